@@ -1,0 +1,1 @@
+//! Host-side tools for pfe: simulator, LMS200 emulator, baselines, evaluation, CLI support.

@@ -1,0 +1,394 @@
+//! Circle fits (paper §3.5): the paper's algebraic (Kåsa) fit on centred data, the less biased
+//! Taubin and Hyper fits (Al-Sharadqah & Chernov 2009), a geometric (Gauss–Newton with
+//! Levenberg damping) refinement, and the covariance `V[Θ] = σ² (WᵀW)⁻¹`.
+
+use crate::error::FitError;
+use crate::geometry::Point;
+use crate::math;
+
+/// A circle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Circle {
+    /// Centre, mm.
+    pub center: Point,
+    /// Radius, mm.
+    pub radius: f32,
+}
+
+/// Which algebraic fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CircleMethod {
+    /// Kåsa: minimises Σ(x²+y²−2ax−2by+a²+b²−R²)²; biased to small radii on short arcs.
+    Kasa,
+    /// Taubin: gradient-weighted algebraic fit.
+    Taubin,
+    /// Hyper (Al-Sharadqah & Chernov): no essential bias to second order.
+    Hyper,
+}
+
+/// Centred, scaled moments (means) of a point set: the common input of the algebraic fits.
+struct Moments {
+    mean: Point,
+    scale: f32,
+    mxx: f32,
+    myy: f32,
+    mxy: f32,
+    mxz: f32,
+    myz: f32,
+    mzz: f32,
+}
+
+fn moments(points: &[Point]) -> Result<Moments, FitError> {
+    let n = points.len();
+    if n < 3 {
+        return Err(FitError::TooFewPoints { got: n, need: 3 });
+    }
+    let (mut sx, mut sy) = (0.0f32, 0.0f32);
+    for p in points {
+        if !p.is_valid() {
+            return Err(FitError::NonFinite);
+        }
+        sx += p.x;
+        sy += p.y;
+    }
+    let nf = n as f32;
+    let mean = Point::new(sx / nf, sy / nf);
+    let mut ss = 0.0f32;
+    for p in points {
+        ss += (p.x - mean.x) * (p.x - mean.x) + (p.y - mean.y) * (p.y - mean.y);
+    }
+    let scale = math::sqrt(ss / nf);
+    if !(scale > 0.0) || !scale.is_finite() {
+        return Err(FitError::Degenerate);
+    }
+    let mut m = Moments {
+        mean,
+        scale,
+        mxx: 0.0,
+        myy: 0.0,
+        mxy: 0.0,
+        mxz: 0.0,
+        myz: 0.0,
+        mzz: 0.0,
+    };
+    for p in points {
+        let x = (p.x - mean.x) / scale;
+        let y = (p.y - mean.y) / scale;
+        let z = x * x + y * y;
+        m.mxx += x * x;
+        m.myy += y * y;
+        m.mxy += x * y;
+        m.mxz += x * z;
+        m.myz += y * z;
+        m.mzz += z * z;
+    }
+    m.mxx /= nf;
+    m.myy /= nf;
+    m.mxy /= nf;
+    m.mxz /= nf;
+    m.myz /= nf;
+    m.mzz /= nf;
+    Ok(m)
+}
+
+/// Algebraic circle fit of `points` (at least 3, finite, not collinear).
+///
+/// ```
+/// use pfe_core::{fit_circle, CircleMethod, Point};
+/// let pts: Vec<Point> = (0..20).map(|i| {
+///     let t = 0.1 * i as f32;
+///     Point::new(2000.0 + 300.0 * t.cos(), 100.0 + 300.0 * t.sin())
+/// }).collect();
+/// let c = fit_circle(&pts, CircleMethod::Hyper).unwrap();
+/// assert!((c.radius - 300.0).abs() < 0.1);
+/// ```
+pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitError> {
+    let m = moments(points)?;
+    let mz = m.mxx + m.myy;
+    let cov_xy = m.mxx * m.myy - m.mxy * m.mxy;
+    let (xc, yc, r2) = match method {
+        CircleMethod::Kasa => {
+            // [Mxx Mxy; Mxy Myy] [B C]ᵀ = −[Mxz Myz]ᵀ, a = −B/2, b = −C/2, R² = a² + b² + Mz.
+            if !(math::abs(cov_xy) > 1e-10) {
+                return Err(FitError::Degenerate);
+            }
+            let b = -(m.mxz * m.myy - m.myz * m.mxy) / cov_xy;
+            let c = -(m.myz * m.mxx - m.mxz * m.mxy) / cov_xy;
+            let (xc, yc) = (-0.5 * b, -0.5 * c);
+            (xc, yc, xc * xc + yc * yc + mz)
+        }
+        CircleMethod::Taubin | CircleMethod::Hyper => {
+            // Chernov's Newton iteration on the characteristic polynomial, from η = 0.
+            let var_z = m.mzz - mz * mz;
+            let a1 = var_z * mz + 4.0 * cov_xy * mz - m.mxz * m.mxz - m.myz * m.myz;
+            let a0 = m.mxz * (m.mxz * m.myy - m.myz * m.mxy) + m.myz * (m.myz * m.mxx - m.mxz * m.mxy)
+                - var_z * cov_xy;
+            let hyper = method == CircleMethod::Hyper;
+            let (a2, a3) = if hyper {
+                (4.0 * cov_xy - 3.0 * mz * mz - m.mzz, 0.0)
+            } else {
+                (-3.0 * mz * mz - m.mzz, 4.0 * mz)
+            };
+            let poly = |x: f32| {
+                if hyper {
+                    a0 + x * (a1 + x * (a2 + 4.0 * x * x))
+                } else {
+                    a0 + x * (a1 + x * (a2 + x * a3))
+                }
+            };
+            let dpoly = |x: f32| {
+                if hyper {
+                    a1 + x * (2.0 * a2 + 16.0 * x * x)
+                } else {
+                    a1 + x * (2.0 * a2 + 3.0 * a3 * x)
+                }
+            };
+            let (mut x, mut y) = (0.0f32, a0);
+            for _ in 0..20 {
+                let dy = dpoly(x);
+                let xn = x - y / dy;
+                if !xn.is_finite() || xn == x {
+                    break;
+                }
+                let yn = poly(xn);
+                if math::abs(yn) >= math::abs(y) {
+                    break;
+                }
+                x = xn;
+                y = yn;
+            }
+            let det = x * x - x * mz + cov_xy;
+            if !(math::abs(det) > 1e-12) {
+                return Err(FitError::Degenerate);
+            }
+            let xc = (m.mxz * (m.myy - x) - m.myz * m.mxy) / det / 2.0;
+            let yc = (m.myz * (m.mxx - x) - m.mxz * m.mxy) / det / 2.0;
+            let r2 = if hyper {
+                xc * xc + yc * yc + mz - 2.0 * x
+            } else {
+                xc * xc + yc * yc + mz
+            };
+            (xc, yc, r2)
+        }
+    };
+    let circle = Circle {
+        center: Point::new(m.mean.x + xc * m.scale, m.mean.y + yc * m.scale),
+        radius: math::sqrt(r2) * m.scale,
+    };
+    if circle.center.is_valid() && circle.radius.is_finite() && circle.radius > 0.0 {
+        Ok(circle)
+    } else {
+        Err(FitError::Degenerate)
+    }
+}
+
+/// Geometric refinement: Gauss–Newton with Levenberg damping on Σ(|P_i − c| − R)², at most
+/// `iterations` steps, from `initial`. Returns the better of the refined and the initial circle.
+pub fn refine_circle(
+    points: &[Point],
+    initial: Circle,
+    iterations: usize,
+) -> Result<Circle, FitError> {
+    if points.len() < 3 {
+        return Err(FitError::TooFewPoints {
+            got: points.len(),
+            need: 3,
+        });
+    }
+    let mut best = initial;
+    let mut best_sse = geometric_sse(points, &best);
+    if !best_sse.is_finite() {
+        return Err(FitError::NonFinite);
+    }
+    let mut lambda = 1e-3f32;
+    for _ in 0..iterations {
+        let mut jtj = [[0.0f32; 3]; 3];
+        let mut jtr = [0.0f32; 3];
+        for p in points {
+            let (dx, dy) = (p.x - best.center.x, p.y - best.center.y);
+            let d = math::hypot(dx, dy);
+            if !(d > 0.0) {
+                continue;
+            }
+            let j = [-dx / d, -dy / d, -1.0];
+            let r = d - best.radius;
+            accumulate(&mut jtj, &mut jtr, &j, r);
+        }
+        let mut improved = false;
+        for _ in 0..4 {
+            let mut a = jtj;
+            a[0][0] *= 1.0 + lambda;
+            a[1][1] *= 1.0 + lambda;
+            a[2][2] *= 1.0 + lambda;
+            let Some(step) = solve3(&a, &jtr) else { break };
+            let cand = Circle {
+                center: Point::new(best.center.x - step[0], best.center.y - step[1]),
+                radius: best.radius - step[2],
+            };
+            let sse = geometric_sse(points, &cand);
+            if sse.is_finite() && sse < best_sse && cand.radius > 0.0 {
+                let gain = best_sse - sse;
+                best = cand;
+                best_sse = sse;
+                lambda = (lambda * 0.3).max(1e-7);
+                improved = gain > best_sse * 1e-7;
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    Ok(best)
+}
+
+fn accumulate(jtj: &mut [[f32; 3]; 3], jtr: &mut [f32; 3], j: &[f32; 3], r: f32) {
+    for (row, ji) in jtj.iter_mut().zip(j.iter()) {
+        for (v, jk) in row.iter_mut().zip(j.iter()) {
+            *v += ji * jk;
+        }
+    }
+    for (v, ji) in jtr.iter_mut().zip(j.iter()) {
+        *v += ji * r;
+    }
+}
+
+/// Sum of squared geometric distances `(|P_i − c| − R)²`.
+pub fn geometric_sse(points: &[Point], c: &Circle) -> f32 {
+    points
+        .iter()
+        .map(|p| {
+            let r = p.distance(&c.center) - c.radius;
+            r * r
+        })
+        .sum()
+}
+
+/// `V[Θ] = σ² (WᵀW)⁻¹` for Θ = (a, b, R), W's rows `(u_i, v_i, 1)`, `u_i = (x_i − a)/R_i`,
+/// `v_i = (y_i − b)/R_i` (Al-Sharadqah & Chernov 2009), for isotropic point noise `σ`.
+pub fn circle_covariance(
+    points: &[Point],
+    circle: &Circle,
+    sigma: f32,
+) -> Result<[[f32; 3]; 3], FitError> {
+    let inv = wtw_inverse(points, circle)?;
+    Ok(scale3(&inv, sigma * sigma))
+}
+
+/// Covariance for range noise `σ_r` along each beam from `origin`: the sandwich
+/// `(WᵀW)⁻¹ Wᵀ Σ W (WᵀW)⁻¹` with `Σ_ii = σ_r² cos² γ_i`, γ_i the angle between beam i and the
+/// circle's normal there. Equals `σ² (WᵀW)⁻¹` when every beam meets the circle head on.
+pub fn circle_covariance_range(
+    points: &[Point],
+    circle: &Circle,
+    origin: Point,
+    sigma_r: f32,
+) -> Result<[[f32; 3]; 3], FitError> {
+    let inv = wtw_inverse(points, circle)?;
+    let mut mid = [[0.0f32; 3]; 3];
+    let mut dummy = [0.0f32; 3];
+    for p in points {
+        let (dx, dy) = (p.x - circle.center.x, p.y - circle.center.y);
+        let d = math::hypot(dx, dy);
+        let (bx, by) = (p.x - origin.x, p.y - origin.y);
+        let bn = math::hypot(bx, by);
+        if !(d > 0.0) || !(bn > 0.0) {
+            continue;
+        }
+        let (u, v) = (dx / d, dy / d);
+        let cosg = (u * bx + v * by) / bn;
+        let w = sigma_r * cosg;
+        accumulate(&mut mid, &mut dummy, &[u * w, v * w, w], 0.0);
+    }
+    Ok(mul3(&mul3(&inv, &mid), &inv))
+}
+
+fn wtw_inverse(points: &[Point], circle: &Circle) -> Result<[[f32; 3]; 3], FitError> {
+    if points.len() < 3 {
+        return Err(FitError::TooFewPoints {
+            got: points.len(),
+            need: 3,
+        });
+    }
+    let mut wtw = [[0.0f32; 3]; 3];
+    let mut dummy = [0.0f32; 3];
+    for p in points {
+        let (dx, dy) = (p.x - circle.center.x, p.y - circle.center.y);
+        let d = math::hypot(dx, dy);
+        if !(d > 0.0) {
+            continue;
+        }
+        accumulate(&mut wtw, &mut dummy, &[dx / d, dy / d, 1.0], 0.0);
+    }
+    let inv = inverse3(&wtw).ok_or(FitError::Degenerate)?;
+    if inv.iter().flatten().all(|v| v.is_finite()) {
+        Ok(inv)
+    } else {
+        Err(FitError::Degenerate)
+    }
+}
+
+fn det3(a: &[[f32; 3]; 3]) -> f32 {
+    let [[a00, a01, a02], [a10, a11, a12], [a20, a21, a22]] = *a;
+    a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) + a02 * (a10 * a21 - a11 * a20)
+}
+
+/// Inverse of a 3×3 matrix by cofactors; `None` when singular relative to its scale.
+pub(crate) fn inverse3(a: &[[f32; 3]; 3]) -> Option<[[f32; 3]; 3]> {
+    let [[a00, a01, a02], [a10, a11, a12], [a20, a21, a22]] = *a;
+    let det = det3(a);
+    let norm = a.iter().flatten().fold(0.0f32, |m, v| m.max(math::abs(*v)));
+    if !(math::abs(det) > norm * norm * norm * 1e-9) || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    Some([
+        [
+            (a11 * a22 - a12 * a21) * inv,
+            (a02 * a21 - a01 * a22) * inv,
+            (a01 * a12 - a02 * a11) * inv,
+        ],
+        [
+            (a12 * a20 - a10 * a22) * inv,
+            (a00 * a22 - a02 * a20) * inv,
+            (a02 * a10 - a00 * a12) * inv,
+        ],
+        [
+            (a10 * a21 - a11 * a20) * inv,
+            (a01 * a20 - a00 * a21) * inv,
+            (a00 * a11 - a01 * a10) * inv,
+        ],
+    ])
+}
+
+fn solve3(a: &[[f32; 3]; 3], b: &[f32; 3]) -> Option<[f32; 3]> {
+    let inv = inverse3(a)?;
+    let mut x = [0.0f32; 3];
+    for (xi, row) in x.iter_mut().zip(inv.iter()) {
+        *xi = row.iter().zip(b.iter()).map(|(m, v)| m * v).sum();
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+fn mul3(a: &[[f32; 3]; 3], b: &[[f32; 3]; 3]) -> [[f32; 3]; 3] {
+    let mut c = [[0.0f32; 3]; 3];
+    for (ci, ai) in c.iter_mut().zip(a.iter()) {
+        for (j, cij) in ci.iter_mut().enumerate() {
+            *cij = ai
+                .iter()
+                .zip(b.iter())
+                .map(|(aik, bk)| aik * bk.get(j).copied().unwrap_or(0.0))
+                .sum();
+        }
+    }
+    c
+}
+
+fn scale3(a: &[[f32; 3]; 3], s: f32) -> [[f32; 3]; 3] {
+    let mut c = *a;
+    c.iter_mut().flatten().for_each(|v| *v *= s);
+    c
+}

@@ -1,0 +1,158 @@
+//! The two named configurations, `paper` and `default`, and every knob of the method.
+
+use crate::circle::CircleMethod;
+use crate::correction::RangeCorrection;
+
+/// How the mark-point threshold is computed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Threshold {
+    /// Paper §3.6: `d_m = (d_0/λ)(r/r_max + (π − ϕ)/π)`.
+    Paper {
+        /// d_0, mm (paper: 50).
+        d0: f32,
+        /// λ (paper: 2).
+        lambda: f32,
+    },
+    /// From the range noise and the prediction's geometry: a point is a mark when its
+    /// prediction error exceeds `k · σ_D`, `σ_D² = σ_r² (1 + 1/n + u²/S_uu) / sin²…` (see
+    /// `predict`), plus `floor` mm for quantisation and model error.
+    Noise {
+        /// Detection level in standard deviations.
+        k: f32,
+        /// Level below which the points before a detected mark are not part of the new
+        /// segment (boundary localisation, see `extract`).
+        k_locate: f32,
+        /// Constant allowance, mm.
+        floor: f32,
+    },
+}
+
+/// How a segment's type is decided.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Typing {
+    /// Paper §3.5: a line when the mean distance to the fitted line is ≤ `d_f` mm (paper: 20).
+    MeanDistance {
+        /// d_f, mm.
+        d_f: f32,
+    },
+    /// Compare the line and circle fits: a circle when its residual sum is lower than the
+    /// line's by more than `chi2 · σ_r²` and by a factor `ratio`, and its radius is at most
+    /// `max_radius`.
+    CompareFits {
+        /// Required drop of the sum of squared residuals, in units of σ_r².
+        chi2: f32,
+        /// Circle SSE must be below `ratio` × line SSE.
+        ratio: f32,
+        /// Largest radius accepted as a circle, mm.
+        max_radius: f32,
+    },
+}
+
+/// Extractor configuration. Build one with [`Config::paper`] or [`Config::default`] and adjust.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub struct Config {
+    /// Mark-point threshold.
+    pub threshold: Threshold,
+    /// Apply the paper's check step (§3.3) to runs of Np marks.
+    pub check_step: bool,
+    /// Feature typing.
+    pub typing: Typing,
+    /// Minimum points of a segment (paper: 4).
+    pub min_points: usize,
+    /// Algebraic circle fit.
+    pub circle_method: CircleMethod,
+    /// Geometric refinement steps after the algebraic fit (0 = none).
+    pub circle_refine: usize,
+    /// Range noise σ_r, mm, for the covariances (and the `Noise` threshold).
+    pub sigma_r: f32,
+    /// Systematic range correction applied to every reading.
+    pub correction: Option<RangeCorrection>,
+}
+
+/// Points in the prediction window (paper: Np = 3).
+pub const NP: usize = 3;
+
+impl Config {
+    /// The paper's method, faithfully: Np 3, d_0 50 mm, λ 2, check step, d_f 20 mm, Kåsa fit.
+    pub const fn paper() -> Self {
+        Self {
+            threshold: Threshold::Paper {
+                d0: 50.0,
+                lambda: 2.0,
+            },
+            check_step: true,
+            typing: Typing::MeanDistance { d_f: 20.0 },
+            min_points: 4,
+            circle_method: CircleMethod::Kasa,
+            circle_refine: 0,
+            sigma_r: 5.0,
+            correction: None,
+        }
+    }
+
+    /// The best measured configuration (see README "Configurations"): noise-derived threshold
+    /// with boundary localisation, fit-comparison typing, Hyper fit with geometric refinement.
+    pub const fn default_config() -> Self {
+        Self {
+            threshold: Threshold::Noise {
+                k: 5.0,
+                k_locate: 2.5,
+                floor: 3.0,
+            },
+            check_step: true,
+            typing: Typing::CompareFits {
+                chi2: 25.0,
+                ratio: 0.5,
+                max_radius: 2000.0,
+            },
+            min_points: 4,
+            circle_method: CircleMethod::Hyper,
+            circle_refine: 5,
+            sigma_r: 5.0,
+            correction: None,
+        }
+    }
+
+    /// The same configuration for a scanner with range noise `sigma_r` mm.
+    pub const fn with_sigma_r(mut self, sigma_r: f32) -> Self {
+        self.sigma_r = sigma_r;
+        self
+    }
+
+    /// The same configuration with a systematic range correction.
+    pub const fn with_correction(mut self, correction: RangeCorrection) -> Self {
+        self.correction = Some(correction);
+        self
+    }
+
+    /// True when every parameter is usable.
+    pub fn is_valid(&self) -> bool {
+        let t = match self.threshold {
+            Threshold::Paper { d0, lambda } => {
+                d0.is_finite() && d0 > 0.0 && lambda.is_finite() && lambda > 0.0
+            }
+            Threshold::Noise { k, k_locate, floor } => {
+                k.is_finite() && k > 0.0 && k_locate.is_finite() && floor.is_finite() && floor >= 0.0
+            }
+        };
+        let ty = match self.typing {
+            Typing::MeanDistance { d_f } => d_f.is_finite() && d_f >= 0.0,
+            Typing::CompareFits {
+                chi2,
+                ratio,
+                max_radius,
+            } => chi2.is_finite() && ratio.is_finite() && max_radius > 0.0,
+        };
+        t && ty && self.sigma_r.is_finite() && self.sigma_r > 0.0 && self.min_points >= 2
+    }
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self::default_config()
+    }
+}

@@ -1,0 +1,490 @@
+//! The extractor: points → mark points (§3.1–3.2, §3.6) → check step and pairing (§3.3) →
+//! segments (§3.4) → type and parameters (§3.5), in one pass over the points plus one
+//! prediction per check and one fit per segment: O(N + M), no recursion, no allocation.
+
+use heapless::Vec;
+
+use crate::circle::{circle_covariance_range, fit_circle, geometric_sse, refine_circle};
+use crate::config::{Config, Threshold, Typing, NP};
+use crate::error::ExtractError;
+use crate::feature::{CircleFeature, Feature, LineFeature};
+use crate::geometry::Point;
+use crate::line::fit_line;
+use crate::math;
+use crate::predict::{paper_threshold, predict, Prediction};
+use crate::scan::Scan;
+use crate::Motion;
+
+const VALID: u8 = 1;
+/// First point of a segment (a mark point in the paper's sense).
+const START: u8 = 2;
+/// Last point of a segment (the paired mark point).
+const END: u8 = 4;
+
+/// What one extraction did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Stats {
+    /// Readings in the scan.
+    pub readings: usize,
+    /// Valid points.
+    pub valid: usize,
+    /// Segments (of any length).
+    pub segments: usize,
+    /// Segments shorter than `min_points`, ignored.
+    pub short_segments: usize,
+    /// Segments whose fit failed (degenerate), ignored.
+    pub degenerate: usize,
+    /// Features stored.
+    pub features: usize,
+    /// Features that did not fit in the buffer.
+    pub dropped: usize,
+    /// Predictions made (N + M in the paper's count).
+    pub predictions: usize,
+}
+
+/// Feature extractor with room for `N` readings and `M` features. About `9·N + 64·M` bytes:
+/// put it in a `static` on a microcontroller.
+///
+/// ```
+/// use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
+/// // A wall 2 m ahead, seen by an LMS200 (180°, 0.5°): r = 2000 / cos(bearing).
+/// let g = ScanGeometry::LMS200_180_050;
+/// let ranges: Vec<f32> = (0..361)
+///     .map(|i| {
+///         let b = g.bearing(i);
+///         if b.abs() < 1.0 { 2000.0 / b.cos() } else { f32::NAN }
+///     })
+///     .collect();
+/// let mut ex = Extractor::<361, 32>::new();
+/// ex.extract(&Scan::from_mm(g, &ranges), &Config::default()).unwrap();
+/// assert_eq!(ex.features().len(), 1);
+/// let Feature::Line(l) = ex.features()[0] else { panic!() };
+/// assert!((l.rho - 2000.0).abs() < 0.5 && l.alpha.abs() < 1e-3);
+/// ```
+pub struct Extractor<const N: usize, const M: usize> {
+    points: [Point; N],
+    flags: [u8; N],
+    len: usize,
+    motion: Option<Motion>,
+    features: Vec<Feature, M>,
+    stats: Stats,
+}
+
+impl<const N: usize, const M: usize> Default for Extractor<N, M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize, const M: usize> Extractor<N, M> {
+    /// An empty extractor (`const`, so it can live in a `static`).
+    pub const fn new() -> Self {
+        Self {
+            points: [Point::INVALID; N],
+            flags: [0; N],
+            len: 0,
+            motion: None,
+            features: Vec::new(),
+            stats: Stats {
+                readings: 0,
+                valid: 0,
+                segments: 0,
+                short_segments: 0,
+                degenerate: 0,
+                features: 0,
+                dropped: 0,
+                predictions: 0,
+            },
+        }
+    }
+
+    /// Extracts the features of `scan`. On `Err(FeatureCapacity)` the first `M` features are
+    /// still available from [`features`](Self::features).
+    pub fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> Result<Stats, ExtractError> {
+        self.len = 0;
+        self.features.clear();
+        self.stats = Stats::default();
+        if !scan.geometry.is_valid() {
+            return Err(ExtractError::InvalidGeometry);
+        }
+        if !config.is_valid() {
+            return Err(ExtractError::InvalidConfig);
+        }
+        let n = scan.ranges.len();
+        if n > N || n > usize::from(u16::MAX) {
+            return Err(ExtractError::TooManyReadings {
+                got: n,
+                capacity: N.min(usize::from(u16::MAX)),
+            });
+        }
+        self.len = n;
+        self.motion = scan.motion.filter(|m| m.is_valid());
+        self.load_points(scan, config);
+        match config.threshold {
+            Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, scan.geometry.r_max),
+            Threshold::Noise { k, k_locate, floor } => {
+                self.mark_noise(k, k_locate, floor, config.sigma_r, scan.geometry.angle_step)
+            }
+        }
+        if config.check_step {
+            self.check_step(config, scan.geometry.r_max);
+        }
+        self.build_features(config);
+        self.stats.features = self.features.len();
+        if self.stats.dropped > 0 {
+            Err(ExtractError::FeatureCapacity {
+                dropped: self.stats.dropped,
+            })
+        } else {
+            Ok(self.stats)
+        }
+    }
+
+    /// Features of the last extraction, in scan order.
+    pub fn features(&self) -> &[Feature] {
+        &self.features
+    }
+
+    /// Statistics of the last extraction.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// Points of the last scan (after correction and de-skew); invalid readings are
+    /// [`Point::INVALID`].
+    pub fn points(&self) -> &[Point] {
+        self.points.get(..self.len).unwrap_or(&[])
+    }
+
+    /// Mark points of the last extraction: the first and last point of every segment (after
+    /// the check step and pairing), in increasing order.
+    pub fn marks(&self) -> impl Iterator<Item = usize> + '_ {
+        self.flags
+            .iter()
+            .take(self.len)
+            .enumerate()
+            .filter(|(_, f)| **f & (START | END) != 0)
+            .map(|(i, _)| i)
+    }
+
+    /// True when point `i` is a mark point.
+    pub fn is_mark(&self, i: usize) -> bool {
+        i < self.len && self.flag(i) & (START | END) != 0
+    }
+
+    fn flag(&self, i: usize) -> u8 {
+        self.flags.get(i).copied().unwrap_or(0)
+    }
+
+    fn set(&mut self, i: usize, bit: u8) {
+        if let Some(f) = self.flags.get_mut(i) {
+            *f |= bit;
+        }
+    }
+
+    fn clear(&mut self, i: usize, bit: u8) {
+        if let Some(f) = self.flags.get_mut(i) {
+            *f &= !bit;
+        }
+    }
+
+    fn valid(&self, i: usize) -> bool {
+        self.flag(i) & VALID != 0
+    }
+
+    fn point(&self, i: usize) -> Point {
+        self.points.get(i).copied().unwrap_or(Point::INVALID)
+    }
+
+    /// Scanner position when beam `i` was taken (origin unless de-skewing).
+    fn origin(&self, i: usize) -> Point {
+        match self.motion {
+            Some(m) => m.pose(i).origin,
+            None => Point::new(0.0, 0.0),
+        }
+    }
+
+    fn load_points(&mut self, scan: &Scan<'_>, config: &Config) {
+        let g = scan.geometry;
+        for i in 0..self.len {
+            let r = scan
+                .ranges
+                .get_mm(i, g.r_max)
+                .map(|r| config.correction.map_or(r, |c| c.apply(r)))
+                .filter(|r| r.is_finite() && *r > 0.0);
+            let p = match (r, self.motion) {
+                (Some(r), Some(m)) => m.deskew(i, r, g.bearing(i)).0,
+                (Some(r), None) => Point::from_polar(r, g.bearing(i)),
+                (None, _) => Point::INVALID,
+            };
+            let ok = p.is_valid();
+            if let Some(slot) = self.points.get_mut(i) {
+                *slot = if ok { p } else { Point::INVALID };
+            }
+            if let Some(f) = self.flags.get_mut(i) {
+                *f = if ok { VALID } else { 0 };
+            }
+            self.stats.valid += usize::from(ok);
+        }
+        self.stats.readings = self.len;
+    }
+
+    /// Predicts point `k` from points `from..to` (all valid).
+    fn predict(&mut self, from: usize, to: usize, k: usize) -> Option<Prediction> {
+        self.stats.predictions += 1;
+        let pts = self.points.get(from..to)?;
+        predict(pts.iter().copied(), self.point(k), self.origin(k))
+    }
+
+    /// Whether a prediction says "mark" under the configured threshold.
+    fn exceeds(&self, pred: Option<Prediction>, k: usize, config: &Config, r_max: f32) -> bool {
+        let Some(p) = pred else { return true };
+        match config.threshold {
+            Threshold::Paper { d0, lambda } => {
+                let r = self.point(k).distance(&self.origin(k));
+                p.error > paper_threshold(d0, lambda, r, r_max, p.phi)
+            }
+            Threshold::Noise { k: kk, floor, .. } => {
+                p.error > kk * config.sigma_r * p.sigma_factor + floor
+            }
+        }
+    }
+
+    /// Paper §3.2: every point with `Np` valid predecessors is predicted from them; the first
+    /// point after a gap (or at the start) opens a segment.
+    fn mark_paper(&mut self, d0: f32, lambda: f32, r_max: f32) {
+        let mut run = 0usize;
+        for k in 0..self.len {
+            if !self.valid(k) {
+                run = 0;
+                continue;
+            }
+            if run == 0 {
+                self.set(k, START);
+            } else if run >= NP {
+                let pred = self.predict(k - NP, k, k);
+                let mark = match pred {
+                    None => true,
+                    Some(p) => {
+                        let r = self.point(k).distance(&self.origin(k));
+                        p.error > paper_threshold(d0, lambda, r, r_max, p.phi)
+                    }
+                };
+                if mark {
+                    self.set(k, START);
+                }
+            }
+            run += 1;
+        }
+    }
+
+    /// Default mode: predict only from points of the current segment (so no window straddles
+    /// a boundary), threshold `k σ_D + floor`, then move the boundary back over the points
+    /// that already left the old segment's line (boundary localisation).
+    fn mark_noise(&mut self, k_sigma: f32, k_locate: f32, floor: f32, sigma_r: f32, step: f32) {
+        let mut seg: Option<usize> = None;
+        // Largest gap between the first two points of a segment: the surface may be seen at
+        // down to 10° incidence (Borges & Aldon's λ), plus the noise of two readings.
+        let sin_step = math::abs(math::sin(step));
+        let lam = 10.0f32.to_radians();
+        let gap_factor = sin_step / math::sin(lam - math::abs(step)).max(1e-3);
+        for k in 0..self.len {
+            if !self.valid(k) {
+                seg = None;
+                continue;
+            }
+            let Some(s) = seg else {
+                self.set(k, START);
+                seg = Some(k);
+                continue;
+            };
+            let c = k - s;
+            let boundary = if c == 1 {
+                let prev = self.point(k - 1);
+                let r_prev = prev.distance(&self.origin(k - 1));
+                let limit = r_prev * gap_factor + k_sigma * sigma_r * core::f32::consts::SQRT_2 + floor;
+                (self.point(k).distance(&prev) > limit).then_some(k)
+            } else {
+                let w = c.min(NP);
+                let pred = self.predict(k - w, k, k);
+                let over = match pred {
+                    None => true,
+                    Some(p) => p.error > k_sigma * sigma_r * p.sigma_factor + floor,
+                };
+                over.then(|| self.locate(s, k, pred, k_locate, sigma_r, floor))
+            };
+            if let Some(b) = boundary {
+                self.set(b, START);
+                seg = Some(b);
+            }
+        }
+    }
+
+    /// The earliest of the (up to 4) points before `k` that, with `k`, deviate on the same
+    /// side from the line through the segment's points before them.
+    fn locate(
+        &mut self,
+        s: usize,
+        k: usize,
+        at_k: Option<Prediction>,
+        k_locate: f32,
+        sigma_r: f32,
+        floor: f32,
+    ) -> usize {
+        const BACK: usize = 4;
+        const REF: usize = 6;
+        let c = k - s;
+        let back = BACK.min(c.saturating_sub(NP));
+        if back == 0 {
+            return k;
+        }
+        let ref_end = k - back;
+        let ref_start = ref_end.saturating_sub(REF).max(s);
+        let Some(side) = at_k.map(|p| p.signed) else {
+            return k;
+        };
+        // Sign of k's deviation from the reference line (not from its own window).
+        let side = match self.predict(ref_start, ref_end, k) {
+            Some(p) if p.signed.is_finite() => p.signed,
+            _ => side,
+        };
+        let mut b = k;
+        for j in (ref_end..k).rev() {
+            match self.predict(ref_start, ref_end, j) {
+                Some(p)
+                    if p.signed * side > 0.0
+                        && p.error > k_locate * sigma_r * p.sigma_factor + floor =>
+                {
+                    b = j
+                }
+                _ => break,
+            }
+        }
+        b
+    }
+
+    /// Paper §3.3: wherever `Np` mark points follow each other, predict the next point from
+    /// them; when it fits, the marks after the first were caused by a window straddling the
+    /// boundary and are removed.
+    fn check_step(&mut self, config: &Config, r_max: f32) {
+        let mut j = 0usize;
+        while j + NP < self.len {
+            let run = (j..j + NP).all(|i| self.flag(i) & (VALID | START) == VALID | START);
+            if run && self.valid(j + NP) {
+                let pred = self.predict(j, j + NP, j + NP);
+                if !self.exceeds(pred, j + NP, config, r_max) {
+                    for i in j + 1..j + NP {
+                        self.clear(i, START);
+                    }
+                    j += NP;
+                    continue;
+                }
+            }
+            j += 1;
+        }
+    }
+
+    /// §3.4–3.5: every segment's last point is paired with the next segment's first; segments
+    /// of at least `min_points` points are typed and fitted.
+    fn build_features(&mut self, config: &Config) {
+        let mut k = 0usize;
+        while k < self.len {
+            if !self.valid(k) {
+                k += 1;
+                continue;
+            }
+            let s = k;
+            let mut e = k;
+            while e + 1 < self.len && self.flag(e + 1) & (VALID | START) == VALID {
+                e += 1;
+            }
+            self.set(s, START);
+            self.set(e, END);
+            self.stats.segments += 1;
+            if e + 1 - s >= config.min_points {
+                match self.fit_segment(s, e, config) {
+                    Some(f) => {
+                        if self.features.push(f).is_err() {
+                            self.stats.dropped += 1;
+                        }
+                    }
+                    None => self.stats.degenerate += 1,
+                }
+            } else {
+                self.stats.short_segments += 1;
+            }
+            k = e + 1;
+        }
+    }
+
+    fn fit_segment(&self, s: usize, e: usize, config: &Config) -> Option<Feature> {
+        let pts = self.points.get(s..=e)?;
+        let (first, last) = (u16::try_from(s).ok()?, u16::try_from(e).ok()?);
+        let count = u16::try_from(pts.len()).ok()?;
+        let origin = self.origin((s + e) / 2);
+        let line = fit_line(pts).ok();
+        let circle = || {
+            let c = fit_circle(pts, config.circle_method).ok()?;
+            if config.circle_refine > 0 {
+                refine_circle(pts, c, config.circle_refine).ok()
+            } else {
+                Some(c)
+            }
+        };
+        let as_circle = match (config.typing, line) {
+            (_, None) => circle(),
+            (Typing::MeanDistance { d_f }, Some(l)) => {
+                if l.mean_abs_distance(pts) <= d_f {
+                    None
+                } else {
+                    circle()
+                }
+            }
+            (
+                Typing::CompareFits {
+                    chi2,
+                    ratio,
+                    max_radius,
+                },
+                Some(l),
+            ) => circle().filter(|c| {
+                let sse_l = l.sse();
+                let sse_c = geometric_sse(pts, c);
+                c.radius <= max_radius
+                    && sse_l - sse_c > chi2 * config.sigma_r * config.sigma_r
+                    && sse_c < ratio * sse_l
+            }),
+        };
+        if let Some(c) = as_circle {
+            let cov = circle_covariance_range(pts, &c, origin, config.sigma_r).ok()?;
+            let a = |p: Point| math::atan2(p.y - c.center.y, p.x - c.center.x);
+            let f = Feature::Circle(CircleFeature {
+                first,
+                last,
+                points: count,
+                center: c.center,
+                radius: c.radius,
+                cov,
+                start_angle: a(*pts.first()?),
+                end_angle: a(*pts.last()?),
+            });
+            return f.is_well_formed().then_some(f);
+        }
+        let l = line?;
+        let cov = l.covariance_range(pts.iter().copied(), origin, config.sigma_r);
+        let f = Feature::Line(LineFeature {
+            first,
+            last,
+            points: count,
+            alpha: l.alpha,
+            rho: l.rho,
+            var_alpha: cov.var_alpha,
+            var_rho: cov.var_rho,
+            cov_alpha_rho: cov.cov_alpha_rho,
+            start: l.project(pts.first()?),
+            end: l.project(pts.last()?),
+        });
+        f.is_well_formed().then_some(f)
+    }
+}

@@ -1,0 +1,106 @@
+//! The extractor's output: lines and circles with their uncertainty and point range.
+
+use crate::geometry::Point;
+
+/// A line feature `x cos α + y sin α = ρ`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LineFeature {
+    /// Index of the first beam of the segment (counting every beam, valid or not).
+    pub first: u16,
+    /// Index of the last beam of the segment.
+    pub last: u16,
+    /// Number of valid points fitted.
+    pub points: u16,
+    /// Normal angle, rad, in (−π, π].
+    pub alpha: f32,
+    /// Distance from the scanner, mm, ≥ 0.
+    pub rho: f32,
+    /// σ_α², rad².
+    pub var_alpha: f32,
+    /// σ_ρ², mm².
+    pub var_rho: f32,
+    /// cov(α, ρ), rad·mm.
+    pub cov_alpha_rho: f32,
+    /// Projection of the first point on the line.
+    pub start: Point,
+    /// Projection of the last point on the line.
+    pub end: Point,
+}
+
+/// A circle (or arc) feature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CircleFeature {
+    /// Index of the first beam of the segment.
+    pub first: u16,
+    /// Index of the last beam of the segment.
+    pub last: u16,
+    /// Number of valid points fitted.
+    pub points: u16,
+    /// Centre, mm.
+    pub center: Point,
+    /// Radius, mm.
+    pub radius: f32,
+    /// Covariance of (centre x, centre y, radius), mm².
+    pub cov: [[f32; 3]; 3],
+    /// Bearing from the centre to the first point, rad.
+    pub start_angle: f32,
+    /// Bearing from the centre to the last point, rad.
+    pub end_angle: f32,
+}
+
+/// One extracted feature.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Feature {
+    /// A straight segment.
+    Line(LineFeature),
+    /// A circular arc.
+    Circle(CircleFeature),
+}
+
+impl Feature {
+    /// Index of the first beam.
+    pub fn first(&self) -> usize {
+        match self {
+            Feature::Line(l) => usize::from(l.first),
+            Feature::Circle(c) => usize::from(c.first),
+        }
+    }
+
+    /// Index of the last beam.
+    pub fn last(&self) -> usize {
+        match self {
+            Feature::Line(l) => usize::from(l.last),
+            Feature::Circle(c) => usize::from(c.last),
+        }
+    }
+
+    /// True for a line.
+    pub fn is_line(&self) -> bool {
+        matches!(self, Feature::Line(_))
+    }
+
+    /// True when every parameter is finite and first ≤ last.
+    pub fn is_well_formed(&self) -> bool {
+        match self {
+            Feature::Line(l) => {
+                l.first <= l.last
+                    && [l.alpha, l.rho, l.var_alpha, l.var_rho, l.cov_alpha_rho]
+                        .iter()
+                        .all(|v| v.is_finite())
+                    && l.start.is_valid()
+                    && l.end.is_valid()
+            }
+            Feature::Circle(c) => {
+                c.first <= c.last
+                    && c.center.is_valid()
+                    && c.radius.is_finite()
+                    && c.cov.iter().flatten().all(|v| v.is_finite())
+                    && c.start_angle.is_finite()
+                    && c.end_angle.is_finite()
+            }
+        }
+    }
+}

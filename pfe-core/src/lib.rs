@@ -1,0 +1,48 @@
+//! # pfe-core: prediction-based geometric feature extraction for 2D laser scans
+//!
+//! An implementation of Y. Zhao and X. Chen, "Prediction-based geometric feature extraction
+//! for 2D laser scanner", *Robotics and Autonomous Systems* 59 (2011) 402–409, for
+//! microcontrollers: `no_std`, no allocator, `f32`, fixed capacities, no panics.
+//!
+//! Data path (one module per step): [`scan`] (readings, [`correction`], [`deskew`]) →
+//! [`predict`] (prediction point and threshold) → [`extract`] (mark, check step, segments,
+//! typing) → [`line`] and [`circle`] fits with covariance → [`feature`].
+//!
+//! ```
+//! use pfe_core::{Config, Extractor, Scan, ScanGeometry};
+//! let ranges = [3000.0_f32; 361]; // a round room of radius 3 m
+//! let mut ex = Extractor::<361, 32>::new();
+//! let stats = ex.extract(&Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges), &Config::paper()).unwrap();
+//! assert_eq!(stats.valid, 361);
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+// `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod circle;
+pub mod config;
+pub mod correction;
+pub mod deskew;
+pub mod error;
+pub mod extract;
+pub mod feature;
+pub mod geometry;
+pub mod line;
+mod math;
+pub mod predict;
+pub mod scan;
+
+pub use circle::{
+    circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
+};
+pub use config::{Config, Threshold, Typing, NP};
+pub use correction::RangeCorrection;
+pub use deskew::Motion;
+pub use error::{ExtractError, FitError};
+pub use extract::{Extractor, Stats};
+pub use feature::{CircleFeature, Feature, LineFeature};
+pub use geometry::Point;
+pub use line::{fit_line, LineCovariance, LineFit};
+pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

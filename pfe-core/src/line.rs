@@ -1,0 +1,216 @@
+//! Line fit (paper §3.5): least squares in polar form `x cos α + y sin α = ρ`, from centred
+//! moments in O(n) (the paper's double sums give the same estimate in O(n²)), and its covariance.
+
+use crate::error::FitError;
+use crate::geometry::Point;
+use crate::math;
+
+/// A fitted line and the moments it came from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LineFit {
+    /// Angle of the normal, rad, in (−π, π].
+    pub alpha: f32,
+    /// Distance from the origin, mm, ≥ 0.
+    pub rho: f32,
+    /// Number of points.
+    pub n: usize,
+    /// Centroid of the points.
+    pub centroid: Point,
+    /// Centred second moments Σ(x−x̄)², Σ(y−ȳ)², Σ(x−x̄)(y−ȳ).
+    pub sxx: f32,
+    /// See `sxx`.
+    pub syy: f32,
+    /// See `sxx`.
+    pub sxy: f32,
+}
+
+/// Covariance of (α, ρ).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct LineCovariance {
+    /// σ_α², rad².
+    pub var_alpha: f32,
+    /// σ_ρ², mm².
+    pub var_rho: f32,
+    /// cov(α, ρ), rad·mm.
+    pub cov_alpha_rho: f32,
+}
+
+/// Fits a line to `points` (all must be finite, at least 2, not all equal).
+///
+/// ```
+/// use pfe_core::{fit_line, Point};
+/// let pts = [Point::new(1000.0, -500.0), Point::new(1000.0, 0.0), Point::new(1000.0, 500.0)];
+/// let l = fit_line(&pts).unwrap();
+/// assert!(l.alpha.abs() < 1e-6 && (l.rho - 1000.0).abs() < 1e-3);
+/// ```
+pub fn fit_line(points: &[Point]) -> Result<LineFit, FitError> {
+    fit_line_iter(points.iter().copied())
+}
+
+/// [`fit_line`] over any re-iterable sequence of points (two passes: mean, then centred sums).
+pub fn fit_line_iter<I>(points: I) -> Result<LineFit, FitError>
+where
+    I: Iterator<Item = Point> + Clone,
+{
+    let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
+    for p in points.clone() {
+        if !p.is_valid() {
+            return Err(FitError::NonFinite);
+        }
+        n += 1;
+        sx += p.x;
+        sy += p.y;
+    }
+    if n < 2 {
+        return Err(FitError::TooFewPoints { got: n, need: 2 });
+    }
+    let c = Point::new(sx / n as f32, sy / n as f32);
+    let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+    for p in points {
+        let (dx, dy) = (p.x - c.x, p.y - c.y);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    from_moments(n, c, sxx, syy, sxy)
+}
+
+/// The line from centred moments.
+pub fn from_moments(
+    n: usize,
+    centroid: Point,
+    sxx: f32,
+    syy: f32,
+    sxy: f32,
+) -> Result<LineFit, FitError> {
+    let spread = sxx + syy;
+    if !(spread > 0.0) || !spread.is_finite() {
+        return Err(FitError::Degenerate);
+    }
+    let mut alpha = 0.5 * math::atan2(-2.0 * sxy, syy - sxx);
+    let (s, c) = math::sin_cos(alpha);
+    let mut rho = centroid.x * c + centroid.y * s;
+    if rho < 0.0 {
+        rho = -rho;
+        alpha += core::f32::consts::PI;
+    }
+    let alpha = math::wrap_pi(alpha);
+    if !alpha.is_finite() || !rho.is_finite() {
+        return Err(FitError::Degenerate);
+    }
+    Ok(LineFit {
+        alpha,
+        rho,
+        n,
+        centroid,
+        sxx,
+        syy,
+        sxy,
+    })
+}
+
+impl LineFit {
+    /// Unit normal (cos α, sin α).
+    pub fn normal(&self) -> (f32, f32) {
+        let (s, c) = math::sin_cos(self.alpha);
+        (c, s)
+    }
+
+    /// Signed distance of `p` from the line.
+    pub fn signed_distance(&self, p: &Point) -> f32 {
+        let (c, s) = self.normal();
+        p.x * c + p.y * s - self.rho
+    }
+
+    /// Foot of the perpendicular from `p`.
+    pub fn project(&self, p: &Point) -> Point {
+        let (c, s) = self.normal();
+        let d = p.x * c + p.y * s - self.rho;
+        Point::new(p.x - d * c, p.y - d * s)
+    }
+
+    /// Sum of squared orthogonal residuals, from the moments (no pass over the points).
+    pub fn sse(&self) -> f32 {
+        let (c, s) = self.normal();
+        let v = self.sxx * c * c + self.syy * s * s + 2.0 * self.sxy * s * c;
+        if v > 0.0 {
+            v
+        } else {
+            0.0
+        }
+    }
+
+    /// Mean absolute distance of `points` from the line (the paper's d̄).
+    pub fn mean_abs_distance(&self, points: &[Point]) -> f32 {
+        if points.is_empty() {
+            return 0.0;
+        }
+        let sum: f32 = points
+            .iter()
+            .map(|p| math::abs(self.signed_distance(p)))
+            .sum();
+        sum / points.len() as f32
+    }
+
+    /// Jensfelt & Christensen (2001) covariance for points that all have the Cartesian
+    /// covariance `[[σxx², σxy²], [σxy², σyy²]]`:
+    /// `A = (a σyy² − b σxy² + c σxx²) / ((a − c)² + b²)`, `σ_α² = A`,
+    /// `σ_ρ² = (σyy² cos²χ + σxx² sin²χ − 2 σxy² sinχ cosχ)/N + d² A`, with `a = Sxx`,
+    /// `b = 2 Sxy`, `c = Syy`, `χ = α + π/2`, `d = ȳ sinχ + x̄ cosχ`.
+    pub fn covariance_jc(&self, var_xx: f32, var_yy: f32, var_xy: f32) -> LineCovariance {
+        let (a, b, c) = (self.sxx, 2.0 * self.sxy, self.syy);
+        let den = (a - c) * (a - c) + b * b;
+        let big_a = if den > 0.0 {
+            (a * var_yy - b * var_xy + c * var_xx) / den
+        } else {
+            f32::INFINITY
+        };
+        let chi = self.alpha + core::f32::consts::FRAC_PI_2;
+        let (sc, cc) = math::sin_cos(chi);
+        let d = self.centroid.y * sc + self.centroid.x * cc;
+        let n = self.n.max(1) as f32;
+        let var_rho = (var_yy * cc * cc + var_xx * sc * sc - 2.0 * var_xy * sc * cc) / n + d * d * big_a;
+        LineCovariance {
+            var_alpha: big_a,
+            var_rho,
+            // ρ = x̄cosα + ȳsinα moves with α through d (see `covariance_range`).
+            cov_alpha_rho: d * big_a,
+        }
+    }
+
+    /// Covariance for range noise `σ_r` along each beam from `origin` (first-order propagation,
+    /// exact for an unweighted fit): a point's error across the line is `σ_r |cos β_i|`, β_i the
+    /// angle between its beam and the normal. With `u_i` the position along the line, `d` the
+    /// centroid's, `e` the perpendicular errors: `δα = −Σu_i e_i / Σu_i²`, `δρ = ē + d δα`.
+    pub fn covariance_range<I>(&self, points: I, origin: Point, sigma_r: f32) -> LineCovariance
+    where
+        I: Iterator<Item = Point>,
+    {
+        let (nc, ns) = self.normal();
+        let (tx, ty) = (-ns, nc);
+        let (mut suu, mut suu_s, mut su_s, mut s_s) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for p in points {
+            let (bx, by) = (p.x - origin.x, p.y - origin.y);
+            let bn = math::hypot(bx, by);
+            let cosb = if bn > 0.0 { (bx * nc + by * ns) / bn } else { 1.0 };
+            let var_i = sigma_r * sigma_r * cosb * cosb;
+            let u = (p.x - self.centroid.x) * tx + (p.y - self.centroid.y) * ty;
+            suu += u * u;
+            suu_s += u * u * var_i;
+            su_s += u * var_i;
+            s_s += var_i;
+        }
+        let n = self.n.max(1) as f32;
+        let d = self.centroid.x * tx + self.centroid.y * ty;
+        let var_alpha = if suu > 0.0 { suu_s / (suu * suu) } else { f32::INFINITY };
+        let cov_e_a = if suu > 0.0 { -su_s / (n * suu) } else { 0.0 };
+        let var_e = s_s / (n * n);
+        LineCovariance {
+            var_alpha,
+            var_rho: var_e + d * d * var_alpha + 2.0 * d * cov_e_a,
+            cov_alpha_rho: cov_e_a + d * var_alpha,
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! Scan input for any scanner: geometry, ranges (raw LMS codes or mm), optional motion.
+
+use crate::deskew::Motion;
+use crate::geometry::Point;
+use crate::math;
+
+/// Where the beams point and how far the scanner sees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScanGeometry {
+    /// Bearing of beam 0, rad (x forward, y left, counter-clockwise positive).
+    pub start_angle: f32,
+    /// Bearing increment from one beam to the next, rad (may be negative).
+    pub angle_step: f32,
+    /// Maximum range, mm: readings beyond it are no return.
+    pub r_max: f32,
+}
+
+impl ScanGeometry {
+    /// The SICK LMS200 in its default variant: 180° at 0.5° (361 beams from −90°), 8 m mode.
+    pub const LMS200_180_050: ScanGeometry = ScanGeometry {
+        start_angle: -core::f32::consts::FRAC_PI_2,
+        angle_step: core::f32::consts::PI / 360.0,
+        r_max: 8000.0,
+    };
+
+    /// An LMS200 variant (field of view and resolution in degrees), centred on x, 8 m mode.
+    pub fn lms200(field_deg: f32, resolution_deg: f32) -> Self {
+        let d2r = core::f32::consts::PI / 180.0;
+        Self {
+            start_angle: -0.5 * field_deg * d2r,
+            angle_step: resolution_deg * d2r,
+            r_max: 8000.0,
+        }
+    }
+
+    /// Bearing of beam `i`, rad.
+    pub fn bearing(&self, i: usize) -> f32 {
+        self.start_angle + self.angle_step * i as f32
+    }
+
+    /// True when the geometry can be used.
+    pub fn is_valid(&self) -> bool {
+        self.start_angle.is_finite()
+            && self.angle_step.is_finite()
+            && self.angle_step != 0.0
+            && math::abs(self.angle_step) < 1.0
+            && self.r_max.is_finite()
+            && self.r_max > 0.0
+    }
+}
+
+/// Range readings of one scan.
+#[derive(Clone, Copy, Debug)]
+pub enum Ranges<'a> {
+    /// Ranges in mm. NaN, ±inf, ≤ 0 and > r_max are no return.
+    Mm(&'a [f32]),
+    /// Raw LMS range codes (already masked to the measuring mode's range bits).
+    Raw {
+        /// The codes.
+        values: &'a [u16],
+        /// mm per code unit: 1.0 in mm mode, 10.0 in cm mode.
+        mm_per_unit: f32,
+        /// Largest valid code; above it are the reserved codes (8182 in the 8 m / 80 m modes).
+        max_valid: u16,
+    },
+}
+
+impl Ranges<'_> {
+    /// Number of readings.
+    pub fn len(&self) -> usize {
+        match self {
+            Ranges::Mm(r) => r.len(),
+            Ranges::Raw { values, .. } => values.len(),
+        }
+    }
+
+    /// True when there is no reading.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Reading `i` in mm, or `None` when it is no return (or `i` is out of range).
+    pub fn get_mm(&self, i: usize, r_max: f32) -> Option<f32> {
+        let r = match self {
+            Ranges::Mm(r) => *r.get(i)?,
+            Ranges::Raw {
+                values,
+                mm_per_unit,
+                max_valid,
+            } => {
+                let v = *values.get(i)?;
+                if v == 0 || v > *max_valid {
+                    return None;
+                }
+                f32::from(v) * mm_per_unit
+            }
+        };
+        (r.is_finite() && r > 0.0 && r <= r_max).then_some(r)
+    }
+}
+
+/// The largest valid LMS range code in the 8 m / 80 m measuring modes; 8183 and above are
+/// reserved (no return, dazzle, overflow, …).
+pub const LMS_MAX_VALID_8M: u16 = 8182;
+
+/// One scan: geometry, readings and, optionally, the robot's motion during the scan.
+#[derive(Clone, Copy, Debug)]
+pub struct Scan<'a> {
+    /// Beam geometry.
+    pub geometry: ScanGeometry,
+    /// Readings.
+    pub ranges: Ranges<'a>,
+    /// Constant-velocity motion during the scan, for de-skewing.
+    pub motion: Option<Motion>,
+}
+
+impl<'a> Scan<'a> {
+    /// A scan of ranges in mm.
+    ///
+    /// ```
+    /// use pfe_core::{Scan, ScanGeometry};
+    /// let ranges = [1000.0_f32; 361];
+    /// let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges);
+    /// assert_eq!(scan.ranges.len(), 361);
+    /// ```
+    pub fn from_mm(geometry: ScanGeometry, ranges: &'a [f32]) -> Self {
+        Self {
+            geometry,
+            ranges: Ranges::Mm(ranges),
+            motion: None,
+        }
+    }
+
+    /// A scan of raw LMS codes in the 8 m / 80 m modes (`mm_per_unit` 1.0 for mm, 10.0 for cm).
+    pub fn from_lms(geometry: ScanGeometry, values: &'a [u16], mm_per_unit: f32) -> Self {
+        Self {
+            geometry,
+            ranges: Ranges::Raw {
+                values,
+                mm_per_unit,
+                max_valid: LMS_MAX_VALID_8M,
+            },
+            motion: None,
+        }
+    }
+
+    /// The same scan, de-skewed for `motion`.
+    pub fn with_motion(mut self, motion: Motion) -> Self {
+        self.motion = Some(motion);
+        self
+    }
+
+    /// Cartesian point of beam `i` (without correction or de-skew), if valid.
+    pub fn point(&self, i: usize) -> Option<Point> {
+        let r = self.ranges.get_mm(i, self.geometry.r_max)?;
+        Some(Point::from_polar(r, self.geometry.bearing(i)))
+    }
+}

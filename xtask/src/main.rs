@@ -1,0 +1,37 @@
+//! `cargo xtask <command>`: the project's commands (see README.md).
+//!
+//! Each command lives in its own module; `util` holds what they share.
+
+mod util;
+
+use anyhow::{bail, Result};
+
+const HELP: &str = "cargo xtask <command> [args]
+
+  demo          firmware in QEMU against the emulated LMS200, prints features (main job)
+  test          everything CI runs: fmt, clippy, unit/integration tests, thumbv7em builds,
+                end-to-end QEMU test, MRPT conformance, no-panic build, budgets
+  eval          PFE paper/default vs ACF and split-and-merge on simulated scans -> docs/EVALUATION.md
+  conformance   MRPT's CSickLaserSerial against the emulator on a pseudo-terminal
+  bench-mcu     instruction counts on mps2-an386 under QEMU (budgets enforced)
+  size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
+  fuzz          every cargo-fuzz target for --seconds S
+  no-panic      firmware build whose link fails if a panic path survives
+  soak          long run with 1% damage through emulator, driver and pfe-core (--scans N)
+";
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(cmd) = args.first() else {
+        eprint!("{HELP}");
+        return Ok(());
+    };
+    let rest = args.get(1..).unwrap_or(&[]);
+    match cmd.as_str() {
+        "help" | "--help" | "-h" => {
+            eprint!("{HELP}");
+            Ok(())
+        }
+        other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
+    }
+}

@@ -1,0 +1,78 @@
+//! Helpers shared by the xtask commands: running programs, installing what they need.
+
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The workspace root (parent of `xtask/`).
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// `cargo` as invoked by the user.
+pub fn cargo() -> Command {
+    let mut c = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+    c.current_dir(root());
+    c
+}
+
+/// Runs `cmd`, echoing it, and fails with its exit status.
+pub fn run(cmd: &mut Command) -> Result<()> {
+    eprintln!("$ {cmd:?}");
+    let status = cmd.status().with_context(|| format!("cannot start {cmd:?}"))?;
+    if !status.success() {
+        bail!("{cmd:?} failed: {status}");
+    }
+    Ok(())
+}
+
+/// True when `program` is on PATH.
+pub fn have(program: &str) -> bool {
+    Command::new("sh")
+        .args(["-c", &format!("command -v {program} >/dev/null 2>&1")])
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+}
+
+/// Makes sure the Cortex-M target and llvm-tools are installed (rustup).
+pub fn ensure_target() -> Result<()> {
+    let out = Command::new("rustup")
+        .args(["target", "list", "--installed"])
+        .output()
+        .context("rustup is needed to install the thumbv7em-none-eabihf target")?;
+    if !String::from_utf8_lossy(&out.stdout).contains("thumbv7em-none-eabihf") {
+        run(Command::new("rustup").args(["target", "add", "thumbv7em-none-eabihf"]))?;
+    }
+    Ok(())
+}
+
+/// Makes sure `program` exists, installing Debian `package` when running as root; otherwise
+/// says precisely what is missing.
+pub fn ensure_apt(program: &str, package: &str) -> Result<()> {
+    if have(program) {
+        return Ok(());
+    }
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+        .unwrap_or(false);
+    if !root || !have("apt-get") {
+        bail!("`{program}` is missing: install the Debian package `{package}` (apt-get install {package})");
+    }
+    static UPDATED: std::sync::Once = std::sync::Once::new();
+    UPDATED.call_once(|| {
+        let _ = run(Command::new("apt-get").arg("update"));
+    });
+    run(Command::new("apt-get")
+        .args(["install", "-y", "--no-install-recommends", package])
+        .env("DEBIAN_FRONTEND", "noninteractive"))?;
+    if !have(program) {
+        bail!("installed {package} but `{program}` is still missing");
+    }
+    Ok(())
+}
