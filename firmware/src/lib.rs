@@ -1,4 +1,10 @@
-//! Firmware library: LMS200 telegram codec, driver and the application loop around pfe-core.
+//! Firmware library: the LMS200 telegram codec and driver, the application loop around
+//! pfe-core, and the framed feature output. Host-testable (`no_std`, generic over
+//! `embedded-io` / `embedded-hal` traits); the binaries in `src/bin` add the hardware glue.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+
+pub mod app;
+pub mod lms;
+pub mod output;

@@ -1,1 +1,10 @@
-//! Host-side tools for pfe: simulator, LMS200 emulator, baselines, evaluation, CLI support.
+//! Host-side tools for pfe: scene simulator with ground truth, scorer, baselines, LMS200
+//! device emulator, file formats, plots, evaluation and benchmarks (std allowed here).
+
+pub mod baselines;
+pub mod emulator;
+pub mod eval;
+pub mod formats;
+pub mod plot;
+pub mod score;
+pub mod sim;

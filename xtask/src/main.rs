@@ -2,6 +2,16 @@
 //!
 //! Each command lives in its own module; `util` holds what they share.
 
+mod bench_mcu;
+mod conformance;
+mod demo;
+mod eval;
+mod fuzz;
+mod no_panic;
+mod size;
+mod soak;
+mod test;
+#[allow(dead_code)]
 mod util;
 
 use anyhow::{bail, Result};
@@ -32,6 +42,15 @@ fn main() -> Result<()> {
             eprint!("{HELP}");
             Ok(())
         }
+        "demo" => demo::run(rest),
+        "test" => test::run(rest),
+        "eval" => eval::run(rest),
+        "conformance" => conformance::run(rest),
+        "bench-mcu" => bench_mcu::run(rest),
+        "size" => size::run(rest),
+        "fuzz" => fuzz::run(rest),
+        "no-panic" => no_panic::run(rest),
+        "soak" => soak::run(rest),
         other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
     }
 }

@@ -1,0 +1,1 @@
+//! The application loop: driver → pfe-core → framed output.

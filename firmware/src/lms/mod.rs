@@ -1,0 +1,1 @@
+//! LMS200 serial protocol: telegram codec (sans-IO), commands, replies, driver.

@@ -1,0 +1,1 @@
+//! Features on the wire: postcard + COBS frames with a checksum.
