@@ -2,9 +2,12 @@
 //! device emulator, file formats, plots, evaluation and benchmarks (std allowed here).
 
 pub mod baselines;
+pub mod bench;
 pub mod emulator;
 pub mod eval;
 pub mod formats;
+pub mod method;
 pub mod plot;
+pub mod record;
 pub mod score;
 pub mod sim;

@@ -1,0 +1,2 @@
+//! `pfe`: run the extractor on recorded scans (being written).
+fn main() {}
