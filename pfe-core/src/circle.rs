@@ -123,7 +123,8 @@ pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitE
             // Chernov's Newton iteration on the characteristic polynomial, from η = 0.
             let var_z = m.mzz - mz * mz;
             let a1 = var_z * mz + 4.0 * cov_xy * mz - m.mxz * m.mxz - m.myz * m.myz;
-            let a0 = m.mxz * (m.mxz * m.myy - m.myz * m.mxy) + m.myz * (m.myz * m.mxx - m.mxz * m.mxy)
+            let a0 = m.mxz * (m.mxz * m.myy - m.myz * m.mxy)
+                + m.myz * (m.myz * m.mxx - m.mxz * m.mxy)
                 - var_z * cov_xy;
             let hyper = method == CircleMethod::Hyper;
             let (a2, a3) = if hyper {

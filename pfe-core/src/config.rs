@@ -14,18 +14,35 @@ pub enum Threshold {
         /// λ (paper: 2).
         lambda: f32,
     },
-    /// From the range noise and the prediction's geometry: a point is a mark when its
-    /// prediction error exceeds `k · σ_D`, `σ_D² = σ_r² (1 + 1/n + u²/S_uu) / sin²…` (see
-    /// `predict`), plus `floor` mm for quantisation and model error.
-    Noise {
-        /// Detection level in standard deviations.
-        k: f32,
-        /// Level below which the points before a detected mark are not part of the new
-        /// segment (boundary localisation, see `extract`).
-        k_locate: f32,
-        /// Constant allowance, mm.
-        floor: f32,
-    },
+    /// From the range noise and the prediction's geometry (default mode, see [`NoiseModel`]).
+    Noise(NoiseModel),
+}
+
+/// The default mode's mark-point test. A point is a mark when its prediction error exceeds
+/// `k · σ_r · f + floor`, `f` the prediction's standard deviation in units of σ_r
+/// ([`crate::predict::Prediction::sigma_factor`]), or when it is farther from its predecessor
+/// than any surface seen at ≥ 10° incidence allows. Predictions use up to `window` points of
+/// the current segment only (never a window straddling a boundary).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct NoiseModel {
+    /// Detection level, in standard deviations of the prediction error.
+    pub k: f32,
+    /// Boundary localisation level: after a detection, the preceding points that already
+    /// deviate by more than this (same side, from the line before them) move to the new segment.
+    pub k_locate: f32,
+    /// Constant allowance, mm (quantisation, small systematic errors).
+    pub floor: f32,
+    /// Points in the prediction window (the paper uses 3; more averages the noise down).
+    pub window: usize,
+    /// Arc continuation: when the line prediction fails, the last `arc_window` points of the
+    /// segment are fitted with a circle; if it explains them significantly better than a line
+    /// and predicts the point, the point continues the arc. 0 disables it.
+    pub arc_window: usize,
+    /// Required drop of the squared residual sum (units of σ_r²) for the arc test.
+    pub arc_chi2: f32,
+    /// Largest radius for the arc test, mm.
+    pub arc_max_radius: f32,
 }
 
 /// How a segment's type is decided.
@@ -98,11 +115,15 @@ impl Config {
     /// with boundary localisation, fit-comparison typing, Hyper fit with geometric refinement.
     pub const fn default_config() -> Self {
         Self {
-            threshold: Threshold::Noise {
-                k: 5.0,
+            threshold: Threshold::Noise(NoiseModel {
+                k: 4.0,
                 k_locate: 2.5,
                 floor: 3.0,
-            },
+                window: 6,
+                arc_window: 24,
+                arc_chi2: 16.0,
+                arc_max_radius: 2000.0,
+            }),
             check_step: true,
             typing: Typing::CompareFits {
                 chi2: 25.0,
@@ -135,8 +156,15 @@ impl Config {
             Threshold::Paper { d0, lambda } => {
                 d0.is_finite() && d0 > 0.0 && lambda.is_finite() && lambda > 0.0
             }
-            Threshold::Noise { k, k_locate, floor } => {
-                k.is_finite() && k > 0.0 && k_locate.is_finite() && floor.is_finite() && floor >= 0.0
+            Threshold::Noise(m) => {
+                m.k.is_finite()
+                    && m.k > 0.0
+                    && m.k_locate.is_finite()
+                    && m.floor.is_finite()
+                    && m.floor >= 0.0
+                    && m.window >= 2
+                    && m.arc_chi2.is_finite()
+                    && m.arc_max_radius > 0.0
             }
         };
         let ty = match self.typing {

@@ -46,7 +46,10 @@ impl Motion {
         let (s, c) = math::sin_cos(theta);
         // x = v/ω sin ωt, y = v/ω (1 − cos ωt); series for small ωt keeps f32 exact.
         let (x, y) = if math::abs(theta) < 1e-3 {
-            (self.v * t * (1.0 - theta * theta / 6.0), self.v * t * theta * 0.5)
+            (
+                self.v * t * (1.0 - theta * theta / 6.0),
+                self.v * t * theta * 0.5,
+            )
         } else {
             (self.v / self.omega * s, self.v / self.omega * (1.0 - c))
         };

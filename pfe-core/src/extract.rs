@@ -5,10 +5,10 @@
 use heapless::Vec;
 
 use crate::circle::{circle_covariance_range, fit_circle, geometric_sse, refine_circle};
-use crate::config::{Config, Threshold, Typing, NP};
+use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{CircleFeature, Feature, LineFeature};
-use crate::geometry::Point;
+use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::fit_line;
 use crate::math;
 use crate::predict::{paper_threshold, predict, Prediction};
@@ -20,6 +20,10 @@ const VALID: u8 = 1;
 const START: u8 = 2;
 /// Last point of a segment (the paired mark point).
 const END: u8 = 4;
+/// Points of the new segment seen before its boundary is refined.
+const REFINE_AFTER: usize = 4;
+/// Points each side used to refine a boundary.
+const REFINE_SPAN: usize = 6;
 
 /// What one extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -123,8 +127,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         self.load_points(scan, config);
         match config.threshold {
             Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, scan.geometry.r_max),
-            Threshold::Noise { k, k_locate, floor } => {
-                self.mark_noise(k, k_locate, floor, config.sigma_r, scan.geometry.angle_step)
+            Threshold::Noise(model) => {
+                self.mark_noise(&model, config.sigma_r, scan.geometry.angle_step)
             }
         }
         if config.check_step {
@@ -245,9 +249,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 let r = self.point(k).distance(&self.origin(k));
                 p.error > paper_threshold(d0, lambda, r, r_max, p.phi)
             }
-            Threshold::Noise { k: kk, floor, .. } => {
-                p.error > kk * config.sigma_r * p.sigma_factor + floor
-            }
+            Threshold::Noise(m) => p.error > m.k * config.sigma_r * p.sigma_factor + m.floor,
         }
     }
 
@@ -280,18 +282,20 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// Default mode: predict only from points of the current segment (so no window straddles
-    /// a boundary), threshold `k σ_D + floor`, then move the boundary back over the points
-    /// that already left the old segment's line (boundary localisation).
-    fn mark_noise(&mut self, k_sigma: f32, k_locate: f32, floor: f32, sigma_r: f32, step: f32) {
+    /// a boundary), threshold `k σ_D + floor`, arc continuation, then move the boundary back
+    /// over the points that already left the old segment's line (boundary localisation).
+    fn mark_noise(&mut self, m: &NoiseModel, sigma_r: f32, step: f32) {
         let mut seg: Option<usize> = None;
-        // Largest gap between the first two points of a segment: the surface may be seen at
-        // down to 10° incidence (Borges & Aldon's λ), plus the noise of two readings.
-        let sin_step = math::abs(math::sin(step));
+        // Boundary awaiting refinement: (its index, the start of the segment before it).
+        let mut pending: Option<(usize, usize)> = None;
+        // Largest gap between consecutive points of one surface: seen at down to 10°
+        // incidence (Borges & Aldon's λ), plus the noise of two readings.
         let lam = 10.0f32.to_radians();
-        let gap_factor = sin_step / math::sin(lam - math::abs(step)).max(1e-3);
+        let gap_factor = math::abs(math::sin(step)) / math::sin(lam - math::abs(step)).max(1e-3);
         for k in 0..self.len {
             if !self.valid(k) {
                 seg = None;
+                pending = None;
                 continue;
             }
             let Some(s) = seg else {
@@ -300,24 +304,100 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 continue;
             };
             let c = k - s;
-            let boundary = if c == 1 {
-                let prev = self.point(k - 1);
-                let r_prev = prev.distance(&self.origin(k - 1));
-                let limit = r_prev * gap_factor + k_sigma * sigma_r * core::f32::consts::SQRT_2 + floor;
-                (self.point(k).distance(&prev) > limit).then_some(k)
+            let prev = self.point(k - 1);
+            let r_prev = prev.distance(&self.origin(k - 1));
+            let limit = r_prev * gap_factor + m.k * sigma_r * core::f32::consts::SQRT_2 + m.floor;
+            let jump = self.point(k).distance(&prev) > limit;
+            let boundary = if jump {
+                // A jump no surface explains (also where the window's line runs along the
+                // beam and the prediction says nothing).
+                Some(k)
+            } else if c == 1 {
+                None
             } else {
-                let w = c.min(NP);
+                let w = c.min(m.window);
                 let pred = self.predict(k - w, k, k);
                 let over = match pred {
                     None => true,
-                    Some(p) => p.error > k_sigma * sigma_r * p.sigma_factor + floor,
+                    Some(p) => p.error > m.k * sigma_r * p.sigma_factor + m.floor,
                 };
-                over.then(|| self.locate(s, k, pred, k_locate, sigma_r, floor))
+                (over && !self.continues_arc(s, k, m, sigma_r))
+                    .then(|| self.locate(s, k, pred, m, sigma_r))
             };
             if let Some(b) = boundary {
                 self.set(b, START);
                 seg = Some(b);
+                pending = (!jump).then_some((b, s));
+            } else if let Some((b, old)) = pending {
+                if k == b + REFINE_AFTER {
+                    let best = self.refine_boundary(old, b, k + 1);
+                    if best != b {
+                        self.clear(b, START);
+                        self.set(best, START);
+                        seg = Some(best);
+                    }
+                    pending = None;
+                }
             }
+        }
+    }
+
+    /// Best split between a segment starting at `old` and one starting near `b` and running
+    /// to `end` (exclusive): the candidate (`b − 3 ..= b + 1`) that minimises the two local
+    /// line fits' squared residuals (at most `REFINE_SPAN` points each side).
+    fn refine_boundary(&self, old: usize, b: usize, end: usize) -> usize {
+        let (mut best, mut best_sse) = (b, f32::INFINITY);
+        let lo = b.saturating_sub(3).max(old + NP);
+        for j in lo..=(b + 1).min(end.saturating_sub(NP)) {
+            let left = self.points.get(j.saturating_sub(REFINE_SPAN).max(old)..j);
+            let right = self.points.get(j..end.min(j + REFINE_SPAN));
+            let sse = match (left.map(fit_line), right.map(fit_line)) {
+                (Some(Ok(l)), Some(Ok(r))) => l.sse() + r.sse(),
+                _ => continue,
+            };
+            // Ties keep the detected boundary.
+            if sse < best_sse || (sse == best_sse && j == b) {
+                best = j;
+                best_sse = sse;
+            }
+        }
+        best
+    }
+
+    /// Arc continuation test for point `k` of the segment starting at `s` (see
+    /// [`NoiseModel::arc_window`]).
+    fn continues_arc(&mut self, s: usize, k: usize, m: &NoiseModel, sigma_r: f32) -> bool {
+        let c = k - s;
+        if m.arc_window < 5 || c < 5 {
+            return false;
+        }
+        let from = k - c.min(m.arc_window);
+        let Some(pts) = self.points.get(from..k) else {
+            return false;
+        };
+        let Ok(line) = fit_line(pts) else {
+            return false;
+        };
+        let Ok(circle) = fit_circle(pts, crate::circle::CircleMethod::Kasa) else {
+            return false;
+        };
+        let var = sigma_r * sigma_r;
+        if circle.radius > m.arc_max_radius
+            || line.sse() - geometric_sse(pts, &circle) < m.arc_chi2 * var
+        {
+            return false;
+        }
+        let (target, origin) = (self.point(k), self.origin(k));
+        let (bx, by) = (target.x - origin.x, target.y - origin.y);
+        let r = math::hypot(bx, by);
+        if !(r > 0.0) {
+            return false;
+        }
+        self.stats.predictions += 1;
+        match ray_circle_intersection(origin, bx / r, by / r, circle.center, circle.radius) {
+            // The fit over many points predicts about as well as one reading: allow 1.5 σ_D.
+            Some(t) => math::abs(r - t) <= m.k * sigma_r * 1.5 + m.floor,
+            None => false,
         }
     }
 
@@ -328,19 +408,17 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         s: usize,
         k: usize,
         at_k: Option<Prediction>,
-        k_locate: f32,
+        m: &NoiseModel,
         sigma_r: f32,
-        floor: f32,
     ) -> usize {
         const BACK: usize = 4;
-        const REF: usize = 6;
         let c = k - s;
         let back = BACK.min(c.saturating_sub(NP));
         if back == 0 {
             return k;
         }
         let ref_end = k - back;
-        let ref_start = ref_end.saturating_sub(REF).max(s);
+        let ref_start = ref_end.saturating_sub(m.window).max(s);
         let Some(side) = at_k.map(|p| p.signed) else {
             return k;
         };
@@ -354,34 +432,60 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             match self.predict(ref_start, ref_end, j) {
                 Some(p)
                     if p.signed * side > 0.0
-                        && p.error > k_locate * sigma_r * p.sigma_factor + floor =>
+                        && p.error > m.k_locate * sigma_r * p.sigma_factor + m.floor =>
                 {
                     b = j
                 }
                 _ => break,
             }
         }
+        // Each point moved to the new segment must lie on the line through the ones after it
+        // (a reference line through an arc's end also "sees" the arc's own last points
+        // deviate).
+        while b + 2 <= k {
+            let tol = m.k * sigma_r + m.floor;
+            let consistent = match (self.points.get(b + 1..=k), self.points.get(b)) {
+                (Some(rest), Some(p)) => {
+                    fit_line(rest).is_ok_and(|l| math::abs(l.signed_distance(p)) <= tol)
+                }
+                _ => true,
+            };
+            if consistent {
+                break;
+            }
+            b += 1;
+        }
         b
     }
 
     /// Paper §3.3: wherever `Np` mark points follow each other, predict the next point from
     /// them; when it fits, the marks after the first were caused by a window straddling the
-    /// boundary and are removed.
+    /// boundary and are removed. Runs of 2..Np marks (a straddling window can fit by chance,
+    /// e.g. when the boundary point lies on both surfaces, as at a corner) get the same test
+    /// with the run's own points as the window; a run longer than `Np` is tested at its last
+    /// `Np` points, so its first marks stay. Runs at the end of a valid stretch are left alone.
     fn check_step(&mut self, config: &Config, r_max: f32) {
         let mut j = 0usize;
-        while j + NP < self.len {
-            let run = (j..j + NP).all(|i| self.flag(i) & (VALID | START) == VALID | START);
-            if run && self.valid(j + NP) {
-                let pred = self.predict(j, j + NP, j + NP);
-                if !self.exceeds(pred, j + NP, config, r_max) {
-                    for i in j + 1..j + NP {
+        while j < self.len {
+            if self.flag(j) & (VALID | START) != VALID | START {
+                j += 1;
+                continue;
+            }
+            let mut e = j;
+            while e + 1 < self.len && self.flag(e + 1) & (VALID | START) == VALID | START {
+                e += 1;
+            }
+            let next = e + 1;
+            if e > j && next < self.len && self.valid(next) {
+                let from = (e + 1).saturating_sub(NP).max(j);
+                let pred = self.predict(from, next, next);
+                if !self.exceeds(pred, next, config, r_max) {
+                    for i in from + 1..next {
                         self.clear(i, START);
                     }
-                    j += NP;
-                    continue;
                 }
             }
-            j += 1;
+            j = next;
         }
     }
 

@@ -70,3 +70,24 @@ pub fn ray_line_intersection(
         None
     }
 }
+
+/// Nearest intersection (t > 0) of the ray from `origin` in the unit direction `(dx, dy)` with
+/// the circle `center`, `radius`; `None` when the ray misses it.
+pub fn ray_circle_intersection(
+    origin: Point,
+    dx: f32,
+    dy: f32,
+    center: Point,
+    radius: f32,
+) -> Option<f32> {
+    let (cx, cy) = (center.x - origin.x, center.y - origin.y);
+    let b = dx * cx + dy * cy;
+    let c = cx * cx + cy * cy - radius * radius;
+    let disc = b * b - c;
+    if !(disc >= 0.0) {
+        return None;
+    }
+    let root = math::sqrt(disc);
+    let t = if b - root > 0.0 { b - root } else { b + root };
+    (t > 0.0 && t.is_finite()).then_some(t)
+}

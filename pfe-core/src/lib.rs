@@ -37,7 +37,7 @@ pub mod scan;
 pub use circle::{
     circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
 };
-pub use config::{Config, Threshold, Typing, NP};
+pub use config::{Config, NoiseModel, Threshold, Typing, NP};
 pub use correction::RangeCorrection;
 pub use deskew::Motion;
 pub use error::{ExtractError, FitError};

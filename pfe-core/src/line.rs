@@ -171,7 +171,8 @@ impl LineFit {
         let (sc, cc) = math::sin_cos(chi);
         let d = self.centroid.y * sc + self.centroid.x * cc;
         let n = self.n.max(1) as f32;
-        let var_rho = (var_yy * cc * cc + var_xx * sc * sc - 2.0 * var_xy * sc * cc) / n + d * d * big_a;
+        let var_rho =
+            (var_yy * cc * cc + var_xx * sc * sc - 2.0 * var_xy * sc * cc) / n + d * d * big_a;
         LineCovariance {
             var_alpha: big_a,
             var_rho,
@@ -194,7 +195,11 @@ impl LineFit {
         for p in points {
             let (bx, by) = (p.x - origin.x, p.y - origin.y);
             let bn = math::hypot(bx, by);
-            let cosb = if bn > 0.0 { (bx * nc + by * ns) / bn } else { 1.0 };
+            let cosb = if bn > 0.0 {
+                (bx * nc + by * ns) / bn
+            } else {
+                1.0
+            };
             let var_i = sigma_r * sigma_r * cosb * cosb;
             let u = (p.x - self.centroid.x) * tx + (p.y - self.centroid.y) * ty;
             suu += u * u;
@@ -204,7 +209,11 @@ impl LineFit {
         }
         let n = self.n.max(1) as f32;
         let d = self.centroid.x * tx + self.centroid.y * ty;
-        let var_alpha = if suu > 0.0 { suu_s / (suu * suu) } else { f32::INFINITY };
+        let var_alpha = if suu > 0.0 {
+            suu_s / (suu * suu)
+        } else {
+            f32::INFINITY
+        };
         let cov_e_a = if suu > 0.0 { -su_s / (n * suu) } else { 0.0 };
         let var_e = s_s / (n * n);
         LineCovariance {

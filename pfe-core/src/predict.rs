@@ -60,11 +60,23 @@ where
             sigma_factor: f32::INFINITY,
         });
     };
-    let error = if t > 0.0 { math::abs(r - t) } else { f32::INFINITY };
+    let error = if t > 0.0 {
+        math::abs(r - t)
+    } else {
+        f32::INFINITY
+    };
     let pp = Point::new(origin.x + dx * t, origin.y + dy * t);
     let u = (pp.x - line.centroid.x) * tx + (pp.y - line.centroid.y) * ty;
-    let lever = if suu > 0.0 { 1.0 / n + u * u / suu } else { f32::INFINITY };
-    let ratio = if sin_phi > 1e-6 { sin_w / sin_phi } else { f32::INFINITY };
+    let lever = if suu > 0.0 {
+        1.0 / n + u * u / suu
+    } else {
+        f32::INFINITY
+    };
+    let ratio = if sin_phi > 1e-6 {
+        sin_w / sin_phi
+    } else {
+        f32::INFINITY
+    };
     let sigma_factor = math::sqrt(1.0 + lever * ratio * ratio);
     Some(Prediction {
         error,

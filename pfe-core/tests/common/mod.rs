@@ -1,0 +1,106 @@
+//! Exact ray casting of walls and circles for the analytic tests (independent of pfe-core).
+#![allow(dead_code)]
+
+/// A primitive of an analytic scene, in mm.
+#[derive(Clone, Copy, Debug)]
+pub enum Prim {
+    /// Segment from (x0, y0) to (x1, y1).
+    Seg(f64, f64, f64, f64),
+    /// Circle centre (cx, cy), radius.
+    Circle(f64, f64, f64),
+}
+
+/// Nearest hit of the ray from the origin at `bearing` (rad): (range, primitive index).
+pub fn cast(prims: &[Prim], bearing: f64) -> Option<(f64, usize)> {
+    let (dx, dy) = (bearing.cos(), bearing.sin());
+    let mut best: Option<(f64, usize)> = None;
+    for (i, p) in prims.iter().enumerate() {
+        let t = match *p {
+            Prim::Seg(x0, y0, x1, y1) => {
+                let (ex, ey) = (x1 - x0, y1 - y0);
+                let den = dx * ey - dy * ex;
+                if den.abs() < 1e-12 {
+                    None
+                } else {
+                    let t = (x0 * ey - y0 * ex) / den;
+                    let s = (x0 * dy - y0 * dx) / den;
+                    (t > 0.0 && (0.0..=1.0).contains(&s)).then_some(t)
+                }
+            }
+            Prim::Circle(cx, cy, r) => {
+                let b = dx * cx + dy * cy;
+                let c = cx * cx + cy * cy - r * r;
+                let disc = b * b - c;
+                if disc < 0.0 {
+                    None
+                } else {
+                    let t = b - disc.sqrt();
+                    (t > 0.0).then_some(t)
+                }
+            }
+        };
+        if let Some(t) = t {
+            if best.map_or(true, |(bt, _)| t < bt) {
+                best = Some((t, i));
+            }
+        }
+    }
+    best
+}
+
+/// Ranges (mm, NaN = no return) and the primitive hit by each beam.
+pub fn scan(
+    prims: &[Prim],
+    start: f64,
+    step: f64,
+    n: usize,
+    r_max: f64,
+) -> (Vec<f32>, Vec<Option<usize>>) {
+    (0..n)
+        .map(|i| match cast(prims, start + step * i as f64) {
+            Some((t, p)) if t <= r_max => (t as f32, Some(p)),
+            _ => (f32::NAN, None),
+        })
+        .unzip()
+}
+
+/// Ground-truth runs of ≥ `min` consecutive beams on one primitive: (first, last, primitive).
+pub fn runs(hits: &[Option<usize>], min: usize) -> Vec<(usize, usize, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < hits.len() {
+        let Some(p) = hits[i] else {
+            i += 1;
+            continue;
+        };
+        let mut j = i;
+        while j + 1 < hits.len() && hits[j + 1] == Some(p) {
+            j += 1;
+        }
+        if j + 1 - i >= min {
+            out.push((i, j, p));
+        }
+        i = j + 1;
+    }
+    out
+}
+
+/// Small deterministic Gaussian noise source (Box–Muller over a xorshift), so tests need no
+/// extra crates and give the same numbers everywhere.
+pub struct Noise(u64);
+
+impl Noise {
+    pub fn new(seed: u64) -> Self {
+        Noise(seed.wrapping_mul(0x9E3779B97F4A7C15) | 1)
+    }
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    pub fn gauss(&mut self) -> f64 {
+        let (u1, u2) = (self.uniform(), self.uniform());
+        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    }
+}
