@@ -1,1 +1,0 @@
-//! formats (being written).

@@ -1,0 +1,204 @@
+//! CARMEN logs: `FLASER n r_1 ... r_n x y θ odom_x odom_y odom_θ timestamp host logger_ts`.
+//!
+//! Ranges are in metres; the field of view is 180°, centred on x (x forward, y left, beams
+//! counter-clockwise from the right). Every other line (`ODOM`, `PARAM`, `NEFF`, `RLASER`,
+//! `TRUEPOS`, … — any upper-case message name — and `#` comments) is skipped; a line that is
+//! neither is an error.
+//!
+//! # No return
+//! A reading is no return when it is at or beyond the maximum range `r_max`: 50 m by default,
+//! which removes the 81.83 / 81.91 codes (the LMS "8183"/"8191" in cm) and the ≈ 50–51.2 m
+//! no-return values some loggers write. When the log declares `PARAM robot_front_laser_max` of
+//! 80 m or more (the Freiburg logs, in the 80 m mode) `r_max` is 81.83 m instead, so that the
+//! genuine 50–80 m returns of outdoor logs (freiburg-campus) are kept.
+//!
+//! # Angle convention
+//! The line stores no angles. [`AngleConvention::Auto`] (the default) uses, for n beams:
+//! - n odd (181, 361): bearing_i = −90° + i·180°/(n−1), both end beams present;
+//! - n even (180, 360): bearing_i = −90° + i·180°/n, the +90° end beam dropped.
+//!
+//! Checked on the ten real logs in `../shared/data/carmen` by the residual of long straight walls
+//! (runs of ≥ 40 adjacent points whose line fit has an RMS residual below 30 mm under both
+//! conventions; see the test `carmen_angle_convention` in `tests/cli_real_data.rs`). Median RMS
+//! residual, mm, (n−1) vs n convention [number of walls]:
+//!
+//! | log | n | 180°/(n−1) | 180°/n |
+//! |---|---|---|---|
+//! | (filled in from the measurement) | | | |
+//!
+//! ```
+//! use host_tests::formats::carmen::Reader;
+//! let log = "ODOM 0 0 0 0 0 0 0 x 0\nFLASER 3 1.0 81.83 2.5 0 0 0 0 0 0 0 host 0\n";
+//! let scan = Reader::new(Box::new(log.as_bytes())).next().unwrap().unwrap();
+//! assert_eq!(scan.ranges_mm.len(), 3);
+//! assert!((scan.ranges_mm[0] - 1000.0).abs() < 1e-3 && scan.ranges_mm[1].is_nan());
+//! ```
+
+use std::f32::consts::PI;
+use std::io::BufRead;
+
+use pfe_core::ScanGeometry;
+
+use super::{check_beams, check_geometry, number, InputError, Lines, Record};
+
+/// Default maximum range, mm: readings at or beyond it are no return.
+pub const DEFAULT_MAX_RANGE_MM: f32 = 50_000.0;
+/// Maximum range when the log declares an 80 m laser: the LMS "8183" code in cm.
+pub const LONG_MAX_RANGE_MM: f32 = 81_830.0;
+
+/// How beam indices map to bearings (the log does not say).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AngleConvention {
+    /// `EndToEnd` for odd n, `DropEnd` for even n (see the module docs).
+    #[default]
+    Auto,
+    /// −90° + i·180°/(n−1): the first beam at −90°, the last at +90°.
+    EndToEnd,
+    /// −90° + i·180°/n: the first beam at −90°, the +90° beam dropped.
+    DropEnd,
+}
+
+impl AngleConvention {
+    /// Geometry of an `n`-beam scan with maximum range `r_max` mm.
+    ///
+    /// ```
+    /// use host_tests::formats::carmen::AngleConvention;
+    /// let g = AngleConvention::Auto.geometry(181, 50_000.0);
+    /// assert!((g.bearing(180) - std::f32::consts::FRAC_PI_2).abs() < 1e-5);
+    /// let g = AngleConvention::Auto.geometry(180, 50_000.0);
+    /// assert!((g.angle_step - 1f32.to_radians()).abs() < 1e-7);
+    /// ```
+    pub fn geometry(self, n: usize, r_max: f32) -> ScanGeometry {
+        let end_to_end = match self {
+            AngleConvention::Auto => n % 2 == 1,
+            AngleConvention::EndToEnd => true,
+            AngleConvention::DropEnd => false,
+        };
+        let intervals = if end_to_end { n.saturating_sub(1) } else { n };
+        ScanGeometry {
+            start_angle: -PI / 2.0,
+            angle_step: PI / intervals.max(1) as f32,
+            r_max,
+        }
+    }
+}
+
+/// Streaming reader of the `FLASER` scans of a CARMEN log.
+pub struct Reader {
+    lines: Lines,
+    convention: AngleConvention,
+    r_max: f32,
+    count: u64,
+}
+
+impl Reader {
+    /// Reads scans from `input` with the default angle convention.
+    pub fn new(input: Box<dyn BufRead>) -> Self {
+        Self::with_convention(input, AngleConvention::Auto)
+    }
+
+    /// Reads scans from `input` with `convention`.
+    pub fn with_convention(input: Box<dyn BufRead>, convention: AngleConvention) -> Self {
+        Self {
+            lines: Lines::new(input),
+            convention,
+            r_max: DEFAULT_MAX_RANGE_MM,
+            count: 0,
+        }
+    }
+
+    fn flaser(&mut self, line: u64, rest: &str) -> Result<Record, InputError> {
+        let mut tokens = rest.split_ascii_whitespace();
+        let n: usize = number(line, "beam count", tokens.next())?;
+        check_beams(line, n)?;
+        let mut ranges = Vec::with_capacity(n);
+        for k in 0..n {
+            let token = tokens.next().ok_or_else(|| {
+                InputError::line(line, format!("FLASER declares {n} ranges but has {k}"))
+            })?;
+            let r: f32 = number(line, &format!("range {k}"), Some(token))?;
+            if !(r.is_finite() && r >= 0.0) {
+                return Err(InputError::line(
+                    line,
+                    format!("range {k} is not a range in metres: {token:?}"),
+                ));
+            }
+            let mm = r * 1000.0;
+            ranges.push(if mm > 0.0 && mm < self.r_max {
+                mm
+            } else {
+                f32::NAN
+            });
+        }
+        // The laser pose, odometry pose and timestamp must follow the ranges.
+        if tokens.next().is_none() {
+            return Err(InputError::line(
+                line,
+                "FLASER line truncated after the ranges (no pose)",
+            ));
+        }
+        let geometry = self.convention.geometry(n, self.r_max);
+        check_geometry(line, &geometry)?;
+        let id = self.count;
+        self.count += 1;
+        Ok(Record {
+            id,
+            geometry,
+            ranges_mm: ranges,
+        })
+    }
+}
+
+impl Iterator for Reader {
+    type Item = Result<Record, InputError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            let (line, text) = match self.lines.next_line()? {
+                Ok(l) => l,
+                Err(e) => return Some(Err(e)),
+            };
+            let t = text.trim_start();
+            let (kind, rest) = t.split_once(char::is_whitespace).unwrap_or((t, ""));
+            let rest = rest.to_string();
+            let r = match kind {
+                "" => continue,
+                _ if kind.starts_with('#') => continue,
+                "FLASER" => self.flaser(line, &rest),
+                "PARAM" => {
+                    let mut p = rest.split_ascii_whitespace();
+                    if p.next() == Some("robot_front_laser_max") {
+                        if let Some(v) = p.next().and_then(|v| v.parse::<f32>().ok()) {
+                            self.r_max = if v >= 80.0 {
+                                LONG_MAX_RANGE_MM
+                            } else {
+                                DEFAULT_MAX_RANGE_MM
+                            };
+                        }
+                    }
+                    continue;
+                }
+                _ if is_message_name(kind) => continue,
+                _ => Err(InputError::line(
+                    line,
+                    format!("not a CARMEN log line (starts with {:?})", truncate(kind)),
+                )),
+            };
+            if r.is_err() {
+                self.lines.stop();
+            }
+            return Some(r);
+        }
+    }
+}
+
+/// CARMEN message names: upper-case letters, digits and `_`, starting with a letter.
+fn is_message_name(s: &str) -> bool {
+    s.starts_with(|c: char| c.is_ascii_uppercase())
+        && s.chars()
+            .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
+}
+
+fn truncate(s: &str) -> String {
+    s.chars().take(20).collect()
+}

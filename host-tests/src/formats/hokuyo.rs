@@ -1,0 +1,109 @@
+//! Hokuyo (ROS `LaserScan`) text dumps, one scan a line:
+//! `topic stamp_s angle_min_rad angle_increment_rad range_min_m range_max_m n r_0 ... r_{n-1}`.
+//!
+//! Ranges in metres. A reading is no return when it is 0 (non-finite ranges were written as
+//! 0), below `range_min` or above `range_max` (both from the line). Blank lines and `#`
+//! comments are skipped.
+//!
+//! ```
+//! use host_tests::formats::hokuyo::Reader;
+//! let text = "/scan 1.5 -1.0 0.5 0.02 5.6 3 1.0 0 0.01\n";
+//! let scan = Reader::new(Box::new(text.as_bytes())).next().unwrap().unwrap();
+//! assert_eq!(scan.geometry.r_max, 5600.0);
+//! assert!(scan.ranges_mm[0] == 1000.0 && scan.ranges_mm[1].is_nan() && scan.ranges_mm[2].is_nan());
+//! ```
+
+use std::io::BufRead;
+
+use pfe_core::ScanGeometry;
+
+use super::{check_beams, check_geometry, number, InputError, Lines, Record};
+
+/// Streaming Hokuyo reader.
+pub struct Reader {
+    lines: Lines,
+    count: u64,
+}
+
+impl Reader {
+    /// Reads scans from `input`.
+    pub fn new(input: Box<dyn BufRead>) -> Self {
+        Self {
+            lines: Lines::new(input),
+            count: 0,
+        }
+    }
+}
+
+/// Parses one line (numbered `line`) as scan `id`.
+pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> {
+    let mut t = text.split_ascii_whitespace();
+    let _topic = t.next();
+    let _stamp: f64 = number(line, "stamp", t.next())?;
+    let angle_min: f32 = number(line, "angle_min", t.next())?;
+    let angle_inc: f32 = number(line, "angle_increment", t.next())?;
+    let range_min: f32 = number(line, "range_min", t.next())?;
+    let range_max: f32 = number(line, "range_max", t.next())?;
+    let n: usize = number(line, "beam count", t.next())?;
+    check_beams(line, n)?;
+    let (lo, hi) = (range_min * 1000.0, range_max * 1000.0);
+    let mut ranges = Vec::with_capacity(n);
+    for k in 0..n {
+        let token = t.next().ok_or_else(|| {
+            InputError::line(line, format!("line declares {n} ranges but has {k}"))
+        })?;
+        let r: f32 = number(line, &format!("range {k}"), Some(token))?;
+        if r.is_nan() || r < 0.0 {
+            return Err(InputError::line(
+                line,
+                format!("range {k} is not a range in metres: {token:?}"),
+            ));
+        }
+        let mm = r * 1000.0;
+        ranges.push(if mm > 0.0 && mm >= lo && mm <= hi {
+            mm
+        } else {
+            f32::NAN
+        });
+    }
+    if let Some(extra) = t.next() {
+        return Err(InputError::line(
+            line,
+            format!("more than the declared {n} ranges (extra {extra:?})"),
+        ));
+    }
+    let geometry = ScanGeometry {
+        start_angle: angle_min,
+        angle_step: angle_inc,
+        r_max: hi,
+    };
+    check_geometry(line, &geometry)?;
+    Ok(Record {
+        id,
+        geometry,
+        ranges_mm: ranges,
+    })
+}
+
+impl Iterator for Reader {
+    type Item = Result<Record, InputError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            let (line, text) = match self.lines.next_line()? {
+                Ok(l) => l,
+                Err(e) => return Some(Err(e)),
+            };
+            let t = text.trim();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            let r = parse_line(line, self.count, t);
+            match r {
+                Ok(_) => self.count += 1,
+                Err(_) => self.lines.stop(),
+            }
+            return Some(r);
+        }
+    }
+}

@@ -1,0 +1,356 @@
+//! Readers for recorded scans: one scan per line of `csv`, CARMEN `FLASER` logs, Hokuyo text
+//! dumps, and raw byte captures of a SICK LMS200 serial line.
+//!
+//! Every reader streams (line by line, or chunk by chunk for LMS200 captures), so files larger
+//! than memory are fine, and reads gzip transparently (detected by its magic bytes). Each scan
+//! comes out as a [`Record`]: the beam geometry and one range per beam in mm, `NaN` for no
+//! return, so indices count every beam, valid or not. A malformed input yields an
+//! [`InputError`] carrying the line number (or byte offset) and reading stops there.
+//!
+//! ```
+//! use host_tests::formats::{scans, Format};
+//! let text = "7,-90,1,1000,0,1000\n";
+//! let records: Vec<_> = scans(Format::Csv, Box::new(text.as_bytes())).collect();
+//! let r = records[0].as_ref().unwrap();
+//! assert_eq!((r.id, r.ranges_mm.len()), (7, 3));
+//! assert!(r.ranges_mm[1].is_nan()); // 0 = no return
+//! ```
+
+pub mod carmen;
+pub mod csv;
+pub mod hokuyo;
+pub mod lms200;
+
+use std::fmt;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Read};
+use std::path::Path;
+
+use pfe_core::{Feature, ScanGeometry};
+use serde::Serialize;
+
+use crate::method::{Extraction, MAX_BEAMS};
+
+/// Input file formats understood by `pfe`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// `ID,START_DEG,STEP_DEG,R_0,...,R_{N-1}`, ranges in mm (0 or ≥ 8183 = no return).
+    Csv,
+    /// CARMEN log, `FLASER` lines (metres, 180° field); see [`carmen`].
+    Carmen,
+    /// Raw byte capture of an LMS200 serial line (0xB0 telegrams); see [`lms200`].
+    Lms200,
+    /// `topic stamp angle_min angle_increment range_min range_max n r_0 ... r_{n-1}`.
+    Hokuyo,
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Format::Csv => "csv",
+            Format::Carmen => "carmen",
+            Format::Lms200 => "lms200",
+            Format::Hokuyo => "hokuyo",
+        })
+    }
+}
+
+/// One scan read from a file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Record {
+    /// Scan ID: the csv ID column, otherwise the 0-based ordinal of the scan in the file.
+    pub id: u64,
+    /// Beam geometry (bearing of beam `i` = start + i·step; x forward, y left).
+    pub geometry: ScanGeometry,
+    /// One range per beam, mm; `NaN` = no return.
+    pub ranges_mm: Vec<f32>,
+}
+
+impl Record {
+    /// Cartesian point of beam `i` in mm, if it has a return.
+    pub fn point(&self, i: usize) -> Option<(f32, f32)> {
+        let r = *self.ranges_mm.get(i)?;
+        if !(r.is_finite() && r > 0.0 && r <= self.geometry.r_max) {
+            return None;
+        }
+        let b = self.geometry.bearing(i);
+        Some((r * b.cos(), r * b.sin()))
+    }
+}
+
+/// Where in the input something went wrong.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Location {
+    /// 1-based line number of a text format.
+    Line(u64),
+    /// 0-based byte offset of a binary format.
+    Byte(u64),
+}
+
+/// A malformed or unreadable input.
+#[derive(Debug)]
+pub struct InputError {
+    /// Where.
+    pub location: Location,
+    /// What, in one line.
+    pub message: String,
+}
+
+impl InputError {
+    /// An error at line `line`.
+    pub fn line(line: u64, message: impl Into<String>) -> Self {
+        Self {
+            location: Location::Line(line),
+            message: message.into(),
+        }
+    }
+}
+
+impl fmt::Display for InputError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.location {
+            Location::Line(n) => write!(f, "line {n}: {}", self.message),
+            Location::Byte(n) => write!(f, "byte {n}: {}", self.message),
+        }
+    }
+}
+
+impl std::error::Error for InputError {}
+
+/// Stream of scans, stopping after the first error.
+pub type Scans = Box<dyn Iterator<Item = Result<Record, InputError>>>;
+
+/// Opens `path` (`-` = stdin) for reading, decompressing gzip when the data starts with the
+/// gzip magic bytes. `wrap` may wrap the raw file reader (e.g. a progress bar counting bytes).
+pub fn open(
+    path: &Path,
+    wrap: impl FnOnce(Box<dyn Read>) -> Box<dyn Read>,
+) -> io::Result<Box<dyn BufRead>> {
+    let raw: Box<dyn Read> = if path.as_os_str() == "-" {
+        Box::new(io::stdin())
+    } else {
+        Box::new(File::open(path)?)
+    };
+    let mut reader = BufReader::with_capacity(1 << 16, wrap(raw));
+    let magic = reader.fill_buf()?;
+    if magic.starts_with(&[0x1f, 0x8b]) {
+        Ok(Box::new(BufReader::with_capacity(
+            1 << 16,
+            flate2::bufread::MultiGzDecoder::new(reader),
+        )))
+    } else {
+        Ok(Box::new(reader))
+    }
+}
+
+/// The scans of `input` in `format`.
+pub fn scans(format: Format, input: Box<dyn BufRead>) -> Scans {
+    match format {
+        Format::Csv => Box::new(csv::Reader::new(input)),
+        Format::Carmen => Box::new(carmen::Reader::new(input)),
+        Format::Hokuyo => Box::new(hokuyo::Reader::new(input)),
+        Format::Lms200 => Box::new(lms200::Reader::new(input).map(|t| t.map(|t| t.record()))),
+    }
+}
+
+/// Longest accepted text line, bytes (a 2048-beam scan in any text format is far shorter).
+pub const MAX_LINE: u64 = 1 << 20;
+
+/// Line-by-line reader with line numbers, a bounded line length and a reused buffer.
+pub(crate) struct Lines {
+    input: Box<dyn BufRead>,
+    buf: Vec<u8>,
+    line: u64,
+    done: bool,
+}
+
+impl Lines {
+    pub(crate) fn new(input: Box<dyn BufRead>) -> Self {
+        Self {
+            input,
+            buf: Vec::new(),
+            line: 0,
+            done: false,
+        }
+    }
+
+    /// The next line (without its line ending) and its 1-based number; `None` at the end or
+    /// after an error.
+    pub(crate) fn next_line(&mut self) -> Option<Result<(u64, &str), InputError>> {
+        if self.done {
+            return None;
+        }
+        self.buf.clear();
+        self.line += 1;
+        let line = self.line;
+        let n = match (&mut self.input)
+            .take(MAX_LINE)
+            .read_until(b'\n', &mut self.buf)
+        {
+            Ok(n) => n,
+            Err(e) => {
+                self.done = true;
+                return Some(Err(InputError::line(line, format!("cannot read: {e}"))));
+            }
+        };
+        if n == 0 {
+            self.done = true;
+            return None;
+        }
+        if n as u64 == MAX_LINE && self.buf.last() != Some(&b'\n') {
+            self.done = true;
+            return Some(Err(InputError::line(
+                line,
+                format!("line longer than {MAX_LINE} bytes"),
+            )));
+        }
+        while matches!(self.buf.last(), Some(b'\n' | b'\r')) {
+            self.buf.pop();
+        }
+        match std::str::from_utf8(&self.buf) {
+            Ok(s) => Some(Ok((line, s))),
+            Err(_) => {
+                self.done = true;
+                Some(Err(InputError::line(line, "not UTF-8 text")))
+            }
+        }
+    }
+
+    /// Stops reading (after an error).
+    pub(crate) fn stop(&mut self) {
+        self.done = true;
+    }
+}
+
+/// Parses a number field, naming it in the error.
+pub(crate) fn number<T: std::str::FromStr>(
+    line: u64,
+    what: &str,
+    token: Option<&str>,
+) -> Result<T, InputError> {
+    let token = token.ok_or_else(|| InputError::line(line, format!("missing {what}")))?;
+    token
+        .trim()
+        .parse()
+        .map_err(|_| InputError::line(line, format!("{what} is not a number: {token:?}")))
+}
+
+/// Checks a beam count against the extractor's capacity.
+pub(crate) fn check_beams(line: u64, n: usize) -> Result<(), InputError> {
+    if n == 0 {
+        Err(InputError::line(line, "no ranges"))
+    } else if n > MAX_BEAMS {
+        Err(InputError::line(
+            line,
+            format!("{n} ranges, more than the {MAX_BEAMS} the extractor holds"),
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// Checks a geometry built from a line.
+pub(crate) fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
+    if g.is_valid() {
+        Ok(())
+    } else {
+        Err(InputError::line(
+            line,
+            format!(
+                "unusable geometry (start {} rad, step {} rad, max range {} mm)",
+                g.start_angle, g.angle_step, g.r_max
+            ),
+        ))
+    }
+}
+
+/// One feature in the `pfe extract` JSON output.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum FeatureJson {
+    /// `x cos α + y sin α = ρ` between `start` and `end`.
+    Line {
+        /// First beam index.
+        first: usize,
+        /// Last beam index.
+        last: usize,
+        /// Normal angle, rad.
+        alpha: f32,
+        /// Distance from the scanner, mm.
+        rho: f32,
+        /// σ_α², rad².
+        var_alpha: f32,
+        /// σ_ρ², mm².
+        var_rho: f32,
+        /// First point projected on the line, mm.
+        start: [f32; 2],
+        /// Last point projected on the line, mm.
+        end: [f32; 2],
+    },
+    /// A circle or arc.
+    Circle {
+        /// First beam index.
+        first: usize,
+        /// Last beam index.
+        last: usize,
+        /// Centre, mm.
+        center: [f32; 2],
+        /// Radius, mm.
+        radius: f32,
+        /// Covariance of (centre x, centre y, radius), mm².
+        cov: [[f32; 3]; 3],
+    },
+}
+
+impl From<&Feature> for FeatureJson {
+    fn from(f: &Feature) -> Self {
+        match f {
+            Feature::Line(l) => FeatureJson::Line {
+                first: usize::from(l.first),
+                last: usize::from(l.last),
+                alpha: l.alpha,
+                rho: l.rho,
+                var_alpha: l.var_alpha,
+                var_rho: l.var_rho,
+                start: [l.start.x, l.start.y],
+                end: [l.end.x, l.end.y],
+            },
+            Feature::Circle(c) => FeatureJson::Circle {
+                first: usize::from(c.first),
+                last: usize::from(c.last),
+                center: [c.center.x, c.center.y],
+                radius: c.radius,
+                cov: c.cov,
+            },
+        }
+    }
+}
+
+/// One line of `pfe extract` output: `{"scan": ID, "marks": [...], "features": [...]}`.
+///
+/// ```
+/// use host_tests::formats::ScanJson;
+/// use host_tests::method::Extraction;
+/// let j = ScanJson::new(3, &Extraction { marks: vec![0, 9], features: vec![] });
+/// assert_eq!(serde_json::to_string(&j).unwrap(), r#"{"scan":3,"marks":[0,9],"features":[]}"#);
+/// ```
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ScanJson {
+    /// Scan ID.
+    pub scan: u64,
+    /// Mark points (beam indices).
+    pub marks: Vec<usize>,
+    /// Features in scan order.
+    pub features: Vec<FeatureJson>,
+}
+
+impl ScanJson {
+    /// The output line for scan `id`.
+    pub fn new(id: u64, extraction: &Extraction) -> Self {
+        Self {
+            scan: id,
+            marks: extraction.marks.clone(),
+            features: extraction.features.iter().map(FeatureJson::from).collect(),
+        }
+    }
+}
