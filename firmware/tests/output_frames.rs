@@ -1,0 +1,358 @@
+//! Output frames: round trips, stream shapes, corruption detection, and the format checked
+//! against independent implementations (the `cobs` crate and `crc32fast`).
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::panic,
+    clippy::indexing_slicing
+)]
+
+use firmware::output::{
+    crc32, max_frame_len, write_report, write_scan, Counters, DecodeError, Feed, Frame,
+    FrameDecoder, Header, Report, ScanHeader, ScanStatus, Stage, WireFeature, MAX_FEATURES,
+};
+use pfe_core::{CircleFeature, Feature, LineFeature, Point};
+
+fn line(i: u16) -> Feature {
+    Feature::Line(LineFeature {
+        first: i,
+        last: i + 20,
+        points: 19,
+        alpha: -2.5 + f32::from(i) * 0.01,
+        rho: 1234.567 + f32::from(i),
+        var_alpha: 1.5e-7,
+        var_rho: 3.25,
+        cov_alpha_rho: -2.0e-5,
+        start: Point::new(100.0, -0.0),
+        end: Point::new(f32::MIN_POSITIVE, 7e30),
+    })
+}
+
+fn circle(i: u16) -> Feature {
+    Feature::Circle(CircleFeature {
+        first: i,
+        last: i + 9,
+        points: 10,
+        center: Point::new(1500.25, -320.5),
+        radius: 100.0 + f32::from(i),
+        cov: [[1.0, 0.5, -0.25], [0.5, 2.0, 0.0], [-0.25, 0.0, 3.0]],
+        start_angle: -3.0,
+        end_angle: 3.1,
+    })
+}
+
+fn header(seq: u32, n: u16) -> ScanHeader {
+    ScanHeader {
+        seq,
+        counters: Counters {
+            telegrams_ok: 1000 + seq,
+            crc_dropped: 3,
+            bytes_skipped: 70_000,
+            reinits: 1,
+        },
+        valid: 355,
+        segments: 9,
+        dropped: 0,
+        n_features: n,
+        status: ScanStatus::FeatureCapacity,
+    }
+}
+
+fn scan_frame(seq: u32, features: &[Feature]) -> Vec<u8> {
+    let mut out = Vec::new();
+    write_scan(&mut Writer(&mut out), &header(seq, 0), features).unwrap();
+    out
+}
+
+/// `embedded_io::Write` for a `Vec` (the firmware crate has no `std` feature of embedded-io).
+struct Writer<'a>(&'a mut Vec<u8>);
+impl embedded_io::ErrorType for Writer<'_> {
+    type Error = core::convert::Infallible;
+}
+impl embedded_io::Write for Writer<'_> {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// Feeds `chunks` and collects every frame / error.
+fn decode_chunks<'a>(
+    dec: &mut FrameDecoder<8192>,
+    chunks: impl IntoIterator<Item = &'a [u8]>,
+) -> Vec<Result<Frame, DecodeError>> {
+    let mut out = Vec::new();
+    for chunk in chunks {
+        let mut rest = chunk;
+        loop {
+            match dec.feed(rest) {
+                Feed::Consumed => break,
+                Feed::Frame { frame, remaining } => {
+                    out.push(Ok(frame));
+                    rest = remaining;
+                }
+                Feed::Error { error, remaining } => {
+                    out.push(Err(error));
+                    rest = remaining;
+                }
+            }
+        }
+    }
+    out
+}
+
+fn mixed() -> Vec<Feature> {
+    (0..12)
+        .map(|i| {
+            if i % 3 == 0 {
+                circle(i * 25)
+            } else {
+                line(i * 25)
+            }
+        })
+        .collect()
+}
+
+fn bits(f: &Feature) -> Vec<u32> {
+    match f {
+        Feature::Line(l) => [
+            l.alpha,
+            l.rho,
+            l.var_alpha,
+            l.var_rho,
+            l.cov_alpha_rho,
+            l.start.x,
+            l.start.y,
+            l.end.x,
+            l.end.y,
+        ]
+        .iter()
+        .map(|v| v.to_bits())
+        .collect(),
+        Feature::Circle(c) => c
+            .cov
+            .iter()
+            .flatten()
+            .chain([c.center.x, c.center.y, c.radius, c.start_angle, c.end_angle].iter())
+            .map(|v| v.to_bits())
+            .collect(),
+    }
+}
+
+#[test]
+fn round_trip_is_bit_exact() {
+    let feats = mixed();
+    let wire = scan_frame(42, &feats);
+    assert_eq!(wire.last(), Some(&0));
+    assert_eq!(
+        wire.iter().filter(|b| **b == 0).count(),
+        1,
+        "one zero: the terminator"
+    );
+    assert!(wire.len() <= max_frame_len(feats.len()));
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    assert_eq!(got.len(), 1);
+    let frame = got[0].as_ref().unwrap();
+    assert_eq!(frame.header, Header::Scan(header(42, 12)));
+    let back: Vec<Feature> = frame.features.iter().map(WireFeature::to_feature).collect();
+    assert_eq!(back, feats);
+    for (a, b) in back.iter().zip(&feats) {
+        assert_eq!(bits(a), bits(b), "bit-exact, including -0.0");
+    }
+}
+
+#[test]
+fn empty_scan_and_reports_round_trip() {
+    let reports = [
+        Report::Stack {
+            used: 2400,
+            size: 16384,
+        },
+        Report::Timing {
+            seq: 3,
+            stage: Stage::Pipeline,
+            ticks: 16_000_000,
+            points: 361,
+        },
+        Report::Done { scans: u32::MAX },
+    ];
+    let mut wire = scan_frame(0, &[]);
+    for r in &reports {
+        write_report(&mut Writer(&mut wire), r).unwrap();
+    }
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    assert_eq!(got.len(), 4);
+    let f0 = got[0].as_ref().unwrap();
+    assert_eq!(f0.scan().unwrap().n_features, 0);
+    assert!(f0.features.is_empty());
+    for (g, r) in got[1..].iter().zip(&reports) {
+        assert_eq!(g.as_ref().unwrap().header, Header::Report(*r));
+    }
+}
+
+#[test]
+fn format_matches_independent_cobs_and_crc32() {
+    let feats = mixed();
+    let wire = scan_frame(9, &feats);
+    let body = &wire[..wire.len() - 1];
+    let raw = cobs::decode_vec(body).expect("the cobs crate decodes our frame");
+    let (payload, crc) = raw.split_at(raw.len() - 4);
+    assert_eq!(
+        u32::from_le_bytes(crc.try_into().unwrap()),
+        crc32fast::hash(payload)
+    );
+    assert_eq!(crc32(0, b"123456789"), 0xCBF4_3926);
+    // The payload starts with the postcard header: variant 0 (Scan), then seq 9 as a varint.
+    assert_eq!(&payload[..2], &[0, 9]);
+    // A frame built by the cobs crate from our payload decodes too (encoders agree).
+    let mut other = cobs::encode_vec(&raw);
+    other.push(0);
+    assert_eq!(other, wire);
+}
+
+#[test]
+fn long_zero_free_runs_use_full_cobs_blocks() {
+    // 64 lines with no zero bytes in their floats give runs longer than 254 bytes.
+    let feats: Vec<Feature> = (1..=MAX_FEATURES as u16).map(|i| line(i + 1)).collect();
+    let wire = scan_frame(0x0102_0304, &feats);
+    let raw = cobs::decode_vec(&wire[..wire.len() - 1]).unwrap();
+    assert!(raw.len() > 600);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    assert_eq!(got[0].as_ref().unwrap().features.len(), MAX_FEATURES);
+}
+
+#[test]
+fn stream_shapes() {
+    let a = scan_frame(1, &mixed());
+    let b = scan_frame(2, &[line(5)]);
+    let mut both = a.clone();
+    both.extend_from_slice(&b);
+    let seqs = |r: Vec<Result<Frame, DecodeError>>| -> Vec<Result<u32, DecodeError>> {
+        r.into_iter()
+            .map(|f| f.map(|f| f.scan().unwrap().seq))
+            .collect()
+    };
+    // All at once (two frames in one chunk).
+    assert_eq!(
+        seqs(decode_chunks(&mut FrameDecoder::new(), [&both[..]])),
+        [Ok(1), Ok(2)]
+    );
+    // Byte by byte.
+    assert_eq!(
+        seqs(decode_chunks(&mut FrameDecoder::new(), both.chunks(1))),
+        [Ok(1), Ok(2)]
+    );
+    // Split at every position.
+    for cut in 0..both.len() {
+        let (x, y) = both.split_at(cut);
+        assert_eq!(
+            seqs(decode_chunks(&mut FrameDecoder::new(), [x, y])),
+            [Ok(1), Ok(2)],
+            "cut at {cut}"
+        );
+    }
+    // Joining mid-frame: the tail of `a` is rejected, `b` survives.
+    let tail = &both[a.len() / 2..];
+    let got = seqs(decode_chunks(&mut FrameDecoder::new(), [tail]));
+    assert_eq!(got.len(), 2);
+    assert!(got[0].is_err());
+    assert_eq!(got[1], Ok(2));
+    // Leading zeros (resync markers) are ignored.
+    let mut z = vec![0, 0, 0];
+    z.extend_from_slice(&b);
+    assert_eq!(
+        seqs(decode_chunks(&mut FrameDecoder::new(), [&z[..]])),
+        [Ok(2)]
+    );
+}
+
+#[test]
+fn every_single_bit_flip_is_detected() {
+    let wire = scan_frame(77, &mixed());
+    let good = scan_frame(78, &[circle(3)]);
+    for byte in 0..wire.len() - 1 {
+        for bit in 0..8 {
+            let mut bad = wire.clone();
+            bad[byte] ^= 1 << bit;
+            bad.extend_from_slice(&good);
+            let got = decode_chunks(&mut FrameDecoder::new(), [&bad[..]]);
+            let frames: Vec<&Frame> = got.iter().filter_map(|r| r.as_ref().ok()).collect();
+            assert_eq!(frames.len(), 1, "byte {byte} bit {bit}: {got:?}");
+            assert_eq!(frames[0].scan().unwrap().seq, 78, "the next frame survives");
+        }
+    }
+}
+
+#[test]
+fn crc_error_carries_both_values() {
+    let mut raw = cobs::decode_vec(&{
+        let w = scan_frame(5, &[line(1)]);
+        w[..w.len() - 1].to_vec()
+    })
+    .unwrap();
+    let n = raw.len();
+    raw[n - 1] ^= 0x80; // damage the CRC itself
+    let mut wire = cobs::encode_vec(&raw);
+    wire.push(0);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    match got[0] {
+        Err(DecodeError::Crc { expected, got }) => assert_eq!(expected ^ got, 0x8000_0000),
+        ref other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn overflow_resets_and_next_frame_decodes() {
+    let big = scan_frame(1, &mixed());
+    let small = scan_frame(2, &[]);
+    let mut dec = FrameDecoder::<64>::new();
+    let mut stream = big.clone();
+    stream.extend_from_slice(&small);
+    let mut rest = &stream[..];
+    let mut out = Vec::new();
+    loop {
+        match dec.feed(rest) {
+            Feed::Consumed => break,
+            Feed::Frame { frame, remaining } => {
+                out.push(Ok(frame.scan().unwrap().seq));
+                rest = remaining;
+            }
+            Feed::Error { error, remaining } => {
+                out.push(Err(error));
+                rest = remaining;
+            }
+        }
+    }
+    assert_eq!(out, [Err(DecodeError::Overflow), Ok(2)]);
+}
+
+#[test]
+fn too_many_features_and_trailing_bytes_are_rejected() {
+    let feats: Vec<Feature> = (0..MAX_FEATURES as u16 + 1).map(line).collect();
+    let wire = scan_frame(1, &feats);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    assert_eq!(got, [Err(DecodeError::TooManyFeatures { n: 65 })]);
+
+    // A report followed by an extra byte, with a valid CRC.
+    let mut w = Vec::new();
+    write_report(&mut Writer(&mut w), &Report::Done { scans: 1 }).unwrap();
+    let mut raw = cobs::decode_vec(&w[..w.len() - 1]).unwrap();
+    raw.truncate(raw.len() - 4);
+    raw.push(0x55);
+    let crc = crc32fast::hash(&raw);
+    raw.extend_from_slice(&crc.to_le_bytes());
+    let mut wire = cobs::encode_vec(&raw);
+    wire.push(0);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    assert_eq!(got, [Err(DecodeError::TrailingBytes)]);
+
+    // Garbage between zeros never panics and never yields a frame.
+    let got = decode_chunks(
+        &mut FrameDecoder::new(),
+        [&[0xFF, 1, 2, 0, 3, 0, 9, 9, 9, 9, 9, 0][..]],
+    );
+    assert!(got.iter().all(|r| r.is_err()), "{got:?}");
+}
