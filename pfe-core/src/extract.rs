@@ -4,7 +4,7 @@
 
 use heapless::Vec;
 
-use crate::circle::{circle_covariance_range, fit_circle, geometric_sse, refine_circle};
+use crate::circle::{circle_covariance_range, fit_circle, geometric_sse, refine_circle, Circle};
 use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{CircleFeature, Feature, LineFeature};
@@ -24,6 +24,8 @@ const END: u8 = 4;
 const REFINE_AFTER: usize = 4;
 /// Points each side used to refine a boundary.
 const REFINE_SPAN: usize = 6;
+/// Sizes of a new segment at which it is tested for being the same arc as the one before.
+const MERGE_AT: [usize; 2] = [8, 16];
 
 /// What one extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -288,6 +290,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let mut seg: Option<usize> = None;
         // Boundary awaiting refinement: (its index, the start of the segment before it).
         let mut pending: Option<(usize, usize)> = None;
+        // Last boundary that was not a jump and the start of the segment before it (a jump
+        // is never inside one surface, so never merged).
+        let mut joinable: Option<(usize, usize)> = None;
         // Largest gap between consecutive points of one surface: seen at down to 10°
         // incidence (Borges & Aldon's λ), plus the noise of two readings.
         let lam = 10.0f32.to_radians();
@@ -296,6 +301,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             if !self.valid(k) {
                 seg = None;
                 pending = None;
+                joinable = None;
                 continue;
             }
             let Some(s) = seg else {
@@ -328,13 +334,27 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 self.set(b, START);
                 seg = Some(b);
                 pending = (!jump).then_some((b, s));
-            } else if let Some((b, old)) = pending {
+                joinable = (!jump).then_some((b, s));
+            } else if let Some((b, old)) = joinable.filter(|(b, _)| MERGE_AT.contains(&(k + 1 - b)))
+            {
+                // An arc's edge seen at grazing incidence curves away from a short line
+                // window: when the two segments together are one arc, they are one segment.
+                let from = old.max(b.saturating_sub(m.arc_window));
+                if m.arc_window >= 5 && self.arc_fit(from, k + 1, m, sigma_r).is_some() {
+                    self.clear(b, START);
+                    seg = Some(old);
+                    pending = None;
+                    joinable = None;
+                }
+            }
+            if let (None, Some((b, old))) = (boundary, pending) {
                 if k == b + REFINE_AFTER {
                     let best = self.refine_boundary(old, b, k + 1);
                     if best != b {
                         self.clear(b, START);
                         self.set(best, START);
                         seg = Some(best);
+                        joinable = Some((best, old));
                     }
                     pending = None;
                 }
@@ -365,40 +385,57 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// Arc continuation test for point `k` of the segment starting at `s` (see
-    /// [`NoiseModel::arc_window`]).
+    /// [`NoiseModel::arc_window`]): the circle through the segment's last points must explain
+    /// them significantly better than a line and predict `k` along its beam.
     fn continues_arc(&mut self, s: usize, k: usize, m: &NoiseModel, sigma_r: f32) -> bool {
         let c = k - s;
         if m.arc_window < 5 || c < 5 {
             return false;
         }
-        let from = k - c.min(m.arc_window);
-        let Some(pts) = self.points.get(from..k) else {
+        let Some(circle) = self.arc_fit(k - c.min(m.arc_window), k, m, sigma_r) else {
             return false;
         };
-        let Ok(line) = fit_line(pts) else {
-            return false;
-        };
-        let Ok(circle) = fit_circle(pts, crate::circle::CircleMethod::Kasa) else {
-            return false;
-        };
-        let var = sigma_r * sigma_r;
-        if circle.radius > m.arc_max_radius
-            || line.sse() - geometric_sse(pts, &circle) < m.arc_chi2 * var
-        {
-            return false;
-        }
+        self.stats.predictions += 1;
         let (target, origin) = (self.point(k), self.origin(k));
         let (bx, by) = (target.x - origin.x, target.y - origin.y);
         let r = math::hypot(bx, by);
         if !(r > 0.0) {
             return false;
         }
-        self.stats.predictions += 1;
-        match ray_circle_intersection(origin, bx / r, by / r, circle.center, circle.radius) {
-            // The fit over many points predicts about as well as one reading: allow 1.5 σ_D.
-            Some(t) => math::abs(r - t) <= m.k * sigma_r * 1.5 + m.floor,
-            None => false,
+        let (dx, dy) = (bx / r, by / r);
+        match ray_circle_intersection(origin, dx, dy, circle.center, circle.radius) {
+            Some(t) => {
+                // The circle's position error (about σ_r across it) is stretched along the
+                // beam by 1/cos γ, γ between the beam and the circle's normal there.
+                let hit = Point::new(origin.x + dx * t, origin.y + dy * t);
+                let (nx, ny) = (hit.x - circle.center.x, hit.y - circle.center.y);
+                let cos_g = math::abs(nx * dx + ny * dy) / circle.radius;
+                let f = math::sqrt(1.0 + 1.0 / cos_g.max(0.1) / cos_g.max(0.1));
+                math::abs(r - t) <= m.k * sigma_r * f + m.floor
+            }
+            // The beam passes just outside the fitted circle (a point at the very edge).
+            None => {
+                math::abs(target.distance(&circle.center) - circle.radius)
+                    <= m.k * sigma_r + m.floor
+            }
         }
+    }
+
+    /// Circle through points `from..to` when it explains them significantly better than a
+    /// line (by `arc_chi2 σ_r²`), with every radial residual within `k σ_r + floor` and a
+    /// radius of at most `arc_max_radius`.
+    fn arc_fit(&self, from: usize, to: usize, m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
+        let pts = self.points.get(from..to)?;
+        let line = fit_line(pts).ok()?;
+        let circle = fit_circle(pts, crate::circle::CircleMethod::Kasa).ok()?;
+        let tol = m.k * sigma_r + m.floor;
+        let fits = pts
+            .iter()
+            .all(|p| math::abs(p.distance(&circle.center) - circle.radius) <= tol);
+        (fits
+            && circle.radius <= m.arc_max_radius
+            && line.sse() - geometric_sse(pts, &circle) >= m.arc_chi2 * sigma_r * sigma_r)
+            .then_some(circle)
     }
 
     /// The earliest of the (up to 4) points before `k` that, with `k`, deviate on the same

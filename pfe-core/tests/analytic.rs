@@ -1,6 +1,7 @@
 //! Analytic scenes with exact (noise-free) ranges: the extractor must find exactly the
 //! ground-truth boundary points and features, with their true parameters, in both
 //! configurations.
+#![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 mod common;
 
@@ -14,7 +15,9 @@ fn lms() -> ScanGeometry {
     ScanGeometry::LMS200_180_050
 }
 
-fn run(prims: &[Prim], config: &Config) -> (Vec<usize>, Vec<Feature>, Vec<(usize, usize, usize)>) {
+type Outcome = (Vec<usize>, Vec<Feature>, Vec<(usize, usize, usize)>);
+
+fn run(prims: &[Prim], config: &Config) -> Outcome {
     let (ranges, hits) = scan(prims, -PI / 2.0, PI / 360.0, N, 8000.0);
     let mut ex = Extractor::<N, 32>::new();
     ex.extract(&Scan::from_mm(lms(), &ranges), config).unwrap();

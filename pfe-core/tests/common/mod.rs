@@ -1,4 +1,5 @@
 //! Exact ray casting of walls and circles for the analytic tests (independent of pfe-core).
+#![allow(clippy::indexing_slicing)]
 #![allow(dead_code)]
 
 /// A primitive of an analytic scene, in mm.
@@ -40,7 +41,7 @@ pub fn cast(prims: &[Prim], bearing: f64) -> Option<(f64, usize)> {
             }
         };
         if let Some(t) = t {
-            if best.map_or(true, |(bt, _)| t < bt) {
+            if best.is_none_or(|(bt, _)| t < bt) {
                 best = Some((t, i));
             }
         }
