@@ -1,5 +1,361 @@
-//! bench (being written).
-/// Entry point of the matching `pfe` subcommand; parses its own arguments.
+//! `pfe bench`: host speed of every method on the same scans, in one run, single thread.
+//!
+//! Data sets: simulated scans (synthetic rooms with pillars, SICK LMS200 geometry, σ_r = 5 mm)
+//! and, when `../shared/data/carmen` is present, real CARMEN logs read by
+//! [`crate::formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
+//! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
+//! 50 m, or 81.83 m for 80 m-mode logs — are no return).
+//!
+//! For each data set and method, one warm-up pass, then `--reps` timed passes over all scans
+//! (`std::time::Instant`, one thread); each pass gives ns per beam (every beam counts, valid
+//! or not) and scans per second; the table reports the median pass. The ratio column is
+//! `time(method) / time(pfe-default)`: how many times faster pfe-default is.
+//!
+//! ```no_run
+//! host_tests::bench::cli(&["--json".to_string()]).unwrap();
+//! ```
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::Parser;
+use pfe_core::ScanGeometry;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use serde::Serialize;
+
+use crate::baselines::{Acf, SplitMerge};
+use crate::method::{Method, Pfe};
+
+/// Command-line options of `pfe bench`.
+#[derive(Parser, Debug)]
+#[command(
+    name = "pfe bench",
+    about = "Speed of pfe-paper, pfe-default, split-merge and acf on the same scans"
+)]
+struct Args {
+    /// Number of simulated scans.
+    #[arg(long, default_value_t = 200)]
+    sim_scans: usize,
+    /// Seed of the simulated scans.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Directory of CARMEN logs (*.log.gz); skipped with a message when absent.
+    #[arg(long, default_value = "../shared/data/carmen")]
+    carmen: PathBuf,
+    /// At most this many scans from each CARMEN log (0 = all).
+    #[arg(long, default_value_t = 200)]
+    per_log: usize,
+    /// Timed passes per data set and method; the median is reported.
+    #[arg(long, default_value_t = 7)]
+    reps: usize,
+    /// Print machine-readable JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// One scan to extract.
+#[derive(Clone, Debug)]
+pub struct BenchScan {
+    /// Beam geometry.
+    pub geometry: ScanGeometry,
+    /// Ranges, mm (NaN = no return).
+    pub ranges_mm: Vec<f32>,
+}
+
+/// Timing of one method on one data set.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodTiming {
+    /// Method name.
+    pub method: String,
+    /// Median ns per beam.
+    pub ns_per_point: f64,
+    /// Fastest and slowest pass, ns per beam.
+    pub ns_per_point_min: f64,
+    /// See `ns_per_point_min`.
+    pub ns_per_point_max: f64,
+    /// Median scans per second.
+    pub scans_per_s: f64,
+    /// Mean features per scan.
+    pub features_per_scan: f64,
+    /// time(this method) / time(pfe-default) (median passes); > 1 means pfe-default is faster.
+    pub slowdown_vs_pfe_default: f64,
+}
+
+/// Timings on one data set.
+#[derive(Clone, Debug, Serialize)]
+pub struct DatasetTiming {
+    /// Data set name.
+    pub dataset: String,
+    /// Scans in one pass.
+    pub scans: usize,
+    /// Beams in one pass.
+    pub points: usize,
+    /// One entry per method.
+    pub methods: Vec<MethodTiming>,
+}
+
+/// The whole report (`--json`).
+#[derive(Clone, Debug, Serialize)]
+pub struct BenchReport {
+    /// "release" or "debug" (debug numbers are meaningless).
+    pub profile: String,
+    /// Timed passes per data set and method.
+    pub reps: usize,
+    /// Threads used.
+    pub threads: usize,
+    /// Per data set.
+    pub datasets: Vec<DatasetTiming>,
+}
+
+/// The four methods compared, in table order.
+pub fn methods() -> Vec<Box<dyn Method>> {
+    vec![
+        Box::new(Pfe::paper()),
+        Box::new(Pfe::default_config()),
+        Box::new(SplitMerge::new()),
+        Box::new(Acf::new()),
+    ]
+}
+
+/// Times `methods` on `scans`: one warm-up pass, then `reps` passes; median per method.
+pub fn time_methods(
+    name: &str,
+    scans: &[BenchScan],
+    methods: &mut [Box<dyn Method>],
+    reps: usize,
+) -> DatasetTiming {
+    let points: usize = scans.iter().map(|s| s.ranges_mm.len()).sum();
+    let reps = reps.max(1);
+    let mut rows = Vec::new();
+    for m in methods.iter_mut() {
+        let mut features = 0usize;
+        for s in scans {
+            features += m.extract(&s.geometry, &s.ranges_mm).features.len();
+        }
+        let mut passes: Vec<f64> = (0..reps)
+            .map(|_| {
+                let t = Instant::now();
+                for s in scans {
+                    std::hint::black_box(
+                        m.extract(&s.geometry, std::hint::black_box(&s.ranges_mm)),
+                    );
+                }
+                t.elapsed().as_secs_f64()
+            })
+            .collect();
+        passes.sort_by(f64::total_cmp);
+        let med = passes.get(passes.len() / 2).copied().unwrap_or(f64::NAN);
+        let per_point = |secs: f64| secs * 1e9 / points.max(1) as f64;
+        rows.push(MethodTiming {
+            method: m.name().to_string(),
+            ns_per_point: per_point(med),
+            ns_per_point_min: per_point(passes.first().copied().unwrap_or(f64::NAN)),
+            ns_per_point_max: per_point(passes.last().copied().unwrap_or(f64::NAN)),
+            scans_per_s: scans.len() as f64 / med,
+            features_per_scan: features as f64 / scans.len().max(1) as f64,
+            slowdown_vs_pfe_default: f64::NAN,
+        });
+    }
+    let reference = rows
+        .iter()
+        .find(|r| r.method == "pfe-default")
+        .map(|r| r.ns_per_point);
+    for r in &mut rows {
+        r.slowdown_vs_pfe_default = reference.map_or(f64::NAN, |p| r.ns_per_point / p);
+    }
+    DatasetTiming {
+        dataset: name.to_string(),
+        scans: scans.len(),
+        points,
+        methods: rows,
+    }
+}
+
+/// `n` simulated LMS200 scans (361 beams, 8 m): a rectangular room of random size and pose,
+/// with up to three pillars (radius 100–400 mm) and range noise σ_r = 5 mm.
+pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
+    let g = ScanGeometry::LMS200_180_050;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let noise = Normal::new(0.0f64, 5.0).ok();
+    (0..n)
+        .map(|_| {
+            // Room walls as lines x cos α + y sin α = ρ around the scanner.
+            let turn: f64 = rng.gen_range(-0.5..0.5);
+            let walls: Vec<(f64, f64)> = (0..4)
+                .map(|k| {
+                    (
+                        turn + f64::from(k) * std::f64::consts::FRAC_PI_2,
+                        rng.gen_range(1500.0..6000.0),
+                    )
+                })
+                .collect();
+            let pillars: Vec<(f64, f64, f64)> = (0..rng.gen_range(0..=3))
+                .map(|_| {
+                    let (b, d): (f64, f64) =
+                        (rng.gen_range(-1.3..1.3), rng.gen_range(800.0..3500.0));
+                    (d * b.cos(), d * b.sin(), rng.gen_range(100.0..400.0))
+                })
+                .filter(|(x, y, r)| {
+                    walls
+                        .iter()
+                        .all(|(a, rho)| rho - (x * a.cos() + y * a.sin()) > r + 100.0)
+                })
+                .collect();
+            let ranges = (0..361)
+                .map(|i| {
+                    let b = f64::from(g.bearing(i));
+                    let (dx, dy) = (b.cos(), b.sin());
+                    let mut best = f64::INFINITY;
+                    for (a, rho) in &walls {
+                        let den = dx * a.cos() + dy * a.sin();
+                        if den > 1e-9 {
+                            best = best.min(rho / den);
+                        }
+                    }
+                    for (cx, cy, r) in &pillars {
+                        let bq = dx * cx + dy * cy;
+                        let disc = bq * bq - (cx * cx + cy * cy - r * r);
+                        if disc >= 0.0 && bq - disc.sqrt() > 0.0 {
+                            best = best.min(bq - disc.sqrt());
+                        }
+                    }
+                    let e = noise.map_or(0.0, |d| d.sample(&mut rng));
+                    if best + e <= f64::from(g.r_max) {
+                        (best + e) as f32
+                    } else {
+                        f32::NAN
+                    }
+                })
+                .collect();
+            BenchScan {
+                geometry: g,
+                ranges_mm: ranges,
+            }
+        })
+        .collect()
+}
+
+/// Scans of every `*.log.gz` in `dir` (sorted by name), at most `per_log` from each (0 = all).
+pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>> {
+    let mut logs: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.to_string_lossy().ends_with(".log.gz"))
+        .collect();
+    logs.sort();
+    let mut out = Vec::new();
+    for log in logs {
+        let input = crate::formats::open(&log, |r| r)
+            .with_context(|| format!("opening {}", log.display()))?;
+        let reader = crate::formats::carmen::Reader::new(input);
+        let limit = if per_log == 0 { usize::MAX } else { per_log };
+        for rec in reader.take(limit) {
+            let rec = rec.map_err(|e| anyhow::anyhow!("{}: {e}", log.display()))?;
+            out.push(BenchScan {
+                geometry: rec.geometry,
+                ranges_mm: rec.ranges_mm,
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Runs the benchmark and returns the report.
+fn run(args: &Args) -> anyhow::Result<BenchReport> {
+    let mut methods = methods();
+    let mut datasets = Vec::new();
+    let sim = simulated_scans(args.sim_scans.max(1), args.seed);
+    datasets.push(time_methods("simulated", &sim, &mut methods, args.reps));
+    if args.carmen.is_dir() {
+        let real = carmen_scans(&args.carmen, args.per_log)?;
+        if real.is_empty() {
+            eprintln!(
+                "pfe bench: no scans in {}; real data skipped",
+                args.carmen.display()
+            );
+        } else {
+            datasets.push(time_methods("carmen", &real, &mut methods, args.reps));
+        }
+    } else {
+        eprintln!(
+            "pfe bench: {} is absent; real-data benchmark skipped",
+            args.carmen.display()
+        );
+    }
+    Ok(BenchReport {
+        profile: if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+        .to_string(),
+        reps: args.reps.max(1),
+        threads: 1,
+        datasets,
+    })
+}
+
+/// The report as a text table.
+pub fn table(report: &BenchReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "profile {}, {} thread, median of {} passes",
+        report.profile, report.threads, report.reps
+    );
+    for d in &report.datasets {
+        let _ = writeln!(s, "\n{}: {} scans, {} beams", d.dataset, d.scans, d.points);
+        let _ = writeln!(
+            s,
+            "{:<12} {:>10} {:>10} {:>10} {:>12} {:>10} {:>14}",
+            "method", "ns/beam", "min", "max", "scans/s", "feat/scan", "× pfe-default"
+        );
+        for m in &d.methods {
+            let _ = writeln!(
+                s,
+                "{:<12} {:>10.1} {:>10.1} {:>10.1} {:>12.0} {:>10.2} {:>14.2}",
+                m.method,
+                m.ns_per_point,
+                m.ns_per_point_min,
+                m.ns_per_point_max,
+                m.scans_per_s,
+                m.features_per_scan,
+                m.slowdown_vs_pfe_default
+            );
+        }
+    }
+    if report.profile == "debug" {
+        s.push_str("\nwarning: debug build; run `cargo run --release --bin pfe -- bench` for real numbers\n");
+    }
+    s
+}
+
+/// Entry point of `pfe bench`; parses its own arguments.
 pub fn cli(args: &[String]) -> anyhow::Result<()> {
-    anyhow::bail!("not implemented yet (args: {args:?})")
+    let args = match Args::try_parse_from(
+        std::iter::once("pfe bench".to_string()).chain(args.iter().cloned()),
+    ) {
+        Ok(a) => a,
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
+            ) =>
+        {
+            print!("{e}");
+            return Ok(());
+        }
+        Err(e) => return Err(e.into()),
+    };
+    let report = run(&args)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{}", table(&report));
+    }
+    Ok(())
 }
