@@ -1,0 +1,133 @@
+//! Range correction and motion de-skew against analytic truth.
+#![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+
+use pfe_core::{Config, Extractor, Feature, Motion, RangeCorrection, Scan, ScanGeometry};
+
+/// A smooth systematic error like the LMS200's (±15 mm over 8 m).
+fn bias(r: f64) -> f64 {
+    15.0 * (r / 8000.0 * 5.0).sin() * (1.0 - r / 16000.0)
+}
+
+#[test]
+fn calibration_recovers_a_sixth_order_error_curve() {
+    let pairs: Vec<(f32, f32)> = (0..200)
+        .map(|i| {
+            let t = 100.0 + 39.5 * i as f64;
+            ((t + bias(t)) as f32, t as f32)
+        })
+        .collect();
+    let c = RangeCorrection::calibrate(&pairs).unwrap();
+    let worst = pairs
+        .iter()
+        .map(|&(m, t)| (c.apply(m) - t).abs())
+        .fold(0.0f32, f32::max);
+    // A degree-6 polynomial fits this curve to well under the 1 mm quantum.
+    assert!(worst < 0.5, "worst residual {worst} mm");
+    // And it is a polynomial: an exact cubic error is recovered exactly.
+    let cubic: Vec<(f32, f32)> = (1..50)
+        .map(|i| {
+            let t = i as f32 * 150.0;
+            let x = t / 7500.0;
+            (t + 3.0 - 4.0 * x + 2.0 * x * x * x, t)
+        })
+        .collect();
+    let c = RangeCorrection::calibrate(&cubic).unwrap();
+    for &(m, t) in &cubic {
+        assert!((c.apply(m) - t).abs() < 0.05);
+    }
+}
+
+#[test]
+fn calibration_rejects_bad_input() {
+    assert!(RangeCorrection::calibrate(&[(1.0, 1.0); 3]).is_err());
+    assert!(RangeCorrection::calibrate(&[(1000.0, 1000.0); 20]).is_err());
+    let mut pairs: Vec<(f32, f32)> = (1..20)
+        .map(|i| (i as f32 * 100.0, i as f32 * 100.0))
+        .collect();
+    pairs[3].0 = f32::NAN;
+    assert!(RangeCorrection::calibrate(&pairs).is_err());
+}
+
+#[test]
+fn correction_in_the_extractor_removes_the_bias() {
+    let g = ScanGeometry::LMS200_180_050;
+    let pairs: Vec<(f32, f32)> = (0..200)
+        .map(|i| {
+            let t = 100.0 + 39.5 * i as f64;
+            ((t + bias(t)) as f32, t as f32)
+        })
+        .collect();
+    let corr = RangeCorrection::calibrate(&pairs).unwrap();
+    let ranges: Vec<f32> = (0..361)
+        .map(|i| {
+            let b = g.bearing(i) as f64;
+            if b.abs() < 1.0 {
+                let t = 3000.0 / b.cos();
+                (t + bias(t)) as f32
+            } else {
+                f32::NAN
+            }
+        })
+        .collect();
+    let mut ex = Extractor::<361, 8>::new();
+    ex.extract(
+        &Scan::from_mm(g, &ranges),
+        &Config::default().with_correction(corr),
+    )
+    .unwrap();
+    let [Feature::Line(l)] = ex.features() else {
+        panic!("{:?}", ex.features())
+    };
+    assert!(
+        (l.rho - 3000.0).abs() < 0.5 && l.alpha.abs() < 1e-4,
+        "{l:?}"
+    );
+}
+
+#[test]
+fn deskew_puts_a_moving_scan_back_on_the_wall() {
+    // The robot drives at 1 m/s and turns at 1 rad/s during a scan of 361 beams taken 26.7 µs
+    // apart... times 100 to make the skew large (0.96 s): 0.96 m and 55°.
+    let g = ScanGeometry::LMS200_180_050;
+    let m = Motion {
+        v: 1000.0,
+        omega: 1.0,
+        beam_dt: 0.002_666,
+    };
+    // Wall x = 4000 in the frame of beam 0. Beam i is taken from pose(i).
+    let ranges: Vec<f32> = (0..361)
+        .map(|i| {
+            let p = m.pose(i);
+            let b = g.bearing(i) + p.theta;
+            let (dx, dy) = (b.cos(), b.sin());
+            let t = (4000.0 - p.origin.x) / dx;
+            let y = p.origin.y + t * dy;
+            if dx > 0.1 && t > 0.0 && y.abs() < 3000.0 {
+                t
+            } else {
+                f32::NAN
+            }
+        })
+        .collect();
+    let mut ex = Extractor::<361, 8>::new();
+    ex.extract(
+        &Scan::from_mm(g, &ranges).with_motion(m),
+        &Config::default(),
+    )
+    .unwrap();
+    let [Feature::Line(l)] = ex.features() else {
+        panic!("{:?}", ex.features())
+    };
+    assert!(
+        (l.rho - 4000.0).abs() < 1.0 && l.alpha.abs() < 1e-3,
+        "{l:?}"
+    );
+    // Without de-skew the same readings do not form one wall at x = 4000.
+    ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
+        .unwrap();
+    let off = ex.features().iter().all(|f| match f {
+        Feature::Line(l) => (l.rho - 4000.0).abs() > 50.0 || l.alpha.abs() > 0.05,
+        Feature::Circle(_) => true,
+    });
+    assert!(off, "{:?}", ex.features());
+}
