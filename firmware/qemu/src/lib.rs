@@ -1,0 +1,18 @@
+//! Board support for QEMU's `mps2-an386` (Cortex-M4F) used by the pfe firmware binaries:
+//! CMSDK APB UARTs as polled `embedded-io` ports, a SysTick time base, semihosting exit and
+//! arguments, the stack high-water mark.
+//!
+//! Everything here only exists for `target_os = "none"`; on the host the crate is empty so
+//! `cargo test --workspace` and clippy still build it.
+#![cfg_attr(target_os = "none", no_std)]
+#![deny(missing_docs)]
+#![deny(unsafe_code)]
+
+#[cfg(target_os = "none")]
+pub mod uart;
+
+#[cfg(target_os = "none")]
+pub mod time;
+
+#[cfg(target_os = "none")]
+pub mod sys;

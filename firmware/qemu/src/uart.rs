@@ -1,0 +1,126 @@
+//! CMSDK APB UART (ARM's simple UART on the MPS2 boards), polled.
+//!
+//! Registers: DATA +0x0, STATE +0x4 (bit 0 TX full, bit 1 RX full, bits 2/3 TX/RX overrun,
+//! write 1 to clear), CTRL +0x8 (bit 0 TX enable, bit 1 RX enable), INTSTATUS +0xC,
+//! BAUDDIV +0x10. Under QEMU the receiver holds one byte and stops reading the host socket
+//! until the firmware takes it, so polled reception loses nothing (back-pressure).
+
+use core::convert::Infallible;
+
+/// UART0 (the scanner link: `-serial` #1).
+pub const UART0: usize = 0x4000_4000;
+/// UART1 (feature output: `-serial` #2).
+pub const UART1: usize = 0x4000_5000;
+
+const DATA: usize = 0x0;
+const STATE: usize = 0x4;
+const CTRL: usize = 0x8;
+const BAUDDIV: usize = 0x10;
+const TX_FULL: u32 = 1;
+const RX_FULL: u32 = 2;
+const RX_OVERRUN: u32 = 8;
+
+/// One CMSDK UART.
+pub struct Uart {
+    base: usize,
+    overruns: u32,
+}
+
+impl Uart {
+    /// Enables the UART at `base` (`UART0` or `UART1`) for transmit and receive.
+    ///
+    /// The caller hands over the UART: only one `Uart` per base address may exist.
+    pub fn new(base: usize) -> Self {
+        let u = Self { base, overruns: 0 };
+        // BAUDDIV must be ≥ 16 on the CMSDK UART; the rate itself is not emulated.
+        u.write_reg(BAUDDIV, 16);
+        u.write_reg(CTRL, 0b11);
+        u
+    }
+
+    /// Receive overruns seen (bytes lost by the UART itself; none under QEMU).
+    pub fn overruns(&self) -> u32 {
+        self.overruns
+    }
+
+    #[allow(unsafe_code)]
+    fn read_reg(&self, off: usize) -> u32 {
+        // SAFETY: `base` is one of the two CMSDK UART blocks of the MPS2 memory map; the
+        // registers are 32-bit, aligned, and reads have no side effect except DATA (which
+        // takes the received byte, as intended).
+        unsafe { core::ptr::read_volatile((self.base + off) as *const u32) }
+    }
+
+    #[allow(unsafe_code)]
+    fn write_reg(&self, off: usize, v: u32) {
+        // SAFETY: as in `read_reg`.
+        unsafe { core::ptr::write_volatile((self.base + off) as *mut u32, v) }
+    }
+
+    /// The next received byte, if one is waiting.
+    pub fn try_read_byte(&mut self) -> Option<u8> {
+        let st = self.read_reg(STATE);
+        if st & RX_OVERRUN != 0 {
+            self.overruns = self.overruns.saturating_add(1);
+            self.write_reg(STATE, RX_OVERRUN);
+        }
+        (st & RX_FULL != 0).then(|| self.read_reg(DATA) as u8)
+    }
+
+    /// Sends one byte, waiting while the transmitter is full.
+    pub fn write_byte(&mut self, b: u8) {
+        while self.read_reg(STATE) & TX_FULL != 0 {}
+        self.write_reg(DATA, u32::from(b));
+    }
+}
+
+impl embedded_io::ErrorType for Uart {
+    type Error = Infallible;
+}
+
+impl embedded_io::Read for Uart {
+    /// Blocks until at least one byte is there, then takes what is waiting.
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            let b = loop {
+                match self.try_read_byte() {
+                    Some(b) => break Some(b),
+                    None if n > 0 => break None,
+                    None => {}
+                }
+            };
+            match b {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        Ok(n)
+    }
+}
+
+impl embedded_io::ReadReady for Uart {
+    fn read_ready(&mut self) -> Result<bool, Infallible> {
+        Ok(self.read_reg(STATE) & RX_FULL != 0)
+    }
+}
+
+impl embedded_io::Write for Uart {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
+        for &b in buf {
+            self.write_byte(b);
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> Result<(), Infallible> {
+        while self.read_reg(STATE) & TX_FULL != 0 {}
+        Ok(())
+    }
+}
