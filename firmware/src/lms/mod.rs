@@ -13,3 +13,8 @@ pub use command::Command;
 pub use frame::{Decoder, DecoderStats, Event, Telegram, MAX_TELEGRAM};
 pub use reply::{parse_reply, MeasuredValues, ParsedReply, Reply, ReplyOptions, Status};
 pub use types::{Baud, MeasuringMode, Unit, Variant};
+pub mod driver;
+pub mod error;
+
+pub use driver::{Clock, Config, Counters, DeviceState, Driver, ScanData, SetBaud};
+pub use error::Error;
