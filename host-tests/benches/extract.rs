@@ -32,7 +32,12 @@ fn benches(c: &mut Criterion) {
     }
 
     let line: Vec<Point> = (0..361)
-        .map(|i| Point::new(2000.0 + 0.3 * i as f32, -1800.0 + 10.0 * i as f32 + (i % 7) as f32))
+        .map(|i| {
+            Point::new(
+                2000.0 + 0.3 * i as f32,
+                -1800.0 + 10.0 * i as f32 + (i % 7) as f32,
+            )
+        })
         .collect();
     c.bench_function("fit_line_361", |b| b.iter(|| fit_line(black_box(&line))));
 
@@ -51,7 +56,9 @@ fn benches(c: &mut Criterion) {
         b.iter(|| black_box(sm.extract(&g, black_box(&r))))
     });
     let mut acf = Acf::new();
-    c.bench_function("acf_361", |b| b.iter(|| black_box(acf.extract(&g, black_box(&r)))));
+    c.bench_function("acf_361", |b| {
+        b.iter(|| black_box(acf.extract(&g, black_box(&r))))
+    });
 }
 
 criterion_group!(extract, benches);

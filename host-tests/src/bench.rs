@@ -1,6 +1,6 @@
 //! `pfe bench`: host speed of every method on the same scans, in one run, single thread.
 //!
-//! Data sets: simulated scans (synthetic rooms with pillars, SICK LMS200 geometry, σ_r = 5 mm)
+//! Data sets: simulated scans ([`crate::sim`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
 //! and, when `../shared/data/carmen` is present, real CARMEN logs read by
 //! [`crate::formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
 //! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
@@ -21,13 +21,11 @@ use std::time::Instant;
 use anyhow::Context;
 use clap::Parser;
 use pfe_core::ScanGeometry;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use serde::Serialize;
 
 use crate::baselines::{Acf, SplitMerge};
 use crate::method::{Method, Pfe};
+use crate::sim::{Scenario, SceneKind};
 
 /// Command-line options of `pfe bench`.
 #[derive(Parser, Debug)]
@@ -174,65 +172,15 @@ pub fn time_methods(
     }
 }
 
-/// `n` simulated LMS200 scans (361 beams, 8 m): a rectangular room of random size and pose,
-/// with up to three pillars (radius 100–400 mm) and range noise σ_r = 5 mm.
+/// `n` simulated LMS200 scans (361 beams, 8 m, σ_r = 5 mm): [`crate::sim`]'s mixed scenes
+/// (office, clutter, pillars, corridor) with seeds `seed, seed + 1, …`.
 pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
-    let g = ScanGeometry::LMS200_180_050;
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let noise = Normal::new(0.0f64, 5.0).ok();
-    (0..n)
-        .map(|_| {
-            // Room walls as lines x cos α + y sin α = ρ around the scanner.
-            let turn: f64 = rng.gen_range(-0.5..0.5);
-            let walls: Vec<(f64, f64)> = (0..4)
-                .map(|k| {
-                    (
-                        turn + f64::from(k) * std::f64::consts::FRAC_PI_2,
-                        rng.gen_range(1500.0..6000.0),
-                    )
-                })
-                .collect();
-            let pillars: Vec<(f64, f64, f64)> = (0..rng.gen_range(0..=3))
-                .map(|_| {
-                    let (b, d): (f64, f64) =
-                        (rng.gen_range(-1.3..1.3), rng.gen_range(800.0..3500.0));
-                    (d * b.cos(), d * b.sin(), rng.gen_range(100.0..400.0))
-                })
-                .filter(|(x, y, r)| {
-                    walls
-                        .iter()
-                        .all(|(a, rho)| rho - (x * a.cos() + y * a.sin()) > r + 100.0)
-                })
-                .collect();
-            let ranges = (0..361)
-                .map(|i| {
-                    let b = f64::from(g.bearing(i));
-                    let (dx, dy) = (b.cos(), b.sin());
-                    let mut best = f64::INFINITY;
-                    for (a, rho) in &walls {
-                        let den = dx * a.cos() + dy * a.sin();
-                        if den > 1e-9 {
-                            best = best.min(rho / den);
-                        }
-                    }
-                    for (cx, cy, r) in &pillars {
-                        let bq = dx * cx + dy * cy;
-                        let disc = bq * bq - (cx * cx + cy * cy - r * r);
-                        if disc >= 0.0 && bq - disc.sqrt() > 0.0 {
-                            best = best.min(bq - disc.sqrt());
-                        }
-                    }
-                    let e = noise.map_or(0.0, |d| d.sample(&mut rng));
-                    if best + e <= f64::from(g.r_max) {
-                        (best + e) as f32
-                    } else {
-                        f32::NAN
-                    }
-                })
-                .collect();
+    (0..n as u64)
+        .map(|k| {
+            let s = Scenario::new(SceneKind::Mixed, seed.wrapping_add(k)).simulate();
             BenchScan {
-                geometry: g,
-                ranges_mm: ranges,
+                geometry: s.geometry,
+                ranges_mm: s.ranges_mm,
             }
         })
         .collect()

@@ -3,6 +3,7 @@
 
 use host_tests::baselines::{Acf, SplitMerge};
 use host_tests::method::{Extraction, Method};
+use host_tests::sim::{self, Shape};
 use pfe_core::{Feature, ScanGeometry};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -10,65 +11,41 @@ use rand_distr::{Distribution, Normal};
 
 const G: ScanGeometry = ScanGeometry::LMS200_180_050;
 
-/// Scene primitives for the ray caster.
-enum Shape {
-    /// Line `x cos α + y sin α = ρ`, restricted to points whose coordinate along the line
-    /// (direction (−sin α, cos α)) lies in `[t0, t1]`.
-    Wall {
-        alpha: f64,
-        rho: f64,
-        t0: f64,
-        t1: f64,
-    },
-    /// Circle.
-    Pillar { cx: f64, cy: f64, r: f64 },
+/// A wall `x cos α + y sin α = ρ` as a simulator segment of the points whose coordinate along
+/// the line (direction (−sin α, cos α)) lies in `[t0, t1]` (clamped to ±100 m).
+fn wall_part(alpha: f64, rho: f64, t0: f64, t1: f64) -> Shape {
+    let (c, s) = (alpha.cos(), alpha.sin());
+    let at = |t: f64| [rho * c - t * s, rho * s + t * c];
+    Shape::Segment {
+        a: at(t0.max(-1e5)),
+        b: at(t1.min(1e5)),
+    }
 }
 
-/// Ranges (mm) of the LMS200 beams in `scene` (NaN = no return), plus N(0, σ) noise.
+fn pillar(cx: f64, cy: f64, r: f64) -> Shape {
+    Shape::Circle {
+        center: [cx, cy],
+        radius: r,
+    }
+}
+
+/// Ranges (mm) of the LMS200 beams in `scene` by the simulator's exact ray caster (NaN = no
+/// return), plus seeded N(0, σ) noise.
 fn cast(scene: &[Shape], sigma: f64, seed: u64) -> Vec<f32> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let noise = Normal::new(0.0, sigma.max(1e-12)).unwrap();
-    (0..361)
-        .map(|i| {
-            let b = f64::from(G.start_angle) + f64::from(G.angle_step) * i as f64;
-            let (dx, dy) = (b.cos(), b.sin());
-            let mut best = f64::INFINITY;
-            for s in scene {
-                match *s {
-                    Shape::Wall { alpha, rho, t0, t1 } => {
-                        let den = dx * alpha.cos() + dy * alpha.sin();
-                        if den.abs() < 1e-9 {
-                            continue;
-                        }
-                        let t = rho / den;
-                        let (x, y) = (t * dx, t * dy);
-                        let along = -x * alpha.sin() + y * alpha.cos();
-                        if t > 0.0 && along >= t0 && along <= t1 {
-                            best = best.min(t);
-                        }
-                    }
-                    Shape::Pillar { cx, cy, r } => {
-                        let bq = dx * cx + dy * cy;
-                        let disc = bq * bq - (cx * cx + cy * cy - r * r);
-                        if disc >= 0.0 {
-                            let t = bq - disc.sqrt();
-                            if t > 0.0 {
-                                best = best.min(t);
-                            }
-                        }
-                    }
-                }
-            }
-            if best <= 8000.0 {
+    sim::cast(scene, &G)
+        .iter()
+        .map(|h| match h {
+            Some((t, _)) => {
                 let n = if sigma > 0.0 {
                     noise.sample(&mut rng)
                 } else {
                     0.0
                 };
-                (best + n) as f32
-            } else {
-                f32::NAN
+                (t + n) as f32
             }
+            None => f32::NAN,
         })
         .collect()
 }
@@ -103,12 +80,7 @@ fn angle_diff(a: f32, b: f32) -> f32 {
 }
 
 fn wall(alpha: f64, rho: f64) -> Shape {
-    Shape::Wall {
-        alpha,
-        rho,
-        t0: -1e9,
-        t1: 1e9,
-    }
+    wall_part(alpha, rho, -1e9, 1e9)
 }
 
 #[test]
@@ -152,18 +124,8 @@ fn corner_gives_two_lines_split_at_the_corner() {
     // x = 3000 for y ≤ 1000, and y = 1000 for x ≤ 3000: corner at (3000, 1000), between beams
     // 216 (bearing 18.0°) and 217 (18.5°): atan2(1000, 3000) = 18.43°.
     let scene = [
-        Shape::Wall {
-            alpha: 0.0,
-            rho: 3000.0,
-            t0: -1e9,
-            t1: 1000.0,
-        },
-        Shape::Wall {
-            alpha: std::f64::consts::FRAC_PI_2,
-            rho: 1000.0,
-            t0: -3000.0,
-            t1: 1e9,
-        },
+        wall_part(0.0, 3000.0, -1e9, 1000.0),
+        wall_part(std::f64::consts::FRAC_PI_2, 1000.0, -3000.0, 1e9),
     ];
     for sigma in [0.0, 5.0] {
         let r = cast(&scene, sigma, 2);
@@ -213,18 +175,8 @@ fn gaps_break_a_wall() {
     }
     // A doorway: the wall at x = 2500 is open for |y| < 400, a back wall at x = 5000.
     let door = [
-        Shape::Wall {
-            alpha: 0.0,
-            rho: 2500.0,
-            t0: -1e9,
-            t1: -400.0,
-        },
-        Shape::Wall {
-            alpha: 0.0,
-            rho: 2500.0,
-            t0: 400.0,
-            t1: 1e9,
-        },
+        wall_part(0.0, 2500.0, -1e9, -400.0),
+        wall_part(0.0, 2500.0, 400.0, 1e9),
         wall(0.0, 5000.0),
     ];
     let rd = cast(&door, 0.0, 4);
@@ -260,15 +212,7 @@ fn gaps_break_a_wall() {
 #[test]
 fn pillar_is_one_circle_with_its_radius() {
     for (sigma, tol) in [(0.0, 1.0), (5.0, 8.0)] {
-        let r = cast(
-            &[Shape::Pillar {
-                cx: 2000.0,
-                cy: 300.0,
-                r: 250.0,
-            }],
-            sigma,
-            5,
-        );
+        let r = cast(&[pillar(2000.0, 300.0, 250.0)], sigma, 5);
         for mut m in methods() {
             let e = m.extract(&G, &r);
             assert_eq!(
@@ -296,14 +240,7 @@ fn pillar_is_one_circle_with_its_radius() {
 
 #[test]
 fn pillar_before_a_wall() {
-    let scene = [
-        wall(0.0, 4000.0),
-        Shape::Pillar {
-            cx: 2000.0,
-            cy: 0.0,
-            r: 200.0,
-        },
-    ];
+    let scene = [wall(0.0, 4000.0), pillar(2000.0, 0.0, 200.0)];
     for sigma in [0.0, 5.0] {
         let r = cast(&scene, sigma, 6);
         for mut m in methods() {

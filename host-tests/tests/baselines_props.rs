@@ -21,15 +21,19 @@ fn reading() -> impl Strategy<Value = f32> {
 
 /// Smooth-ish ranges (random walk) so that segments, corners and arcs actually occur.
 fn walk() -> impl Strategy<Value = Vec<f32>> {
-    (500.0f32..7000.0, prop::collection::vec(-60.0f32..60.0, 0..400)).prop_map(|(start, steps)| {
-        steps
-            .iter()
-            .scan(start, |r, d| {
-                *r = (*r + d).clamp(1.0, 9000.0);
-                Some(*r)
-            })
-            .collect()
-    })
+    (
+        500.0f32..7000.0,
+        prop::collection::vec(-60.0f32..60.0, 0..400),
+    )
+        .prop_map(|(start, steps)| {
+            steps
+                .iter()
+                .scan(start, |r, d| {
+                    *r = (*r + d).clamp(1.0, 9000.0);
+                    Some(*r)
+                })
+                .collect()
+        })
 }
 
 fn check(e: &Extraction, n: usize) -> Result<(), TestCaseError> {
@@ -111,7 +115,10 @@ fn degenerate_inputs() {
         vec![1000.0; 3],
     ];
     for r in &cases {
-        for mut m in [Box::new(SplitMerge::new()) as Box<dyn Method>, Box::new(Acf::new())] {
+        for mut m in [
+            Box::new(SplitMerge::new()) as Box<dyn Method>,
+            Box::new(Acf::new()),
+        ] {
             let e = m.extract(&g, r);
             assert!(e.features.is_empty(), "{}: {r:?}", m.name());
             assert!(e.marks.iter().all(|i| *i < r.len()));

@@ -87,8 +87,9 @@ impl Abd {
             };
             if let Some((j, q)) = prev {
                 let d_max = self.d_max(q.norm(), geometry.angle_step);
-                // `!(d ≤ D_max)` also breaks on a NaN distance.
-                if !(p.distance(&q) <= d_max) {
+                // A NaN distance is a break too.
+                let d = p.distance(&q);
+                if d.is_nan() || d > d_max {
                     if let Some(s) = start.take() {
                         out.push((s, j));
                     }

@@ -119,7 +119,7 @@ impl SplitMerge {
             }
             let (k, dmax) = farthest_from_chord(pts, a, b);
             let thr = self.d_split(pa, pb);
-            if !(dmax > thr) {
+            if dmax <= thr {
                 out.push(piece(Model::Line));
                 continue;
             }
