@@ -1,0 +1,239 @@
+//! Scorer on hand-made cases, and an oracle extraction on simulated scans.
+
+use host_tests::method::Extraction;
+use host_tests::score::{iou, line_error, match_features, score, score_sim, GroundTruth, Score};
+use host_tests::sim::{Crb, Scenario, SceneKind, TruthFeature, TruthKind};
+use pfe_core::{fit_line, CircleFeature, Feature, LineFeature, Point};
+use std::f64::consts::PI;
+
+fn truth_line(first: usize, last: usize, alpha: f64, rho: f64) -> TruthFeature {
+    TruthFeature {
+        primitive: first,
+        first,
+        last,
+        kind: TruthKind::Line { alpha, rho },
+        crb: Crb {
+            position: 1.0,
+            shape: 0.001,
+        },
+    }
+}
+
+fn truth_circle(first: usize, last: usize, center: [f64; 2], radius: f64) -> TruthFeature {
+    TruthFeature {
+        primitive: first,
+        first,
+        last,
+        kind: TruthKind::Circle { center, radius },
+        crb: Crb {
+            position: 2.0,
+            shape: 3.0,
+        },
+    }
+}
+
+fn line(first: usize, last: usize, alpha: f32, rho: f32) -> Feature {
+    Feature::Line(LineFeature {
+        first: first as u16,
+        last: last as u16,
+        points: (last + 1 - first) as u16,
+        alpha,
+        rho,
+        var_alpha: 0.0,
+        var_rho: 0.0,
+        cov_alpha_rho: 0.0,
+        start: Point::new(0.0, 0.0),
+        end: Point::new(0.0, 0.0),
+    })
+}
+
+fn circle(first: usize, last: usize, c: [f32; 2], r: f32) -> Feature {
+    Feature::Circle(CircleFeature {
+        first: first as u16,
+        last: last as u16,
+        points: (last + 1 - first) as u16,
+        center: Point::new(c[0], c[1]),
+        radius: r,
+        cov: [[0.0; 3]; 3],
+        start_angle: 0.0,
+        end_angle: 0.0,
+    })
+}
+
+/// 100 beams: a line on 10..=39, a circle on 45..=59, a line on 60..=89; the rest don't care.
+fn gt() -> GroundTruth {
+    GroundTruth {
+        beams: 100,
+        features: vec![
+            truth_line(10, 39, 0.5, 2000.0),
+            truth_circle(45, 59, [3000.0, 100.0], 300.0),
+            truth_line(60, 89, -1.0, 1500.0),
+        ],
+    }
+}
+
+fn perfect() -> Extraction {
+    Extraction {
+        marks: vec![10, 39, 45, 59, 60, 89],
+        features: vec![
+            line(10, 39, 0.5, 2000.0),
+            circle(45, 59, [3000.0, 100.0], 300.0),
+            line(60, 89, -1.0, 1500.0),
+        ],
+    }
+}
+
+#[test]
+fn perfect_extraction_scores_zero() {
+    let s = score(&perfect(), &gt());
+    assert_eq!(s.points, 30 + 15 + 30);
+    assert_eq!((s.false_marks, s.omitted_marks), (0, 0));
+    assert_eq!(s.false_mark_ratio(), 0.0);
+    assert_eq!(s.false_iden_ratio(), 0.0);
+    assert_eq!((s.matched, s.missed, s.spurious), (3, 0, 0));
+    assert_eq!(s.line_errors.len(), 2);
+    assert_eq!(s.circle_errors.len(), 1);
+    assert!(s
+        .line_errors
+        .iter()
+        .all(|e| e.rho < 1e-3 && e.alpha < 1e-6 && e.crb_rho == 1.0));
+    let c = s.circle_errors[0];
+    assert!(c.center < 1e-3 && c.radius < 1e-3 && c.crb_center == 2.0 && c.crb_radius == 3.0);
+}
+
+#[test]
+fn shifted_mark_counts_two() {
+    let mut ex = perfect();
+    ex.marks = vec![11, 39, 45, 59, 60, 89]; // 10 omitted, 11 falsely marked
+    let s = score(&ex, &gt());
+    assert_eq!((s.false_marks, s.omitted_marks), (1, 1));
+    assert!((s.false_mark_ratio() - 2.0 / 75.0).abs() < 1e-12);
+}
+
+#[test]
+fn marks_outside_truth_features_are_not_counted() {
+    let mut ex = perfect();
+    ex.marks.extend([0, 3, 42, 95, 99, 1000]); // don't-care beams and out-of-range indices
+    ex.marks.sort_unstable();
+    let s = score(&ex, &gt());
+    assert_eq!(s.false_mark_ratio(), 0.0);
+    // A mark inside a feature is counted.
+    ex.marks.push(20);
+    assert_eq!(score(&ex, &gt()).false_marks, 1);
+}
+
+#[test]
+fn mistyped_features_count_in_false_iden() {
+    let mut ex = perfect();
+    ex.features[1] = line(45, 59, 0.0, 2700.0); // circle as line
+    ex.features[2] = circle(60, 89, [0.0, 0.0], 5000.0); // line as circle
+    let s = score(&ex, &gt());
+    assert_eq!((s.circles_as_lines, s.lines_as_circles), (1, 1));
+    assert!((s.false_iden_ratio() - 2.0 / 3.0).abs() < 1e-12);
+    // Mistyped features have no parameter errors.
+    assert_eq!((s.line_errors.len(), s.circle_errors.len()), (1, 0));
+}
+
+#[test]
+fn iou_matching_is_one_to_one_and_thresholded() {
+    assert_eq!(iou((0, 9), (0, 9)), 1.0);
+    assert_eq!(iou((0, 9), (10, 19)), 0.0);
+    assert_eq!(iou((0, 9), (5, 14)), 5.0 / 15.0);
+    let t = gt().features;
+    // The first truth line split into two halves: IoU 0.5 each (15/30), only one matches.
+    let pred = vec![line(10, 24, 0.5, 2000.0), line(25, 39, 0.5, 2000.0)];
+    let m = match_features(&t, &pred);
+    assert_eq!(m.len(), 1);
+    // A feature covering two truth features (10..=59 vs 10..=39: IoU 0.6) matches the larger.
+    let pred = vec![line(10, 59, 0.5, 2000.0)];
+    assert_eq!(match_features(&t, &pred), vec![(0, 0)]);
+    // Below the threshold: missed and spurious.
+    let ex = Extraction {
+        marks: vec![],
+        features: vec![line(10, 22, 0.5, 2000.0)],
+    };
+    let s = score(&ex, &gt());
+    assert_eq!((s.matched, s.missed, s.spurious), (0, 3, 1));
+    assert!(
+        (s.missed_ratio() - 1.0).abs() < 1e-12 && (s.spurious_ratio() - 1.0 / 3.0).abs() < 1e-12
+    );
+}
+
+#[test]
+fn parameter_errors_are_measured_and_wrapped() {
+    let mut ex = perfect();
+    ex.features[0] = line(10, 39, 0.51, 2003.0);
+    ex.features[1] = circle(45, 59, [3003.0, 104.0], 298.0);
+    let s = score(&ex, &gt());
+    assert!((s.line_errors[0].rho - 3.0).abs() < 1e-3);
+    assert!((s.line_errors[0].alpha - 0.01).abs() < 1e-6);
+    assert!((s.circle_errors[0].center - 5.0).abs() < 1e-3);
+    assert!((s.circle_errors[0].radius - 2.0).abs() < 1e-3);
+    // α near ±π wraps; (α + π, −ρ) is the same line as (α, ρ).
+    let (dr, da) = line_error(PI - 0.001, 1000.0, -PI + 0.001, 1000.0);
+    assert!(dr < 1e-9 && (da - 0.002).abs() < 1e-9);
+    let (dr, da) = line_error(0.2 + PI, 0.5, 0.2, 0.3);
+    assert!((dr - 0.8).abs() < 1e-9 && da < 1e-9);
+}
+
+#[test]
+fn aggregate_sums_before_ratios() {
+    let a = score(&perfect(), &gt());
+    let mut ex = perfect();
+    ex.marks.clear();
+    let b = score(&ex, &gt());
+    let mut total = Score::default();
+    total.add(&a);
+    total.add(&b);
+    assert_eq!(total.scans, 2);
+    assert_eq!(total.points, 150);
+    assert!((total.false_mark_ratio() - 6.0 / 150.0).abs() < 1e-12);
+    assert_eq!(total.line_errors.len(), 4);
+}
+
+/// An oracle that marks the true marks and fits each truth run with pfe-core gets no false
+/// marks, no misses and no misidentified features, and errors near the CRB.
+#[test]
+fn oracle_on_simulated_scans() {
+    let mut total = Score::default();
+    for seed in 0..30 {
+        let sim = Scenario::new(SceneKind::Office, seed).simulate();
+        let pts = sim.points();
+        let features = sim
+            .truth
+            .iter()
+            .map(|f| {
+                let p: Vec<Point> = (f.first..=f.last).map(|i| pts[i].unwrap()).collect();
+                let l = fit_line(&p).unwrap();
+                match f.kind {
+                    TruthKind::Line { .. } => line(f.first, f.last, l.alpha, l.rho),
+                    TruthKind::Circle { center, radius } => circle(
+                        f.first,
+                        f.last,
+                        [center[0] as f32, center[1] as f32],
+                        radius as f32,
+                    ),
+                }
+            })
+            .collect();
+        let ex = Extraction {
+            marks: sim.true_marks.clone(),
+            features,
+        };
+        total.add(&score_sim(&ex, &sim));
+    }
+    assert!(total.truth_features > 100);
+    assert_eq!(total.false_mark_ratio(), 0.0);
+    assert_eq!(
+        (total.missed, total.spurious, total.false_iden_ratio()),
+        (0, 0, 0.0)
+    );
+    // Least squares is near-efficient: RMS(Δρ / CRB σ_ρ) is about 1, not 0 and not 3.
+    let z: f64 = total
+        .line_errors
+        .iter()
+        .map(|e| (e.rho / e.crb_rho).powi(2))
+        .sum::<f64>()
+        / total.line_errors.len() as f64;
+    assert!(z.sqrt() > 0.7 && z.sqrt() < 2.0, "rms z = {}", z.sqrt());
+}
