@@ -6,8 +6,9 @@
 //! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
 //! 50 m, or 81.83 m for 80 m-mode logs — are no return).
 //!
-//! For each data set and method, one warm-up pass, then `--reps` timed passes over all scans
-//! (`std::time::Instant`, one thread); each pass gives ns per beam (every beam counts, valid
+//! For each data set and method, one warm-up pass, then `--reps` rounds in which every method
+//! makes one timed pass over all scans, interleaved (`std::time::Instant`, one thread); each
+//! pass gives ns per beam (every beam counts, valid
 //! or not) and scans per second; the table reports the median pass. The ratio column is
 //! `time(method) / time(pfe-default)`: how many times faster pfe-default is.
 //!
@@ -47,7 +48,7 @@ struct Args {
     #[arg(long, default_value_t = 200)]
     per_log: usize,
     /// Timed passes per data set and method; the median is reported.
-    #[arg(long, default_value_t = 7)]
+    #[arg(long, default_value_t = 11)]
     reps: usize,
     /// Print machine-readable JSON instead of the table.
     #[arg(long)]
@@ -118,7 +119,9 @@ pub fn methods() -> Vec<Box<dyn Method>> {
     ]
 }
 
-/// Times `methods` on `scans`: one warm-up pass, then `reps` passes; median per method.
+/// Times `methods` on `scans`: one warm-up pass each, then `reps` rounds; in each round every
+/// method makes one timed pass (interleaved, so that load changes on a shared machine hit all
+/// methods alike). Median pass per method.
 pub fn time_methods(
     name: &str,
     scans: &[BenchScan],
@@ -127,36 +130,44 @@ pub fn time_methods(
 ) -> DatasetTiming {
     let points: usize = scans.iter().map(|s| s.ranges_mm.len()).sum();
     let reps = reps.max(1);
-    let mut rows = Vec::new();
-    for m in methods.iter_mut() {
-        let mut features = 0usize;
-        for s in scans {
-            features += m.extract(&s.geometry, &s.ranges_mm).features.len();
+    let features: Vec<usize> = methods
+        .iter_mut()
+        .map(|m| {
+            scans
+                .iter()
+                .map(|s| m.extract(&s.geometry, &s.ranges_mm).features.len())
+                .sum()
+        })
+        .collect();
+    let mut passes: Vec<Vec<f64>> = vec![Vec::with_capacity(reps); methods.len()];
+    for _ in 0..reps {
+        for (m, times) in methods.iter_mut().zip(passes.iter_mut()) {
+            let t = Instant::now();
+            for s in scans {
+                std::hint::black_box(m.extract(&s.geometry, std::hint::black_box(&s.ranges_mm)));
+            }
+            times.push(t.elapsed().as_secs_f64());
         }
-        let mut passes: Vec<f64> = (0..reps)
-            .map(|_| {
-                let t = Instant::now();
-                for s in scans {
-                    std::hint::black_box(
-                        m.extract(&s.geometry, std::hint::black_box(&s.ranges_mm)),
-                    );
-                }
-                t.elapsed().as_secs_f64()
-            })
-            .collect();
-        passes.sort_by(f64::total_cmp);
-        let med = passes.get(passes.len() / 2).copied().unwrap_or(f64::NAN);
-        let per_point = |secs: f64| secs * 1e9 / points.max(1) as f64;
-        rows.push(MethodTiming {
-            method: m.name().to_string(),
-            ns_per_point: per_point(med),
-            ns_per_point_min: per_point(passes.first().copied().unwrap_or(f64::NAN)),
-            ns_per_point_max: per_point(passes.last().copied().unwrap_or(f64::NAN)),
-            scans_per_s: scans.len() as f64 / med,
-            features_per_scan: features as f64 / scans.len().max(1) as f64,
-            slowdown_vs_pfe_default: f64::NAN,
-        });
     }
+    let per_point = |secs: f64| secs * 1e9 / points.max(1) as f64;
+    let mut rows: Vec<MethodTiming> = methods
+        .iter()
+        .zip(passes.iter_mut())
+        .zip(features)
+        .map(|((m, times), features)| {
+            times.sort_by(f64::total_cmp);
+            let med = times.get(times.len() / 2).copied().unwrap_or(f64::NAN);
+            MethodTiming {
+                method: m.name().to_string(),
+                ns_per_point: per_point(med),
+                ns_per_point_min: per_point(times.first().copied().unwrap_or(f64::NAN)),
+                ns_per_point_max: per_point(times.last().copied().unwrap_or(f64::NAN)),
+                scans_per_s: scans.len() as f64 / med,
+                features_per_scan: features as f64 / scans.len().max(1) as f64,
+                slowdown_vs_pfe_default: f64::NAN,
+            }
+        })
+        .collect();
     let reference = rows
         .iter()
         .find(|r| r.method == "pfe-default")
