@@ -913,11 +913,11 @@ fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
             );
             let walls = room(&mut sc, rng, w, h, 2, false);
             for &(a, b) in &walls {
-                let k = rng.gen_range(0..=2);
+                let k = rng.gen_range(1..=3);
                 sc.pilasters(rng, a, b, k, 600.0);
             }
             // Furniture: against a wall or free-standing.
-            let n = rng.gen_range(4..=9);
+            let n = rng.gen_range(6..=11);
             sc.scatter(
                 rng,
                 n,
@@ -964,7 +964,7 @@ fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
                 rng.gen_range(4000.0..8000.0),
             );
             room(&mut sc, rng, w, h, 1, false);
-            let n = rng.gen_range(10..=18);
+            let n = rng.gen_range(12..=22);
             sc.scatter(
                 rng,
                 n,
@@ -1008,10 +1008,10 @@ fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
                 }
             }
             for &(a, b) in &walls {
-                let k = rng.gen_range(0..=1);
+                let k = rng.gen_range(0..=2);
                 sc.pilasters(rng, a, b, k, 400.0);
             }
-            let n = rng.gen_range(6..=11);
+            let n = rng.gen_range(8..=14);
             sc.scatter(
                 rng,
                 n,
