@@ -1,0 +1,346 @@
+//! Real-time transports for the emulator: a pseudo-terminal (for real clients such as MRPT or
+//! `pfe record`) and a TCP socket (for QEMU's `-serial tcp:…`), and the `pfe emulate` CLI.
+
+use std::io::{ErrorKind, Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::os::fd::{AsFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use nix::fcntl::{fcntl, FcntlArg, OFlag};
+use nix::sys::termios::{self, BaudRate, SetArg};
+
+use super::{Emulator, EmulatorConfig, EmulatorReport, SourceKind};
+use firmware::lms::types::{Baud, Unit, Variant};
+
+/// When a real-time run stops.
+#[derive(Clone, Debug, Default)]
+pub struct RunLimits {
+    /// Stop once this many B0 telegrams were sent completely.
+    pub scans: Option<u32>,
+    /// Stop after this much wall time.
+    pub max_time: Option<Duration>,
+    /// Print every command received to stderr.
+    pub trace: bool,
+}
+
+/// A byte pipe to the host with an optional notion of the host's baud.
+trait Wire {
+    /// Reads available host bytes; `Ok(None)` when the host closed the connection.
+    fn read_host(&mut self, buf: &mut [u8]) -> std::io::Result<Option<usize>>;
+    /// Writes device bytes; returns how many were accepted.
+    fn write_device(&mut self, bytes: &[u8]) -> std::io::Result<usize>;
+    /// The host's baud, or `None` when the wire has none.
+    fn host_baud(&mut self) -> Option<u32>;
+}
+
+fn run_realtime(emu: &mut Emulator, wire: &mut dyn Wire, limits: &RunLimits) -> Result<()> {
+    let start = Instant::now();
+    let mut buf = [0u8; 4096];
+    let mut pending: Vec<u8> = Vec::new();
+    let mut out = Vec::new();
+    let mut seen_cmds = 0;
+    loop {
+        let now = start.elapsed().as_micros() as u64;
+        let hb = wire.host_baud();
+        match wire.read_host(&mut buf) {
+            Ok(Some(n)) if n > 0 => emu.receive(now, hb, buf.get(..n).unwrap_or(&[])),
+            Ok(Some(_)) => {}
+            Ok(None) => break,
+            Err(e) => return Err(e).context("reading from the host"),
+        }
+        if limits.trace {
+            for c in emu.report().commands.get(seen_cmds..).unwrap_or(&[]) {
+                eprintln!(
+                    "{:10.4} RX cmd {c:02X} (device at {} baud)",
+                    now as f64 / 1e6,
+                    emu.baud().bps()
+                );
+            }
+            seen_cmds = emu.report().commands.len();
+        }
+        emu.set_hold(!pending.is_empty());
+        out.clear();
+        emu.take_ready(now, hb, &mut out);
+        pending.extend(&out);
+        if !pending.is_empty() {
+            let n = wire.write_device(&pending).context("writing to the host")?;
+            pending.drain(..n.min(pending.len()));
+        }
+        let done_scans = limits.scans.is_some_and(|n| {
+            emu.report().scans.len() as u32 >= n && emu.queued() == 0 && pending.is_empty()
+        });
+        let timed_out = limits.max_time.is_some_and(|t| start.elapsed() >= t);
+        if done_scans || timed_out {
+            break;
+        }
+        std::thread::sleep(Duration::from_micros(500));
+    }
+    Ok(())
+}
+
+struct TcpWire {
+    s: TcpStream,
+}
+
+impl Wire for TcpWire {
+    fn read_host(&mut self, buf: &mut [u8]) -> std::io::Result<Option<usize>> {
+        match self.s.read(buf) {
+            Ok(0) => Ok(None),
+            Ok(n) => Ok(Some(n)),
+            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
+                Ok(Some(0))
+            }
+            Err(e) => Err(e),
+        }
+    }
+    fn write_device(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        match self.s.write(bytes) {
+            Ok(n) => Ok(n),
+            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
+                Ok(0)
+            }
+            Err(e) => Err(e),
+        }
+    }
+    fn host_baud(&mut self) -> Option<u32> {
+        None
+    }
+}
+
+/// Accepts one TCP connection on `listener` (e.g. QEMU started with
+/// `-serial tcp:127.0.0.1:PORT`) and emulates a device with `config`'s built-in source on it
+/// until `limits` or the peer closes. Baud is not modelled (the host is always at the device's
+/// rate); output is paced at the device baud and held back while the peer does not read.
+pub fn serve_tcp(
+    listener: TcpListener,
+    config: EmulatorConfig,
+    limits: RunLimits,
+) -> Result<EmulatorReport> {
+    serve_tcp_with(listener, Emulator::from_config(config), limits)
+}
+
+/// [`serve_tcp`] with a ready-made emulator (any [`ScanSource`](super::ScanSource)).
+pub fn serve_tcp_with(
+    listener: TcpListener,
+    mut emu: Emulator,
+    limits: RunLimits,
+) -> Result<EmulatorReport> {
+    let (s, _) = listener.accept().context("accepting the TCP connection")?;
+    s.set_nonblocking(true)?;
+    s.set_nodelay(true)?;
+    let mut wire = TcpWire { s };
+    run_realtime(&mut emu, &mut wire, &limits)?;
+    Ok(emu.report().clone())
+}
+
+struct PtyWire {
+    master: std::fs::File,
+    slave: OwnedFd,
+}
+
+fn baud_of(b: BaudRate) -> Option<u32> {
+    Some(match b {
+        BaudRate::B9600 => 9600,
+        BaudRate::B19200 => 19200,
+        BaudRate::B38400 => 38400,
+        BaudRate::B57600 => 57600,
+        BaudRate::B115200 => 115_200,
+        BaudRate::B230400 => 230_400,
+        BaudRate::B460800 => 460_800,
+        BaudRate::B500000 => 500_000,
+        BaudRate::B4800 => 4800,
+        _ => return None,
+    })
+}
+
+impl Wire for PtyWire {
+    fn read_host(&mut self, buf: &mut [u8]) -> std::io::Result<Option<usize>> {
+        match self.master.read(buf) {
+            Ok(n) => Ok(Some(n)),
+            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
+                Ok(Some(0))
+            }
+            // EIO: no process has the slave open (we keep one, so this is transient).
+            Err(e) if e.raw_os_error() == Some(nix::libc::EIO) => Ok(Some(0)),
+            Err(e) => Err(e),
+        }
+    }
+    fn write_device(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        match self.master.write(bytes) {
+            Ok(n) => Ok(n),
+            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
+                Ok(0)
+            }
+            Err(e) => Err(e),
+        }
+    }
+    fn host_baud(&mut self) -> Option<u32> {
+        // The client's speed as set on the slave; an unknown one never matches the device.
+        termios::tcgetattr(self.slave.as_fd())
+            .ok()
+            .map(|t| baud_of(termios::cfgetospeed(&t)).unwrap_or(1))
+    }
+}
+
+/// A pseudo-terminal whose slave is reachable through a symlink at `link`.
+pub struct Pty {
+    wire: PtyWire,
+    link: PathBuf,
+    slave_path: PathBuf,
+}
+
+impl Pty {
+    /// Opens a pty, sets its slave raw at 9600 baud and creates the symlink `link` to it.
+    pub fn open(link: &Path) -> Result<Self> {
+        let r = nix::pty::openpty(None, None).context("openpty")?;
+        let slave_path = nix::unistd::ttyname(r.slave.as_fd()).context("ttyname")?;
+        let mut t = termios::tcgetattr(r.slave.as_fd())?;
+        termios::cfmakeraw(&mut t);
+        termios::cfsetspeed(&mut t, BaudRate::B9600)?;
+        termios::tcsetattr(r.slave.as_fd(), SetArg::TCSANOW, &t)?;
+        let flags = OFlag::from_bits_truncate(fcntl(r.master.as_fd(), FcntlArg::F_GETFL)?);
+        fcntl(
+            r.master.as_fd(),
+            FcntlArg::F_SETFL(flags | OFlag::O_NONBLOCK),
+        )?;
+        if link.symlink_metadata().is_ok() {
+            std::fs::remove_file(link)
+                .with_context(|| format!("removing old {}", link.display()))?;
+        }
+        std::os::unix::fs::symlink(&slave_path, link)
+            .with_context(|| format!("symlink {} -> {}", link.display(), slave_path.display()))?;
+        Ok(Self {
+            wire: PtyWire {
+                master: std::fs::File::from(r.master),
+                slave: r.slave,
+            },
+            link: link.to_path_buf(),
+            slave_path,
+        })
+    }
+
+    /// Path of the slave device (`/dev/pts/N`).
+    pub fn slave_path(&self) -> &Path {
+        &self.slave_path
+    }
+}
+
+impl Drop for Pty {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.link);
+    }
+}
+
+/// Emulates `emu` on a fresh pty linked at `link` until `limits`; baud is modelled from the
+/// client's termios speed (bytes at another speed are garbled, as on a real line).
+pub fn serve_pty(link: &Path, mut emu: Emulator, limits: RunLimits) -> Result<EmulatorReport> {
+    let mut pty = Pty::open(link)?;
+    run_realtime(&mut emu, &mut pty.wire, &limits)?;
+    Ok(emu.report().clone())
+}
+
+/// Runs an emulator on an already opened [`Pty`].
+pub fn serve_on(pty: &mut Pty, mut emu: Emulator, limits: RunLimits) -> Result<EmulatorReport> {
+    run_realtime(&mut emu, &mut pty.wire, &limits)?;
+    Ok(emu.report().clone())
+}
+
+const USAGE: &str = "pfe emulate (--pty PATH | --tcp ADDR) [--scans N] [--seconds S] [--seed N]
+    [--baud 9600|19200|38400|500000] [--variant 180/0.5] [--unit mm|cm] [--source room|tagged] [--trace]
+
+Emulates a SICK LMS200 on a pseudo-terminal (symlink PATH to the slave) or on a TCP socket
+(listens on ADDR and serves one connection). Prints a JSON summary on exit.";
+
+/// `pfe emulate`: parses its own arguments (see the usage text) and runs.
+pub fn cli(args: &[String]) -> Result<()> {
+    let mut cfg = EmulatorConfig::default();
+    let mut limits = RunLimits::default();
+    let mut pty = None;
+    let mut tcp = None;
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || {
+            it.next()
+                .cloned()
+                .with_context(|| format!("{a} needs a value\n\n{USAGE}"))
+        };
+        match a.as_str() {
+            "--pty" => pty = Some(PathBuf::from(val()?)),
+            "--tcp" => tcp = Some(val()?),
+            "--scans" => limits.scans = Some(val()?.parse().context("--scans")?),
+            "--seconds" => {
+                limits.max_time = Some(Duration::from_secs_f64(
+                    val()?.parse().context("--seconds")?,
+                ))
+            }
+            "--seed" => cfg.seed = val()?.parse().context("--seed")?,
+            "--baud" => {
+                let b: u32 = val()?.parse().context("--baud")?;
+                cfg.initial_baud =
+                    Baud::from_bps(b).with_context(|| format!("unsupported baud {b}"))?;
+            }
+            "--variant" => {
+                let v = val()?;
+                let (a, r) = v
+                    .split_once('/')
+                    .context("--variant ANGLE/RES, e.g. 180/0.5")?;
+                let a: u16 = a.parse()?;
+                let r: f32 = r.parse()?;
+                let var = Variant::new(a, (r * 100.0).round() as u16);
+                if !var.is_valid() {
+                    bail!("invalid variant {v}");
+                }
+                cfg.variant = var;
+            }
+            "--unit" => {
+                let u = match val()?.as_str() {
+                    "mm" => Unit::Mm,
+                    "cm" => Unit::Cm,
+                    other => bail!("unknown unit {other}"),
+                };
+                cfg.config.set_unit(u);
+            }
+            "--source" => {
+                cfg.source = match val()?.as_str() {
+                    "room" => SourceKind::Room,
+                    "tagged" => SourceKind::Tagged,
+                    other => bail!("unknown source {other}"),
+                }
+            }
+            "--trace" => limits.trace = true,
+            "-h" | "--help" => {
+                println!("{USAGE}");
+                return Ok(());
+            }
+            other => bail!("unknown argument {other}\n\n{USAGE}"),
+        }
+    }
+    let report = match (pty, tcp) {
+        (Some(p), None) => {
+            eprintln!("emulating an LMS200 on {}", p.display());
+            serve_pty(&p, Emulator::from_config(cfg), limits)?
+        }
+        (None, Some(addr)) => {
+            let l = TcpListener::bind(&addr).with_context(|| format!("binding {addr}"))?;
+            eprintln!("emulating an LMS200 on tcp {}", l.local_addr()?);
+            serve_tcp(l, cfg, limits)?
+        }
+        _ => bail!("give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"),
+    };
+    println!(
+        "{}",
+        serde_json::json!({
+            "scans_sent": report.scans.len(),
+            "scans_damaged": report.scans.iter().filter(|s| s.damaged).count(),
+            "commands": report.commands.len(),
+            "bad_commands": report.bad_commands,
+            "garbled_in": report.garbled_in,
+            "garbled_out": report.garbled_out,
+            "bytes_out": report.bytes_out,
+            "resets": report.resets,
+        })
+    );
+    Ok(())
+}

@@ -1,0 +1,268 @@
+//! The firmware driver against the emulated LMS200 over the in-process link (virtual time).
+
+use firmware::lms::driver::{Config, Driver};
+use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
+use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
+use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
+use host_tests::emulator::{
+    Emulator, EmulatorConfig, HostPort, Link, LinkClock, LinkDelay, SourceKind, TaggedSource,
+};
+
+type Lms = Driver<HostPort, LinkDelay, LinkClock>;
+
+fn setup(cfg: EmulatorConfig, driver: Config) -> (Link, Lms) {
+    let link = Link::new(Emulator::from_config(cfg), Some(9600));
+    let d = Driver::new(link.host_port(), link.delay(), link.clock(), driver);
+    (link, d)
+}
+
+fn tagged() -> EmulatorConfig {
+    EmulatorConfig {
+        source: SourceKind::Tagged,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn init_like_sicktoolbox_then_stream_exact_ranges() {
+    let (link, mut lms) = setup(EmulatorConfig::default(), Config::default());
+    lms.init().unwrap();
+    let cmds = link.with_emulator(|e| e.report().commands.clone()).unwrap();
+    // 20 25 probe (fails at 38400: device at 9600, garbled), ... found at 9600, 20 40, 20 25,
+    // 3A, 31, 74, 20 24. Unit mm and 180/0.5 are the emulator's defaults: no 3B / 77.
+    assert_eq!(cmds, [0x20, 0x20, 0x20, 0x3A, 0x31, 0x74, 0x20]);
+    assert_eq!(link.with_emulator(|e| e.baud()).unwrap(), Baud::B38400);
+    assert_eq!(link.host_baud(), Some(38400));
+    assert_eq!(lms.device().unit, Some(Unit::Mm));
+    let mut got = Vec::new();
+    for _ in 0..5 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!(s.len(), 361);
+        assert_eq!(s.unit(), Unit::Mm);
+        got.push(s.codes().to_vec());
+    }
+    let sent = link.with_emulator(|e| e.report().scans.clone()).unwrap();
+    for (g, s) in got.iter().zip(&sent) {
+        assert_eq!(g, &s.words);
+        // Independent truth: the room's geometry, to the mm quantum.
+        for (i, (&c, &r)) in g.iter().zip(&s.ranges_mm).enumerate() {
+            if r.is_finite() && r <= 8182.0 {
+                assert!((f32::from(c) - r).abs() <= 0.5, "beam {i}: {c} vs {r}");
+            } else {
+                assert!(
+                    c > 8182,
+                    "beam {i}: {r} mm must be a reserved code, got {c}"
+                );
+            }
+        }
+    }
+    let c = lms.counters();
+    assert_eq!(c.scans, 5);
+    assert_eq!(c.crc_errors, 0);
+    assert_eq!(c.reinits, 0);
+    assert!(c.timeouts >= 1, "the probe at 38400 timed out: {c:?}");
+}
+
+#[test]
+fn scan_rate_follows_baud_and_variant() {
+    for (baud, variant, hz) in [
+        (Baud::B38400, Variant::A180_R050, 5.2),
+        (Baud::B9600, Variant::A180_R100, 2.6),
+        (Baud::B500000, Variant::A180_R050, 37.5),
+        (Baud::B500000, Variant::A100_R025, 18.75),
+        (Baud::B19200, Variant::A100_R100, 9.1),
+    ] {
+        let (link, mut lms) = setup(
+            tagged(),
+            Config::default().with_baud(baud).with_variant(variant),
+        );
+        lms.next_scan().unwrap();
+        let t0 = link.now_us();
+        let n = 20;
+        for _ in 0..n {
+            let s = lms.next_scan().unwrap();
+            assert_eq!(s.len(), variant.values());
+        }
+        let rate = n as f64 / ((link.now_us() - t0) as f64 / 1e6);
+        assert!(
+            (rate - hz).abs() / hz < 0.08,
+            "{baud:?} {variant:?}: {rate:.2} Hz, want {hz}"
+        );
+    }
+}
+
+#[test]
+fn variant_and_cm_unit_via_installation_mode() {
+    let cfg = Config::default()
+        .with_variant(Variant::A100_R025)
+        .with_unit(Unit::Cm)
+        .with_baud(Baud::B500000);
+    let (link, mut lms) = setup(EmulatorConfig::default(), cfg);
+    let s = lms.next_scan().unwrap().clone();
+    assert_eq!(s.len(), 401);
+    assert_eq!(s.unit(), Unit::Cm);
+    let cmds = link.with_emulator(|e| e.report().commands.clone()).unwrap();
+    assert!(
+        cmds.ends_with(&[0x3A, 0x31, 0x74, 0x3B, 0x20, 0x77, 0x20, 0x20]),
+        "{cmds:02X?}"
+    );
+    let block = link.with_emulator(|e| e.config_block()).unwrap();
+    assert_eq!(block.unit(), Some(Unit::Cm));
+    let sent = link
+        .with_emulator(|e| e.report().scans.last().cloned())
+        .unwrap()
+        .unwrap();
+    // cm quantum: every valid value within 5 mm of the room geometry.
+    for i in 0..401 {
+        if let Some(mm) = s.range_mm(i) {
+            let truth = sent.ranges_mm[i];
+            assert!((mm - truth).abs() <= 5.0, "beam {i}: {mm} vs {truth}");
+        }
+    }
+    // The pfe-core view uses the same numbers.
+    let scan = s.as_pfe_scan();
+    assert_eq!(scan.ranges.len(), 401);
+    assert!((scan.geometry.angle_step.to_degrees() - 0.25).abs() < 1e-4);
+}
+
+#[test]
+fn mrpt_style_32m_mode_decodes_15_bit_ranges() {
+    let cfg = Config::default().with_measuring_mode(MeasuringMode(6));
+    let (link, mut lms) = setup(tagged(), cfg);
+    let s = lms.next_scan().unwrap();
+    assert_eq!(s.mode, MeasuringMode(6));
+    assert_eq!(s.max_valid(), 32758);
+    let tag = TaggedSource::tag_of(s.codes()).unwrap();
+    let sent = link
+        .with_emulator(|e| e.report().scans[tag as usize].clone())
+        .unwrap();
+    assert_eq!(s.codes(), &sent.words[..]);
+}
+
+#[test]
+fn driver_restart_finds_device_streaming_at_38400() {
+    let (link, mut lms) = setup(tagged(), Config::default());
+    lms.next_scan().unwrap();
+    let (port, delay, clock) = lms.release();
+    // A new driver (e.g. after a firmware reset): the device still streams at 38400.
+    let mut lms2 = Driver::new(port, delay, clock, Config::default());
+    let s = lms2.next_scan().unwrap();
+    assert_eq!(s.len(), 361);
+    let cmds = link.with_emulator(|e| e.report().commands.clone()).unwrap();
+    // Second init: 20 25 probe answered at once at 38400; no baud change.
+    assert_eq!(&cmds[7..], &[0x20, 0x3A, 0x31, 0x74, 0x20]);
+}
+
+#[test]
+fn invalid_variant_is_rejected_by_config_check() {
+    let (_, mut lms) = setup(
+        tagged(),
+        Config::default().with_variant(Variant::new(180, 25)),
+    );
+    assert!(matches!(
+        lms.init(),
+        Err(firmware::lms::Error::InvalidConfig)
+    ));
+}
+
+// ------------------------------------------------------------------ emulator alone
+
+fn talk(emu: &mut Emulator, t: &mut u64, payload: &[u8]) -> Vec<(Option<u8>, Vec<u8>)> {
+    let mut buf = [0u8; 64];
+    let n = encode_telegram(0x00, payload, &mut buf).unwrap();
+    emu.receive(*t, None, &buf[..n]);
+    *t += 1_000_000;
+    let mut out = Vec::new();
+    emu.take_ready(*t, None, &mut out);
+    let mut dec = Decoder::<MAX_TELEGRAM>::new();
+    let mut ev = Vec::new();
+    let mut rest = &out[..];
+    loop {
+        let (u, e) = dec.feed(rest);
+        rest = &rest[u..];
+        match e {
+            Some(Event::Ack) => ev.push((Some(0x06), vec![])),
+            Some(Event::Nak) => ev.push((Some(0x15), vec![])),
+            Some(Event::Telegram(t)) => ev.push((None, t.payload().to_vec())),
+            None => break,
+        }
+    }
+    ev
+}
+
+#[test]
+fn emulator_replies() {
+    let mut e = Emulator::from_config(EmulatorConfig::default());
+    let mut t = 0;
+    let r = talk(&mut e, &mut t, &[0x3B, 0xB4, 0x00, 0x19, 0x00]); // 180/0.25: invalid
+    assert_eq!(
+        r,
+        vec![
+            (Some(6), vec![]),
+            (None, vec![0xBB, 0x00, 0xB4, 0x00, 0x19, 0x00, 0x10])
+        ]
+    );
+    let r = talk(&mut e, &mut t, &[0x3B, 0x64, 0x00, 0x32, 0x00]); // 100/0.5 ok
+    assert_eq!(r[1].1[1], 1);
+    assert_eq!(e.variant(), Variant::A100_R050);
+    // 77 outside installation mode fails, inside works.
+    let mut block = e.config_block();
+    block.set_unit(Unit::Cm);
+    let mut p = vec![0x77];
+    p.extend(block.as_bytes());
+    let r = talk(&mut e, &mut t, &p);
+    assert_eq!(&r[1].1[..2], &[0xF7, 0x00]);
+    let mut inst = vec![0x20, 0x00];
+    inst.extend(b"SICK_LMX");
+    let r = talk(&mut e, &mut t, &inst);
+    assert_eq!(r[1].1, vec![0xA0, 0x01, 0x10], "bad password");
+    inst[9] = b'S';
+    assert_eq!(talk(&mut e, &mut t, &inst)[1].1, vec![0xA0, 0x00, 0x10]);
+    let r = talk(&mut e, &mut t, &p);
+    assert_eq!(&r[1].1[..2], &[0xF7, 0x01]);
+    assert_eq!(e.config_block().unit(), Some(Unit::Cm));
+    // Unknown command: 92.
+    assert_eq!(talk(&mut e, &mut t, &[0x55])[1].1, vec![0x92, 0x10]);
+    // Single scan on request: B0 with 201 values in cm.
+    let r = talk(&mut e, &mut t, &[0x30, 0x01]);
+    let pr = parse_reply(&r[1].1, ReplyOptions::default()).unwrap();
+    let Reply::Values(v) = pr.reply else { panic!() };
+    assert_eq!((v.len(), v.unit()), (201, Some(Unit::Cm)));
+    // B1 reports what was set.
+    let r = talk(&mut e, &mut t, &[0x31]);
+    let Reply::Status(s) = parse_reply(&r[1].1, ReplyOptions::default()).unwrap().reply else {
+        panic!()
+    };
+    assert_eq!(s.variant(), Some(Variant::A100_R050));
+    assert_eq!(s.baud(), Some(Baud::B9600));
+    assert_eq!(s.unit(), Some(Unit::Cm));
+    // Bad CRC: NAK only.
+    e.receive(t, None, &[0x02, 0x00, 0x01, 0x00, 0x31, 0x00, 0x00]);
+    t += 50_000;
+    let mut out = Vec::new();
+    e.take_ready(t, None, &mut out);
+    assert_eq!(out, vec![0x15]);
+}
+
+#[test]
+fn baud_switch_reply_at_old_rate_then_garbled_mismatch() {
+    let mut e = Emulator::from_config(EmulatorConfig::default());
+    let mut buf = [0u8; 16];
+    let n = encode_telegram(0x00, &[0x20, 0x40], &mut buf).unwrap();
+    e.receive(0, Some(9600), &buf[..n]);
+    let mut out = Vec::new();
+    e.take_ready(100_000, Some(9600), &mut out);
+    assert_eq!(
+        out,
+        vec![0x06, 0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A]
+    );
+    // 10 bytes at 9600 take 10.4 ms: the device was still at 9600 while sending them.
+    assert_eq!(e.baud(), Baud::B38400);
+    // A host still at 9600 is not understood now.
+    let n = encode_telegram(0x00, &[0x31], &mut buf).unwrap();
+    e.receive(200_000, Some(9600), &buf[..n]);
+    out.clear();
+    e.take_ready(400_000, Some(9600), &mut out);
+    assert!(out.is_empty());
+    assert_eq!(e.report().garbled_in, n as u64);
+}
