@@ -11,7 +11,7 @@ use crate::feature::{CircleFeature, Feature, LineFeature};
 use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::fit_line;
 use crate::math;
-use crate::predict::{paper_threshold, predict, Prediction};
+use crate::predict::{paper_threshold, predict_beam, Prediction};
 use crate::scan::Scan;
 use crate::Motion;
 
@@ -49,7 +49,7 @@ pub struct Stats {
     pub predictions: usize,
 }
 
-/// Feature extractor with room for `N` readings and `M` features. About `9·N + 64·M` bytes:
+/// Feature extractor with room for `N` readings and `M` features. About `13·N + 64·M` bytes:
 /// put it in a `static` on a microcontroller.
 ///
 /// ```
@@ -70,6 +70,8 @@ pub struct Stats {
 /// ```
 pub struct Extractor<const N: usize, const M: usize> {
     points: [Point; N],
+    /// Corrected measured range of each valid point, mm (its distance from the scanner).
+    ranges: [f32; N],
     flags: [u8; N],
     len: usize,
     motion: Option<Motion>,
@@ -88,6 +90,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     pub const fn new() -> Self {
         Self {
             points: [Point::INVALID; N],
+            ranges: [0.0; N],
             flags: [0; N],
             len: 0,
             motion: None,
@@ -211,22 +214,39 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
     }
 
+    fn range(&self, i: usize) -> f32 {
+        self.ranges.get(i).copied().unwrap_or(f32::NAN)
+    }
+
+    /// Converts the readings to points. Beam directions come from an exact sine and cosine
+    /// every 16 beams and a rotation recurrence in between (error < 1e-6 rad).
     fn load_points(&mut self, scan: &Scan<'_>, config: &Config) {
+        const EXACT_EVERY: usize = 16;
         let g = scan.geometry;
+        let (rs, rc) = math::sin_cos(g.angle_step);
+        let (mut s, mut c) = (0.0f32, 1.0f32);
         for i in 0..self.len {
+            if i % EXACT_EVERY == 0 {
+                (s, c) = math::sin_cos(g.bearing(i));
+            } else {
+                (s, c) = (s * rc + c * rs, c * rc - s * rs);
+            }
             let r = scan
                 .ranges
                 .get_mm(i, g.r_max)
-                .map(|r| config.correction.map_or(r, |c| c.apply(r)))
+                .map(|r| config.correction.map_or(r, |k| k.apply(r)))
                 .filter(|r| r.is_finite() && *r > 0.0);
             let p = match (r, self.motion) {
                 (Some(r), Some(m)) => m.deskew(i, r, g.bearing(i)).0,
-                (Some(r), None) => Point::from_polar(r, g.bearing(i)),
+                (Some(r), None) => Point::new(r * c, r * s),
                 (None, _) => Point::INVALID,
             };
             let ok = p.is_valid();
             if let Some(slot) = self.points.get_mut(i) {
                 *slot = if ok { p } else { Point::INVALID };
+            }
+            if let Some(slot) = self.ranges.get_mut(i) {
+                *slot = if ok { r.unwrap_or(0.0) } else { 0.0 };
             }
             if let Some(f) = self.flags.get_mut(i) {
                 *f = if ok { VALID } else { 0 };
@@ -240,7 +260,11 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     fn predict(&mut self, from: usize, to: usize, k: usize) -> Option<Prediction> {
         self.stats.predictions += 1;
         let pts = self.points.get(from..to)?;
-        predict(pts.iter().copied(), self.point(k), self.origin(k))
+        let (p, o, r) = (self.point(k), self.origin(k), self.range(k));
+        if !(r > 0.0) {
+            return None;
+        }
+        predict_beam(pts.iter().copied(), o, (p.x - o.x) / r, (p.y - o.y) / r, r)
     }
 
     /// Whether a prediction says "mark" under the configured threshold.
@@ -248,8 +272,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let Some(p) = pred else { return true };
         match config.threshold {
             Threshold::Paper { d0, lambda } => {
-                let r = self.point(k).distance(&self.origin(k));
-                p.error > paper_threshold(d0, lambda, r, r_max, p.phi)
+                p.error > paper_threshold(d0, lambda, self.range(k), r_max, p.phi())
             }
             Threshold::Noise(m) => p.error > m.k * config.sigma_r * p.sigma_factor + m.floor,
         }
@@ -270,10 +293,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 let pred = self.predict(k - NP, k, k);
                 let mark = match pred {
                     None => true,
-                    Some(p) => {
-                        let r = self.point(k).distance(&self.origin(k));
-                        p.error > paper_threshold(d0, lambda, r, r_max, p.phi)
-                    }
+                    Some(p) => p.error > paper_threshold(d0, lambda, self.range(k), r_max, p.phi()),
                 };
                 if mark {
                     self.set(k, START);
@@ -310,10 +330,12 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 continue;
             };
             let c = k - s;
-            let prev = self.point(k - 1);
-            let r_prev = prev.distance(&self.origin(k - 1));
-            let limit = r_prev * gap_factor + m.k * sigma_r * core::f32::consts::SQRT_2 + m.floor;
-            let jump = self.point(k).distance(&prev) > limit;
+            let (p, prev) = (self.point(k), self.point(k - 1));
+            let limit = self.range(k - 1) * gap_factor
+                + m.k * sigma_r * core::f32::consts::SQRT_2
+                + m.floor;
+            let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+            let jump = ex * ex + ey * ey > limit * limit;
             let boundary = if jump {
                 // A jump no surface explains (also where the window's line runs along the
                 // beam and the prediction says nothing).
