@@ -77,6 +77,8 @@ fn tick_step(span: f64, target: f64) -> f64 {
 
 /// Tick label for `v` mm with step `step` mm, in m when `metres`.
 fn tick_label(v: f64, step: f64, metres: bool) -> String {
+    // Snap to the step so that rounding never prints "-0".
+    let v = (v / step).round() * step + 0.0;
     if metres {
         let decimals = if step >= 1000.0 {
             0
@@ -85,9 +87,19 @@ fn tick_label(v: f64, step: f64, metres: bool) -> String {
         } else {
             2
         };
-        format!("{:.*}", decimals, v / 1000.0)
+        let t = format!("{:.*}", decimals, v / 1000.0);
+        if t.trim_start_matches(['-', '0', '.']).is_empty() {
+            "0".to_string()
+        } else {
+            t
+        }
     } else {
-        format!("{v:.0}")
+        let t = format!("{v:.0}");
+        if t == "-0" {
+            "0".to_string()
+        } else {
+            t
+        }
     }
 }
 
@@ -301,7 +313,7 @@ pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
         if let Some(Some((x, y))) = pts.get(i) {
             let _ = writeln!(
                 s,
-                r#"<circle cx="{:.1}" cy="{:.1}" r="4.5" fill="none" stroke="{MARK}" stroke-width="1.8"/>"#,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3.8" fill="none" stroke="{MARK}" stroke-width="1.3"/>"#,
                 sx(*x),
                 sy(*y)
             );
@@ -334,7 +346,7 @@ pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
         ),
         (
             format!(
-                r#"<circle cx="{:.1}" cy="{:.1}" r="4.5" fill="none" stroke="{MARK}" stroke-width="1.8"/>"#,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3.8" fill="none" stroke="{MARK}" stroke-width="1.3"/>"#,
                 lx + 12.0,
                 ly + 22.0
             ),
@@ -404,6 +416,14 @@ mod tests {
         assert_eq!(tick_step(10_000.0, 8.0), 1000.0);
         assert_eq!(tick_step(3_000.0, 8.0), 500.0);
         assert_eq!(tick_step(1_600.0, 8.0), 200.0);
+    }
+
+    #[test]
+    fn labels() {
+        assert_eq!(tick_label(-1e-9, 1000.0, true), "0");
+        assert_eq!(tick_label(-0.4, 200.0, false), "0");
+        assert_eq!(tick_label(2500.0, 500.0, true), "2.5");
+        assert_eq!(tick_label(-3000.0, 1000.0, true), "-3");
     }
 
     #[test]

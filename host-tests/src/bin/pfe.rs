@@ -173,7 +173,7 @@ fn delegate(name: &str, r: anyhow::Result<()>) -> Result<(), Failure> {
 
 /// Opens `file` with a byte-counting progress bar on stderr (hidden when stderr is not a
 /// terminal).
-fn open(file: &Path) -> Result<(Box<dyn io::BufRead>, ProgressBar), Failure> {
+fn open(file: &Path, format: Format) -> Result<(Box<dyn io::BufRead>, ProgressBar), Failure> {
     let len = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
     let bar = if io::stderr().is_terminal() && len > 0 {
         let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
@@ -187,8 +187,10 @@ fn open(file: &Path) -> Result<(Box<dyn io::BufRead>, ProgressBar), Failure> {
         ProgressBar::hidden()
     };
     let b = bar.clone();
-    let input = formats::open(file, move |r| Box::new(b.wrap_read(r)) as Box<dyn Read>)
-        .map_err(|e| Failure::input(format!("{}: cannot open: {e}", file.display())))?;
+    let input = formats::open_for(file, format, move |r| {
+        Box::new(b.wrap_read(r)) as Box<dyn Read>
+    })
+    .map_err(|e| Failure::input(format!("{}: cannot open: {e}", file.display())))?;
     Ok((input, bar))
 }
 
@@ -214,7 +216,7 @@ fn flush<W: Write>(out: &mut W) -> Result<(), Failure> {
 }
 
 fn extract(format: Format, config: ConfigName, file: &Path) -> Result<(), Failure> {
-    let (input, bar) = open(file)?;
+    let (input, bar) = open(file, format)?;
     let mut method = config.method();
     let stdout = io::stdout();
     let mut out = io::BufWriter::with_capacity(1 << 16, stdout.lock());
@@ -266,7 +268,7 @@ fn decode(format: Format, file: &Path) -> Result<(), Failure> {
             "decode reads only --format lms200 (got {format})"
         )));
     }
-    let (input, bar) = open(file)?;
+    let (input, bar) = open(file, format)?;
     let stdout = io::stdout();
     let mut out = io::BufWriter::with_capacity(1 << 16, stdout.lock());
     let mut reader = lms200::Reader::new(input);
@@ -293,8 +295,9 @@ fn decode(format: Format, file: &Path) -> Result<(), Failure> {
     bar.finish_and_clear();
     let s = reader.summary();
     eprintln!(
-        "pfe: {} bytes: {} telegrams good, {} dropped for CRC, {} bytes skipped",
-        s.bytes, s.good, s.crc_errors, s.skipped
+        "pfe: {} bytes: {} telegrams good, {} dropped for CRC, {} bytes skipped \
+         ({} dropped for length, {} malformed B0, {} other telegrams)",
+        s.bytes, s.good, s.crc_errors, s.skipped, s.bad_length, s.malformed, s.other_telegrams
     );
     error.map_or(Ok(()), Err)
 }
@@ -306,7 +309,7 @@ fn plot(
     scan: u64,
     output: &Path,
 ) -> Result<(), Failure> {
-    let (input, bar) = open(file)?;
+    let (input, bar) = open(file, format)?;
     let mut found: Option<Record> = None;
     let mut count = 0u64;
     for record in formats::scans(format, input) {

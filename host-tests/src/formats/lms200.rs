@@ -10,6 +10,9 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
+use firmware::lms::reply::MeasuredValues;
+use firmware::lms::{Decoder, Event, MeasuringMode, ReplyOptions, Unit as LmsUnit, MAX_TELEGRAM};
+
 use super::{InputError, Location, Record};
 
 /// Range unit of a telegram.
@@ -110,19 +113,44 @@ impl Telegram {
 pub struct Summary {
     /// Good 0xB0 telegrams.
     pub good: u64,
-    /// Telegrams dropped for a bad CRC.
+    /// Candidate telegrams dropped for a bad CRC.
     pub crc_errors: u64,
-    /// Bytes skipped while searching for a telegram.
+    /// Candidate telegrams dropped for an impossible length.
+    pub bad_length: u64,
+    /// Telegrams with a good CRC that are not 0xB0 (ACK bytes not counted).
+    pub other_telegrams: u64,
+    /// 0xB0 telegrams with a good CRC whose payload does not match their count word.
+    pub malformed: u64,
+    /// Bytes skipped while hunting for a telegram (including a truncated one at the end).
     pub skipped: u64,
     /// Bytes read.
     pub bytes: u64,
 }
 
-/// Streaming reader of the good 0xB0 telegrams of a capture.
+/// Streaming reader of the good 0xB0 telegrams of a capture, built on the firmware's
+/// [`Decoder`](firmware::lms::Decoder) (resynchronising, CRC-checked). Value words are masked
+/// to their 13 range bits (measuring mode 0, the 8 m / 80 m modes); a B0 payload one byte
+/// longer than its count word says is read as carrying the real-time scan index.
+///
+/// ```
+/// use host_tests::formats::lms200::{Reader, Unit};
+/// // The protocol fact sheet's test vector: 5 values in mm, status 0x10, after an ACK.
+/// let capture = [0x06, 0x02, 0x80, 0x0E, 0x00, 0xB0, 0x05, 0x40, 0xE8, 0x03, 0xE9, 0x03,
+///                0xEA, 0x03, 0xEB, 0x03, 0xFF, 0x1F, 0x10, 0x1F, 0x93];
+/// let mut r = Reader::new(Box::new(&capture[..]));
+/// let t = r.next().unwrap().unwrap();
+/// assert_eq!((t.unit, t.ranges.as_slice(), t.status), (Unit::Mm, &[1000, 1001, 1002, 1003, 8191][..], 0x10));
+/// assert!(r.next().is_none());
+/// assert_eq!(r.summary().good, 1);
+/// ```
 pub struct Reader {
     input: Box<dyn BufRead>,
+    decoder: Box<Decoder<MAX_TELEGRAM>>,
     summary: Summary,
+    /// Input ended.
     done: bool,
+    /// Padding bytes fed after the end (see `next`).
+    padding: u64,
 }
 
 impl Reader {
@@ -130,14 +158,61 @@ impl Reader {
     pub fn new(input: Box<dyn BufRead>) -> Self {
         Self {
             input,
+            decoder: Box::new(Decoder::new()),
             summary: Summary::default(),
             done: false,
+            padding: 0,
         }
     }
 
     /// Counts so far (complete once the iterator has ended).
     pub fn summary(&self) -> Summary {
-        self.summary
+        let st = self.decoder.stats();
+        Summary {
+            crc_errors: u64::from(st.crc_errors),
+            bad_length: u64::from(st.bad_length) + u64::from(st.overflows),
+            skipped: (u64::from(st.bytes_skipped) + self.decoder.pending() as u64)
+                .saturating_sub(self.padding),
+            ..self.summary
+        }
+    }
+
+    /// Turns a telegram with a good CRC into a scan, counting what is not one.
+    fn accept(&mut self, payload: &[u8]) -> Option<Telegram> {
+        if payload.first() != Some(&0xB0) {
+            self.summary.other_telegrams += 1;
+            return None;
+        }
+        let parsed = MeasuredValues::parse(payload, ReplyOptions::default()).or_else(|_| {
+            MeasuredValues::parse(
+                payload,
+                ReplyOptions {
+                    realtime_index: true,
+                },
+            )
+        });
+        let (Ok(values), Some(&status)) = (parsed, payload.last()) else {
+            self.summary.malformed += 1;
+            return None;
+        };
+        let unit = match values.unit() {
+            Some(LmsUnit::Mm) => Unit::Mm,
+            Some(LmsUnit::Cm) => Unit::Cm,
+            _ => {
+                self.summary.malformed += 1;
+                return None;
+            }
+        };
+        let mode = MeasuringMode::M8_FIELDS_AB_DAZZLE;
+        let ranges = values.words().map(|w| w & mode.range_mask()).collect();
+        let t = Telegram {
+            ordinal: self.summary.good,
+            unit,
+            ranges,
+            status,
+        };
+        self.summary.good += 1;
+        Some(t)
     }
 }
 
@@ -145,14 +220,62 @@ impl Iterator for Reader {
     type Item = Result<Telegram, InputError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if self.done {
-            return None;
+        loop {
+            // Events still buffered in the decoder (a telegram may start inside a rejected one).
+            let (_, ev) = self.decoder.feed(&[]);
+            if let Some(Event::Telegram(t)) = ev {
+                let payload = t.payload().to_vec();
+                if let Some(t) = self.accept(&payload) {
+                    return Some(Ok(t));
+                }
+                continue;
+            }
+            if ev.is_some() {
+                continue;
+            }
+            if self.done {
+                // A truncated telegram at the end may hide good telegrams that started inside
+                // it: complete it with padding so that the decoder rejects it and rescans.
+                if self.decoder.pending() == 0 || self.padding >= 2 * MAX_TELEGRAM as u64 {
+                    return None;
+                }
+                let (used, ev) = self.decoder.feed(&[0u8; 64]);
+                self.padding += used as u64;
+                if let Some(Event::Telegram(t)) = ev {
+                    let payload = t.payload().to_vec();
+                    if let Some(t) = self.accept(&payload) {
+                        return Some(Ok(t));
+                    }
+                }
+                continue;
+            }
+            let chunk = match self.input.fill_buf() {
+                Ok(c) => c,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => {
+                    self.done = true;
+                    return Some(Err(InputError {
+                        location: Location::Byte(self.summary.bytes),
+                        message: format!("cannot read: {e}"),
+                    }));
+                }
+            };
+            if chunk.is_empty() {
+                self.done = true;
+                continue;
+            }
+            let (used, ev) = self.decoder.feed(chunk);
+            let payload = match ev {
+                Some(Event::Telegram(t)) => Some(t.payload().to_vec()),
+                _ => None,
+            };
+            self.input.consume(used);
+            self.summary.bytes += used as u64;
+            if let Some(p) = payload {
+                if let Some(t) = self.accept(&p) {
+                    return Some(Ok(t));
+                }
+            }
         }
-        self.done = true;
-        let _ = &mut self.input;
-        Some(Err(InputError {
-            location: Location::Byte(0),
-            message: "the lms200 decoder is not wired in yet".into(),
-        }))
     }
 }

@@ -120,10 +120,22 @@ impl std::error::Error for InputError {}
 /// Stream of scans, stopping after the first error.
 pub type Scans = Box<dyn Iterator<Item = Result<Record, InputError>>>;
 
-/// Opens `path` (`-` = stdin) for reading, decompressing gzip when the data starts with the
-/// gzip magic bytes. `wrap` may wrap the raw file reader (e.g. a progress bar counting bytes).
+/// Opens a text file `path` (`-` = stdin), decompressing gzip when the data starts with the
+/// gzip magic bytes; see [`open_for`].
 pub fn open(
     path: &Path,
+    wrap: impl FnOnce(Box<dyn Read>) -> Box<dyn Read>,
+) -> io::Result<Box<dyn BufRead>> {
+    open_for(path, Format::Csv, wrap)
+}
+
+/// Opens `path` (`-` = stdin) for reading `format`, decompressing gzip when the data starts
+/// with the gzip magic bytes (for the binary `lms200` format only when the name ends in
+/// `.gz`, since a raw capture may start with any bytes). `wrap` may wrap the raw file reader
+/// (e.g. with a progress bar counting bytes).
+pub fn open_for(
+    path: &Path,
+    format: Format,
     wrap: impl FnOnce(Box<dyn Read>) -> Box<dyn Read>,
 ) -> io::Result<Box<dyn BufRead>> {
     let raw: Box<dyn Read> = if path.as_os_str() == "-" {
@@ -132,8 +144,8 @@ pub fn open(
         Box::new(File::open(path)?)
     };
     let mut reader = BufReader::with_capacity(1 << 16, wrap(raw));
-    let magic = reader.fill_buf()?;
-    if magic.starts_with(&[0x1f, 0x8b]) {
+    let sniff = format != Format::Lms200 || path.to_string_lossy().ends_with(".gz");
+    if sniff && reader.fill_buf()?.starts_with(&[0x1f, 0x8b]) {
         Ok(Box::new(BufReader::with_capacity(
             1 << 16,
             flate2::bufread::MultiGzDecoder::new(reader),
