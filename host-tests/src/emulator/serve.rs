@@ -23,6 +23,8 @@ pub struct RunLimits {
     pub max_time: Option<Duration>,
     /// Print every command received to stderr.
     pub trace: bool,
+    /// Stop as soon as this flag is set (from another thread).
+    pub stop: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// A byte pipe to the host with an optional notion of the host's baud.
@@ -72,7 +74,11 @@ fn run_realtime(emu: &mut Emulator, wire: &mut dyn Wire, limits: &RunLimits) -> 
             emu.report().scans.len() as u32 >= n && emu.queued() == 0 && pending.is_empty()
         });
         let timed_out = limits.max_time.is_some_and(|t| start.elapsed() >= t);
-        if done_scans || timed_out {
+        let stopped = limits
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed));
+        if done_scans || timed_out || stopped {
             break;
         }
         std::thread::sleep(Duration::from_micros(500));
