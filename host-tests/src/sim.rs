@@ -249,7 +249,7 @@ pub struct TruthFeature {
 /// ```
 pub fn crb(kind: &TruthKind, bearings: &[f64], sigma: f64) -> Option<Crb> {
     let s2 = sigma * sigma;
-    if !(s2 > 0.0) {
+    if s2.is_nan() || s2 <= 0.0 {
         return None;
     }
     match *kind {
@@ -268,7 +268,7 @@ pub fn crb(kind: &TruthKind, bearings: &[f64], sigma: f64) -> Option<Crb> {
                 }
             }
             let det = f[0][0] * f[1][1] - f[0][1] * f[1][0];
-            if !(det.abs() > 1e-300) {
+            if det.is_nan() || det.abs() <= 1e-300 {
                 return None;
             }
             let (vr, va) = (f[1][1] / det, f[0][0] / det);
@@ -314,7 +314,7 @@ fn invert3(m: &[[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
         m[r1][k1] * m[r2][k2] - m[r1][k2] * m[r2][k1]
     };
     let det = m[0][0] * c(0, 0) + m[0][1] * c(0, 1) + m[0][2] * c(0, 2);
-    if !(det.abs() > 1e-300) || !det.is_finite() {
+    if !det.is_finite() || det.abs() <= 1e-300 {
         return None;
     }
     let mut out = [[0.0; 3]; 3];
