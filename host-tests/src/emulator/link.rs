@@ -3,6 +3,18 @@
 //! [`HostPort`] implements `embedded_io::{Read, Write, ReadReady}` and the driver's `SetBaud`;
 //! [`LinkDelay`] (`DelayNs`) advances virtual time; [`LinkClock`] reads it. Nothing sleeps, so
 //! tests of seconds of device time run in milliseconds and are deterministic.
+//!
+//! ```
+//! use firmware::lms::driver::{Config, Driver};
+//! use host_tests::emulator::{Emulator, EmulatorConfig, Link};
+//! // A device at power-on (9600 baud), host UART modelled starting at 9600.
+//! let link = Link::new(Emulator::from_config(EmulatorConfig::default()), Some(9600));
+//! let mut lms = Driver::new(link.host_port(), link.delay(), link.clock(), Config::default());
+//! let scan = lms.next_scan().unwrap(); // probes, switches to 38400, streams
+//! assert_eq!(scan.len(), 361);
+//! let sent = link.with_emulator(|e| e.report().scans[0].words.clone()).unwrap();
+//! assert_eq!(scan.codes(), &sent[..]);
+//! ```
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
