@@ -323,6 +323,7 @@ pub struct Driver<U, D, C> {
     initialised_once: bool,
     reset_seen: bool,
     last_scan_ms: u32,
+    last_cmd_ms: u32,
     counters: Counters,
 }
 
@@ -353,6 +354,7 @@ where
             initialised_once: false,
             reset_seen: false,
             last_scan_ms: 0,
+            last_cmd_ms: 0,
             counters: Counters::default(),
         }
     }
@@ -415,6 +417,7 @@ where
     fn send(&mut self, cmd: &Command<'_>) -> Result<(), Error<U::Error>> {
         let mut buf = [0u8; 48];
         let n = cmd.encode(&mut buf)?;
+        self.last_cmd_ms = self.clock.now_ms();
         self.write_all(buf.get(..n).unwrap_or(&[]))
     }
 
@@ -752,7 +755,11 @@ where
     }
 
     fn unexpected_reply(&mut self, c: u8) {
-        if matches!(c, rcode::POWER_ON | rcode::RESET_ACK | rcode::MODE) {
+        // A late A0 answering a retried command is not a reset.
+        let late_answer = c == rcode::MODE
+            && self.elapsed_since(self.last_cmd_ms)
+                < self.config.reply_timeout_ms.saturating_mul(2);
+        if matches!(c, rcode::POWER_ON | rcode::RESET_ACK | rcode::MODE) && !late_answer {
             self.note_reset();
         }
     }

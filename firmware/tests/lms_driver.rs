@@ -1,0 +1,136 @@
+//! Driver behaviour that needs no device: every wait ends, odd UART answers are errors, not
+//! panics or hangs. (Behaviour against a device: host-tests/tests/emulator_*.rs, faults_*.rs.)
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
+
+use std::cell::Cell;
+use std::rc::Rc;
+
+use firmware::lms::driver::{Clock, Config, Driver, SetBaud};
+use firmware::lms::Error;
+
+#[derive(Clone, Default)]
+struct Time(Rc<Cell<u64>>);
+
+impl embedded_hal::delay::DelayNs for Time {
+    fn delay_ns(&mut self, ns: u32) {
+        self.0.set(self.0.get() + u64::from(ns).div_ceil(1000));
+    }
+}
+impl Clock for Time {
+    fn now_ms(&mut self) -> u32 {
+        (self.0.get() / 1000) as u32
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct E;
+impl embedded_io::Error for E {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::Other
+    }
+}
+
+/// A UART that accepts writes (or not) and never receives anything, or only `Ok(0)` reads.
+struct Dead {
+    write_zero: bool,
+    spurious_ready: bool,
+    written: usize,
+    bauds: Vec<u32>,
+}
+impl embedded_io::ErrorType for Dead {
+    type Error = E;
+}
+impl embedded_io::Read for Dead {
+    fn read(&mut self, _: &mut [u8]) -> Result<usize, E> {
+        Ok(0)
+    }
+}
+impl embedded_io::ReadReady for Dead {
+    fn read_ready(&mut self) -> Result<bool, E> {
+        Ok(self.spurious_ready)
+    }
+}
+impl embedded_io::Write for Dead {
+    fn write(&mut self, b: &[u8]) -> Result<usize, E> {
+        if self.write_zero {
+            return Ok(0);
+        }
+        self.written += b.len();
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> Result<(), E> {
+        Ok(())
+    }
+}
+impl SetBaud for Dead {
+    fn set_baud(&mut self, b: u32) -> Result<(), E> {
+        self.bauds.push(b);
+        Ok(())
+    }
+}
+
+fn dead(write_zero: bool, spurious_ready: bool) -> Dead {
+    Dead {
+        write_zero,
+        spurious_ready,
+        written: 0,
+        bauds: Vec::new(),
+    }
+}
+
+#[test]
+fn silent_device_gives_no_device_in_bounded_time() {
+    for spurious in [false, true] {
+        let t = Time::default();
+        let mut d = Driver::new(
+            dead(false, spurious),
+            t.clone(),
+            t.clone(),
+            Config::default(),
+        );
+        assert_eq!(d.init(), Err(Error::NoDevice));
+        let c = d.counters();
+        // 3 rounds over 4 rates, one 1 s try each.
+        assert_eq!(c.timeouts, 12);
+        let secs = t.0.get() as f64 / 1e6;
+        assert!((12.0..12.5).contains(&secs), "took {secs} s");
+        // next_scan reports the same error instead of hanging.
+        assert_eq!(d.next_scan().err(), Some(Error::NoDevice));
+        let (uart, _, _) = d.release();
+        // Every rate was tried, the configured one (38400) first.
+        assert_eq!(&uart.bauds[..4], &[38400, 9600, 19200, 500_000]);
+        assert_eq!(uart.written, 2 * 12 * 8);
+    }
+}
+
+#[test]
+fn write_returning_zero_is_an_error() {
+    let t = Time::default();
+    let mut d = Driver::new(dead(true, false), t.clone(), t, Config::default());
+    assert_eq!(d.init(), Err(Error::WriteZero));
+}
+
+#[test]
+fn invalid_variant_refused_before_any_byte() {
+    let t = Time::default();
+    let cfg = Config::default().with_variant(firmware::lms::Variant::new(180, 25));
+    let mut d = Driver::new(dead(false, false), t.clone(), t, cfg);
+    assert_eq!(d.init(), Err(Error::InvalidConfig));
+    assert_eq!(d.release().0.written, 0);
+}
+
+#[test]
+fn errors_display() {
+    let e: Error<E> = Error::Timeout { command: 0x31 };
+    assert_eq!(e.to_string(), "no reply to command 0x31");
+    let e: Error<E> = Error::Rejected {
+        command: 0x3B,
+        code: 0,
+    };
+    assert!(e.to_string().contains("0x3b"));
+}
