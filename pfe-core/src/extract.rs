@@ -264,7 +264,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         if !(r > 0.0) {
             return None;
         }
-        predict_beam(pts.iter().copied(), o, (p.x - o.x) / r, (p.y - o.y) / r, r)
+        predict_beam(pts, o, (p.x - o.x) / r, (p.y - o.y) / r, r)
     }
 
     /// Whether a prediction says "mark" under the configured threshold.
@@ -274,7 +274,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             Threshold::Paper { d0, lambda } => {
                 p.error > paper_threshold(d0, lambda, self.range(k), r_max, p.phi())
             }
-            Threshold::Noise(m) => p.error > m.k * config.sigma_r * p.sigma_factor + m.floor,
+            Threshold::Noise(m) => p.exceeds(m.k, config.sigma_r, m.floor),
         }
     }
 
@@ -347,7 +347,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 let pred = self.predict(k - w, k, k);
                 let over = match pred {
                     None => true,
-                    Some(p) => p.error > m.k * sigma_r * p.sigma_factor + m.floor,
+                    Some(p) => p.exceeds(m.k, sigma_r, m.floor),
                 };
                 (over && !self.continues_arc(s, k, m, sigma_r))
                     .then(|| self.locate(s, k, pred, m, sigma_r))
@@ -489,10 +489,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let mut b = k;
         for j in (ref_end..k).rev() {
             match self.predict(ref_start, ref_end, j) {
-                Some(p)
-                    if p.signed * side > 0.0
-                        && p.error > m.k_locate * sigma_r * p.sigma_factor + m.floor =>
-                {
+                Some(p) if p.signed * side > 0.0 && p.exceeds(m.k_locate, sigma_r, m.floor) => {
                     b = j
                 }
                 _ => break,
@@ -611,13 +608,33 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     max_radius,
                 },
                 Some(l),
-            ) => circle().filter(|c| {
+            ) => {
                 let sse_l = l.sse();
-                let sse_c = geometric_sse(pts, c);
-                c.radius <= max_radius
-                    && sse_l - sse_c > chi2 * config.sigma_r * config.sigma_r
-                    && sse_c < ratio * sse_l
-            }),
+                let var = config.sigma_r * config.sigma_r;
+                // A circle must beat the line by chi2·σ_r²: not possible when the line's own
+                // residual is smaller. Then the cheap algebraic fit screens the candidates
+                // before the geometric refinement.
+                let algebraic = (sse_l > chi2 * var)
+                    .then(|| fit_circle(pts, config.circle_method).ok())
+                    .flatten()
+                    .filter(|c| {
+                        c.radius <= 1.5 * max_radius && geometric_sse(pts, c) < 2.0 * ratio * sse_l
+                    });
+                algebraic
+                    .and_then(|c| {
+                        if config.circle_refine > 0 {
+                            refine_circle(pts, c, config.circle_refine).ok()
+                        } else {
+                            Some(c)
+                        }
+                    })
+                    .filter(|c| {
+                        let sse_c = geometric_sse(pts, c);
+                        c.radius <= max_radius
+                            && sse_l - sse_c > chi2 * var
+                            && sse_c < ratio * sse_l
+                    })
+            }
         };
         if let Some(c) = as_circle {
             let cov = circle_covariance_range(pts, &c, origin, config.sigma_r).ok()?;

@@ -1,7 +1,7 @@
 //! Prediction (paper §3.1–3.2): the least-squares line through the `Np` preceding points
 //! (Line 1) meets the test point's beam (Line 2) at the prediction point; the test point's
 //! distance from it is the prediction error `D`. No trigonometry: the line's direction is the
-//! principal axis of the window's centred moments (two square roots).
+//! principal axis of the window's centred moments (one square root).
 
 use crate::geometry::Point;
 use crate::math;
@@ -14,101 +14,116 @@ pub struct Prediction {
     pub error: f32,
     /// Measured range minus predicted range, mm (positive: the point is behind Line 1).
     pub signed: f32,
-    /// sin ϕ, ϕ the acute angle between Line 1 and the beam.
-    pub sin_phi: f32,
-    /// cos ϕ.
-    pub cos_phi: f32,
-    /// Standard deviation of `error` in units of σ_r for pure range noise:
-    /// `sqrt(1 + (1/n + u²/S_uu) · sin²ϕ̄ / sin²ϕ)`, u the prediction point's position along
-    /// Line 1 from the window's centroid, `S_uu` the window's spread along Line 1, ϕ̄ the
-    /// incidence of Line 1 at the window's centroid (its points' noise across Line 1 is
-    /// σ_r sin ϕ̄).
-    pub sigma_factor: f32,
+    /// Beam direction · Line 1's (unnormalised) normal: ∝ sin ϕ.
+    dn: f32,
+    /// Beam direction · Line 1's (unnormalised) direction: ∝ cos ϕ.
+    dt: f32,
+    /// Variance of `error` in units of σ_r² for pure range noise:
+    /// `1 + (1/n + u²/S_uu) · sin²ϕ̄ / sin²ϕ`, u the prediction point's position along Line 1
+    /// from the window's centroid, `S_uu` the window's spread along Line 1, ϕ̄ the incidence of
+    /// Line 1 at the window's last point (its points' noise across Line 1 is σ_r sin ϕ̄).
+    pub var_factor: f32,
 }
 
 impl Prediction {
-    /// ϕ in radians, in [0, π/2].
+    /// ϕ, the acute angle between Line 1 and the beam, in [0, π/2].
     pub fn phi(&self) -> f32 {
-        math::atan2(self.sin_phi, self.cos_phi)
+        math::atan2(math::abs(self.dn), math::abs(self.dt))
+    }
+
+    /// Standard deviation of `error` in units of σ_r.
+    pub fn sigma_factor(&self) -> f32 {
+        math::sqrt(self.var_factor)
+    }
+
+    /// True when `error > k · σ_r · sigma_factor + floor` (computed without a square root).
+    pub fn exceeds(&self, k: f32, sigma_r: f32, floor: f32) -> bool {
+        if !(self.error > floor) {
+            return false;
+        }
+        let e = self.error - floor;
+        !(e * e <= k * k * sigma_r * sigma_r * self.var_factor)
     }
 }
 
 /// Predicts the point at range `r` (mm, from `origin`) along the unit beam direction
 /// `(dx, dy)` from the `window` points (at least 2). `None` when the window does not define a
-/// line (fewer than 2 points, all equal, or not finite).
-pub fn predict_beam<I>(window: I, origin: Point, dx: f32, dy: f32, r: f32) -> Option<Prediction>
-where
-    I: Iterator<Item = Point> + Clone,
-{
-    let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
-    for p in window.clone() {
-        n += 1;
-        sx += p.x;
-        sy += p.y;
-    }
+/// line (fewer than 2 points, all equal, or not finite). One pass over the window and one
+/// square root.
+pub fn predict_beam(
+    window: &[Point],
+    origin: Point,
+    dx: f32,
+    dy: f32,
+    r: f32,
+) -> Option<Prediction> {
+    let (first, last) = (window.first()?, window.last()?);
+    let n = window.len();
     if n < 2 {
         return None;
     }
-    let nf = n as f32;
-    let c = Point::new(sx / nf, sy / nf);
-    let (mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32);
+    // Moments relative to the first point (the window is small: no cancellation).
+    let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     for p in window {
-        let (ex, ey) = (p.x - c.x, p.y - c.y);
+        let (ex, ey) = (p.x - first.x, p.y - first.y);
+        sx += ex;
+        sy += ey;
         sxx += ex * ex;
         syy += ey * ey;
         sxy += ex * ey;
     }
-    // Principal axis of [[sxx, sxy], [sxy, syy]].
+    let nf = n as f32;
+    let (mx, my) = (sx / nf, sy / nf);
+    let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
+    let c = Point::new(first.x + mx, first.y + my);
+    // Principal axis (tx, ty) of [[sxx, sxy], [sxy, syy]], not normalised; normal (−ty, tx).
     let half = 0.5 * (sxx - syy);
-    let root = math::sqrt(half * half + sxy * sxy);
-    let suu = 0.5 * (sxx + syy) + root;
+    let suu = 0.5 * (sxx + syy) + math::sqrt(half * half + sxy * sxy);
     let (tx, ty) = if sxx >= syy {
         (suu - syy, sxy)
     } else {
         (sxy, suu - sxx)
     };
-    let norm = math::hypot(tx, ty);
-    if !(norm > 0.0) || !norm.is_finite() || !(suu > 0.0) {
+    let t2 = tx * tx + ty * ty;
+    if !(t2 > 0.0) || !t2.is_finite() || !(suu > 0.0) {
         return None;
     }
-    let (tx, ty) = (tx / norm, ty / norm);
     let (nx, ny) = (-ty, tx);
-    let denom = dx * nx + dy * ny;
-    let sin_phi = math::abs(denom);
-    let cos_phi = math::abs(dx * tx + dy * ty);
-    // Incidence of Line 1 at the window's centroid.
+    let dn = dx * nx + dy * ny;
+    let dt = dx * tx + dy * ty;
     let (wx, wy) = (c.x - origin.x, c.y - origin.y);
-    let wn = math::hypot(wx, wy);
-    let sin_w = if wn > 0.0 {
-        math::abs(wx * nx + wy * ny) / wn
-    } else {
-        1.0
-    };
-    if sin_phi < 1e-6 {
+    if math::abs(dn) < 1e-6 * math::sqrt(t2) {
         return Some(Prediction {
             error: f32::INFINITY,
             signed: f32::INFINITY,
-            sin_phi,
-            cos_phi,
-            sigma_factor: f32::INFINITY,
+            dn,
+            dt,
+            var_factor: f32::INFINITY,
         });
     }
-    let t = (wx * nx + wy * ny) / denom;
+    let t = (wx * nx + wy * ny) / dn;
     let (error, signed) = if t > 0.0 && t.is_finite() {
         (math::abs(r - t), r - t)
     } else {
         (f32::INFINITY, f32::INFINITY)
     };
-    let u = (origin.x + dx * t - c.x) * tx + (origin.y + dy * t - c.y) * ty;
-    let lever = 1.0 / nf + u * u / suu;
-    let ratio = sin_w / sin_phi;
-    let sigma_factor = math::sqrt(1.0 + lever * ratio * ratio);
+    let ut = (origin.x + dx * t - c.x) * tx + (origin.y + dy * t - c.y) * ty;
+    let lever = 1.0 / nf + ut * ut / (t2 * suu);
+    // Incidence at the window's last point: sin²ϕ̄ = (l·n)² / (|l|² |n|²); sin²ϕ = dn²/|n|².
+    let (lx, ly) = (last.x - origin.x, last.y - origin.y);
+    let ln = lx * nx + ly * ny;
+    let l2 = lx * lx + ly * ly;
+    let ratio2 = if l2 > 0.0 {
+        ln * ln / (l2 * dn * dn)
+    } else {
+        1.0 / (dn * dn) * t2
+    };
     Some(Prediction {
         error,
         signed,
-        sin_phi,
-        cos_phi,
-        sigma_factor,
+        dn,
+        dt,
+        var_factor: 1.0 + lever * ratio2,
     })
 }
 
@@ -118,13 +133,10 @@ where
 /// use pfe_core::{predict::predict, Point};
 /// // Three points of the wall x = 1000; the next beam hits it at (1000, 300).
 /// let w = [Point::new(1000.0, 0.0), Point::new(1000.0, 100.0), Point::new(1000.0, 200.0)];
-/// let p = predict(w.iter().copied(), Point::new(1010.0, 303.0), Point::new(0.0, 0.0)).unwrap();
+/// let p = predict(&w, Point::new(1010.0, 303.0), Point::new(0.0, 0.0)).unwrap();
 /// assert!((p.signed - 1010.0f32.hypot(303.0) + 1000.0f32.hypot(300.0)).abs() < 1e-2);
 /// ```
-pub fn predict<I>(window: I, target: Point, origin: Point) -> Option<Prediction>
-where
-    I: Iterator<Item = Point> + Clone,
-{
+pub fn predict(window: &[Point], target: Point, origin: Point) -> Option<Prediction> {
     let (bx, by) = (target.x - origin.x, target.y - origin.y);
     let r = math::hypot(bx, by);
     if !(r > 0.0) || !r.is_finite() {
