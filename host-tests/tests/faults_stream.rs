@@ -232,3 +232,46 @@ fn wrong_initial_baud_is_probed() {
     );
     check_exactly_once(&r);
 }
+
+#[test]
+fn damaged_replies_during_init_are_retried() {
+    let (mut damaged, mut retries) = (0, 0);
+    for seed in 20..26 {
+        let f = Faults {
+            bit_flip: 0.15,
+            truncate: 0.1,
+            drop_byte: 0.05,
+            damage_replies: true,
+            ..Default::default()
+        };
+        let cfg = EmulatorConfig {
+            source: SourceKind::Tagged,
+            faults: f,
+            seed,
+            ..Default::default()
+        };
+        let link = Link::new(Emulator::from_config(cfg), Some(9600));
+        let mut lms = Driver::new(link.host_port(), link.delay(), link.clock(), dflt());
+        // A lost A0 to the baud switch makes one init fail; calling again recovers.
+        let mut delivered = Vec::new();
+        let mut errors = 0;
+        while delivered.len() < 10 {
+            match lms.next_scan() {
+                Ok(s) => delivered.push(TaggedSource::tag_of(s.codes()).unwrap()),
+                Err(_) => errors += 1,
+            }
+            assert!(errors < 5, "seed {seed}: driver does not recover");
+        }
+        let sent = link.with_emulator(|e| e.report().clone()).unwrap();
+        for t in &delivered {
+            assert!(!sent.scans[*t as usize].damaged);
+        }
+        let set: BTreeSet<u32> = delivered.iter().copied().collect();
+        assert_eq!(set.len(), delivered.len());
+        damaged += sent.damaged_replies;
+        retries += lms.counters().retries;
+    }
+    eprintln!("damaged replies {damaged}, driver retries {retries}");
+    assert!(damaged >= 5, "only {damaged} replies damaged");
+    assert!(retries >= 3, "only {retries} retries");
+}

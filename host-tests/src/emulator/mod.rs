@@ -160,6 +160,8 @@ pub struct Faults {
     pub reset_after_scans: Option<u32>,
     /// Answer this many of the next commands with NAK instead of ACK + reply.
     pub nak_commands: u32,
+    /// Apply the damaging faults (flip, drop, duplicate, truncate) to replies as well.
+    pub damage_replies: bool,
 }
 
 /// Emulator settings.
@@ -250,6 +252,8 @@ pub struct EmulatorReport {
     pub bytes_out: u64,
     /// Resets (commanded or injected).
     pub resets: u32,
+    /// Replies damaged by [`Faults::damage_replies`].
+    pub damaged_replies: u32,
 }
 
 /// The emulated LMS200.
@@ -397,10 +401,14 @@ impl Emulator {
         let mut p = payload.to_vec();
         p.push(self.cfg.status);
         let mut buf = [0u8; MAX_TELEGRAM];
-        match encode_telegram(DEVICE_ADDRESS, &p, &mut buf) {
-            Ok(n) => self.emit(at, buf.get(..n).unwrap_or(&[]), None),
-            Err(_) => at,
+        let Ok(n) = encode_telegram(DEVICE_ADDRESS, &p, &mut buf) else {
+            return at;
+        };
+        let mut t = buf.get(..n).unwrap_or(&[]).to_vec();
+        if self.cfg.faults.damage_replies && self.damage(&mut t) {
+            self.report.damaged_replies += 1;
         }
+        self.emit(at, &t, None)
     }
 
     /// Host bytes arrive at `now_us`. `host_baud` is the host's line speed (`None`: always the
@@ -602,36 +610,39 @@ impl Emulator {
         (buf.get(..len).unwrap_or(&[]).to_vec(), seq)
     }
 
-    fn send_b0(&mut self, at: u64, (mut t, seq): (Vec<u8>, u32)) {
-        let f = self.cfg.faults.clone();
+    /// Applies at most one damaging fault to telegram `t`; true when it was damaged.
+    fn damage(&mut self, t: &mut Vec<u8>) -> bool {
+        let f = &self.cfg.faults;
+        let (pf, pd, pu, pt) = (f.bit_flip, f.drop_byte, f.duplicate_byte, f.truncate);
         let r: f64 = self.rng.gen();
-        let mut acc = 0.0;
-        let mut pick = |p: f64| {
-            acc += p;
-            r < acc
-        };
         let len = t.len();
-        let mut damaged = true;
-        if pick(f.bit_flip) {
+        if len < 2 {
+            return false;
+        }
+        if r < pf {
             let i = self.rng.gen_range(0..len);
             t[i] ^= 1 << self.rng.gen_range(0..8);
-        } else if pick(f.drop_byte) {
+        } else if r < pf + pd {
             t.remove(self.rng.gen_range(0..len));
-        } else if pick(f.duplicate_byte) {
+        } else if r < pf + pd + pu {
             let i = self.rng.gen_range(0..len);
             let b = t[i];
             t.insert(i, b);
-        } else if pick(f.truncate) {
+        } else if r < pf + pd + pu + pt {
             t.truncate(self.rng.gen_range(1..len));
         } else {
-            damaged = false;
+            return false;
         }
-        if damaged {
+        true
+    }
+
+    fn send_b0(&mut self, at: u64, (mut t, seq): (Vec<u8>, u32)) {
+        if self.damage(&mut t) {
             if let Some(s) = self.report.scans.get_mut(seq as usize) {
                 s.damaged = true;
             }
         }
-        if self.rng.gen_bool(f.garbage.clamp(0.0, 1.0)) {
+        if self.rng.gen_bool(self.cfg.faults.garbage.clamp(0.0, 1.0)) {
             let n = self.rng.gen_range(1..=40);
             let g: Vec<u8> = (0..n).map(|_| self.rng.gen()).collect();
             self.emit(at, &g, None);
