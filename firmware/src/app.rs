@@ -20,7 +20,7 @@
 //! let mut app = App::<361, 48>::new(ConfigChoice::Default);
 //! let mut buf = [0u8; 1024];
 //! let mut out = &mut buf[..];
-//! let scan = RawScan { geometry: g, values: &values, mm_per_unit: 1.0 };
+//! let scan = RawScan::lms_8m(g, &values, 1.0);
 //! let header = app.process(&scan, Counters::default(), &mut out).unwrap();
 //! assert_eq!(header.n_features, 1);
 //! let n = 1024 - out.len();
@@ -28,8 +28,12 @@
 //! assert!(frame.features[0].is_line());
 //! ```
 
+use embedded_hal::delay::DelayNs;
 use embedded_io::Write;
-use pfe_core::{Config, ExtractError, Extractor, Scan, ScanGeometry};
+use embedded_io::{Read, ReadReady};
+use pfe_core::{Config, ExtractError, Extractor, Ranges, Scan, ScanGeometry};
+
+use crate::lms::driver::{Clock, Driver, SetBaud};
 
 use crate::output::{self, Counters, EncodeError, ScanHeader, ScanStatus};
 
@@ -42,6 +46,33 @@ pub struct RawScan<'a> {
     pub values: &'a [u16],
     /// mm per code: 1.0 in mm mode, 10.0 in cm mode.
     pub mm_per_unit: f32,
+    /// Largest valid code ([`pfe_core::LMS_MAX_VALID_8M`] in the 8 m / 80 m modes).
+    pub max_valid: u16,
+}
+
+impl<'a> RawScan<'a> {
+    /// A scan in the 8 m / 80 m measuring modes (largest valid code 8182).
+    pub fn lms_8m(geometry: ScanGeometry, values: &'a [u16], mm_per_unit: f32) -> Self {
+        Self {
+            geometry,
+            values,
+            mm_per_unit,
+            max_valid: pfe_core::LMS_MAX_VALID_8M,
+        }
+    }
+
+    /// The pfe-core input for this scan.
+    pub fn to_pfe(&self) -> Scan<'a> {
+        Scan {
+            geometry: self.geometry,
+            ranges: Ranges::Raw {
+                values: self.values,
+                mm_per_unit: self.mm_per_unit,
+                max_valid: self.max_valid,
+            },
+            motion: None,
+        }
+    }
 }
 
 /// Where scans come from (the LMS200 driver through a small adapter, or a test double).
@@ -118,6 +149,16 @@ impl<const N: usize, const M: usize> App<N, M> {
         }
     }
 
+    /// Changes the configuration (in place: no copy of the extractor on the stack).
+    pub fn set_config(&mut self, config: Config) {
+        self.config = config;
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
     /// The extractor (features, marks and stats of the last scan).
     pub fn extractor(&self) -> &Extractor<N, M> {
         &self.extractor
@@ -135,7 +176,7 @@ impl<const N: usize, const M: usize> App<N, M> {
         counters: Counters,
         out: &mut W,
     ) -> Result<ScanHeader, EncodeError<W::Error>> {
-        let s = Scan::from_lms(scan.geometry, scan.values, scan.mm_per_unit);
+        let s = scan.to_pfe();
         let result = self.extractor.extract(&s, &self.config);
         let stats = self.extractor.stats();
         let status = match result {
@@ -168,5 +209,36 @@ impl<const N: usize, const M: usize> App<N, M> {
     ) -> Result<ScanHeader, AppError<S::Error, W::Error>> {
         let (scan, counters) = source.next_scan().map_err(AppError::Source)?;
         self.process(&scan, counters, out).map_err(AppError::Output)
+    }
+}
+
+/// The LMS200 driver as a scan source: geometry, unit and measuring mode from the driver,
+/// counters mapped to the output's (`crc_dropped` = CRC errors + bad lengths/overflows).
+impl<U, D, C> ScanSource for Driver<U, D, C>
+where
+    U: Read + Write + ReadReady + SetBaud,
+    U::Error: core::fmt::Debug,
+    D: DelayNs,
+    C: Clock,
+{
+    type Error = crate::lms::Error<U::Error>;
+
+    fn next_scan(&mut self) -> Result<(RawScan<'_>, Counters), Self::Error> {
+        Driver::next_scan(self)?;
+        let c = self.counters();
+        let counters = Counters {
+            telegrams_ok: c.telegrams_ok,
+            crc_dropped: c.crc_errors.saturating_add(c.bad_length),
+            bytes_skipped: c.bytes_skipped,
+            reinits: c.reinits,
+        };
+        let scan = self.last_scan();
+        let raw = RawScan {
+            geometry: scan.geometry(),
+            values: scan.codes(),
+            mm_per_unit: scan.mm_per_unit(),
+            max_valid: scan.max_valid(),
+        };
+        Ok((raw, counters))
     }
 }

@@ -59,14 +59,7 @@ impl ScanSource for Source {
             bytes_skipped: 11,
             reinits: 0,
         };
-        Ok((
-            RawScan {
-                geometry: G,
-                values: v,
-                mm_per_unit: 1.0,
-            },
-            counters,
-        ))
+        Ok((RawScan::lms_8m(G, v, 1.0), counters))
     }
 }
 
@@ -142,11 +135,7 @@ fn default_config_finds_the_room_geometry() {
     let mut app = App::<361, 48>::new(ConfigChoice::Default);
     let mut out = Writer(Vec::new());
     let values = room(0.0);
-    let scan = RawScan {
-        geometry: G,
-        values: &values,
-        mm_per_unit: 1.0,
-    };
+    let scan = RawScan::lms_8m(G, &values, 1.0);
     app.process(&scan, Counters::default(), &mut out).unwrap();
     let f = &frames(&out.0)[0];
     let feats: Vec<Feature> = f.features.iter().map(|w| w.to_feature()).collect();
@@ -183,11 +172,7 @@ fn cm_mode_scales_ranges() {
         .collect();
     let mut app = App::<361, 48>::new(ConfigChoice::Default);
     let mut out = Writer(Vec::new());
-    let scan = RawScan {
-        geometry: G,
-        values: &cm,
-        mm_per_unit: 10.0,
-    };
+    let scan = RawScan::lms_8m(G, &cm, 10.0);
     app.process(&scan, Counters::default(), &mut out).unwrap();
     let f = &frames(&out.0)[0];
     assert!(f.features.iter().any(|w| match w.to_feature() {
@@ -199,11 +184,7 @@ fn cm_mode_scales_ranges() {
 #[test]
 fn too_many_readings_and_full_buffer_are_reported_not_hidden() {
     let values = room(0.0);
-    let scan = RawScan {
-        geometry: G,
-        values: &values,
-        mm_per_unit: 1.0,
-    };
+    let scan = RawScan::lms_8m(G, &values, 1.0);
     let mut small = App::<100, 48>::new(ConfigChoice::Default);
     let mut out = Writer(Vec::new());
     let h = small.process(&scan, Counters::default(), &mut out).unwrap();
@@ -222,11 +203,7 @@ fn too_many_readings_and_full_buffer_are_reported_not_hidden() {
 #[test]
 fn output_errors_propagate() {
     let values = room(0.0);
-    let scan = RawScan {
-        geometry: G,
-        values: &values,
-        mm_per_unit: 1.0,
-    };
+    let scan = RawScan::lms_8m(G, &values, 1.0);
     let mut app = App::<361, 48>::new(ConfigChoice::Paper);
     let mut tiny = [0u8; 8];
     let mut out = &mut tiny[..];

@@ -56,3 +56,13 @@ impl embedded_hal::delay::DelayNs for Delay {
         while ticks() < until {}
     }
 }
+
+/// Milliseconds from [`ticks`] for the LMS driver.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Clock;
+
+impl firmware::lms::Clock for Clock {
+    fn now_ms(&mut self) -> u32 {
+        (ticks() / (TICK_HZ / 1000)) as u32
+    }
+}

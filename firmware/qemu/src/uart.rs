@@ -124,3 +124,10 @@ impl embedded_io::Write for Uart {
         Ok(())
     }
 }
+
+/// The baud rate is not emulated by QEMU: accepted and ignored.
+impl firmware::lms::SetBaud for Uart {
+    fn set_baud(&mut self, _baud: u32) -> Result<(), Infallible> {
+        Ok(())
+    }
+}

@@ -124,11 +124,7 @@ mod fw {
             // Whole pipeline: bytes → codes → features → frame.
             let t0 = time::ticks();
             let (_, n2) = decode(&mut dec, rest, &mut codes);
-            let raw = RawScan {
-                geometry: g,
-                values: codes.get(..n2).unwrap_or(&[]),
-                mm_per_unit: 1.0,
-            };
+            let raw = RawScan::lms_8m(g, codes.get(..n2).unwrap_or(&[]), 1.0);
             let r = app.process(&raw, Counters::default(), &mut Sink);
             let t_pipe = time::ticks() - t0;
             if r.is_err() {
