@@ -7,7 +7,6 @@ use std::process::Command;
 
 use host_tests::formats::carmen::{AngleConvention, Reader};
 use host_tests::formats::{self, Record};
-use host_tests::method::{Method, Pfe};
 use pfe_core::{fit_line, Point};
 
 fn data_dir() -> Option<PathBuf> {
@@ -89,18 +88,184 @@ fn sse(r: &Record, (a, b): (usize, usize), step: f32) -> (f64, usize) {
     (f64::from(fit_line(&pts).unwrap().sse()), pts.len())
 }
 
-/// Both conventions read the same ranges; on long straight walls the right angular step
-/// leaves the smaller residual. Walls: line features of ≥ 20 beams that the extractor finds
-/// under both conventions, each wall the beams common to both (so neither is favoured). For
-/// a grid of steps around 180°/n the total residual is computed; its minimum should lie
-/// at the step of the `Auto` convention. The result is recorded in the docs of
-/// `formats::carmen`.
+/// Straight runs of ≥ `min` beams in `r`, found by recursive splitting (independent of the
+/// extractor): break where adjacent points are > 300 mm apart or a beam is no return, then
+/// split each run at its farthest point from the fitted line until every point is within
+/// 50 mm.
+fn straight_runs(r: &Record, min: usize) -> Vec<(usize, usize)> {
+    let pts: Vec<Option<Point>> = (0..r.ranges_mm.len())
+        .map(|i| r.point(i).map(|(x, y)| Point::new(x, y)))
+        .collect();
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    let mut start = 0;
+    for i in 1..=pts.len() {
+        let joined = match (pts[i - 1], pts.get(i).copied().flatten()) {
+            (Some(p), Some(q)) => p.distance(&q) < 300.0,
+            _ => false,
+        };
+        if !joined {
+            if pts[start].is_some() {
+                stack.push((start, i - 1));
+            }
+            start = i;
+        }
+    }
+    while let Some((a, b)) = stack.pop() {
+        if b + 1 - a < min {
+            continue;
+        }
+        let seg: Vec<Point> = (a..=b).filter_map(|i| pts[i]).collect();
+        let fit = fit_line(&seg).unwrap();
+        let (k, d) = (a..=b)
+            .map(|i| (i, fit.signed_distance(&pts[i].unwrap()).abs()))
+            .max_by(|x, y| x.1.total_cmp(&y.1))
+            .unwrap();
+        if d <= 50.0 {
+            out.push((a, b));
+        } else {
+            stack.push((a, k.saturating_sub(1).max(a)));
+            stack.push(((k + 1).min(b), b));
+        }
+    }
+    out
+}
+
+/// Slope ε, its standard error and the number of pairs, for the nearly rectilinear pairs
+/// of `walls` (scan index, beam span) in `scans` (see [`carmen_angle_convention`]).
+fn step_error(scans: &[Record], walls: &[(usize, (usize, usize))]) -> (f64, f64, usize) {
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let alpha = |k: usize, (f, l): (usize, usize)| -> f64 {
+        let pts: Vec<Point> = (f..=l)
+            .filter_map(|j| scans[k].point(j).map(|(x, y)| Point::new(x, y)))
+            .collect();
+        f64::from(fit_line(&pts).unwrap().alpha)
+    };
+    let (mut sxy, mut sxx, mut pairs) = (0.0f64, 0.0f64, Vec::new());
+    for (i, &(k, w0)) in walls.iter().enumerate() {
+        for &(k2, w1) in &walls[i + 1..] {
+            if k2 != k {
+                continue;
+            }
+            let dev =
+                (alpha(k, w1) - alpha(k, w0) + quarter / 2.0).rem_euclid(quarter) - quarter / 2.0;
+            // Effective bearing of a wall (see `carmen_angle_convention`).
+            let u = |(f, l): (usize, usize)| -> f64 {
+                let g = &scans[k].geometry;
+                let mid = f64::from(g.start_angle) + f64::from(g.angle_step) * (f + l) as f64 / 2.0;
+                mid + 0.5 * (2.0 * (mid - alpha(k, (f, l)))).sin()
+            };
+            let dtheta = u(w1) - u(w0);
+            if dev.abs() < 2f64.to_radians() {
+                sxy += dev * dtheta;
+                sxx += dtheta * dtheta;
+                pairs.push((dtheta, dev));
+            }
+        }
+    }
+    let slope = sxy / sxx;
+    let resid: f64 = pairs.iter().map(|(x, y)| (y - slope * x).powi(2)).sum();
+    let se = (resid / (pairs.len() as f64 - 1.0) / sxx).sqrt();
+    (slope, se, pairs.len())
+}
+
+/// The estimator of [`step_error`] on synthetic scans of rectangular rooms: ranges taken at
+/// −90° + i·180°/(n−1) with 10 mm quantisation, read at 180°/n, give ε ≈ −1/n; read at the
+/// true step, ≈ 0.
+#[test]
+fn step_error_estimator_on_synthetic_rooms() {
+    use pfe_core::ScanGeometry;
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let n = 181;
+    let truth = std::f64::consts::PI / (n - 1) as f64;
+    let (mut wrong, mut right) = (Vec::new(), Vec::new());
+    for _ in 0..60 {
+        // A room w × h around the scanner, turned by `rot`.
+        let (w, h, rot) = (
+            rng.gen_range(3000.0..9000.0),
+            rng.gen_range(3000.0..9000.0),
+            rng.gen_range(0.0..1.5f64),
+        );
+        let (cx, cy) = (rng.gen_range(-0.3..0.3) * w, rng.gen_range(-0.3..0.3) * h);
+        let ranges: Vec<f32> = (0..n)
+            .map(|i| {
+                let t = -std::f64::consts::FRAC_PI_2 + truth * i as f64 + rot;
+                let (c, s) = (t.cos(), t.sin());
+                let mut r = f64::INFINITY;
+                for (d, nx, ny) in [
+                    (w / 2.0 - cx, 1.0, 0.0),
+                    (w / 2.0 + cx, -1.0, 0.0),
+                    (h / 2.0 - cy, 0.0, 1.0),
+                    (h / 2.0 + cy, 0.0, -1.0),
+                ] {
+                    let den = c * nx + s * ny;
+                    if den > 1e-9 {
+                        r = r.min(d / den);
+                    }
+                }
+                ((r / 10.0).round() * 10.0) as f32
+            })
+            .collect();
+        for (out, step) in [
+            (&mut wrong, std::f32::consts::PI / n as f32),
+            (&mut right, truth as f32),
+        ] {
+            out.push(Record {
+                id: 0,
+                geometry: ScanGeometry {
+                    start_angle: -std::f32::consts::FRAC_PI_2,
+                    angle_step: step,
+                    r_max: 50_000.0,
+                },
+                ranges_mm: ranges.clone(),
+            });
+        }
+    }
+    let walls = |scans: &[Record]| -> Vec<(usize, (usize, usize))> {
+        scans
+            .iter()
+            .enumerate()
+            .flat_map(|(k, r)| straight_runs(r, 20).into_iter().map(move |s| (k, s)))
+            .collect()
+    };
+    let (s_wrong, se_wrong, p) = step_error(&wrong, &walls(&wrong));
+    let (s_right, se_right, _) = step_error(&right, &walls(&right));
+    eprintln!("synthetic: read at 180°/n: {s_wrong:+.5} ± {se_wrong:.5} ({p} pairs); at the true step: {s_right:+.5} ± {se_right:.5}");
+    let expected = -1.0 / n as f64;
+    assert!(
+        (s_wrong - expected).abs() < 0.3 * expected.abs(),
+        "{s_wrong} vs {expected}"
+    );
+    assert!(s_right.abs() < 0.3 * expected.abs(), "{s_right}");
+}
+
+/// Both conventions read the same ranges; they differ in the angular step (180°/(n−1) vs
+/// 180°/n), i.e. by a factor n/(n−1). Two checks on the long straight walls of the real logs
+/// ([`straight_runs`] of ≥ 20 beams, found under both conventions; each wall the beams common
+/// to both, so neither convention is favoured):
+///
+/// 1. Residual: the RMS distance of the wall points from their fitted lines, under each step.
+///    (Weak: a wrong step bends a wall only to second order.)
+/// 2. Relative wall directions: in these rectilinear buildings most pairs of walls seen in one
+///    scan are parallel or perpendicular. Reading bearings with a step k times the true one
+///    (θ' = −90° + k(θ + 90°), k = 1 + ε) turns a wall seen at mid bearing θ with incidence ψ
+///    (beam to wall normal) by ε·u, u = θ + 90° + ½ sin 2ψ (the rotation plus the change of
+///    apparent incidence from the tangential stretch). So the deviation d of a pair from
+///    parallel/perpendicular is d ≈ ε·Δu. The least-squares slope of d against Δu over all
+///    nearly rectilinear pairs (|d| < 2°), read with the 180°/n step, estimates ε: 0 if
+///    180°/n is the true step, (n − 1)/n − 1 = −1/n if 180°/(n − 1) is.
+///
+/// The result is recorded in the docs of `formats::carmen`.
 #[test]
 fn carmen_angle_convention() {
     const MIN_BEAMS: usize = 20;
     let Some(d) = data_dir() else { return };
     let logs = carmen_logs(&d);
-    let mut agree = 0;
+    let (mut agree, mut decisive) = (0, 0);
+    eprintln!(
+        "| log | n | walls | RMS 180°/(n−1) | RMS 180°/n | pairs | ε (± s.e.) | −1/n | step |"
+    );
     for path in &logs {
         let read = |c| -> Vec<Record> {
             let input = formats::open(path, |r| r).unwrap();
@@ -113,19 +278,10 @@ fn carmen_angle_convention() {
             read(AngleConvention::DropEnd),
         );
         let n = a_scans[0].ranges_mm.len();
-        let mut pfe = Pfe::paper();
         let mut walls: Vec<(usize, (usize, usize))> = Vec::new();
         for (k, (a, b)) in a_scans.iter().zip(&b_scans).enumerate() {
-            let spans = |r: &Record, pfe: &mut Pfe| -> Vec<(usize, usize)> {
-                pfe.extract(&r.geometry, &r.ranges_mm)
-                    .features
-                    .iter()
-                    .filter(|f| f.is_line() && f.last() - f.first() >= MIN_BEAMS)
-                    .map(|f| (f.first(), f.last()))
-                    .collect()
-            };
-            let sa = spans(a, &mut pfe);
-            let sb = spans(b, &mut pfe);
+            let sa = straight_runs(a, MIN_BEAMS);
+            let sb = straight_runs(b, MIN_BEAMS);
             for &(a0, a1) in &sa {
                 for &(b0, b1) in &sb {
                     let (f, l) = (a0.max(b0), a1.min(b1));
@@ -137,7 +293,7 @@ fn carmen_angle_convention() {
         }
         let step_a = std::f32::consts::PI / (n - 1) as f32;
         let step_b = std::f32::consts::PI / n as f32;
-        let total = |step: f32| -> f64 {
+        let rms = |step: f32| -> f64 {
             let (mut e, mut m) = (0.0, 0);
             for &(k, span) in &walls {
                 let (s, c) = sse(&a_scans[k], span, step);
@@ -146,35 +302,56 @@ fn carmen_angle_convention() {
             }
             (e / m.max(1) as f64).sqrt()
         };
-        // Grid of steps from 0.99 to 1.012 × 180°/n.
-        let grid: Vec<(f32, f64)> = (0..=44)
-            .map(|j| {
-                let step = step_b * (0.99 + 0.0005 * j as f32);
-                (step, total(step))
+        let (ea, eb) = (rms(step_a), rms(step_b));
+        let (slope, _, pairs) = step_error(&b_scans, &walls);
+        // Pairs in nearby scans see the same walls: take the standard error from the spread of
+        // the estimates of 10 blocks of consecutive scans.
+        let blocks: Vec<f64> = (0..10)
+            .filter_map(|j| {
+                let (lo, hi) = (j * b_scans.len() / 10, (j + 1) * b_scans.len() / 10);
+                let w: Vec<_> = walls
+                    .iter()
+                    .copied()
+                    .filter(|&(k, _)| k >= lo && k < hi)
+                    .collect();
+                let (e, _, p) = step_error(&b_scans, &w);
+                (p >= 5).then_some(e)
             })
             .collect();
-        let (best, _) = grid
-            .iter()
-            .copied()
-            .min_by(|x, y| x.1.total_cmp(&y.1))
-            .unwrap();
-        let (ea, eb) = (total(step_a), total(step_b));
+        let mean = blocks.iter().sum::<f64>() / blocks.len() as f64;
+        let se = (blocks.iter().map(|e| (e - mean).powi(2)).sum::<f64>()
+            / (blocks.len() as f64 - 1.0)
+            / blocks.len() as f64)
+            .sqrt();
+        let predicted = -1.0 / n as f64;
+        let end_to_end = (slope - predicted).abs() < slope.abs();
         let name = path.file_name().unwrap().to_string_lossy();
         eprintln!(
-            "| {name} | {n} | {} | {ea:.3} | {eb:.3} | {:.4} | {} |",
+            "| {name} | {n} | {} | {ea:.2} | {eb:.2} | {} | {:+.4} ± {:.4} | {:.4} | {} |",
             walls.len(),
-            best / step_b,
-            if ea < eb { "180°/(n−1)" } else { "180°/n" },
+            pairs,
+            slope,
+            se,
+            predicted,
+            if end_to_end {
+                "180°/(n−1)"
+            } else {
+                "180°/n"
+            },
         );
-        assert!(walls.len() >= 50, "{name}: only {} walls", walls.len());
-        let auto_better = if n % 2 == 1 { ea <= eb } else { eb <= ea };
-        if auto_better {
-            agree += 1;
+        // Asserted only where the check can decide: n even and ≥ 100 pairs. For n odd
+        // (acapulco, csail) the estimate is within 2 s.e. of both hypotheses: reported only
+        // (see the docs of `formats::carmen`).
+        if n % 2 == 0 && pairs >= 100 {
+            decisive += 1;
+            if !end_to_end {
+                agree += 1;
+            }
         }
     }
+    assert!(decisive >= 6, "only {decisive} decisive logs");
     assert_eq!(
-        agree,
-        logs.len(),
-        "the Auto convention should fit walls best on every log"
+        agree, decisive,
+        "for n even the 180°/n step should match the wall directions"
     );
 }

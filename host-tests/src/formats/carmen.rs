@@ -17,14 +17,35 @@
 //! - n odd (181, 361): bearing_i = −90° + i·180°/(n−1), both end beams present;
 //! - n even (180, 360): bearing_i = −90° + i·180°/n, the +90° end beam dropped.
 //!
-//! Checked on the ten real logs in `../shared/data/carmen` by the residual of long straight walls
-//! (runs of ≥ 40 adjacent points whose line fit has an RMS residual below 30 mm under both
-//! conventions; see the test `carmen_angle_convention` in `tests/cli_real_data.rs`). Median RMS
-//! residual, mm, (n−1) vs n convention [number of walls]:
+//! Checked on the ten real logs in `../shared/data/carmen` (test `carmen_angle_convention` in
+//! `tests/cli_real_data.rs`) on straight walls (runs of ≥ 20 beams within 50 mm of their fitted
+//! line). The two conventions differ only in the step, by a factor n/(n−1):
+//! - The RMS residual of the walls barely depends on it (a wrong step bends a wall only to
+//!   second order): 8.9–20.8 mm under both, differences ≤ 0.15 mm.
+//! - The relative directions of wall pairs do: reading with a step (1 + ε) times the true one
+//!   turns each wall by ε·u (u: mid bearing + 90° + ½ sin 2·incidence), so pairs that should
+//!   be parallel or perpendicular deviate by ε·Δu. ε estimated by least squares over the nearly
+//!   rectilinear pairs, reading at 180°/n (so ε ≈ 0 if 180°/n is right, −1/n if 180°/(n−1) is;
+//!   the estimator recovers −0.0046 for −0.0055 on synthetic rooms); ± = standard error over 10
+//!   blocks of scans:
 //!
-//! | log | n | 180°/(n−1) | 180°/n |
-//! |---|---|---|---|
-//! | (filled in from the measurement) | | | |
+//! | log | n | pairs | ε | −1/n | verdict |
+//! |---|---|---|---|---|---|
+//! | aces | 180 | 273 | +0.0015 ± 0.0010 | −0.0056 | 180°/n |
+//! | fhw | 180 | 106 | +0.0013 ± 0.0012 | −0.0056 | 180°/n |
+//! | infinite-corridor | 180 | 1892 | +0.0019 ± 0.0007 | −0.0056 | 180°/n |
+//! | intel | 180 | 571 | −0.0009 ± 0.0005 | −0.0056 | 180°/n |
+//! | edmonton | 180 | 13 | +0.0045 | −0.0056 | too few pairs |
+//! | freiburg-079 | 360 | 9378 | −0.0010 ± 0.0004 | −0.0028 | 180°/n (favoured) |
+//! | freiburg-101 | 360 | 331 | −0.0009 ± 0.0010 | −0.0028 | 180°/n (favoured) |
+//! | freiburg-campus | 360 | 1060 | +0.0005 ± 0.0011 | −0.0028 | 180°/n |
+//! | acapulco | 181 | 78 | −0.0006 ± 0.0033 | −0.0055 | inconclusive |
+//! | csail | 361 | 586 | −0.0010 ± 0.0010 | −0.0028 | inconclusive |
+//!
+//! So for n even the data confirms 180°/n (decisively for the 180-beam logs). For n odd the
+//! check cannot decide; 180°/(n−1) is kept, the layout of the LMS's own 181/361-value scans
+//! (both end beams present). In acapulco the last of the 181 values is always exactly 50 (a
+//! filler, read as no return).
 //!
 //! ```
 //! use host_tests::formats::carmen::Reader;
