@@ -156,6 +156,8 @@ pub struct Evaluation {
     pub by_kind: Vec<(SceneKind, Level)>,
     /// The noise sweep.
     pub sweep: Vec<Level>,
+    /// Robustness conditions at the main σ ([`conditions`]).
+    pub robustness: Vec<(String, Level)>,
 }
 
 /// Simulates and scores one level.
@@ -167,10 +169,17 @@ pub fn run_level(
     seed: u64,
     passes: usize,
 ) -> Level {
-    let sims: Vec<SimScan> = scenarios(kind, scans, sigma, seed)
-        .iter()
-        .map(Scenario::simulate)
-        .collect();
+    run_scenarios(methods, &scenarios(kind, scans, sigma, seed), passes)
+}
+
+/// Simulates `scenarios` and scores every method on them (`sigma` of the level: the first
+/// scenario's).
+pub fn run_scenarios(
+    methods: &mut [Box<dyn Method>],
+    scenarios: &[Scenario],
+    passes: usize,
+) -> Level {
+    let sims: Vec<SimScan> = scenarios.iter().map(Scenario::simulate).collect();
     let truth_features = sims.iter().map(|s| s.truth.len()).sum();
     let truth_crb: Vec<(bool, crate::sim::Crb)> = sims
         .iter()
@@ -183,12 +192,29 @@ pub fn run_level(
         .map(|m| &mut **m as &mut dyn Method)
         .collect();
     Level {
-        sigma,
+        sigma: scenarios.first().map_or(0.0, |s| s.sigma_r),
         truth_features,
         truth_circles,
         truth_crb,
         results: run_methods_timed(&mut refs, &sims, passes),
     }
+}
+
+/// A named change to the scenarios (a robustness condition).
+pub type Condition = (&'static str, fn(&mut Scenario));
+
+/// The robustness conditions at the main σ: (name, change to the scenario).
+pub fn conditions() -> Vec<Condition> {
+    vec![
+        ("systematic bias ±15 mm (uncorrected)", |s| s.bias = true),
+        ("mixed pixels at depth jumps", |s| s.mixed_pixels = true),
+        ("0.25° resolution (721 beams)", |s| {
+            s.resolution = crate::sim::Resolution::Quarter
+        }),
+        ("1° resolution (181 beams)", |s| {
+            s.resolution = crate::sim::Resolution::One
+        }),
+    ]
 }
 
 /// Runs the whole evaluation with `methods`.
@@ -213,11 +239,20 @@ pub fn evaluate(methods: &mut [Box<dyn Method>], options: &EvalOptions) -> Evalu
         .iter()
         .map(|&s| run_level(methods, options.kind, options.scans, s, options.seed, 1))
         .collect();
+    let robustness = conditions()
+        .into_iter()
+        .map(|(name, change)| {
+            let mut sc = scenarios(options.kind, options.scans, options.sigma, options.seed);
+            sc.iter_mut().for_each(change);
+            (name.to_string(), run_scenarios(methods, &sc, 1))
+        })
+        .collect();
     Evaluation {
         options: options.clone(),
         main,
         by_kind,
         sweep,
+        robustness,
     }
 }
 
@@ -287,6 +322,10 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
         write("eval-errors.svg", svg::errors_vs_noise(&ev))?;
         write("eval-ratios.svg", svg::ratios_vs_noise(&ev))?;
         write("eval-time.svg", svg::time_per_scan(&ev))?;
+        write(
+            "eval-scenes.svg",
+            svg::scene_gallery(options.seed, options.sigma),
+        )?;
     }
     Ok(())
 }

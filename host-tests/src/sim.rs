@@ -32,6 +32,9 @@ pub const NO_RETURN_CODE: u16 = 8183;
 /// Smallest run of beams on one primitive that is a ground-truth feature (the paper's 4).
 pub const MIN_RUN: usize = 4;
 
+/// Free distance straight ahead of a sampled scanner pose, mm.
+pub const MIN_FORWARD_MM: f64 = 1500.0;
+
 /// Amplitude of the optional systematic range bias, mm (LMS200 data sheet, 8 m mode).
 pub const BIAS_AMPLITUDE_MM: f64 = 15.0;
 
@@ -823,27 +826,38 @@ impl Scene {
         }
     }
 
+    /// A random scanner pose: at least 350 mm from everything, not inside a solid, and not
+    /// facing an obstacle closer than [`MIN_FORWARD_MM`] straight ahead (a robot does not
+    /// drive with its nose against a wall); the last candidate when none qualifies.
     fn sample_pose(&self, rng: &mut ChaCha8Rng) -> [f64; 3] {
         let [x0, x1, y0, y1] = self.area;
-        let mut p = [(x0 + x1) / 2.0, (y0 + y1) / 2.0];
+        let mut best = [(x0 + x1) / 2.0, (y0 + y1) / 2.0, 0.0];
         for _ in 0..500 {
             let q = [
                 rng.gen_range(x0..x1.max(x0 + 1.0)),
                 rng.gen_range(y0..y1.max(y0 + 1.0)),
             ];
-            if self.free(q, 350.0) {
-                p = q;
+            let heading = match self.heading {
+                None => rng.gen_range(-PI..PI),
+                Some((m, s)) => {
+                    let base = if rng.gen_bool(0.5) { m } else { m + PI };
+                    wrap_pi(base + rng.gen_range(-s..s))
+                }
+            };
+            if !self.free(q, 350.0) {
+                continue;
+            }
+            best = [q[0], q[1], heading];
+            let ahead = self
+                .shapes
+                .iter()
+                .filter_map(|s| s.ray_hit(q, dir(heading)))
+                .fold(f64::INFINITY, f64::min);
+            if ahead >= MIN_FORWARD_MM {
                 break;
             }
         }
-        let heading = match self.heading {
-            None => rng.gen_range(-PI..PI),
-            Some((m, s)) => {
-                let base = if rng.gen_bool(0.5) { m } else { m + PI };
-                wrap_pi(base + rng.gen_range(-s..s))
-            }
-        };
-        [p[0], p[1], heading]
+        best
     }
 
     /// Places up to `n` items of radius `r(rng)` at free random spots in the area.

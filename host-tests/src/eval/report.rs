@@ -257,6 +257,32 @@ pub fn markdown(ev: &Evaluation) -> String {
             );
         }
     }
+    let _ = writeln!(
+        out,
+        "\n## Robustness (σ_r = {} mm, {} scans each, the same scenes as the main comparison)\n",
+        m.sigma, o.scans
+    );
+    let _ = writeln!(out, "| condition | method | FalseMarkRatio | FalseIdenRatio | missed | spurious | median \\|Δρ\\| mm | median centre mm | z ρ |");
+    let _ = writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|");
+    for (name, level) in &ev.robustness {
+        for r in &level.results {
+            let s = &r.score;
+            let e = errors(r);
+            let _ = writeln!(
+                out,
+                "| {} | {} | {:.4} | {:.4} | {:.3} | {:.3} | {} | {} | {} |",
+                name,
+                r.name,
+                s.false_mark_ratio(),
+                s.false_iden_ratio(),
+                s.missed_ratio(),
+                s.spurious_ratio(),
+                f(e.rho.0, 2),
+                f(e.center.0, 1),
+                f(e.z_rho.0, 2)
+            );
+        }
+    }
     let _ = writeln!(out, "\n## Noise sweep ({} scans per level)\n", o.scans);
     let _ = writeln!(out, "| σ_r mm | method | FalseMarkRatio | FalseIdenRatio | missed | spurious | \\|Δρ\\| mm | \\|Δα\\| mrad | centre mm | \\|ΔR\\| mm | z ρ | z centre |");
     let _ = writeln!(

@@ -308,3 +308,33 @@ pub fn time_per_scan(ev: &Evaluation) -> String {
     out.push_str("</svg>\n");
     out
 }
+
+/// One scan of each concrete scene kind side by side ([`crate::sim::SimScan::to_svg`]).
+pub fn scene_gallery(seed: u64, sigma: f32) -> String {
+    use crate::sim::{Scenario, SceneKind};
+    let size = 420.0;
+    let kinds = SceneKind::CONCRETE;
+    let w = size * kinds.len() as f64;
+    let mut out = svg_open(w, size + 24.0);
+    for (i, k) in kinds.iter().enumerate() {
+        let sim = Scenario::new(*k, super::scan_seed(seed, i))
+            .with_sigma(sigma)
+            .simulate();
+        let x = size * i as f64;
+        let body = sim.to_svg(size);
+        let inner = body
+            .split_once('>')
+            .map_or("", |(_, rest)| rest)
+            .trim_end()
+            .trim_end_matches("</svg>");
+        let _ = write!(
+            out,
+            r##"<svg x="{x}" y="24" width="{size}" height="{size}">{inner}</svg><text x="{:.1}" y="17" font-size="13" font-weight="bold">{} ({} truth features)</text><rect x="{x}" y="24" width="{size}" height="{size}" fill="none" stroke="#888"/>"##,
+            x + 8.0,
+            k.name(),
+            sim.truth.len()
+        );
+    }
+    out.push_str("</svg>\n");
+    out
+}
