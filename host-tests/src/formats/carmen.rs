@@ -49,9 +49,9 @@
 //!
 //! ```
 //! use host_tests::formats::carmen::Reader;
-//! let log = "ODOM 0 0 0 0 0 0 0 x 0\nFLASER 3 1.0 81.83 2.5 0 0 0 0 0 0 0 host 0\n";
+//! let log = "ODOM 0 0 0 0 0 0 0 x 0\nFLASER 5 1.0 81.83 2.5 2.5 2.5 0 0 0 0 0 0 0 host 0\n";
 //! let scan = Reader::new(Box::new(log.as_bytes())).next().unwrap().unwrap();
-//! assert_eq!(scan.ranges_mm.len(), 3);
+//! assert_eq!(scan.ranges_mm.len(), 5);
 //! assert!((scan.ranges_mm[0] - 1000.0).abs() < 1e-3 && scan.ranges_mm[1].is_nan());
 //! ```
 

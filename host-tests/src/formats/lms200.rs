@@ -135,9 +135,9 @@ pub struct Summary {
 /// ```
 /// use host_tests::formats::lms200::{Reader, Unit};
 /// // The protocol fact sheet's test vector: 5 values in mm, status 0x10, after an ACK.
-/// let capture = [0x06, 0x02, 0x80, 0x0E, 0x00, 0xB0, 0x05, 0x40, 0xE8, 0x03, 0xE9, 0x03,
+/// let capture: &'static [u8] = &[0x06, 0x02, 0x80, 0x0E, 0x00, 0xB0, 0x05, 0x40, 0xE8, 0x03, 0xE9, 0x03,
 ///                0xEA, 0x03, 0xEB, 0x03, 0xFF, 0x1F, 0x10, 0x1F, 0x93];
-/// let mut r = Reader::new(Box::new(&capture[..]));
+/// let mut r = Reader::new(Box::new(capture));
 /// let t = r.next().unwrap().unwrap();
 /// assert_eq!((t.unit, t.ranges.as_slice(), t.status), (Unit::Mm, &[1000, 1001, 1002, 1003, 8191][..], 0x10));
 /// assert!(r.next().is_none());
