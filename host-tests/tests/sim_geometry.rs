@@ -299,3 +299,52 @@ fn circle_crb_shrinks_with_arc_and_grows_with_noise() {
     let c = crb(&k, &wide, 10.0).unwrap();
     assert!((c.shape / b.shape - 2.0).abs() < 1e-9);
 }
+
+#[test]
+fn circle_crb_matches_monte_carlo_of_geometric_fit() {
+    // A pillar of radius 300 mm at 2 m seen over a wide arc: the refined geometric fit is
+    // nearly efficient there, so its RMS errors must sit just above the bound.
+    use pfe_core::{fit_circle, refine_circle, CircleMethod};
+    let (center, radius, sigma) = ([2000.0f64, 200.0f64], 300.0f64, 5.0f64);
+    let kind = TruthKind::Circle { center, radius };
+    let shape = Shape::Circle { center, radius };
+    let bearings: Vec<f64> = (-40..=40)
+        .map(|i| (200.0f64 / 2000.0).atan() + f64::from(i) * 0.2f64.to_radians())
+        .filter(|&phi| shape.ray_hit([0.0, 0.0], [phi.cos(), phi.sin()]).is_some())
+        .collect();
+    assert!(bearings.len() > 30);
+    let b = crb(&kind, &bearings, sigma).unwrap();
+    let normal = rand_distr::Normal::new(0.0, sigma).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let (mut sc, mut sr) = (0.0, 0.0);
+    let trials = 1000;
+    for _ in 0..trials {
+        let pts: Vec<Point> = bearings
+            .iter()
+            .map(|&phi| {
+                let u = [phi.cos(), phi.sin()];
+                let t = shape.ray_hit([0.0, 0.0], u).unwrap()
+                    + rand_distr::Distribution::sample(&normal, &mut rng);
+                Point::new((t * u[0]) as f32, (t * u[1]) as f32)
+            })
+            .collect();
+        let c = refine_circle(&pts, fit_circle(&pts, CircleMethod::Hyper).unwrap(), 10).unwrap();
+        sc += (f64::from(c.center.x) - center[0]).powi(2)
+            + (f64::from(c.center.y) - center[1]).powi(2);
+        sr += (f64::from(c.radius) - radius).powi(2);
+    }
+    let (ec, er) = (
+        (sc / f64::from(trials)).sqrt(),
+        (sr / f64::from(trials)).sqrt(),
+    );
+    assert!(
+        ec > 0.9 * b.position && ec < 1.35 * b.position,
+        "centre {ec} vs {}",
+        b.position
+    );
+    assert!(
+        er > 0.9 * b.shape && er < 1.35 * b.shape,
+        "radius {er} vs {}",
+        b.shape
+    );
+}
