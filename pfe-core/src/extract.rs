@@ -630,9 +630,12 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     })
                     .filter(|c| {
                         let sse_c = geometric_sse(pts, c);
+                        // The circle must also explain the points (RMS residual ≤ 2σ_r): an
+                        // undetected corner fits neither model and stays a line.
                         c.radius <= max_radius
                             && sse_l - sse_c > chi2 * var
                             && sse_c < ratio * sse_l
+                            && sse_c <= 4.0 * var * pts.len() as f32
                     })
             }
         };
