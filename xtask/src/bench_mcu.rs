@@ -18,6 +18,10 @@ pub fn target_dir() -> std::path::PathBuf {
         .unwrap_or_else(|| util::root().join("target"))
 }
 
+/// The firmware's optimisation level: the workspace release profile (LTO, one codegen unit)
+/// with `opt-level = "s"`, what the flash budget is measured on.
+pub const FIRMWARE_OPT_LEVEL: &str = "s";
+
 /// Builds a firmware-qemu binary in release for thumbv7em into `dir`; returns the ELF.
 pub fn build_fw(
     bin: &str,
@@ -30,6 +34,7 @@ pub fn build_fw(
         .args(["--target", "thumbv7em-none-eabihf"])
         .env("CARGO_TARGET_DIR", dir)
         .env("DEFMT_LOG", "info")
+        .env("CARGO_PROFILE_RELEASE_OPT_LEVEL", FIRMWARE_OPT_LEVEL)
         .env_remove("RUSTFLAGS");
     if !features.is_empty() {
         c.args(["--features", &features.join(",")]);
