@@ -1,6 +1,11 @@
 //! Codec tests against the published protocol test vectors (lms200-test-vectors.txt) and the
 //! full 732-byte B0 telegram (lms200-b0-full-180-050-mm.txt), embedded here verbatim.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing, clippy::panic)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use firmware::lms::crc::crc16;
 use firmware::lms::frame::{encode_telegram, Decoder, Event, Telegram, MAX_TELEGRAM};
