@@ -162,11 +162,8 @@ mod board {
                 let Some(geometry) = geometry(k) else {
                     continue;
                 };
-                let scan = RawScan {
-                    geometry,
-                    values: CODES.get(..k).unwrap_or(&[]),
-                    mm_per_unit: unit.mm_per_unit(),
-                };
+                let codes = CODES.get(..k).unwrap_or(&[]);
+                let scan = RawScan::lms_8m(geometry, codes, unit.mm_per_unit());
                 // Errors of an infallible writer cannot happen; extraction errors are in the frame.
                 let _ = PAPER.process(&scan, counters, &mut tx);
                 let _ = DEFAULT.process(&scan, counters, &mut tx);
