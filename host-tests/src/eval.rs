@@ -84,13 +84,19 @@ pub fn run_methods_timed(
 }
 
 /// The four methods of the comparison: PFE `paper`, PFE `default`, ACF, split-and-merge
-/// (each in its own default configuration, whatever the simulated noise).
+/// (each in its own default configuration, made for σ_r = 5 mm).
 pub fn default_methods() -> Vec<Box<dyn Method>> {
+    methods_for(5.0)
+}
+
+/// The four methods told the scanner's range noise `sigma_r` (what a user configures for
+/// their scanner). The paper's thresholds do not depend on it (only its covariances do).
+pub fn methods_for(sigma_r: f32) -> Vec<Box<dyn Method>> {
     vec![
-        Box::new(Pfe::paper()),
-        Box::new(Pfe::default_config()),
-        Box::new(Acf::new()),
-        Box::new(SplitMerge::new()),
+        Box::new(Pfe::new("pfe-paper", pfe_core::Config::paper().with_sigma_r(sigma_r))),
+        Box::new(Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma_r))),
+        Box::new(Acf::new().with_sigma_r(sigma_r)),
+        Box::new(SplitMerge::new().with_sigma_r(sigma_r)),
     ]
 }
 
@@ -237,7 +243,17 @@ pub fn evaluate(methods: &mut [Box<dyn Method>], options: &EvalOptions) -> Evalu
     let sweep = options
         .sweep
         .iter()
-        .map(|&s| run_level(methods, options.kind, options.scans, s, options.seed, 1))
+        .map(|&s| {
+            // Each level with methods told that level's noise, when running the standard set.
+            let mut tuned = methods_for(s);
+            let same = tuned.len() == methods.len()
+                && tuned.iter().zip(methods.iter()).all(|(a, b)| a.name() == b.name());
+            if same {
+                run_level(&mut tuned, options.kind, options.scans, s, options.seed, 1)
+            } else {
+                run_level(methods, options.kind, options.scans, s, options.seed, 1)
+            }
+        })
         .collect();
     let robustness = conditions()
         .into_iter()
