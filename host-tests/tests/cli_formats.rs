@@ -445,3 +445,80 @@ fn plot_writes_a_readable_svg() {
     assert_eq!(out.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn stdin_input() {
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args(["extract", "--format", "csv", "-"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let text = std::fs::read(fixture("room.csv")).unwrap();
+    child.stdin.take().unwrap().write_all(&text).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    assert_eq!(out.stdout, extract("csv", "default", "room.csv").stdout);
+}
+
+#[test]
+fn hokuyo_non_finite_ranges_are_no_return_and_negative_is_an_error() {
+    let dir = std::env::temp_dir().join(format!("pfe-cli-hok-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scan.txt");
+    // 8 beams of 0.1 rad from −0.35 rad at a wall 1 m ahead; beams 2 and 5 non-finite.
+    let ranges: Vec<String> = (0..8)
+        .map(|i| match i {
+            2 => "nan".to_string(),
+            5 => "inf".to_string(),
+            _ => format!("{:.4}", 1.0 / (-0.35 + 0.1 * i as f64).cos()),
+        })
+        .collect();
+    let line = format!("/scan 1.0 -0.35 0.1 0.02 5.6 8 {}\n", ranges.join(" "));
+    std::fs::write(
+        &path,
+        format!("{line}{}", line.replacen(" 1.0013 ", " -1.0 ", 1)),
+    )
+    .unwrap();
+    let out = pfe(&["extract", "--format", "hokuyo", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("line 2") && stderr.contains("negative"),
+        "{stderr}"
+    );
+    let s = scans(&out);
+    assert_eq!(s.len(), 1);
+    for m in s[0]["marks"].as_array().unwrap() {
+        assert!(m != 2 && m != 5, "a no-return beam is a mark: {}", s[0]);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn carmen_max_range_follows_the_declared_laser() {
+    use host_tests::formats::carmen::Reader;
+    let scan = "FLASER 181 60.0 50.0 49.9 81.82 81.83 81.91 ".to_string()
+        + &"2.0 ".repeat(175)
+        + "0 0 0 0 0 0 1.0 host 1.0\n";
+    let read = |text: String| {
+        let r = Reader::new(Box::new(std::io::Cursor::new(text)))
+            .next()
+            .unwrap()
+            .unwrap();
+        r.ranges_mm[..6]
+            .iter()
+            .map(|v| v.is_finite())
+            .collect::<Vec<_>>()
+    };
+    // Default: ≥ 50 m is no return.
+    assert_eq!(
+        read(scan.clone()),
+        [false, false, true, false, false, false]
+    );
+    // An 80 m laser: up to 81.82 m valid, the 8183 / 8191 codes not.
+    let long = format!("PARAM robot_front_laser_max 80.99 nohost 0\n{scan}");
+    assert_eq!(read(long), [true, true, true, true, false, false]);
+}

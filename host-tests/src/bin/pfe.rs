@@ -25,7 +25,14 @@ use serde::Serialize;
 
 /// Prediction-based feature extraction (Zhao & Chen 2011) on recorded 2D laser scans.
 #[derive(Parser, Debug)]
-#[command(name = "pfe", version, about)]
+#[command(
+    name = "pfe",
+    version,
+    about = "Prediction-based feature extraction (Zhao & Chen 2011) on recorded 2D laser scans",
+    after_help = "FILE may be gzipped (detected from its content) or - for stdin. Bad input gives a \
+                  one-line error with the line number and exit code 2; the scans before it are \
+                  still written."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -168,7 +175,11 @@ fn main() -> ExitCode {
 }
 
 fn delegate(name: &str, r: anyhow::Result<()>) -> Result<(), Failure> {
-    r.map_err(|e| Failure::other(format!("{name}: {e:#}")))
+    r.map_err(|e| {
+        let text = format!("{e:#}");
+        let text = text.strip_prefix("error: ").unwrap_or(&text);
+        Failure::other(format!("{name}: {text}"))
+    })
 }
 
 /// Opens `file` with a byte-counting progress bar on stderr (hidden when stderr is not a

@@ -2,7 +2,8 @@
 //! `topic stamp_s angle_min_rad angle_increment_rad range_min_m range_max_m n r_0 ... r_{n-1}`.
 //!
 //! Ranges in metres. A reading is no return when it is 0 (non-finite ranges were written as
-//! 0), below `range_min` or above `range_max` (both from the line). Blank lines and `#`
+//! 0), `nan` or `inf`, below `range_min` or above `range_max` (both from the line); a negative
+//! range is an error. Blank lines and `#`
 //! comments are skipped.
 //!
 //! ```
@@ -53,13 +54,14 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
             InputError::line(line, format!("line declares {n} ranges but has {k}"))
         })?;
         let r: f32 = number(line, &format!("range {k}"), Some(token))?;
-        if r.is_nan() || r < 0.0 {
+        if r < 0.0 {
             return Err(InputError::line(
                 line,
-                format!("range {k} is not a range in metres: {token:?}"),
+                format!("range {k} is negative: {token:?}"),
             ));
         }
         let mm = r * 1000.0;
+        // NaN and ±inf (as ROS writes non-finite ranges) fail these tests: no return.
         ranges.push(if mm > 0.0 && mm >= lo && mm <= hi {
             mm
         } else {

@@ -36,9 +36,9 @@ use crate::method::{Extraction, MAX_BEAMS};
 pub enum Format {
     /// `ID,START_DEG,STEP_DEG,R_0,...,R_{N-1}`, ranges in mm (0 or ≥ 8183 = no return).
     Csv,
-    /// CARMEN log, `FLASER` lines (metres, 180° field); see [`carmen`].
+    /// CARMEN log, `FLASER` lines (metres, 180° field, gzip allowed).
     Carmen,
-    /// Raw byte capture of an LMS200 serial line (0xB0 telegrams); see [`lms200`].
+    /// Raw byte capture of an LMS200 serial line (0xB0 telegrams, damage skipped).
     Lms200,
     /// `topic stamp angle_min angle_increment range_min range_max n r_0 ... r_{n-1}`.
     Hokuyo,
