@@ -245,6 +245,9 @@ fn extract(format: Format, config: ConfigName, file: &Path) -> Result<(), Failur
         let ex = method.extract(&record.geometry, &record.ranges_mm);
         scans += 1;
         features += ex.features.len() as u64;
+        if scans % 256 == 0 {
+            bar.set_message(format!("{scans} scans"));
+        }
         if !write_json(&mut out, &ScanJson::new(record.id, &ex))? {
             break;
         }
