@@ -1,0 +1,238 @@
+//! The pfe firmware on an STM32F411 board (WeAct "Black Pill" F411CE, 25 MHz crystal):
+//! LMS200 on USART1 (PA9 TX, PA10 RX, through an RS-232/RS-422 transceiver) at the baud the
+//! driver asks for, one feature frame per scan on USART2 (PA2 TX, PA3 RX) at 460800 baud,
+//! defmt logs over RTT, panics reported by panic-probe.
+//!
+//! `cargo run --release` in this directory flashes it with probe-rs (see `.cargo/config.toml`).
+#![cfg_attr(target_os = "none", no_std, no_main)]
+
+#[cfg(not(target_os = "none"))]
+fn main() {
+    eprintln!("pfe-board runs on an STM32F411: cd firmware/board && cargo run --release");
+}
+
+#[cfg(target_os = "none")]
+mod fw {
+    use core::sync::atomic::{AtomicU32, Ordering};
+
+    use cortex_m::peripheral::syst::SystClkSource;
+    use cortex_m_rt::{entry, exception};
+    use defmt_rtt as _;
+    use panic_probe as _;
+    use stm32f4xx_hal::{
+        pac,
+        prelude::*,
+        rcc::{Config as RccConfig, Rcc},
+        serial::{self, config::Config as SerialConfig, Serial},
+    };
+
+    use firmware::app::{App, AppError, ConfigChoice};
+    use firmware::lms::{Clock, Config, Driver, SetBaud};
+
+    /// System clock, Hz.
+    const SYSCLK_HZ: u32 = 96_000_000;
+    /// Feature output baud rate.
+    const OUTPUT_BAUD: u32 = 460_800;
+
+    static MILLIS: AtomicU32 = AtomicU32::new(0);
+
+    #[exception]
+    fn SysTick() {
+        MILLIS.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// Milliseconds from the 1 kHz SysTick.
+    struct Millis;
+    impl Clock for Millis {
+        fn now_ms(&mut self) -> u32 {
+            MILLIS.load(Ordering::Relaxed)
+        }
+    }
+
+    /// Busy-wait delay counting core cycles.
+    struct Delay;
+    impl embedded_hal::delay::DelayNs for Delay {
+        fn delay_ns(&mut self, ns: u32) {
+            let cycles = u64::from(ns) * u64::from(SYSCLK_HZ / 1_000_000) / 1000;
+            cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX).max(1));
+        }
+    }
+
+    /// Errors of the scanner UART.
+    #[derive(Debug, defmt::Format)]
+    enum UartError {
+        /// Receive overrun (a byte was lost).
+        Overrun,
+        /// Framing error (wrong baud rate?).
+        Framing,
+        /// Parity error.
+        Parity,
+        /// Line noise.
+        Noise,
+        /// Another HAL error.
+        Other,
+        /// The requested baud rate cannot be configured.
+        Baud,
+    }
+
+    impl From<serial::Error> for UartError {
+        fn from(e: serial::Error) -> Self {
+            match e {
+                serial::Error::Overrun => UartError::Overrun,
+                serial::Error::FrameFormat => UartError::Framing,
+                serial::Error::Parity => UartError::Parity,
+                serial::Error::Noise => UartError::Noise,
+                _ => UartError::Other,
+            }
+        }
+    }
+
+    impl embedded_io::Error for UartError {
+        fn kind(&self) -> embedded_io::ErrorKind {
+            embedded_io::ErrorKind::Other
+        }
+    }
+
+    /// USART1 as the driver wants it: embedded-io Read/ReadReady/Write and a baud switch
+    /// (release and re-create the HAL serial with the new rate).
+    struct ScannerUart {
+        serial: Option<Serial<pac::USART1>>,
+        rcc: Rcc,
+    }
+
+    impl embedded_io::ErrorType for ScannerUart {
+        type Error = UartError;
+    }
+
+    impl embedded_io::Read for ScannerUart {
+        fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
+            use embedded_hal_nb::serial::Read;
+            let Some(s) = self.serial.as_mut() else {
+                return Err(UartError::Baud);
+            };
+            let mut n = 0;
+            for slot in buf.iter_mut() {
+                match s.read() {
+                    Ok(b) => {
+                        *slot = b;
+                        n += 1;
+                    }
+                    Err(nb::Error::WouldBlock) if n > 0 => break,
+                    Err(nb::Error::WouldBlock) => {
+                        // Block for the first byte (embedded-io contract).
+                        loop {
+                            match s.read() {
+                                Ok(b) => {
+                                    *slot = b;
+                                    n += 1;
+                                    break;
+                                }
+                                Err(nb::Error::WouldBlock) => {}
+                                Err(nb::Error::Other(e)) => return Err(UartError::from(e)),
+                            }
+                        }
+                    }
+                    Err(nb::Error::Other(e)) => return Err(UartError::from(e)),
+                }
+            }
+            Ok(n)
+        }
+    }
+
+    impl embedded_io::ReadReady for ScannerUart {
+        fn read_ready(&mut self) -> Result<bool, UartError> {
+            Ok(self.serial.as_ref().is_some_and(|s| s.is_rx_not_empty()))
+        }
+    }
+
+    impl embedded_io::Write for ScannerUart {
+        fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
+            let s = self.serial.as_mut().ok_or(UartError::Baud)?;
+            // The HAL writes what fits in the data register; wait until all is queued.
+            let mut rest = buf;
+            while !rest.is_empty() {
+                let n = embedded_io::Write::write(s, rest).map_err(UartError::from)?;
+                rest = rest.get(n..).unwrap_or(&[]);
+            }
+            Ok(buf.len())
+        }
+        fn flush(&mut self) -> Result<(), UartError> {
+            let s = self.serial.as_mut().ok_or(UartError::Baud)?;
+            embedded_io::Write::flush(s).map_err(UartError::from)
+        }
+    }
+
+    impl SetBaud for ScannerUart {
+        fn set_baud(&mut self, baud: u32) -> Result<(), UartError> {
+            let s = self.serial.take().ok_or(UartError::Baud)?;
+            let (usart, (tx, rx)) = s.release();
+            let (Some(tx), Some(rx)) = (tx, rx) else {
+                return Err(UartError::Baud);
+            };
+            let cfg = SerialConfig::default().baudrate(baud.bps());
+            self.serial = Some(
+                Serial::new(usart, (tx, rx), cfg, &mut self.rcc).map_err(|_| UartError::Baud)?,
+            );
+            Ok(())
+        }
+    }
+
+    #[entry]
+    fn main() -> ! {
+        let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+            defmt::panic!("peripherals taken twice");
+        };
+        let mut rcc = dp
+            .RCC
+            .freeze(RccConfig::hse(25.MHz()).sysclk(SYSCLK_HZ.Hz()));
+        let mut syst = cp.SYST;
+        syst.set_clock_source(SystClkSource::Core);
+        syst.set_reload(SYSCLK_HZ / 1000 - 1);
+        syst.clear_current();
+        syst.enable_interrupt();
+        syst.enable_counter();
+
+        let gpioa = dp.GPIOA.split(&mut rcc);
+        let Ok(mut out) = Serial::new(
+            dp.USART2,
+            (gpioa.pa2, gpioa.pa3),
+            SerialConfig::default().baudrate(OUTPUT_BAUD.bps()),
+            &mut rcc,
+        ) else {
+            defmt::panic!("USART2 configuration");
+        };
+        // The LMS200 powers up at 9600 baud; the driver probes and switches.
+        let Ok(lms_serial) = Serial::new(
+            dp.USART1,
+            (gpioa.pa9, gpioa.pa10),
+            SerialConfig::default().baudrate(9600.bps()),
+            &mut rcc,
+        ) else {
+            defmt::panic!("USART1 configuration");
+        };
+        let uart = ScannerUart {
+            serial: Some(lms_serial),
+            rcc,
+        };
+        let app: &'static mut App<361, 48> = {
+            static mut APP: App<361, 48> = App::new(ConfigChoice::Default);
+            #[allow(unsafe_code)]
+            // SAFETY: the only reference to APP, taken once here.
+            unsafe {
+                &mut *core::ptr::addr_of_mut!(APP)
+            }
+        };
+        let mut lms = Driver::new(uart, Delay, Millis, Config::default());
+        defmt::info!(
+            "pfe-board: LMS200 on USART1, features on USART2 at {} baud",
+            OUTPUT_BAUD
+        );
+        loop {
+            match app.step(&mut lms, &mut out) {
+                Ok(h) => defmt::debug!("scan {}: {} features", h.seq, h.n_features),
+                Err(AppError::Source(e)) => defmt::warn!("scanner: {}", e),
+                Err(_) => defmt::warn!("feature output failed"),
+            }
+        }
+    }
+}
