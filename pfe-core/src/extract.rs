@@ -4,10 +4,10 @@
 
 use heapless::Vec;
 
-use crate::circle::{circle_covariance_range, fit_circle, geometric_sse, refine_circle, Circle};
+use crate::circle::{fit_circle, geometric_sse, refine_circle, Circle};
 use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
-use crate::feature::{CircleFeature, Feature, LineFeature};
+use crate::feature::{circle_feature, line_feature, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::fit_line;
 use crate::math;
@@ -580,8 +580,6 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     fn fit_segment(&self, s: usize, e: usize, config: &Config) -> Option<Feature> {
         let pts = self.points.get(s..=e)?;
-        let (first, last) = (u16::try_from(s).ok()?, u16::try_from(e).ok()?);
-        let count = u16::try_from(pts.len()).ok()?;
         let origin = self.origin((s + e) / 2);
         let line = fit_line(pts).ok();
         let circle = || {
@@ -639,35 +637,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     })
             }
         };
-        if let Some(c) = as_circle {
-            let cov = circle_covariance_range(pts, &c, origin, config.sigma_r).ok()?;
-            let a = |p: Point| math::atan2(p.y - c.center.y, p.x - c.center.x);
-            let f = Feature::Circle(CircleFeature {
-                first,
-                last,
-                points: count,
-                center: c.center,
-                radius: c.radius,
-                cov,
-                start_angle: a(*pts.first()?),
-                end_angle: a(*pts.last()?),
-            });
-            return f.is_well_formed().then_some(f);
+        match as_circle {
+            Some(c) => circle_feature(pts, s, e, &c, origin, config.sigma_r),
+            None => line_feature(pts, s, e, &line?, origin, config.sigma_r),
         }
-        let l = line?;
-        let cov = l.covariance_range(pts.iter().copied(), origin, config.sigma_r);
-        let f = Feature::Line(LineFeature {
-            first,
-            last,
-            points: count,
-            alpha: l.alpha,
-            rho: l.rho,
-            var_alpha: cov.var_alpha,
-            var_rho: cov.var_rho,
-            cov_alpha_rho: cov.cov_alpha_rho,
-            start: l.project(pts.first()?),
-            end: l.project(pts.last()?),
-        });
-        f.is_well_formed().then_some(f)
     }
 }

@@ -1,6 +1,9 @@
 //! The extractor's output: lines and circles with their uncertainty and point range.
 
+use crate::circle::{circle_covariance_range, Circle};
 use crate::geometry::Point;
+use crate::line::LineFit;
+use crate::math;
 
 /// A line feature `x cos α + y sin α = ρ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,4 +106,56 @@ impl Feature {
             }
         }
     }
+}
+
+/// The line feature of the points `pts` of beams `first..=last` fitted by `line`, with the
+/// range-noise covariance for a scanner at `origin` (`None` when not well formed or the
+/// indices do not fit in `u16`).
+pub fn line_feature(
+    pts: &[Point],
+    first: usize,
+    last: usize,
+    line: &LineFit,
+    origin: Point,
+    sigma_r: f32,
+) -> Option<Feature> {
+    let cov = line.covariance_range(pts.iter().copied(), origin, sigma_r);
+    let f = Feature::Line(LineFeature {
+        first: u16::try_from(first).ok()?,
+        last: u16::try_from(last).ok()?,
+        points: u16::try_from(pts.len()).ok()?,
+        alpha: line.alpha,
+        rho: line.rho,
+        var_alpha: cov.var_alpha,
+        var_rho: cov.var_rho,
+        cov_alpha_rho: cov.cov_alpha_rho,
+        start: line.project(pts.first()?),
+        end: line.project(pts.last()?),
+    });
+    f.is_well_formed().then_some(f)
+}
+
+/// The circle feature of the points `pts` of beams `first..=last` fitted by `circle`, with the
+/// range-noise covariance for a scanner at `origin` and the arc's extent.
+pub fn circle_feature(
+    pts: &[Point],
+    first: usize,
+    last: usize,
+    circle: &Circle,
+    origin: Point,
+    sigma_r: f32,
+) -> Option<Feature> {
+    let cov = circle_covariance_range(pts, circle, origin, sigma_r).ok()?;
+    let angle = |p: &Point| math::atan2(p.y - circle.center.y, p.x - circle.center.x);
+    let f = Feature::Circle(CircleFeature {
+        first: u16::try_from(first).ok()?,
+        last: u16::try_from(last).ok()?,
+        points: u16::try_from(pts.len()).ok()?,
+        center: circle.center,
+        radius: circle.radius,
+        cov,
+        start_angle: angle(pts.first()?),
+        end_angle: angle(pts.last()?),
+    });
+    f.is_well_formed().then_some(f)
 }

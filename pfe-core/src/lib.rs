@@ -42,7 +42,7 @@ pub use correction::RangeCorrection;
 pub use deskew::Motion;
 pub use error::{ExtractError, FitError};
 pub use extract::{Extractor, Stats};
-pub use feature::{CircleFeature, Feature, LineFeature};
+pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
 pub use geometry::Point;
 pub use line::{fit_line, LineCovariance, LineFit};
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

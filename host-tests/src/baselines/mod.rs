@@ -24,8 +24,8 @@ pub use acf::Acf;
 pub use split_merge::SplitMerge;
 
 use pfe_core::{
-    circle_covariance_range, fit_circle, fit_line, refine_circle, CircleFeature, CircleMethod,
-    Feature, LineFeature, LineFit, Point, Scan, ScanGeometry,
+    circle_feature, fit_circle, fit_line, line_feature, refine_circle, CircleMethod, Feature,
+    LineFit, Point, Scan, ScanGeometry,
 };
 
 /// Smallest segment that becomes a feature (the paper's 4 points).
@@ -92,45 +92,12 @@ pub(crate) fn make_feature(
     model: Model,
     sigma_r: f32,
 ) -> Option<Feature> {
-    let first16 = u16::try_from(first).ok()?;
-    let last16 = u16::try_from(last).ok()?;
-    let count = u16::try_from(pts.len()).ok()?;
     let origin = Point::new(0.0, 0.0);
-    if model == Model::Circle {
-        let circle = circle_fit(pts).and_then(|c| {
-            let cov = circle_covariance_range(pts, &c, origin, sigma_r).ok()?;
-            let angle = |p: &Point| (p.y - c.center.y).atan2(p.x - c.center.x);
-            let f = Feature::Circle(CircleFeature {
-                first: first16,
-                last: last16,
-                points: count,
-                center: c.center,
-                radius: c.radius,
-                cov,
-                start_angle: angle(pts.first()?),
-                end_angle: angle(pts.last()?),
-            });
-            f.is_well_formed().then_some(f)
-        });
-        if circle.is_some() {
-            return circle;
-        }
-    }
-    let l = fit_line(pts).ok()?;
-    let cov = l.covariance_range(pts.iter().copied(), origin, sigma_r);
-    let f = Feature::Line(LineFeature {
-        first: first16,
-        last: last16,
-        points: count,
-        alpha: l.alpha,
-        rho: l.rho,
-        var_alpha: cov.var_alpha,
-        var_rho: cov.var_rho,
-        cov_alpha_rho: cov.cov_alpha_rho,
-        start: l.project(pts.first()?),
-        end: l.project(pts.last()?),
-    });
-    f.is_well_formed().then_some(f)
+    let circle = (model == Model::Circle)
+        .then(|| circle_fit(pts))
+        .flatten()
+        .and_then(|c| circle_feature(pts, first, last, &c, origin, sigma_r));
+    circle.or_else(|| line_feature(pts, first, last, &fit_line(pts).ok()?, origin, sigma_r))
 }
 
 /// One final segment of a baseline: beams `first..=last` and its model.
