@@ -93,8 +93,14 @@ pub fn default_methods() -> Vec<Box<dyn Method>> {
 /// their scanner). The paper's thresholds do not depend on it (only its covariances do).
 pub fn methods_for(sigma_r: f32) -> Vec<Box<dyn Method>> {
     vec![
-        Box::new(Pfe::new("pfe-paper", pfe_core::Config::paper().with_sigma_r(sigma_r))),
-        Box::new(Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma_r))),
+        Box::new(Pfe::new(
+            "pfe-paper",
+            pfe_core::Config::paper().with_sigma_r(sigma_r),
+        )),
+        Box::new(Pfe::new(
+            "pfe-default",
+            pfe_core::Config::default().with_sigma_r(sigma_r),
+        )),
         Box::new(Acf::new().with_sigma_r(sigma_r)),
         Box::new(SplitMerge::new().with_sigma_r(sigma_r)),
     ]
@@ -247,7 +253,10 @@ pub fn evaluate(methods: &mut [Box<dyn Method>], options: &EvalOptions) -> Evalu
             // Each level with methods told that level's noise, when running the standard set.
             let mut tuned = methods_for(s);
             let same = tuned.len() == methods.len()
-                && tuned.iter().zip(methods.iter()).all(|(a, b)| a.name() == b.name());
+                && tuned
+                    .iter()
+                    .zip(methods.iter())
+                    .all(|(a, b)| a.name() == b.name());
             if same {
                 run_level(&mut tuned, options.kind, options.scans, s, options.seed, 1)
             } else {

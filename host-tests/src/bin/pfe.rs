@@ -21,6 +21,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 use host_tests::formats::{self, lms200, Format, Record, ScanJson};
 use host_tests::method::{Method, Pfe};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pfe_core::Config;
 use serde::Serialize;
 
 /// Prediction-based feature extraction (Zhao & Chen 2011) on recorded 2D laser scans.
@@ -48,11 +49,23 @@ enum ConfigName {
 }
 
 impl ConfigName {
-    fn method(self) -> Pfe {
+    /// The extractor for a scanner with range noise `sigma_r` mm (the paper's thresholds do
+    /// not depend on it; its covariances do).
+    fn method(self, sigma_r: f32) -> Pfe {
         match self {
-            ConfigName::Paper => Pfe::paper(),
-            ConfigName::Default => Pfe::default_config(),
+            ConfigName::Paper => Pfe::new("pfe-paper", Config::paper().with_sigma_r(sigma_r)),
+            ConfigName::Default => Pfe::new("pfe-default", Config::default().with_sigma_r(sigma_r)),
         }
+    }
+}
+
+/// Range noise assumed for a format unless `--sigma-r` says otherwise, mm: the LMS200 data
+/// sheet's 5 mm for mm-mode data (csv, lms200); 10 mm for CARMEN logs (cm-quantised LMS data)
+/// and for the Hokuyo URG-04LX (±10 mm at short range).
+fn default_sigma(format: Format) -> f32 {
+    match format {
+        Format::Csv | Format::Lms200 => 5.0,
+        Format::Carmen | Format::Hokuyo => 10.0,
     }
 }
 
@@ -66,6 +79,9 @@ enum Command {
         /// Extractor configuration.
         #[arg(long, short, default_value = "default")]
         config: ConfigName,
+        /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
+        #[arg(long)]
+        sigma_r: Option<f32>,
         /// Input file (gzip is read transparently; `-` = stdin).
         file: PathBuf,
     },
@@ -87,6 +103,9 @@ enum Command {
         /// Extractor configuration.
         #[arg(long, short, default_value = "default")]
         config: ConfigName,
+        /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
+        #[arg(long)]
+        sigma_r: Option<f32>,
         /// Scan ID to plot (the csv ID, else the 0-based ordinal).
         #[arg(long, short)]
         scan: u64,
@@ -150,16 +169,28 @@ fn main() -> ExitCode {
         Command::Extract {
             format,
             config,
+            sigma_r,
             file,
-        } => extract(format, config, &file),
+        } => extract(
+            format,
+            config.method(sigma_r.unwrap_or(default_sigma(format))),
+            &file,
+        ),
         Command::Decode { format, file } => decode(format, &file),
         Command::Plot {
             file,
             format,
             config,
+            sigma_r,
             scan,
             output,
-        } => plot(&file, format, config, scan, &output),
+        } => plot(
+            &file,
+            format,
+            config.method(sigma_r.unwrap_or(default_sigma(format))),
+            scan,
+            &output,
+        ),
         Command::Eval { args } => delegate("eval", host_tests::eval::cli(&args)),
         Command::Bench { args } => delegate("bench", host_tests::bench::cli(&args)),
         Command::Emulate { args } => delegate("emulate", host_tests::emulator::cli(&args)),
@@ -226,9 +257,8 @@ fn flush<W: Write>(out: &mut W) -> Result<(), Failure> {
     }
 }
 
-fn extract(format: Format, config: ConfigName, file: &Path) -> Result<(), Failure> {
+fn extract(format: Format, mut method: Pfe, file: &Path) -> Result<(), Failure> {
     let (input, bar) = open(file, format)?;
-    let mut method = config.method();
     let stdout = io::stdout();
     let mut out = io::BufWriter::with_capacity(1 << 16, stdout.lock());
     let t0 = Instant::now();
@@ -319,7 +349,7 @@ fn decode(format: Format, file: &Path) -> Result<(), Failure> {
 fn plot(
     file: &Path,
     format: Format,
-    config: ConfigName,
+    mut method: Pfe,
     scan: u64,
     output: &Path,
 ) -> Result<(), Failure> {
@@ -341,7 +371,6 @@ fn plot(
             file.display()
         ))
     })?;
-    let mut method = config.method();
     let ex = method.extract(&record.geometry, &record.ranges_mm);
     let name = file
         .file_name()
