@@ -35,6 +35,10 @@ pub struct NoiseModel {
     pub floor: f32,
     /// Points in the prediction window (the paper uses 3; more averages the noise down).
     pub window: usize,
+    /// The window grows up to this many points until it spans `min_span · σ_r`.
+    pub max_window: usize,
+    /// Smallest span of the prediction window, in units of σ_r.
+    pub min_span: f32,
     /// Arc continuation: when the line prediction fails, the last `arc_window` points of the
     /// segment are fitted with a circle; if it explains them significantly better than a line
     /// and predicts the point, the point continues the arc. 0 disables it.
@@ -120,6 +124,8 @@ impl Config {
                 k_locate: 2.5,
                 floor: 3.0,
                 window: 6,
+                max_window: 24,
+                min_span: 12.0,
                 arc_window: 24,
                 arc_chi2: 16.0,
                 arc_max_radius: 2000.0,
@@ -163,6 +169,7 @@ impl Config {
                     && m.floor.is_finite()
                     && m.floor >= 0.0
                     && m.window >= 2
+                    && m.min_span.is_finite()
                     && m.arc_chi2.is_finite()
                     && m.arc_max_radius > 0.0
             }

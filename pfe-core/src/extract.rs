@@ -343,7 +343,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             } else if c == 1 {
                 None
             } else {
-                let w = c.min(m.window);
+                let w = self.window(k, c, m, sigma_r);
                 let pred = self.predict(k - w, k, k);
                 let over = match pred {
                     None => true,
@@ -404,6 +404,26 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             }
         }
         best
+    }
+
+    /// Prediction window for point `k` with `c` points of its segment before it: `window`
+    /// points, grown (up to `max_window`) until it spans `min_span · σ_r`, so that close to
+    /// the scanner, where beams are a few mm apart, the window still sees a line's direction
+    /// above the noise.
+    fn window(&self, k: usize, c: usize, m: &NoiseModel, sigma_r: f32) -> usize {
+        let mut w = c.min(m.window);
+        let limit = c.min(m.max_window.max(m.window));
+        let span = m.min_span * sigma_r;
+        let last = self.point(k - 1);
+        while w < limit {
+            let p = self.point(k - w);
+            let (dx, dy) = (p.x - last.x, p.y - last.y);
+            if dx * dx + dy * dy >= span * span {
+                break;
+            }
+            w += 1;
+        }
+        w
     }
 
     /// Arc continuation test for point `k` of the segment starting at `s` (see
