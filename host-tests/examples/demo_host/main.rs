@@ -218,11 +218,18 @@ fn bench(o: &Opts) -> Result<()> {
         }
     }
     if let Some(mm) = &mm {
-        md.push_str("\n`libm` vs `micromath` (pfe-core feature), median instructions per scan:\n\n| stage | libm | micromath | micromath / libm |\n|---|---:|---:|---:|\n");
+        md.push_str("\n`libm` vs `micromath` (pfe-core feature), medians:\n\n| stage | libm instr/scan | micromath instr/scan | micromath / libm | libm instr/point | micromath instr/point |\n|---|---:|---:|---:|---:|---:|\n");
         for (key, label) in STAGES.iter().skip(1) {
             if let (Some(a), Some(b)) = (libm.stages.get(key), mm.stages.get(key)) {
-                let (a, b) = (summary(a).0, summary(b).0);
-                md.push_str(&format!("| {label} | {a:.0} | {b:.0} | {:.2} |\n", b / a));
+                let (sa, sb) = (summary(a), summary(b));
+                md.push_str(&format!(
+                    "| {label} | {:.0} | {:.0} | {:.2} | {:.1} | {:.1} |\n",
+                    sa.0,
+                    sb.0,
+                    sb.0 / sa.0,
+                    sa.2,
+                    sb.2
+                ));
             }
         }
     }
