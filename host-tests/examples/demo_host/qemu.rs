@@ -259,6 +259,13 @@ pub struct SimSource {
     next: usize,
 }
 
+impl SimSource {
+    /// Serves `ranges` (mm, one vector per scan) in order, cycling.
+    pub fn new(ranges: Vec<Vec<f32>>) -> Self {
+        Self { ranges, next: 0 }
+    }
+}
+
 impl host_tests::emulator::ScanSource for SimSource {
     fn next_scan(&mut self, n: usize, _start_deg: f32, _step_deg: f32) -> Vec<f32> {
         let r = match self.ranges.get(self.next % self.ranges.len().max(1)) {

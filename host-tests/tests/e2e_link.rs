@@ -1,0 +1,109 @@
+//! The firmware's application loop on the host, end to end over emulated UART bytes: the
+//! LMS200 emulator (in-process link, virtual time, baud modelled) → the real driver →
+//! `firmware::app::App` → feature frames → decoder. The features must equal pfe-core run on
+//! the value words the emulator sent, also when the link damages telegrams.
+
+#[path = "../examples/demo_host/qemu.rs"]
+mod qemu;
+
+use firmware::app::{App, ConfigChoice};
+use firmware::lms::{Config, Driver};
+use firmware::output::{Frame, ScanStatus};
+use host_tests::emulator::{Emulator, EmulatorConfig, Faults, Link};
+use host_tests::method::Extraction;
+use host_tests::sim::{Scenario, SceneKind, SimScan};
+
+fn sims(seed: u64, n: u64) -> Vec<SimScan> {
+    (seed..seed + n)
+        .map(|s| Scenario::new(SceneKind::Mixed, s).simulate())
+        .collect()
+}
+
+/// Runs `scans` steps of the app over an emulator with `faults`; returns the frames and the
+/// emulator's report.
+fn run(
+    sims: &[SimScan],
+    scans: usize,
+    faults: Faults,
+) -> (Vec<Frame>, host_tests::emulator::EmulatorReport) {
+    let source = qemu::SimSource::new(sims.iter().map(|s| s.ranges_mm.clone()).collect());
+    let cfg = EmulatorConfig {
+        faults,
+        ..EmulatorConfig::default()
+    };
+    let link = Link::new(Emulator::new(cfg, Box::new(source)), Some(9600));
+    let mut lms = Driver::new(
+        link.host_port(),
+        link.delay(),
+        link.clock(),
+        Config::default(),
+    );
+    let mut app = Box::new(App::<361, 48>::new(ConfigChoice::Default));
+    let mut out = qemu::VecWriter(Vec::new());
+    let mut ok = 0;
+    for _ in 0..scans * 3 {
+        if app.step(&mut lms, &mut out).is_ok() {
+            ok += 1;
+        }
+        if ok == scans {
+            break;
+        }
+    }
+    assert_eq!(ok, scans, "the loop delivered every scan");
+    let (frames, bad) = qemu::decode_frames(&out.0);
+    assert!(bad.is_empty(), "{bad:?}");
+    let report = link.with_emulator(|e| e.report().clone()).unwrap();
+    (frames, report)
+}
+
+#[test]
+fn clean_link_features_equal_host_and_match_ground_truth() {
+    let sims = sims(500, 6);
+    let (frames, report) = run(&sims, 6, Faults::default());
+    assert_eq!(frames.len(), 6);
+    let mut total = host_tests::score::Score::default();
+    for (k, f) in frames.iter().enumerate() {
+        let h = f.scan().unwrap();
+        assert_eq!(h.seq, k as u32);
+        assert_eq!(h.status, ScanStatus::Ok);
+        assert_eq!(h.counters.crc_dropped, 0);
+        let sent = &report.scans[k];
+        let host = qemu::host_features(&sent.words, ConfigChoice::Default).unwrap();
+        assert_eq!(host.as_slice(), f.features.as_slice(), "scan {k}");
+        let ex = Extraction {
+            marks: Vec::new(),
+            features: f.features.iter().map(|w| w.to_feature()).collect(),
+        };
+        total.add(&host_tests::score::score_sim(&ex, &sims[k]));
+    }
+    assert!(total.truth_features > 20);
+    assert!(
+        total.matched as f64 >= 0.8 * total.truth_features as f64,
+        "{} of {} truth features matched",
+        total.matched,
+        total.truth_features
+    );
+}
+
+#[test]
+fn damaged_telegrams_are_dropped_counted_and_the_rest_is_exact() {
+    let sims = sims(700, 12);
+    let faults = Faults {
+        bit_flip: 0.15,
+        drop_byte: 0.1,
+        truncate: 0.05,
+        garbage: 0.2,
+        ..Faults::default()
+    };
+    let (frames, report) = run(&sims, 12, faults);
+    let intact: Vec<_> = report.scans.iter().filter(|s| !s.damaged).collect();
+    let damaged = report.scans.len() - intact.len();
+    assert!(damaged > 0, "the faults damaged some telegrams");
+    for (k, f) in frames.iter().enumerate() {
+        let host = qemu::host_features(&intact[k].words, ConfigChoice::Default).unwrap();
+        assert_eq!(host.as_slice(), f.features.as_slice(), "scan {k}");
+    }
+    let last = frames.last().unwrap().scan().unwrap().counters;
+    assert!(last.crc_dropped > 0, "{last:?}");
+    assert!(last.bytes_skipped > 0, "{last:?}");
+}
