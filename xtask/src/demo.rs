@@ -31,6 +31,12 @@ pub fn run(args: &[String]) -> Result<()> {
     let elf = build_fw("pfe-qemu", &[], &[], &dir.join("firmware"))?;
     let svg = dir.join("scan0.svg");
     let log = dir.join("defmt.bin");
+    eprintln!(
+        "the firmware's defmt log (semihosting) goes to {}; decode it with `defmt-print -e {} < {}`",
+        log.display(),
+        elf.display(),
+        log.display()
+    );
     demo_host(&[
         "demo".as_ref(),
         "--elf".as_ref(),
@@ -46,11 +52,5 @@ pub fn run(args: &[String]) -> Result<()> {
         "--defmt-log".as_ref(),
         log.as_os_str(),
     ])?;
-    eprintln!(
-        "defmt log of the firmware (semihosting): {} — decode with `defmt-print -e {} < {}`",
-        log.display(),
-        elf.display(),
-        log.display()
-    );
     Ok(())
 }

@@ -150,6 +150,13 @@ pub fn run(args: &[String]) -> Result<()> {
         .filter(|v| *v > 0)
         .context("no stack high-water mark in the run summary")?;
 
+    let field = |k: &str| {
+        text.lines()
+            .find_map(|l| l.strip_prefix(k))
+            .map(|v| v.trim().to_string())
+            .unwrap_or_default()
+    };
+    let (equal, compared) = (field("equal="), field("compared="));
     let mut md = format!(
         "Release profile with `opt-level = \"{FIRMWARE_OPT_LEVEL}\"` (LTO, 1 codegen unit), \
          `Extractor<361, 48>` in a static. Flash = vector table + text + rodata + data; \
@@ -184,6 +191,12 @@ pub fn run(args: &[String]) -> Result<()> {
             ));
         }
     }
+    md.push_str(&format!(
+        "\nThe same run compares the features the firmware sent (Cortex-M4F, QEMU) with pfe-core \
+         on the host (x86-64) for the same B0 values: {equal}/{compared} scans bit-identical \
+         (libm is pure software on both targets and rustc does not contract f32 mul/add into \
+         FMA, so no ulp differences are expected).\n"
+    ));
     md.push_str(&format!(
         "\nBudgets: flash ≤ {FLASH_BUDGET} B, static RAM + stack ≤ {RAM_BUDGET} B: **{}**.\n",
         if broken.is_empty() { "met" } else { "BROKEN" }
