@@ -356,3 +356,42 @@ fn too_many_features_and_trailing_bytes_are_rejected() {
     );
     assert!(got.iter().all(|r| r.is_err()), "{got:?}");
 }
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Any bytes, in any chunking, never panic; a good frame after a zero always decodes.
+        #[test]
+        fn noise_then_frame(noise in proptest::collection::vec(any::<u8>(), 0..600),
+                            cut in 0usize..700) {
+            let good = scan_frame(31, &mixed());
+            let mut stream = noise.clone();
+            stream.push(0);
+            stream.extend_from_slice(&good);
+            let cut = cut.min(stream.len());
+            let got = decode_chunks(&mut FrameDecoder::new(), [&stream[..cut], &stream[cut..]]);
+            let last = got.last().unwrap().as_ref().unwrap();
+            prop_assert_eq!(last.scan().unwrap().seq, 31);
+            prop_assert_eq!(last.features.len(), 12);
+        }
+
+        /// Random damage to a frame (any bytes replaced) never yields a different frame.
+        #[test]
+        fn damage_never_yields_a_wrong_frame(pos in proptest::collection::vec((0usize..400, 1u8..=255), 1..6)) {
+            let wire = scan_frame(5, &mixed());
+            let mut bad = wire.clone();
+            let n = bad.len() - 1;
+            for (p, x) in pos {
+                bad[p % n] ^= x;
+            }
+            let got = decode_chunks(&mut FrameDecoder::new(), [&bad[..]]);
+            for f in got.iter().flatten() {
+                prop_assert_eq!(f.scan().unwrap().seq, 5);
+                let want: Vec<WireFeature> = mixed().iter().map(WireFeature::from).collect();
+                prop_assert_eq!(f.features.as_slice(), want.as_slice());
+            }
+        }
+    }
+}
