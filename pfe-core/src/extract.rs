@@ -474,9 +474,14 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let fits = pts
             .iter()
             .all(|p| math::abs(p.distance(&circle.center) - circle.radius) <= tol);
+        // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
+        // corner does not.
+        let sse = geometric_sse(pts, &circle);
+        let var = sigma_r * sigma_r;
         (fits
             && circle.radius <= m.arc_max_radius
-            && line.sse() - geometric_sse(pts, &circle) >= m.arc_chi2 * sigma_r * sigma_r)
+            && sse <= 2.25 * var * pts.len() as f32
+            && line.sse() - sse >= m.arc_chi2 * var)
             .then_some(circle)
     }
 
