@@ -458,7 +458,11 @@ impl<const CAP: usize> Decoder<CAP> {
                     None => break,
                 }
             }
-            let want = if self.len < 4 {
+            // The address byte is checked before anything after it is buffered, so a wrong
+            // address is rejected at the same byte however the stream is chunked.
+            let want = if self.len < 2 {
+                2 - self.len
+            } else if self.len < 4 {
                 4 - self.len
             } else {
                 match self.announced_total() {
