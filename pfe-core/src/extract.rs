@@ -219,9 +219,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// Converts the readings to points. Beam directions come from an exact sine and cosine
-    /// every 16 beams and a rotation recurrence in between (error < 1e-6 rad).
+    /// every 64 beams and a rotation recurrence in between (error < 1e-5 rad: 0.1 mm at 8 m).
     fn load_points(&mut self, scan: &Scan<'_>, config: &Config) {
-        const EXACT_EVERY: usize = 16;
+        const EXACT_EVERY: usize = 64;
         let g = scan.geometry;
         let (rs, rc) = math::sin_cos(g.angle_step);
         let (mut s, mut c) = (0.0f32, 1.0f32);

@@ -13,6 +13,10 @@ pub struct LineFit {
     pub alpha: f32,
     /// Distance from the origin, mm, ≥ 0.
     pub rho: f32,
+    /// cos α (the unit normal's x).
+    pub cos_alpha: f32,
+    /// sin α (the unit normal's y).
+    pub sin_alpha: f32,
     /// Number of points.
     pub n: usize,
     /// Centroid of the points.
@@ -77,7 +81,8 @@ where
     from_moments(n, c, sxx, syy, sxy)
 }
 
-/// The line from centred moments.
+/// The line from centred moments: the normal is the minor principal axis (no trigonometry
+/// but one `atan2` for α).
 pub fn from_moments(
     n: usize,
     centroid: Point,
@@ -89,20 +94,34 @@ pub fn from_moments(
     if !(spread > 0.0) || !spread.is_finite() {
         return Err(FitError::Degenerate);
     }
-    let mut alpha = 0.5 * math::atan2(-2.0 * sxy, syy - sxx);
-    let (s, c) = math::sin_cos(alpha);
-    let mut rho = centroid.x * c + centroid.y * s;
+    // Major axis (tx, ty) of [[sxx, sxy], [sxy, syy]]; the normal is (−ty, tx).
+    let half = 0.5 * (sxx - syy);
+    let major = 0.5 * spread + math::sqrt(half * half + sxy * sxy);
+    let (tx, ty) = if sxx >= syy {
+        (major - syy, sxy)
+    } else {
+        (sxy, major - sxx)
+    };
+    let norm = math::hypot(tx, ty);
+    if !(norm > 0.0) || !norm.is_finite() {
+        return Err(FitError::Degenerate);
+    }
+    let (mut nx, mut ny) = (-ty / norm, tx / norm);
+    let mut rho = centroid.x * nx + centroid.y * ny;
     if rho < 0.0 {
         rho = -rho;
-        alpha += core::f32::consts::PI;
+        nx = -nx;
+        ny = -ny;
     }
-    let alpha = math::wrap_pi(alpha);
+    let alpha = math::atan2(ny, nx);
     if !alpha.is_finite() || !rho.is_finite() {
         return Err(FitError::Degenerate);
     }
     Ok(LineFit {
         alpha,
         rho,
+        cos_alpha: nx,
+        sin_alpha: ny,
         n,
         centroid,
         sxx,
@@ -114,8 +133,7 @@ pub fn from_moments(
 impl LineFit {
     /// Unit normal (cos α, sin α).
     pub fn normal(&self) -> (f32, f32) {
-        let (s, c) = math::sin_cos(self.alpha);
-        (c, s)
+        (self.cos_alpha, self.sin_alpha)
     }
 
     /// Signed distance of `p` from the line.
@@ -167,8 +185,8 @@ impl LineFit {
         } else {
             f32::INFINITY
         };
-        let chi = self.alpha + core::f32::consts::FRAC_PI_2;
-        let (sc, cc) = math::sin_cos(chi);
+        // χ = α + π/2: sin χ = cos α, cos χ = −sin α.
+        let (sc, cc) = (self.cos_alpha, -self.sin_alpha);
         let d = self.centroid.y * sc + self.centroid.x * cc;
         let n = self.n.max(1) as f32;
         let var_rho =

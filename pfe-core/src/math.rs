@@ -4,14 +4,6 @@
 #[cfg(feature = "micromath")]
 mod imp {
     use micromath::F32Ext;
-    pub fn sqrt(x: f32) -> f32 {
-        if x <= 0.0 {
-            return if x == 0.0 { 0.0 } else { f32::NAN };
-        }
-        // micromath's sqrt is a bit-trick estimate; one Newton step brings it to ~1e-7.
-        let y = F32Ext::sqrt(x);
-        0.5 * (y + x / y)
-    }
     pub fn atan2(y: f32, x: f32) -> f32 {
         F32Ext::atan2(y, x)
     }
@@ -25,9 +17,6 @@ mod imp {
 
 #[cfg(not(feature = "micromath"))]
 mod imp {
-    pub fn sqrt(x: f32) -> f32 {
-        libm::sqrtf(x)
-    }
     pub fn atan2(y: f32, x: f32) -> f32 {
         libm::atan2f(y, x)
     }
@@ -39,7 +28,32 @@ mod imp {
     }
 }
 
-pub(crate) use imp::{atan2, cos, sin, sqrt};
+pub(crate) use imp::{atan2, cos, sin};
+
+/// Square root by a bit-level estimate and three Newton steps (within an ulp or two of the
+/// correctly rounded result). libm's `sqrtf` is a bit-by-bit software loop costing a few
+/// hundred instructions on a Cortex-M4F; this is a dozen, with the FPU's divide. The same code
+/// runs on the host, so host and target results stay bit-identical. NaN and negative inputs
+/// give NaN, +inf gives +inf, 0 gives 0.
+pub(crate) fn sqrt(x: f32) -> f32 {
+    if !(x > 0.0) {
+        return if x == 0.0 { 0.0 } else { f32::NAN };
+    }
+    if x == f32::INFINITY {
+        return x;
+    }
+    // Keep the estimate in the normal range: scale tiny inputs by 2^64 (result by 2^-32).
+    let (x, scale) = if x < 1e-30 {
+        (x * 18_446_744_073_709_551_616.0, 1.0 / 4_294_967_296.0)
+    } else {
+        (x, 1.0)
+    };
+    let mut y = f32::from_bits(0x1fbd_1df5 + (x.to_bits() >> 1));
+    for _ in 0..3 {
+        y = 0.5 * (y + x / y);
+    }
+    y * scale
+}
 
 /// `(sin x, cos x)`.
 pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
@@ -60,22 +74,25 @@ pub(crate) fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)
 }
 
-/// Wraps an angle to (-π, π].
-pub(crate) fn wrap_pi(a: f32) -> f32 {
-    use core::f32::consts::PI;
-    let mut a = a;
-    if !a.is_finite() {
-        return a;
-    }
-    // Bounded: inputs are sums of a few angles in (-4π, 4π).
-    for _ in 0..8 {
-        if a > PI {
-            a -= 2.0 * PI;
-        } else if a <= -PI {
-            a += 2.0 * PI;
-        } else {
-            break;
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    #[test]
+    fn sqrt_is_within_two_ulp_everywhere() {
+        let mut x = 1e-38f32;
+        while x < 1e38 {
+            for k in [1.0f32, 1.3, 1.7, 2.9, 7.1] {
+                let v = x * k;
+                let exact = (f64::from(v)).sqrt() as f32;
+                let got = super::sqrt(v);
+                let ulps = (got.to_bits() as i64 - exact.to_bits() as i64).abs();
+                assert!(ulps <= 2, "sqrt({v}) = {got}, exact {exact}");
+            }
+            x *= 3.7;
         }
+        assert_eq!(super::sqrt(0.0), 0.0);
+        assert!(super::sqrt(-1.0).is_nan() && super::sqrt(f32::NAN).is_nan());
+        assert_eq!(super::sqrt(f32::INFINITY), f32::INFINITY);
     }
-    a
 }
