@@ -15,6 +15,10 @@ use firmware::app::ConfigChoice;
 use firmware::output::{Header, Report, ScanStatus};
 
 fn firmware_elf() -> Option<PathBuf> {
+    if std::env::var_os("PFE_SKIP_QEMU").is_some() {
+        eprintln!("SKIPPED e2e_qemu: PFE_SKIP_QEMU is set (cargo xtask test --quick)");
+        return None;
+    }
     if !qemu::have("qemu-system-arm") {
         eprintln!(
             "SKIPPED e2e_qemu: qemu-system-arm is not installed (apt-get install qemu-system-arm)"
