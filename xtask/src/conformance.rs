@@ -25,9 +25,17 @@ pub fn run(args: &[String]) -> Result<()> {
         }
     }
     let mut cmd = util::cargo();
-    cmd.args(["test", "-p", "host-tests", "--test", "emulator_mrpt", "--", "--nocapture"])
-        .args(args)
-        .env("PFE_CONFORMANCE_REQUIRED", "1");
+    cmd.args([
+        "test",
+        "-p",
+        "host-tests",
+        "--test",
+        "emulator_mrpt",
+        "--",
+        "--nocapture",
+    ])
+    .args(args)
+    .env("PFE_CONFORMANCE_REQUIRED", "1");
     util::run(&mut cmd)
 }
 
@@ -38,7 +46,9 @@ fn ensure_apt_package(package: &str) -> Result<()> {
         .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
         .unwrap_or(false);
     if !root || !util::have("apt-get") {
-        bail!("MRPT is missing: install the Debian package `{package}` (apt-get install {package})");
+        bail!(
+            "MRPT is missing: install the Debian package `{package}` (apt-get install {package})"
+        );
     }
     let _ = util::run(Command::new("apt-get").arg("update"));
     util::run(
