@@ -637,7 +637,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 // A circle must beat the line by chi2·σ_r²: not possible when the line's own
                 // residual is smaller. Then the cheap algebraic fit screens the candidates
                 // before the geometric refinement.
-                let algebraic = (sse_l > chi2 * var)
+                let algebraic = (sse_l > chi2 * var && sse_l > 1.5 * var * pts.len() as f32)
                     .then(|| fit_circle(pts, config.circle_method).ok())
                     .flatten()
                     .filter(|c| {
