@@ -5,10 +5,12 @@
 //!
 //! ```text
 //! cargo run --release -p host-tests --example soak -- [--scans N] [--seed S] [--damage P]
-//!     [--transport inproc|pty]
+//!     [--transport inproc|pty|qemu]
 //! ```
 //! `inproc` (default) runs the in-process virtual-time link; `pty` runs the emulator in real
-//! time on a pseudo-terminal and the driver over the tty (500 000 baud; keep N small).
+//! time on a pseudo-terminal and the driver over the tty (500 000 baud; keep N small); `qemu`
+//! runs the real firmware (`pfe-qemu`) under `qemu-system-arm -M mps2-an386` against the
+//! emulator on a pseudo-terminal (see `soak_qemu/mod.rs`).
 //! Every scan is unique: [`TaggedSource`] encodes its sequence number in the first two ranges,
 //! and each delivered scan is compared word for word (and by checksum) with what was sent.
 //! Exits non-zero when the account does not balance; a panic anywhere aborts it.
@@ -30,6 +32,11 @@ use firmware::app::{App, ConfigChoice, RawScan};
 use firmware::lms::driver::{Config, Driver, ScanData};
 use firmware::lms::types::Baud;
 use firmware::output::{self, Feed, FrameDecoder};
+#[path = "demo_host/qemu.rs"]
+mod qemu;
+#[path = "soak_qemu/mod.rs"]
+mod soak_qemu;
+
 use host_tests::emulator::{
     Emulator, EmulatorConfig, Faults, Link, RunLimits, SentScan, SourceKind, TaggedSource,
 };
@@ -48,6 +55,7 @@ pub(crate) struct Args {
     pub(crate) seed: u64,
     pub(crate) damage: f64,
     pub(crate) pty: bool,
+    pub(crate) qemu: bool,
 }
 
 fn args() -> Result<Args> {
@@ -56,6 +64,7 @@ fn args() -> Result<Args> {
         seed: 1,
         damage: 0.01,
         pty: false,
+        qemu: false,
     };
     let v: Vec<String> = std::env::args().skip(1).collect();
     let mut it = v.iter();
@@ -65,7 +74,12 @@ fn args() -> Result<Args> {
             "--scans" => a.scans = val()?.parse()?,
             "--seed" => a.seed = val()?.parse()?,
             "--damage" => a.damage = val()?.parse()?,
-            "--transport" => a.pty = val()? == "pty",
+            "--transport" => match val()?.as_str() {
+                "inproc" => {}
+                "pty" => a.pty = true,
+                "qemu" => a.qemu = true,
+                other => bail!("unknown transport {other} (inproc, pty, qemu)"),
+            },
             other => bail!("unknown argument {other}"),
         }
     }
@@ -74,7 +88,7 @@ fn args() -> Result<Args> {
 
 /// The damage mix: `p` per telegram in total for the damaging faults, plus garbage bytes
 /// between telegrams with probability `p`.
-fn faults(p: f64) -> Faults {
+pub(crate) fn faults(p: f64) -> Faults {
     Faults {
         bit_flip: 0.4 * p,
         drop_byte: 0.25 * p,
@@ -534,7 +548,13 @@ pub(crate) fn pty(a: &Args) -> Result<bool> {
 
 fn main() -> Result<()> {
     let a = args()?;
-    let ok = if a.pty { pty(&a)? } else { inproc(&a)? };
+    let ok = if a.qemu {
+        soak_qemu::run(&a)?
+    } else if a.pty {
+        pty(&a)?
+    } else {
+        inproc(&a)?
+    };
     if !ok {
         bail!("soak: the account does not balance");
     }

@@ -18,6 +18,7 @@ fn short_soak_in_process_balances() {
         seed: 7,
         damage: 0.05,
         pty: false,
+        qemu: false,
     };
     assert!(soak::inproc(&args).unwrap(), "account does not balance");
 }
@@ -29,6 +30,7 @@ fn short_soak_over_a_pty_balances() {
         seed: 8,
         damage: 0.05,
         pty: true,
+        qemu: false,
     };
     assert!(soak::pty(&args).unwrap(), "account does not balance");
 }

@@ -27,7 +27,7 @@ const HELP: &str = "cargo xtask <command> [args]
   size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
   fuzz          every cargo-fuzz target for --seconds S
   no-panic      firmware build whose link fails if a panic path survives
-  soak          long run with 1% damage through emulator, driver and pfe-core (--scans N)
+  soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
 ";
 
 fn main() -> Result<()> {

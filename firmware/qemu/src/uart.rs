@@ -16,6 +16,8 @@ const DATA: usize = 0x0;
 const STATE: usize = 0x4;
 const CTRL: usize = 0x8;
 const BAUDDIV: usize = 0x10;
+/// APB clock of the UARTs on mps2-an386, Hz.
+const APB_HZ: u64 = 25_000_000;
 const TX_FULL: u32 = 1;
 const RX_FULL: u32 = 2;
 const RX_OVERRUN: u32 = 8;
@@ -125,9 +127,26 @@ impl embedded_io::Write for Uart {
     }
 }
 
-/// The baud rate is not emulated by QEMU: accepted and ignored.
+/// QEMU passes BAUDDIV on to a tty backend (`-serial /dev/pts/N`), so the emulated LMS200
+/// on a pty sees the rate the firmware chose; on a TCP backend it has no effect.
 impl firmware::lms::SetBaud for Uart {
-    fn set_baud(&mut self, _baud: u32) -> Result<(), Infallible> {
+    fn set_baud(&mut self, baud: u32) -> Result<(), Infallible> {
+        self.write_reg(BAUDDIV, bauddiv(baud));
         Ok(())
+    }
+}
+
+/// BAUDDIV for `bps` at the 25 MHz APB clock, as QEMU's tty backend reads it: it takes
+/// `clock / BAUDDIV`, scales it by 10/11 and rounds up to the next standard rate, so this is
+/// the smallest divisor whose scaled rate does not exceed `bps` (≥ 16, the hardware minimum).
+pub const fn bauddiv(bps: u32) -> u32 {
+    let bps = if bps == 0 { 1 } else { bps as u64 };
+    let d = (APB_HZ * 10).div_ceil(11 * bps);
+    if d < 16 {
+        16
+    } else if d > u32::MAX as u64 {
+        u32::MAX
+    } else {
+        d as u32
     }
 }

@@ -59,8 +59,15 @@ pub struct Config {
     pub silence_timeout_ms: u32,
     /// Re-initialisations [`Driver::next_scan`] attempts before returning [`Error::Silence`].
     pub max_reinits_per_call: u8,
-    /// Poll interval while waiting for bytes, µs.
+    /// Longest poll interval while waiting for bytes, µs; the driver never waits longer
+    /// than half a character time at the current baud (a 1-byte receive register cannot
+    /// overrun while the driver waits).
     pub poll_interval_us: u32,
+}
+
+/// The poll interval at `baud`: `max_us`, but at most half a 10-bit character time, ≥ 1 µs.
+fn poll_interval(max_us: u32, baud: Baud) -> u32 {
+    max_us.min(5_000_000 / baud.bps()).max(1)
 }
 
 impl Default for Config {
@@ -314,6 +321,8 @@ pub struct Driver<U, D, C> {
     rx: [u8; RX_CHUNK],
     rx_pos: usize,
     rx_len: usize,
+    /// Current poll interval, µs (see [`Config::poll_interval_us`]).
+    idle_us: u32,
     reply: [u8; REPLY_CAP],
     reply_len: usize,
     scan: ScanData,
@@ -345,6 +354,7 @@ where
             rx: [0; RX_CHUNK],
             rx_pos: 0,
             rx_len: 0,
+            idle_us: poll_interval(config.poll_interval_us, Baud::B9600),
             reply: [0; REPLY_CAP],
             reply_len: 0,
             scan: ScanData::default(),
@@ -479,7 +489,7 @@ where
     }
 
     fn idle(&mut self) {
-        self.delay.delay_us(self.config.poll_interval_us.max(1));
+        self.delay.delay_us(self.idle_us);
     }
 
     fn reply_payload(&self) -> &[u8] {
@@ -574,6 +584,7 @@ where
 
     fn set_local_baud(&mut self, baud: Baud) -> Result<(), Error<U::Error>> {
         self.uart.set_baud(baud.bps()).map_err(Error::Io)?;
+        self.idle_us = poll_interval(self.config.poll_interval_us, baud);
         self.decoder.clear();
         self.rx_pos = 0;
         self.rx_len = 0;

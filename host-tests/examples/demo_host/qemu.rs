@@ -300,7 +300,8 @@ pub fn session(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
-    use host_tests::emulator::{serve_tcp_with, Emulator, EmulatorConfig, RunLimits};
+    use host_tests::emulator::serve::{serve_on, Pty};
+    use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits};
     use host_tests::sim::{Scenario, SceneKind};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
@@ -312,7 +313,14 @@ pub fn session(
         ranges: sims.iter().map(|s| s.ranges_mm.clone()).collect(),
         next: 0,
     };
-    let (l0, p0) = listener()?;
+    // The LMS200 on a pty: QEMU's tty backend passes the UART's baud divisor on, so the
+    // emulator sees the firmware's baud switch (a TCP backend would not).
+    let link = std::env::temp_dir().join(format!(
+        "pfe-qemu-lms-{}-{seed}-{scans}",
+        std::process::id()
+    ));
+    let mut pty = Pty::open(&link)?;
+    let slave = pty.slave_path().display().to_string();
     let (l1, p1) = listener()?;
     let stop = Arc::new(AtomicBool::new(false));
     let limits = RunLimits {
@@ -321,11 +329,11 @@ pub fn session(
         ..RunLimits::default()
     };
     let emu = Emulator::new(EmulatorConfig::default(), Box::new(source));
-    let server = std::thread::spawn(move || serve_tcp_with(l0, emu, limits));
+    let server = std::thread::spawn(move || serve_on(&mut pty, emu, limits));
     let n = scans.to_string();
     let cmd = qemu_command(
         elf,
-        &format!("tcp:127.0.0.1:{p0}"),
+        &slave,
         &format!("tcp:127.0.0.1:{p1}"),
         &[&n, config],
         false,

@@ -37,6 +37,14 @@ trait Wire {
     fn host_baud(&mut self) -> Option<u32>;
 }
 
+/// True for the errors by which a peer that closed its end shows up (e.g. QEMU exiting).
+fn peer_gone(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        ErrorKind::ConnectionReset | ErrorKind::ConnectionAborted | ErrorKind::BrokenPipe
+    )
+}
+
 fn run_realtime(emu: &mut Emulator, wire: &mut dyn Wire, limits: &RunLimits) -> Result<()> {
     let start = Instant::now();
     let mut buf = [0u8; 4096];
@@ -50,6 +58,7 @@ fn run_realtime(emu: &mut Emulator, wire: &mut dyn Wire, limits: &RunLimits) -> 
             Ok(Some(n)) if n > 0 => emu.receive(now, hb, buf.get(..n).unwrap_or(&[])),
             Ok(Some(_)) => {}
             Ok(None) => break,
+            Err(e) if peer_gone(&e) => break,
             Err(e) => return Err(e).context("reading from the host"),
         }
         if limits.trace {
@@ -67,7 +76,11 @@ fn run_realtime(emu: &mut Emulator, wire: &mut dyn Wire, limits: &RunLimits) -> 
         emu.take_ready(now, hb, &mut out);
         pending.extend(&out);
         if !pending.is_empty() {
-            let n = wire.write_device(&pending).context("writing to the host")?;
+            let n = match wire.write_device(&pending) {
+                Ok(n) => n,
+                Err(e) if peer_gone(&e) => break,
+                Err(e) => return Err(e).context("writing to the host"),
+            };
             pending.drain(..n.min(pending.len()));
         }
         let done_scans = limits.scans.is_some_and(|n| {

@@ -2,7 +2,8 @@
 //! driver), pfe-core on every scan, one feature frame per scan on UART1
 //! (`firmware::output`), defmt logs on semihosting stdout.
 //!
-//! Semihosting arguments: `pfe <scans> [paper|default]` (`0` or none: run forever). At the
+//! Semihosting arguments: `pfe <scans> [paper|default] [baud]` (`0` or none: run forever;
+//! baud 9600/19200/38400/500000, default 38400). At the
 //! end it sends `Report::Stack` (painted-stack high-water mark) and `Report::Done`, then
 //! exits QEMU with 0; 3 = scanner link failed, 4 = output failed, 101 = panic, 102 = fault.
 #![cfg_attr(target_os = "none", no_std, no_main)]
@@ -17,6 +18,7 @@ mod fw {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_semihosting as _;
     use firmware::app::{App, AppError, ConfigChoice};
+    use firmware::lms::types::Baud;
     use firmware::lms::{Config, Driver};
     use firmware::output::{self, Report};
     use firmware_qemu::sys;
@@ -55,7 +57,15 @@ mod fw {
         app.set_config(choice.config());
         defmt::info!("pfe-qemu: {} scans (0 = forever), config {}", scans, choice);
         let mut out = Uart::new(UART1);
-        let mut lms = Driver::new(Uart::new(UART0), Delay, Clock, Config::default());
+        let baud = sys::arg_u32(2)
+            .and_then(Baud::from_bps)
+            .unwrap_or(Config::default().baud);
+        let mut lms = Driver::new(
+            Uart::new(UART0),
+            Delay,
+            Clock,
+            Config::default().with_baud(baud),
+        );
         let mut failures = 0u32;
         while scans == 0 || app.seq() < scans {
             match app.step(&mut lms, &mut out) {
