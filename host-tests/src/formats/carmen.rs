@@ -60,7 +60,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, check_geometry, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, InputError, Lines, Record};
 
 /// Default maximum range, mm: readings at or beyond it are no return.
 pub const DEFAULT_MAX_RANGE_MM: f32 = 50_000.0;
@@ -159,14 +159,9 @@ impl Reader {
             ));
         }
         let geometry = self.convention.geometry(n, self.r_max);
-        check_geometry(line, &geometry)?;
-        let id = self.count;
+        let record = checked_record(line, self.count, geometry, ranges)?;
         self.count += 1;
-        Ok(Record {
-            id,
-            geometry,
-            ranges_mm: ranges,
-        })
+        Ok(record)
     }
 }
 

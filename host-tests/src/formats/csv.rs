@@ -17,7 +17,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, check_geometry, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, InputError, Lines, Record};
 
 /// Largest valid range, mm (8183 and above are the LMS "no return" codes).
 pub const MAX_RANGE_MM: f32 = 8182.0;
@@ -64,32 +64,20 @@ pub fn parse_line(line: u64, text: &str) -> Result<Record, InputError> {
         angle_step: step_deg.to_radians(),
         r_max: MAX_RANGE_MM,
     };
-    check_geometry(line, &geometry)?;
-    Ok(Record {
-        id,
-        geometry,
-        ranges_mm: ranges,
-    })
+    checked_record(line, id, geometry, ranges)
 }
 
 impl Iterator for Reader {
     type Item = Result<Record, InputError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        loop {
-            let (line, text) = match self.lines.next_line()? {
-                Ok(l) => l,
-                Err(e) => return Some(Err(e)),
-            };
-            let t = text.trim();
-            if t.is_empty() || t.starts_with('#') {
-                continue;
-            }
-            let r = parse_line(line, t);
-            if r.is_err() {
-                self.lines.stop();
-            }
-            return Some(r);
+        let r = match self.lines.next_data_line()? {
+            Ok((line, t)) => parse_line(line, t),
+            Err(e) => Err(e),
+        };
+        if r.is_err() {
+            self.lines.stop();
         }
+        Some(r)
     }
 }

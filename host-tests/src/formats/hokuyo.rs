@@ -18,7 +18,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, check_geometry, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, InputError, Lines, Record};
 
 /// Streaming Hokuyo reader.
 pub struct Reader {
@@ -79,33 +79,21 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
         angle_step: angle_inc,
         r_max: hi,
     };
-    check_geometry(line, &geometry)?;
-    Ok(Record {
-        id,
-        geometry,
-        ranges_mm: ranges,
-    })
+    checked_record(line, id, geometry, ranges)
 }
 
 impl Iterator for Reader {
     type Item = Result<Record, InputError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        loop {
-            let (line, text) = match self.lines.next_line()? {
-                Ok(l) => l,
-                Err(e) => return Some(Err(e)),
-            };
-            let t = text.trim();
-            if t.is_empty() || t.starts_with('#') {
-                continue;
-            }
-            let r = parse_line(line, self.count, t);
-            match r {
-                Ok(_) => self.count += 1,
-                Err(_) => self.lines.stop(),
-            }
-            return Some(r);
+        let r = match self.lines.next_data_line()? {
+            Ok((line, t)) => parse_line(line, self.count, t),
+            Err(e) => Err(e),
+        };
+        match r {
+            Ok(_) => self.count += 1,
+            Err(_) => self.lines.stop(),
         }
+        Some(r)
     }
 }

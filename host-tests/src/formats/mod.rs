@@ -228,10 +228,29 @@ impl Lines {
         }
     }
 
+    /// The next line that is neither blank nor a `#` comment, trimmed, and its number.
+    pub(crate) fn next_data_line(&mut self) -> Option<Result<(u64, &str), InputError>> {
+        loop {
+            match self.next_line()? {
+                Ok((_, text)) if is_blank_or_comment(text) => {}
+                Ok((line, _)) => {
+                    let text = std::str::from_utf8(&self.buf).unwrap_or("").trim();
+                    return Some(Ok((line, text)));
+                }
+                Err(e) => return Some(Err(e)),
+            }
+        }
+    }
+
     /// Stops reading (after an error).
     pub(crate) fn stop(&mut self) {
         self.done = true;
     }
+}
+
+fn is_blank_or_comment(text: &str) -> bool {
+    let t = text.trim();
+    t.is_empty() || t.starts_with('#')
 }
 
 /// Parses a number field, naming it in the error.
@@ -261,8 +280,23 @@ pub(crate) fn check_beams(line: u64, n: usize) -> Result<(), InputError> {
     }
 }
 
+/// The record read from `line`, once its geometry is usable.
+pub(crate) fn checked_record(
+    line: u64,
+    id: u64,
+    geometry: ScanGeometry,
+    ranges_mm: Vec<f32>,
+) -> Result<Record, InputError> {
+    check_geometry(line, &geometry)?;
+    Ok(Record {
+        id,
+        geometry,
+        ranges_mm,
+    })
+}
+
 /// Checks a geometry built from a line.
-pub(crate) fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
+fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
     if g.is_valid() {
         Ok(())
     } else {
