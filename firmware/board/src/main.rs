@@ -1,7 +1,8 @@
 //! The pfe firmware on an STM32F411 board (WeAct "Black Pill" F411CE, 25 MHz crystal):
 //! LMS200 on USART1 (PA9 TX, PA10 RX, through an RS-232/RS-422 transceiver) at the baud the
-//! driver asks for, one feature frame per scan on USART2 (PA2 TX, PA3 RX) at 460800 baud,
-//! defmt logs over RTT, panics reported by panic-probe.
+//! driver asks for, received by interrupt into a ring (`scanner_uart.rs`); one feature frame
+//! per scan on USART2 (PA2 TX, PA3 RX) at 460800 baud, defmt logs over RTT, panics reported
+//! by panic-probe.
 //!
 //! `cargo run --release` in this directory flashes it with probe-rs (see `.cargo/config.toml`).
 #![cfg_attr(target_os = "none", no_std, no_main)]
@@ -10,6 +11,9 @@
 fn main() {
     eprintln!("pfe-board runs on an STM32F411: cd firmware/board && cargo run --release");
 }
+
+#[cfg(target_os = "none")]
+mod scanner_uart;
 
 #[cfg(target_os = "none")]
 mod fw {
@@ -22,12 +26,13 @@ mod fw {
     use stm32f4xx_hal::{
         pac,
         prelude::*,
-        rcc::{Config as RccConfig, Rcc},
-        serial::{self, config::Config as SerialConfig, Serial},
+        rcc::Config as RccConfig,
+        serial::{config::Config as SerialConfig, Serial},
     };
 
+    use crate::scanner_uart::ScannerUart;
     use firmware::app::{App, AppError, ConfigChoice};
-    use firmware::lms::{Clock, Config, Driver, SetBaud};
+    use firmware::lms::{Clock, Config, Driver};
 
     /// System clock, Hz.
     const SYSCLK_HZ: u32 = 96_000_000;
@@ -55,125 +60,6 @@ mod fw {
         fn delay_ns(&mut self, ns: u32) {
             let cycles = u64::from(ns) * u64::from(SYSCLK_HZ / 1_000_000) / 1000;
             cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX).max(1));
-        }
-    }
-
-    /// Errors of the scanner UART.
-    #[derive(Debug, defmt::Format)]
-    enum UartError {
-        /// Receive overrun (a byte was lost).
-        Overrun,
-        /// Framing error (wrong baud rate?).
-        Framing,
-        /// Parity error.
-        Parity,
-        /// Line noise.
-        Noise,
-        /// Another HAL error.
-        Other,
-        /// The requested baud rate cannot be configured.
-        Baud,
-    }
-
-    impl From<serial::Error> for UartError {
-        fn from(e: serial::Error) -> Self {
-            match e {
-                serial::Error::Overrun => UartError::Overrun,
-                serial::Error::FrameFormat => UartError::Framing,
-                serial::Error::Parity => UartError::Parity,
-                serial::Error::Noise => UartError::Noise,
-                _ => UartError::Other,
-            }
-        }
-    }
-
-    impl embedded_io::Error for UartError {
-        fn kind(&self) -> embedded_io::ErrorKind {
-            embedded_io::ErrorKind::Other
-        }
-    }
-
-    /// USART1 as the driver wants it: embedded-io Read/ReadReady/Write and a baud switch
-    /// (release and re-create the HAL serial with the new rate).
-    struct ScannerUart {
-        serial: Option<Serial<pac::USART1>>,
-        rcc: Rcc,
-    }
-
-    impl embedded_io::ErrorType for ScannerUart {
-        type Error = UartError;
-    }
-
-    impl embedded_io::Read for ScannerUart {
-        fn read(&mut self, buf: &mut [u8]) -> Result<usize, UartError> {
-            use embedded_hal_nb::serial::Read;
-            let Some(s) = self.serial.as_mut() else {
-                return Err(UartError::Baud);
-            };
-            let mut n = 0;
-            for slot in buf.iter_mut() {
-                match s.read() {
-                    Ok(b) => {
-                        *slot = b;
-                        n += 1;
-                    }
-                    Err(nb::Error::WouldBlock) if n > 0 => break,
-                    Err(nb::Error::WouldBlock) => {
-                        // Block for the first byte (embedded-io contract).
-                        loop {
-                            match s.read() {
-                                Ok(b) => {
-                                    *slot = b;
-                                    n += 1;
-                                    break;
-                                }
-                                Err(nb::Error::WouldBlock) => {}
-                                Err(nb::Error::Other(e)) => return Err(UartError::from(e)),
-                            }
-                        }
-                    }
-                    Err(nb::Error::Other(e)) => return Err(UartError::from(e)),
-                }
-            }
-            Ok(n)
-        }
-    }
-
-    impl embedded_io::ReadReady for ScannerUart {
-        fn read_ready(&mut self) -> Result<bool, UartError> {
-            Ok(self.serial.as_ref().is_some_and(|s| s.is_rx_not_empty()))
-        }
-    }
-
-    impl embedded_io::Write for ScannerUart {
-        fn write(&mut self, buf: &[u8]) -> Result<usize, UartError> {
-            let s = self.serial.as_mut().ok_or(UartError::Baud)?;
-            // The HAL writes what fits in the data register; wait until all is queued.
-            let mut rest = buf;
-            while !rest.is_empty() {
-                let n = embedded_io::Write::write(s, rest).map_err(UartError::from)?;
-                rest = rest.get(n..).unwrap_or(&[]);
-            }
-            Ok(buf.len())
-        }
-        fn flush(&mut self) -> Result<(), UartError> {
-            let s = self.serial.as_mut().ok_or(UartError::Baud)?;
-            embedded_io::Write::flush(s).map_err(UartError::from)
-        }
-    }
-
-    impl SetBaud for ScannerUart {
-        fn set_baud(&mut self, baud: u32) -> Result<(), UartError> {
-            let s = self.serial.take().ok_or(UartError::Baud)?;
-            let (usart, (tx, rx)) = s.release();
-            let (Some(tx), Some(rx)) = (tx, rx) else {
-                return Err(UartError::Baud);
-            };
-            let cfg = SerialConfig::default().baudrate(baud.bps());
-            self.serial = Some(
-                Serial::new(usart, (tx, rx), cfg, &mut self.rcc).map_err(|_| UartError::Baud)?,
-            );
-            Ok(())
         }
     }
 
@@ -210,9 +96,8 @@ mod fw {
         ) else {
             defmt::panic!("USART1 configuration");
         };
-        let uart = ScannerUart {
-            serial: Some(lms_serial),
-            rcc,
+        let Some(uart) = ScannerUart::new(lms_serial, rcc) else {
+            defmt::panic!("scanner UART started twice");
         };
         let app: &'static mut App<361, 48> = {
             static mut APP: App<361, 48> = App::new(ConfigChoice::Default);
