@@ -261,7 +261,12 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
         .any(|f| f.header == Header::Report(Report::Done { scans }));
     let em = &full.emulator;
     let silences = u32::from(em.scans.len() > SILENCE_AFTER as usize);
-    let want_reinits = em.resets + silences;
+    // Every device reset must lead to a re-initialisation. This run is real time on a shared
+    // machine: a silence can fall inside a reset's re-initialisation (one re-init for both),
+    // and a host scheduling stall of QEMU or the emulator longer than the driver's 1 s silence
+    // timeout is a real silence to the firmware (one more). Those stay rare.
+    let reinits_ok =
+        acc.last.reinits >= em.resets && acc.last.reinits <= em.resets + silences + scans / 100;
 
     println!(
         "\nsoak (QEMU pfe-qemu, mps2-an386, LMS200 on a pty): {:.1} s",
@@ -321,8 +326,15 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
     println!("  sent after the last frame (tail)      {:>9}", acc.tail);
     println!("  firmware counters (last frame)        {:?}", acc.last);
     println!(
-        "    reinits vs emulator resets+silences {:>9} / {} + {}",
-        acc.last.reinits, em.resets, silences
+        "    reinits vs emulator resets+silences {:>9} / {} + {}  ({})",
+        acc.last.reinits,
+        em.resets,
+        silences,
+        if reinits_ok {
+            "ok: at least one per reset, extra ones rare"
+        } else {
+            "NOT OK"
+        }
     );
     println!(
         "    CRC-dropped vs damaged (no re-init) {:>9} / {}",
@@ -360,7 +372,7 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
         && acc.ok_delta_errors == 0
         && acc.phantom_drops == 0
         && acc.unnoticed_damage == 0
-        && acc.last.reinits == want_reinits
+        && reinits_ok
         && acc.sent_damaged > 0
         && w_stack.is_some()
         && w_stack == f_stack;
