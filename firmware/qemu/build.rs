@@ -8,6 +8,7 @@ fn main() {
     let out = PathBuf::from(std::env::var_os("OUT_DIR").unwrap_or_default());
     println!("cargo:rerun-if-changed=memory-qemu.x");
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=../../memory.x");
     println!("cargo:rerun-if-env-changed=PFE_BENCH_SCANS");
     let scans = match std::env::var_os("PFE_BENCH_SCANS") {
         Some(p) => {
@@ -25,8 +26,12 @@ fn main() {
     if std::env::var("CARGO_CFG_TARGET_OS").as_deref() == Ok("none") {
         // A memory.x in OUT_DIR, first on the search path, whatever the current directory.
         let mem = include_str!("memory-qemu.x");
-        if let Err(e) = std::fs::write(out.join("memory.x"), mem) {
-            println!("cargo:warning=cannot write memory.x: {e}");
+        // `pfe-memory.x` for the workspace root's memory.x (read when the linker runs
+        // there), `memory.x` for a link from anywhere else.
+        for name in ["pfe-memory.x", "memory.x"] {
+            if let Err(e) = std::fs::write(out.join(name), mem) {
+                println!("cargo:warning=cannot write {name}: {e}");
+            }
         }
         println!("cargo:rustc-link-search={}", out.display());
         println!("cargo:rustc-link-arg=-Tlink.x");
