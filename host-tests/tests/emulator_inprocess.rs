@@ -64,6 +64,27 @@ fn init_like_sicktoolbox_then_stream_exact_ranges() {
 }
 
 #[test]
+fn device_without_type_and_status_commands_is_still_used() {
+    // A device (or emulator) that answers 3A and 31 with 92 "incorrect command": the driver
+    // goes on without them and, not knowing the variant from the status, sets it with 3B.
+    let cfg = EmulatorConfig {
+        unsupported: vec![0x3A, 0x31],
+        ..tagged()
+    };
+    let (link, mut lms) = setup(cfg, Config::default());
+    lms.init().unwrap();
+    let cmds = link.with_emulator(|e| e.report().commands.clone()).unwrap();
+    assert_eq!(cmds, [0x20, 0x20, 0x20, 0x3A, 0x31, 0x74, 0x3B, 0x20]);
+    assert_eq!(lms.device().variant, Variant::A180_R050);
+    for _ in 0..3 {
+        assert_eq!(lms.next_scan().unwrap().len(), 361);
+    }
+    let sent = link.with_emulator(|e| e.report().scans.clone()).unwrap();
+    assert!(sent.len() >= 3 && sent.iter().all(|s| !s.damaged));
+    assert_eq!(lms.counters().scans, 3);
+}
+
+#[test]
 fn scan_rate_follows_baud_and_variant() {
     for (baud, variant, hz) in [
         (Baud::B38400, Variant::A180_R050, 5.2),

@@ -563,6 +563,16 @@ where
         self.transact_n(cmd, self.config.reply_timeout_ms, self.config.tries)
     }
 
+    /// [`Self::transact`] for a command the device may not implement: `Ok(false)` when it was
+    /// refused (92 or another refusal), NAKed or not answered.
+    fn optional(&mut self, cmd: &Command<'_>) -> Result<bool, Error<U::Error>> {
+        match self.transact(cmd) {
+            Ok(()) => Ok(true),
+            Err(Error::Rejected { .. } | Error::Nak { .. } | Error::Timeout { .. }) => Ok(false),
+            Err(e) => Err(e),
+        }
+    }
+
     fn parsed(&self) -> Option<ParsedReply<'_>> {
         parse_reply(self.reply_payload(), ReplyOptions::default()).ok()
     }
@@ -646,21 +656,25 @@ where
             self.delay.delay_ms(self.config.baud_switch_wait_ms);
             self.mode(&Command::OnRequest)?;
         }
-        // Type string.
-        self.transact(&Command::Type)?;
-        if let Some(Reply::Type(s)) = self.parsed().map(|p| p.reply) {
-            let mut t = [0u8; 20];
-            for (d, s) in t.iter_mut().zip(s) {
-                *d = *s;
+        // Type string and status: informative, so a device that refuses them (92) or does
+        // not answer is still used (the variant then comes from the 3B below).
+        if self.optional(&Command::Type)? {
+            if let Some(Reply::Type(s)) = self.parsed().map(|p| p.reply) {
+                let mut t = [0u8; 20];
+                for (d, s) in t.iter_mut().zip(s) {
+                    *d = *s;
+                }
+                self.device.type_string = t;
             }
-            self.device.type_string = t;
         }
-        // Status.
-        self.transact(&Command::Status)?;
-        if let Some(Reply::Status(s)) = self.parsed().map(|p| p.reply) {
-            let s = StatusInfo::new(s.payload());
-            if let Some(v) = s.variant() {
-                self.device.variant = v;
+        let mut variant_known = false;
+        if self.optional(&Command::Status)? {
+            if let Some(Reply::Status(s)) = self.parsed().map(|p| p.reply) {
+                let s = StatusInfo::new(s.payload());
+                if let Some(v) = s.variant() {
+                    self.device.variant = v;
+                    variant_known = true;
+                }
             }
         }
         // Configuration.
@@ -670,8 +684,8 @@ where
             _ => return Err(Error::BadReply { command: 0x74 }),
         };
         self.apply_block(&block);
-        // Variant.
-        if self.device.variant != self.config.variant {
+        // Variant (also when the status did not say which one is set).
+        if !variant_known || self.device.variant != self.config.variant {
             let v = self.config.variant;
             self.transact(&Command::SetVariant(v))?;
             match self.parsed().map(|p| p.reply) {

@@ -189,6 +189,9 @@ pub struct EmulatorConfig {
     pub faults: Faults,
     /// Built-in scan source (used by [`serve_tcp`] / [`cli`]).
     pub source: SourceKind,
+    /// Command codes this device does not implement: answered `92` (incorrect command), as
+    /// a variant or a simpler emulator might.
+    pub unsupported: Vec<u8>,
 }
 
 impl Default for EmulatorConfig {
@@ -205,6 +208,7 @@ impl Default for EmulatorConfig {
             seed: 1,
             faults: Faults::default(),
             source: SourceKind::Room,
+            unsupported: Vec::new(),
         }
     }
 }
@@ -458,6 +462,10 @@ impl Emulator {
         }
         let t = self.emit(ack_at, &[ACK], None);
         let at = t + self.cfg.reply_delay_us;
+        if self.cfg.unsupported.contains(&cmd) {
+            self.reply(at, &[rcode::INCORRECT]);
+            return;
+        }
         match (cmd, data) {
             (ccode::MODE, [m, pw @ ..]) => {
                 let m = *m;
