@@ -261,10 +261,10 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
         .any(|f| f.header == Header::Report(Report::Done { scans }));
     let em = &full.emulator;
     let silences = u32::from(em.scans.len() > SILENCE_AFTER as usize);
-    // Every device reset must lead to a re-initialisation. This run is real time on a shared
-    // machine: a silence can fall inside a reset's re-initialisation (one re-init for both),
-    // and a host scheduling stall of QEMU or the emulator longer than the driver's 1 s silence
-    // timeout is a real silence to the firmware (one more). Those stay rare.
+    // Every device reset must lead to a re-initialisation. How many it takes depends on
+    // real-time timing: a re-init whose probe falls into the device's deaf time after a reset
+    // or into the silence fails and is retried (and a silence can fall inside a reset's
+    // re-init, one for both). Each costs a few telegrams; they stay rare.
     let reinits_ok =
         acc.last.reinits >= em.resets && acc.last.reinits <= em.resets + silences + scans / 100;
 
