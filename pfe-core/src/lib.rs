@@ -6,7 +6,7 @@
 //!
 //! Data path (one module per step): [`scan`] (readings, [`correction`], [`deskew`]) →
 //! [`predict`] (prediction point and threshold) → [`extract`] (mark, check step, segments,
-//! typing) → [`line`] and [`circle`] fits with covariance → [`feature`].
+//! typing) → [`mod@line`] and [`circle`] fits with covariance → [`feature`].
 //!
 //! ```
 //! use pfe_core::{Config, Extractor, Scan, ScanGeometry};

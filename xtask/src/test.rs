@@ -1,7 +1,7 @@
 //! `cargo xtask test`: everything CI checks, in order, stopping at the first failure.
 //!
 //! Installs what it needs (the thumbv7em target; as root, Debian's qemu-system-arm, and
-//! libmrpt-hwdrivers-dev for the conformance step), then: formatting, clippy, the no_std
+//! libmrpt-hwdrivers-dev for the conformance step), then: formatting, clippy, rustdoc, the no_std
 //! builds, every host test (unit, integration, doc, the end-to-end QEMU and emulator runs),
 //! firmware sizes and their budgets, MRPT conformance, the no-panic build, fuzzing (60 s per
 //! target under `CI`, 10 s otherwise) and a short soak. `--quick` stops after the host tests
@@ -31,6 +31,20 @@ pub fn run_all(quick: bool) -> Result<()> {
             "-D",
             "warnings",
         ]))
+    })?;
+    step("rustdoc (broken links are errors)", || {
+        sh(cargo()
+            .args([
+                "doc",
+                "--no-deps",
+                "-p",
+                "pfe-core",
+                "-p",
+                "firmware",
+                "-p",
+                "host-tests",
+            ])
+            .env("RUSTDOCFLAGS", "-D warnings"))
     })?;
     step(
         "no_std builds of pfe-core (libm, micromath) and the firmware library",

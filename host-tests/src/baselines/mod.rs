@@ -7,7 +7,7 @@
 //!   Núñez et al. (2008), the method the PFE paper measures itself against.
 //!
 //! Both return pfe-core's [`Feature`] with the same covariances as PFE (range noise propagated
-//! along each beam: [`LineFit::covariance_range`], [`circle_covariance_range`]). All geometry
+//! along each beam: [`LineFit::covariance_range`], [`circle_covariance_range`](pfe_core::circle_covariance_range)). All geometry
 //! (fits, covariances, points) is pfe-core's; this module only segments.
 //!
 //! Conventions shared with PFE: indices count every beam, valid or not; a reading is a point

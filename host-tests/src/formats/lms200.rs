@@ -128,7 +128,7 @@ pub struct Summary {
 }
 
 /// Streaming reader of the good 0xB0 telegrams of a capture, built on the firmware's
-/// [`Decoder`](firmware::lms::Decoder) (resynchronising, CRC-checked). Value words are masked
+/// [`Decoder`] (resynchronising, CRC-checked). Value words are masked
 /// to their 13 range bits (measuring mode 0, the 8 m / 80 m modes); a B0 payload one byte
 /// longer than its count word says is read as carrying the real-time scan index.
 ///
