@@ -92,7 +92,8 @@ pub fn predict_beam(
     let dn = dx * nx + dy * ny;
     let dt = dx * tx + dy * ty;
     let (wx, wy) = (c.x - origin.x, c.y - origin.y);
-    if math::abs(dn) < 1e-6 * math::sqrt(t2) {
+    // |dn| < 1e-6·|t| without a second square root (each costs ~50 instructions on the M4F).
+    if dn * dn < 1e-12 * t2 {
         return Some(Prediction {
             error: f32::INFINITY,
             signed: f32::INFINITY,
