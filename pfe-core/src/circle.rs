@@ -192,49 +192,64 @@ pub fn refine_circle(
     initial: Circle,
     iterations: usize,
 ) -> Result<Circle, FitError> {
+    refine_circle_sse(points, initial, iterations).map(|(c, _)| c)
+}
+
+/// [`refine_circle`] and the refined circle's [`geometric_sse`].
+pub(crate) fn refine_circle_sse(
+    points: &[Point],
+    initial: Circle,
+    iterations: usize,
+) -> Result<(Circle, f32), FitError> {
     if points.len() < 3 {
         return Err(FitError::TooFewPoints {
             got: points.len(),
             need: 3,
         });
     }
+    refine_from(
+        points,
+        initial,
+        NormalEquations::at(points, &initial),
+        iterations,
+    )
+}
+
+/// [`refine_circle_sse`] from `initial` whose normal equations `eq` are already known.
+pub(crate) fn refine_from(
+    points: &[Point],
+    initial: Circle,
+    mut eq: NormalEquations,
+    iterations: usize,
+) -> Result<(Circle, f32), FitError> {
     let mut best = initial;
-    let mut best_sse = geometric_sse(points, &best);
-    if !best_sse.is_finite() {
+    // One pass per candidate gives its SSE and, for the next step, its normal equations.
+    if !eq.sse.is_finite() {
         return Err(FitError::NonFinite);
     }
     let mut lambda = 1e-3f32;
     for _ in 0..iterations {
-        let mut jtj = [[0.0f32; 3]; 3];
-        let mut jtr = [0.0f32; 3];
-        for p in points {
-            let (dx, dy) = (p.x - best.center.x, p.y - best.center.y);
-            let d = math::hypot(dx, dy);
-            if !(d > 0.0) {
-                continue;
-            }
-            let j = [-dx / d, -dy / d, -1.0];
-            let r = d - best.radius;
-            accumulate(&mut jtj, &mut jtr, &j, r);
-        }
         let mut improved = false;
         for _ in 0..4 {
-            let mut a = jtj;
+            let mut a = eq.jtj;
             a[0][0] *= 1.0 + lambda;
             a[1][1] *= 1.0 + lambda;
             a[2][2] *= 1.0 + lambda;
-            let Some(step) = solve3(&a, &jtr) else { break };
+            let Some(step) = solve3(&a, &eq.jtr) else {
+                break;
+            };
             let cand = Circle {
                 center: Point::new(best.center.x - step[0], best.center.y - step[1]),
                 radius: best.radius - step[2],
             };
-            let sse = geometric_sse(points, &cand);
-            if sse.is_finite() && sse < best_sse && cand.radius > 0.0 {
-                let gain = best_sse - sse;
+            let at_cand = NormalEquations::at(points, &cand);
+            let sse = at_cand.sse;
+            if sse.is_finite() && sse < eq.sse && cand.radius > 0.0 {
+                let gain = eq.sse - sse;
                 best = cand;
-                best_sse = sse;
+                eq = at_cand;
                 lambda = (lambda * 0.3).max(1e-7);
-                improved = gain > best_sse * 1e-7;
+                improved = gain > sse * 1e-7;
                 break;
             }
             lambda *= 10.0;
@@ -243,7 +258,52 @@ pub fn refine_circle(
             break;
         }
     }
-    Ok(best)
+    Ok((best, eq.sse))
+}
+
+/// Gauss–Newton normal equations `JᵀJ`, `Jᵀr` of the geometric residuals `|P_i − c| − R` at
+/// one circle, with their sum of squares.
+pub(crate) struct NormalEquations {
+    jtj: [[f32; 3]; 3],
+    jtr: [f32; 3],
+    /// `Σ (|P_i − c| − R)²` ([`geometric_sse`]).
+    pub(crate) sse: f32,
+}
+
+impl NormalEquations {
+    pub(crate) fn at(points: &[Point], c: &Circle) -> Self {
+        let mut eq = NormalEquations {
+            jtj: [[0.0; 3]; 3],
+            jtr: [0.0; 3],
+            sse: 0.0,
+        };
+        let (mut s00, mut s01, mut s11, mut s0, mut s1, mut count) =
+            (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for p in points {
+            let (dx, dy) = (p.x - c.center.x, p.y - c.center.y);
+            let d = math::hypot(dx, dy);
+            let r = d - c.radius;
+            eq.sse += r * r;
+            if !(d > 0.0) {
+                continue;
+            }
+            // J_i = (−dx/d, −dy/d, −1): the products with −1 are exact negations, and JᵀJ is
+            // symmetric, so five sums and a count give all nine entries (the same values
+            // `accumulate` would sum, in the same order).
+            let (a, b) = (-dx / d, -dy / d);
+            s00 += a * a;
+            s01 += a * b;
+            s11 += b * b;
+            s0 -= a;
+            s1 -= b;
+            count += 1.0;
+            eq.jtr[0] += a * r;
+            eq.jtr[1] += b * r;
+            eq.jtr[2] -= r;
+        }
+        eq.jtj = [[s00, s01, s0], [s01, s11, s1], [s0, s1, count]];
+        eq
+    }
 }
 
 fn accumulate(jtj: &mut [[f32; 3]; 3], jtr: &mut [f32; 3], j: &[f32; 3], r: f32) {

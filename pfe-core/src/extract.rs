@@ -4,12 +4,12 @@
 
 use heapless::Vec;
 
-use crate::circle::{fit_circle, geometric_sse, refine_circle, Circle};
+use crate::circle::{fit_circle, refine_circle, refine_from, Circle, NormalEquations};
 use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{circle_feature, line_feature, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
-use crate::line::fit_line;
+use crate::line::{fit_axis, fit_line};
 use crate::math;
 use crate::predict::{paper_threshold, predict_beam, Prediction};
 use crate::scan::Scan;
@@ -393,7 +393,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         for j in lo..=(b + 1).min(end.saturating_sub(NP)) {
             let left = self.points.get(j.saturating_sub(REFINE_SPAN).max(old)..j);
             let right = self.points.get(j..end.min(j + REFINE_SPAN));
-            let sse = match (left.map(fit_line), right.map(fit_line)) {
+            let sse = match (left.map(fit_axis), right.map(fit_axis)) {
                 (Some(Ok(l)), Some(Ok(r))) => l.sse() + r.sse(),
                 _ => continue,
             };
@@ -468,15 +468,19 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// radius of at most `arc_max_radius`.
     fn arc_fit(&self, from: usize, to: usize, m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
         let pts = self.points.get(from..to)?;
-        let line = fit_line(pts).ok()?;
+        let line = fit_axis(pts).ok()?;
         let circle = fit_circle(pts, crate::circle::CircleMethod::Kasa).ok()?;
         let tol = m.k * sigma_r + m.floor;
-        let fits = pts
-            .iter()
-            .all(|p| math::abs(p.distance(&circle.center) - circle.radius) <= tol);
+        // One pass: the largest radial residual and their sum of squares (`geometric_sse`).
+        let (mut worst, mut sse) = (0.0f32, 0.0f32);
+        for p in pts {
+            let r = p.distance(&circle.center) - circle.radius;
+            sse += r * r;
+            worst = worst.max(math::abs(r));
+        }
+        let fits = worst <= tol;
         // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
         // corner does not.
-        let sse = geometric_sse(pts, &circle);
         let var = sigma_r * sigma_r;
         (fits
             && circle.radius <= m.arc_max_radius
@@ -527,7 +531,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             let tol = m.k * sigma_r + m.floor;
             let consistent = match (self.points.get(b + 1..=k), self.points.get(b)) {
                 (Some(rest), Some(p)) => {
-                    fit_line(rest).is_ok_and(|l| math::abs(l.signed_distance(p)) <= tol)
+                    fit_axis(rest).is_ok_and(|l| math::abs(l.signed_distance(p)) <= tol)
                 }
                 _ => true,
             };
@@ -640,26 +644,25 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 let algebraic = (sse_l > chi2 * var && sse_l > 1.5 * var * pts.len() as f32)
                     .then(|| fit_circle(pts, config.circle_method).ok())
                     .flatten()
-                    .filter(|c| {
-                        c.radius <= 1.5 * max_radius && geometric_sse(pts, c) < 2.0 * ratio * sse_l
-                    });
+                    .map(|c| (c, NormalEquations::at(pts, &c)))
+                    .filter(|(c, eq)| c.radius <= 1.5 * max_radius && eq.sse < 2.0 * ratio * sse_l);
                 algebraic
-                    .and_then(|c| {
+                    .and_then(|(c, eq)| {
                         if config.circle_refine > 0 {
-                            refine_circle(pts, c, config.circle_refine).ok()
+                            refine_from(pts, c, eq, config.circle_refine).ok()
                         } else {
-                            Some(c)
+                            Some((c, eq.sse))
                         }
                     })
-                    .filter(|c| {
-                        let sse_c = geometric_sse(pts, c);
+                    .filter(|(c, sse_c)| {
                         // The circle must also explain the points (RMS residual ≤ 2σ_r): an
                         // undetected corner fits neither model and stays a line.
                         c.radius <= max_radius
                             && sse_l - sse_c > chi2 * var
-                            && sse_c < ratio * sse_l
-                            && sse_c <= 4.0 * var * pts.len() as f32
+                            && *sse_c < ratio * sse_l
+                            && *sse_c <= 4.0 * var * pts.len() as f32
                     })
+                    .map(|(c, _)| c)
             }
         };
         match as_circle {

@@ -58,6 +58,57 @@ pub fn fit_line_iter<I>(points: I) -> Result<LineFit, FitError>
 where
     I: Iterator<Item = Point> + Clone,
 {
+    LineFit::from_axis(fit_axis_iter(points)?)
+}
+
+/// The line from centred moments: the normal is the minor principal axis (no trigonometry
+/// but one `atan2` for α).
+pub fn from_moments(
+    n: usize,
+    centroid: Point,
+    sxx: f32,
+    syy: f32,
+    sxy: f32,
+) -> Result<LineFit, FitError> {
+    LineFit::from_axis(axis_from_moments(n, centroid, sxx, syy, sxy)?)
+}
+
+/// A fitted line without its angle α (no `atan2`): what the extractor's internal tests
+/// (boundary refinement, arc test, boundary consistency) need.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LineAxis {
+    n: usize,
+    centroid: Point,
+    /// Unit normal, pointing away from the origin.
+    nx: f32,
+    ny: f32,
+    rho: f32,
+    sxx: f32,
+    syy: f32,
+    sxy: f32,
+}
+
+impl LineAxis {
+    /// Sum of squared orthogonal residuals, from the moments.
+    pub(crate) fn sse(&self) -> f32 {
+        residual_sse(self.sxx, self.syy, self.sxy, self.nx, self.ny)
+    }
+
+    /// Signed distance of `p` from the line.
+    pub(crate) fn signed_distance(&self, p: &Point) -> f32 {
+        p.x * self.nx + p.y * self.ny - self.rho
+    }
+}
+
+/// [`fit_line`] without α.
+pub(crate) fn fit_axis(points: &[Point]) -> Result<LineAxis, FitError> {
+    fit_axis_iter(points.iter().copied())
+}
+
+fn fit_axis_iter<I>(points: I) -> Result<LineAxis, FitError>
+where
+    I: Iterator<Item = Point> + Clone,
+{
     let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
     for p in points.clone() {
         if !p.is_valid() {
@@ -78,18 +129,16 @@ where
         syy += dy * dy;
         sxy += dx * dy;
     }
-    from_moments(n, c, sxx, syy, sxy)
+    axis_from_moments(n, c, sxx, syy, sxy)
 }
 
-/// The line from centred moments: the normal is the minor principal axis (no trigonometry
-/// but one `atan2` for α).
-pub fn from_moments(
+fn axis_from_moments(
     n: usize,
     centroid: Point,
     sxx: f32,
     syy: f32,
     sxy: f32,
-) -> Result<LineFit, FitError> {
+) -> Result<LineAxis, FitError> {
     let spread = sxx + syy;
     if !(spread > 0.0) || !spread.is_finite() {
         return Err(FitError::Degenerate);
@@ -113,24 +162,50 @@ pub fn from_moments(
         nx = -nx;
         ny = -ny;
     }
-    let alpha = math::atan2(ny, nx);
-    if !alpha.is_finite() || !rho.is_finite() {
+    if !rho.is_finite() {
         return Err(FitError::Degenerate);
     }
-    Ok(LineFit {
-        alpha,
-        rho,
-        cos_alpha: nx,
-        sin_alpha: ny,
+    Ok(LineAxis {
         n,
         centroid,
+        nx,
+        ny,
+        rho,
         sxx,
         syy,
         sxy,
     })
 }
 
+/// `Σ (residual)²` of centred moments about the line with unit normal `(c, s)`.
+fn residual_sse(sxx: f32, syy: f32, sxy: f32, c: f32, s: f32) -> f32 {
+    let v = sxx * c * c + syy * s * s + 2.0 * sxy * s * c;
+    if v > 0.0 {
+        v
+    } else {
+        0.0
+    }
+}
+
 impl LineFit {
+    fn from_axis(a: LineAxis) -> Result<LineFit, FitError> {
+        let alpha = math::atan2(a.ny, a.nx);
+        if !alpha.is_finite() {
+            return Err(FitError::Degenerate);
+        }
+        Ok(LineFit {
+            alpha,
+            rho: a.rho,
+            cos_alpha: a.nx,
+            sin_alpha: a.ny,
+            n: a.n,
+            centroid: a.centroid,
+            sxx: a.sxx,
+            syy: a.syy,
+            sxy: a.sxy,
+        })
+    }
+
     /// Unit normal (cos α, sin α).
     pub fn normal(&self) -> (f32, f32) {
         (self.cos_alpha, self.sin_alpha)
@@ -151,13 +226,7 @@ impl LineFit {
 
     /// Sum of squared orthogonal residuals, from the moments (no pass over the points).
     pub fn sse(&self) -> f32 {
-        let (c, s) = self.normal();
-        let v = self.sxx * c * c + self.syy * s * s + 2.0 * self.sxy * s * c;
-        if v > 0.0 {
-            v
-        } else {
-            0.0
-        }
+        residual_sse(self.sxx, self.syy, self.sxy, self.cos_alpha, self.sin_alpha)
     }
 
     /// Mean absolute distance of `points` from the line (the paper's d̄).
@@ -211,14 +280,11 @@ impl LineFit {
         let (tx, ty) = (-ns, nc);
         let (mut suu, mut suu_s, mut su_s, mut s_s) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for p in points {
+            // cos²β = (b·n)² / |b|², without a square root.
             let (bx, by) = (p.x - origin.x, p.y - origin.y);
-            let bn = math::hypot(bx, by);
-            let cosb = if bn > 0.0 {
-                (bx * nc + by * ns) / bn
-            } else {
-                1.0
-            };
-            let var_i = sigma_r * sigma_r * cosb * cosb;
+            let (bn2, bdot) = (bx * bx + by * by, bx * nc + by * ns);
+            let cos2b = if bn2 > 0.0 { bdot * bdot / bn2 } else { 1.0 };
+            let var_i = sigma_r * sigma_r * cos2b;
             let u = (p.x - self.centroid.x) * tx + (p.y - self.centroid.y) * ty;
             suu += u * u;
             suu_s += u * u * var_i;

@@ -19,7 +19,8 @@ pub fn target_dir() -> std::path::PathBuf {
 }
 
 /// The firmware's optimisation level: the workspace release profile (LTO, one codegen unit)
-/// with `opt-level = "s"`, what the flash budget is measured on.
+/// with `opt-level = "s"` (pfe-core at 3, see the workspace Cargo.toml), what the flash
+/// budget is measured on.
 pub const FIRMWARE_OPT_LEVEL: &str = "s";
 
 /// Builds a firmware-qemu binary in release for thumbv7em into `dir`; returns the ELF.

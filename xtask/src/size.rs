@@ -1,4 +1,4 @@
-//! `cargo xtask size`: flash and RAM of both firmware binaries (release, opt-level s) and the
+//! `cargo xtask size`: flash and RAM of both firmware binaries (release, opt-level s, pfe-core 3) and the
 //! stack high-water mark measured under QEMU (cortex-m-rt `paint-stack`, reported by the
 //! firmware in its output frames after 20 scans from the emulated LMS200).
 //!
@@ -158,7 +158,7 @@ pub fn run(args: &[String]) -> Result<()> {
     };
     let (equal, compared) = (field("equal="), field("compared="));
     let mut md = format!(
-        "Release profile with `opt-level = \"{FIRMWARE_OPT_LEVEL}\"` (LTO, 1 codegen unit), \
+        "Release profile with `opt-level = \"{FIRMWARE_OPT_LEVEL}\"` (pfe-core at 3; LTO, 1 codegen unit), \
          `Extractor<361, 48>` in a static. Flash = vector table + text + rodata + data; \
          static RAM = data + bss + uninit. Stack: painted-stack high-water mark after 20 scans \
          under QEMU against the emulated LMS200 (same driver, app and extractor code on the \
