@@ -20,6 +20,11 @@ const VALID: u8 = 1;
 const START: u8 = 2;
 /// Last point of a segment (the paired mark point).
 const END: u8 = 4;
+/// A segment start caused by a jump (never inside one surface, so never merged).
+const JUMP: u8 = 8;
+/// Sizes of the union of two neighbouring segments tested for being one arc after
+/// segmentation (fewer points do not show an arc above the noise).
+const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
 /// Points of the new segment seen before its boundary is refined.
 const REFINE_AFTER: usize = 4;
 /// Points each side used to refine a boundary.
@@ -354,6 +359,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             };
             if let Some(b) = boundary {
                 self.set(b, START);
+                if jump {
+                    self.set(b, JUMP);
+                }
                 seg = Some(b);
                 pending = (!jump).then_some((b, s));
                 joinable = (!jump).then_some((b, s));
@@ -575,8 +583,16 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// §3.4–3.5: every segment's last point is paired with the next segment's first; segments
-    /// of at least `min_points` points are typed and fitted.
+    /// of at least `min_points` points are typed and fitted. In the default mode, neighbouring
+    /// segments (no gap, no jump between them) that together are one arc are merged first: a
+    /// small or distant pillar, seen over a few beams at growing incidence, can fail the line
+    /// prediction every few points before an arc window has formed.
     fn build_features(&mut self, config: &Config) {
+        let merge = match config.threshold {
+            Threshold::Noise(m) if m.arc_window >= 5 => Some(m),
+            _ => None,
+        };
+        let mut pending: Option<(usize, usize)> = None;
         let mut k = 0usize;
         while k < self.len {
             if !self.valid(k) {
@@ -588,22 +604,44 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             while e + 1 < self.len && self.flag(e + 1) & (VALID | START) == VALID {
                 e += 1;
             }
-            self.set(s, START);
-            self.set(e, END);
-            self.stats.segments += 1;
-            if e + 1 - s >= config.min_points {
-                match self.fit_segment(s, e, config) {
-                    Some(f) => {
-                        if self.features.push(f).is_err() {
-                            self.stats.dropped += 1;
-                        }
-                    }
-                    None => self.stats.degenerate += 1,
-                }
-            } else {
-                self.stats.short_segments += 1;
-            }
             k = e + 1;
+            if let (Some((ps, pe)), Some(m)) = (pending, merge) {
+                if pe + 1 == s
+                    && self.flag(s) & JUMP == 0
+                    && MERGE_SIZES.contains(&(e + 1 - ps))
+                    && self.arc_fit(ps, e + 1, &m, config.sigma_r).is_some()
+                {
+                    self.clear(s, START);
+                    pending = Some((ps, e));
+                    continue;
+                }
+            }
+            if let Some((ps, pe)) = pending {
+                self.emit_segment(ps, pe, config);
+            }
+            pending = Some((s, e));
+        }
+        if let Some((ps, pe)) = pending {
+            self.emit_segment(ps, pe, config);
+        }
+    }
+
+    /// Marks, types and fits (when long enough) the segment `s..=e`.
+    fn emit_segment(&mut self, s: usize, e: usize, config: &Config) {
+        self.set(s, START);
+        self.set(e, END);
+        self.stats.segments += 1;
+        if e + 1 - s >= config.min_points {
+            match self.fit_segment(s, e, config) {
+                Some(f) => {
+                    if self.features.push(f).is_err() {
+                        self.stats.dropped += 1;
+                    }
+                }
+                None => self.stats.degenerate += 1,
+            }
+        } else {
+            self.stats.short_segments += 1;
         }
     }
 
