@@ -53,6 +53,11 @@ struct Args {
     /// Print machine-readable JSON instead of the table.
     #[arg(long)]
     json: bool,
+    /// Also time every method against the number of beams (0.25° scans cut to their first n
+    /// beams) and write the tables into the `host` section of this Markdown file, with the
+    /// plot next to it (`perf-scaling.svg`).
+    #[arg(long)]
+    md: Option<PathBuf>,
 }
 
 /// One scan to extract.
@@ -316,5 +321,147 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
     } else {
         print!("{}", table(&report));
     }
+    if let Some(md) = &args.md {
+        let sweep = scaling(args.sim_scans.clamp(1, 50), args.seed, args.reps);
+        write_markdown(md, &report, &sweep)?;
+        eprintln!("wrote {} and perf-scaling.svg next to it", md.display());
+    }
     Ok(())
+}
+
+/// Beam counts of the scaling sweep.
+pub const SCALING_BEAMS: [usize; 8] = [91, 181, 271, 361, 451, 541, 631, 721];
+
+/// Mean µs per scan of every method at each of [`SCALING_BEAMS`]: `n` simulated mixed scans at
+/// 0.25° (721 beams), each cut to its first `beams` beams (a narrower field of view), timed as
+/// [`time_methods`] does.
+pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64)>)> {
+    let full: Vec<BenchScan> = (0..n as u64)
+        .map(|k| {
+            let mut sc = Scenario::new(SceneKind::Mixed, seed.wrapping_add(k));
+            sc.resolution = crate::sim::Resolution::Quarter;
+            let s = sc.simulate();
+            BenchScan {
+                geometry: s.geometry,
+                ranges_mm: s.ranges_mm,
+            }
+        })
+        .collect();
+    let mut methods = methods();
+    SCALING_BEAMS
+        .iter()
+        .map(|&beams| {
+            let cut: Vec<BenchScan> = full
+                .iter()
+                .map(|s| BenchScan {
+                    geometry: s.geometry,
+                    ranges_mm: s.ranges_mm.iter().take(beams).copied().collect(),
+                })
+                .collect();
+            let d = time_methods("scaling", &cut, &mut methods, reps);
+            let per_scan = d
+                .methods
+                .iter()
+                .map(|m| (m.method.clone(), m.ns_per_point * beams as f64 / 1e3))
+                .collect();
+            (beams, per_scan)
+        })
+        .collect()
+}
+
+/// Writes the `host` section of `md` (the report and the scaling sweep) and
+/// `perf-scaling.svg` next to it.
+fn write_markdown(
+    md: &Path,
+    report: &BenchReport,
+    sweep: &[(usize, Vec<(String, f64)>)],
+) -> anyhow::Result<()> {
+    use std::fmt::Write as _;
+    let mut body = format!(
+        "Reproduce: `cargo run --release -p host-tests --bin pfe -- bench --md docs/PERFORMANCE.md`\n\n\
+         Host CPU: {}, one thread, release build, `std::time::Instant`; median of {} interleaved \
+         passes per method (the machine is shared: compare methods within one run). \
+         **× pfe-default** = time(method) / time(pfe-default): above 1, pfe-default is faster.\n",
+        cpu_name(),
+        report.reps
+    );
+    for d in &report.datasets {
+        let _ = write!(
+            body,
+            "\n### {} ({} scans, {} beams)\n\n| method | ns/beam | scans/s | features/scan | × pfe-default |\n|---|---:|---:|---:|---:|\n",
+            d.dataset, d.scans, d.points
+        );
+        for m in &d.methods {
+            let _ = writeln!(
+                body,
+                "| {} | {:.1} | {:.0} | {:.2} | {:.2} |",
+                m.method,
+                m.ns_per_point,
+                m.scans_per_s,
+                m.features_per_scan,
+                m.slowdown_vs_pfe_default
+            );
+        }
+    }
+    let names: Vec<String> = sweep
+        .first()
+        .map(|(_, v)| v.iter().map(|(n, _)| n.clone()).collect())
+        .unwrap_or_default();
+    let _ = write!(
+        body,
+        "\n### Time per scan against the number of beams\n\n\
+         Simulated mixed scans at 0.25° cut to their first n beams (µs per scan):\n\n| beams | {} |\n|---:|{}\n",
+        names.join(" | "),
+        "---:|".repeat(names.len())
+    );
+    for (beams, row) in sweep {
+        let cells: Vec<String> = row.iter().map(|(_, t)| format!("{t:.1}")).collect();
+        let _ = writeln!(body, "| {beams} | {} |", cells.join(" | "));
+    }
+    body.push_str("\n![time per scan vs beams](perf-scaling.svg)\n");
+    let xs: Vec<f64> = sweep.iter().map(|(b, _)| *b as f64).collect();
+    let curves: Vec<(String, Vec<f64>)> = names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| {
+            let ys = sweep
+                .iter()
+                .map(|(_, row)| row.get(i).map_or(f64::NAN, |(_, t)| *t))
+                .collect();
+            (n.clone(), ys)
+        })
+        .collect();
+    let svg = crate::eval::svg::line_chart(
+        "Time per scan (µs, host) against beams per scan",
+        "beams per scan",
+        &xs,
+        &curves,
+    );
+    let dir = md.parent().unwrap_or(Path::new("."));
+    std::fs::write(dir.join("perf-scaling.svg"), svg).context("writing perf-scaling.svg")?;
+    let old = std::fs::read_to_string(md).unwrap_or_default();
+    let (start, end) = ("<!-- host:start -->", "<!-- host:end -->");
+    let section = format!("{start}\n## `pfe bench`\n\n{body}{end}");
+    let new = match (old.find(start), old.find(end)) {
+        (Some(a), Some(b)) if b > a => format!(
+            "{}{section}{}",
+            old.get(..a).unwrap_or(""),
+            old.get(b + end.len()..).unwrap_or("")
+        ),
+        _ => format!("{}\n\n{section}\n", old.trim_end()),
+    };
+    std::fs::write(md, new).with_context(|| format!("writing {}", md.display()))
+}
+
+/// The host CPU's model name (Linux), or "unknown".
+fn cpu_name() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|v| v.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".to_string())
 }

@@ -309,6 +309,34 @@ pub fn time_per_scan(ev: &Evaluation) -> String {
     out
 }
 
+/// A single line chart (`title`, x axis `xlabel` at `xs`) of named curves, y from 0.
+pub fn line_chart(title: &str, xlabel: &str, xs: &[f64], curves: &[(String, Vec<f64>)]) -> String {
+    let series: Vec<Series> = curves
+        .iter()
+        .enumerate()
+        .map(|(i, (name, ys))| Series {
+            name: name.clone(),
+            color: COLORS[i % COLORS.len()],
+            dashed: false,
+            ys: ys.clone(),
+        })
+        .collect();
+    let (w, h) = (640.0, 340.0);
+    let mut out = svg_open(w, h);
+    panel(
+        &mut out,
+        (0.0, 0.0),
+        (w - 150.0, h),
+        title,
+        xlabel,
+        xs,
+        &series,
+    );
+    legend(&mut out, w - 140.0, 40.0, &series);
+    out.push_str("</svg>\n");
+    out
+}
+
 /// One scan of each concrete scene kind side by side ([`crate::sim::SimScan::to_svg`]).
 pub fn scene_gallery(seed: u64, sigma: f32) -> String {
     use crate::sim::{Scenario, SceneKind};
