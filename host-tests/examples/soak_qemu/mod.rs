@@ -6,7 +6,10 @@
 //! Every frame the firmware sends must decode with a valid CRC; each scan frame is matched, in
 //! order, to the B0 telegram whose features pfe-core on the host computes bit-identically; the
 //! counters in the frames must agree with what the emulator sent and damaged; and the stack
-//! high-water mark must be the same after a short run (warm-up) and the full run.
+//! high-water mark of the full run may exceed that of a short run (warm-up) by at most
+//! [`STACK_SLACK`]: with no heap and no recursion the stack cannot grow with the number of
+//! scans, but a rare path (a re-initialisation interrupted by damage, an unusual scan) can be
+//! taken first after the warm-up and go a frame or two deeper; a leak would not stop there.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -22,8 +25,10 @@ use host_tests::sim::{Scenario, SceneKind};
 
 use super::qemu;
 
-/// Scans in the warm-up run whose stack high-water mark the full run must not exceed.
+/// Scans in the warm-up run whose stack high-water mark the full run must stay close to.
 const WARMUP_SCANS: u32 = 200;
+/// How far, bytes, the full run's stack high-water mark may exceed the warm-up's.
+const STACK_SLACK: u32 = 1024;
 /// The emulator resets itself after this many B0 telegrams (in both runs).
 const RESET_AFTER: u32 = 60;
 /// The emulator falls silent (longer than the driver's 1 s silence timeout) after this many.
@@ -374,12 +379,11 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
         && acc.unnoticed_damage == 0
         && reinits_ok
         && acc.sent_damaged > 0
-        && w_stack.is_some()
-        && w_stack == f_stack;
+        && matches!((w_stack, f_stack), (Some((w, _)), Some((f, size))) if f <= w + STACK_SLACK && f < size);
     println!(
         "  account: {}",
         if ok {
-            "BALANCED — firmware exit 0, every frame decodes, every scan bit-identical to host pfe-core, counters agree, stack constant"
+            "BALANCED — firmware exit 0, every frame decodes, every scan bit-identical to host pfe-core, counters agree, stack bounded"
         } else {
             "NOT BALANCED"
         }
