@@ -382,7 +382,7 @@ fn write_markdown(
          Host CPU: {}, one thread, release build, `std::time::Instant`; median of {} interleaved \
          passes per method (the machine is shared: compare methods within one run). \
          **× pfe-default** = time(method) / time(pfe-default): above 1, pfe-default is faster.\n",
-        cpu_name(),
+        crate::docs::cpu_model(),
         report.reps
     );
     for d in &report.datasets {
@@ -439,29 +439,5 @@ fn write_markdown(
     );
     let dir = md.parent().unwrap_or(Path::new("."));
     std::fs::write(dir.join("perf-scaling.svg"), svg).context("writing perf-scaling.svg")?;
-    let old = std::fs::read_to_string(md).unwrap_or_default();
-    let (start, end) = ("<!-- host:start -->", "<!-- host:end -->");
-    let section = format!("{start}\n## `pfe bench`\n\n{body}{end}");
-    let new = match (old.find(start), old.find(end)) {
-        (Some(a), Some(b)) if b > a => format!(
-            "{}{section}{}",
-            old.get(..a).unwrap_or(""),
-            old.get(b + end.len()..).unwrap_or("")
-        ),
-        _ => format!("{}\n\n{section}\n", old.trim_end()),
-    };
-    std::fs::write(md, new).with_context(|| format!("writing {}", md.display()))
-}
-
-/// The host CPU's model name (Linux), or "unknown".
-fn cpu_name() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|v| v.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown".to_string())
+    crate::docs::write_section(md, "host", "`pfe bench`", &body)
 }

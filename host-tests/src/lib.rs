@@ -3,6 +3,7 @@
 
 pub mod baselines;
 pub mod bench;
+pub mod docs;
 pub mod emulator;
 pub mod eval;
 pub mod formats;

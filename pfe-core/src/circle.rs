@@ -192,13 +192,21 @@ pub fn refine_circle(
     initial: Circle,
     iterations: usize,
 ) -> Result<Circle, FitError> {
-    refine_circle_sse(points, initial, iterations).map(|(c, _)| c)
+    refine_from(
+        points,
+        initial,
+        NormalEquations::at(points, &initial),
+        iterations,
+    )
+    .map(|(c, _)| c)
 }
 
-/// [`refine_circle`] and the refined circle's [`geometric_sse`].
-pub(crate) fn refine_circle_sse(
+/// [`refine_circle`] from `initial` whose normal equations `eq` are already known; also
+/// returns the refined circle's [`geometric_sse`].
+pub(crate) fn refine_from(
     points: &[Point],
     initial: Circle,
+    mut eq: NormalEquations,
     iterations: usize,
 ) -> Result<(Circle, f32), FitError> {
     if points.len() < 3 {
@@ -207,21 +215,6 @@ pub(crate) fn refine_circle_sse(
             need: 3,
         });
     }
-    refine_from(
-        points,
-        initial,
-        NormalEquations::at(points, &initial),
-        iterations,
-    )
-}
-
-/// [`refine_circle_sse`] from `initial` whose normal equations `eq` are already known.
-pub(crate) fn refine_from(
-    points: &[Point],
-    initial: Circle,
-    mut eq: NormalEquations,
-    iterations: usize,
-) -> Result<(Circle, f32), FitError> {
     let mut best = initial;
     // One pass per candidate gives its SSE and, for the next step, its normal equations.
     if !eq.sse.is_finite() {

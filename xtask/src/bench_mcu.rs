@@ -109,16 +109,7 @@ pub fn run(args: &[String]) -> Result<()> {
 fn accuracy() -> Result<String> {
     let mut rows = String::new();
     for (math, features) in [("libm", None), ("micromath", Some("pfe-core/micromath"))] {
-        let mut c = util::cargo();
-        c.args([
-            "run",
-            "--release",
-            "-q",
-            "-p",
-            "host-tests",
-            "--example",
-            "score",
-        ]);
+        let mut c = util::host_example("score");
         if let Some(f) = features {
             c.args(["--features", f]);
         }

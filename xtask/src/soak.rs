@@ -14,7 +14,7 @@
 
 use anyhow::{bail, Context, Result};
 
-use crate::util::{cargo, run as sh};
+use crate::util::{host_example, run as sh};
 
 /// Entry point.
 pub fn run(args: &[String]) -> Result<()> {
@@ -41,19 +41,10 @@ pub fn run(args: &[String]) -> Result<()> {
         }
     }
     let example = |transport: &str, n: &str| {
-        let mut c = cargo();
-        c.args([
-            "run",
-            "--release",
-            "-q",
-            "-p",
-            "host-tests",
-            "--example",
-            "soak",
-            "--",
-        ])
-        .args(["--transport", transport, "--scans", n])
-        .args(&extra);
+        let mut c = host_example("soak");
+        c.arg("--")
+            .args(["--transport", transport, "--scans", n])
+            .args(&extra);
         c
     };
     if scans != "0" {

@@ -19,6 +19,21 @@ pub fn cargo() -> Command {
     c
 }
 
+/// `cargo run --release -q -p host-tests --example {name}` (append `--` and its arguments).
+pub fn host_example(name: &str) -> Command {
+    let mut c = cargo();
+    c.args([
+        "run",
+        "--release",
+        "-q",
+        "-p",
+        "host-tests",
+        "--example",
+        name,
+    ]);
+    c
+}
+
 /// Runs `cmd`, echoing it, and fails with its exit status.
 pub fn run(cmd: &mut Command) -> Result<()> {
     eprintln!("$ {cmd:?}");

@@ -91,18 +91,6 @@ fn pair(p: (f64, f64), d: usize) -> String {
     format!("{} / {}", f(p.0, d), f(p.1, d))
 }
 
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".to_string())
-}
-
 fn counts_table(out: &mut String, level: &Level, with_time: bool) {
     let _ = writeln!(
         out,
@@ -161,7 +149,7 @@ pub fn markdown(ev: &Evaluation) -> String {
         "Times: release build on {}, `std::time::Instant` around each `extract`, mean per scan \
          of the fastest of {} passes (the machine is shared, so compare methods, not absolute \
          values).\n",
-        cpu_model(),
+        crate::docs::cpu_model(),
         o.passes.max(1)
     );
     let _ = writeln!(
