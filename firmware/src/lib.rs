@@ -5,6 +5,16 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+/// `defmt::$level!(...)` with the `defmt` feature, nothing without it.
+macro_rules! log {
+    ($level:ident, $($arg:tt)*) => {
+        #[cfg(feature = "defmt")]
+        {
+            defmt::$level!($($arg)*);
+        }
+    };
+}
+
 pub mod app;
 pub mod lms;
 pub mod output;

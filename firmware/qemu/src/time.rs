@@ -7,7 +7,7 @@
 //! `instructions = ticks × 10 / 256` exactly; without `-icount` ticks follow host time.
 
 use core::sync::atomic::{AtomicU32, Ordering};
-use cortex_m::peripheral::{syst::SystClkSource, SYST};
+use cortex_m::peripheral::{syst::SystClkSource, SCB, SYST};
 
 /// SysTick frequency on mps2-an386, Hz.
 pub const TICK_HZ: u64 = 25_000_000;
@@ -29,14 +29,27 @@ pub fn start(mut syst: SYST) {
     syst.enable_counter();
 }
 
-/// Ticks since [`start`].
+/// Ticks since [`start`]; monotonic.
+///
+/// The counter can wrap before its exception has been taken (QEMU delivers it at the end of
+/// a translation block; on hardware it waits while a higher priority runs), so a wrap still
+/// pending counts too: the value read before the pending bit is from before any wrap when
+/// the bit is clear, the one read after it from after the wrap when it is set. Counting the
+/// wrap count alone made time jump back by 2^24 ticks (0.67 s) now and then.
 pub fn ticks() -> u64 {
     loop {
         let w0 = WRAPS.load(Ordering::Relaxed);
-        let cvr = SYST::get_current();
+        let before = SYST::get_current();
+        let pending = SCB::is_pendst_pending();
+        let after = SYST::get_current();
         let w1 = WRAPS.load(Ordering::Relaxed);
         if w0 == w1 {
-            return (u64::from(w0) << 24) + u64::from(RELOAD - cvr);
+            let (wraps, cvr) = if pending {
+                (u64::from(w0) + 1, after)
+            } else {
+                (u64::from(w0), before)
+            };
+            return (wraps << 24) + u64::from(RELOAD - cvr);
         }
     }
 }

@@ -496,7 +496,8 @@ where
         self.reply.get(..self.reply_len).unwrap_or(&[])
     }
 
-    fn note_reset(&mut self) {
+    fn note_reset(&mut self, _why: &'static str) {
+        log!(warn, "lms: device reset seen: {=str}", _why);
         self.reset_seen = true;
         self.counters.device_resets = self.counters.device_resets.saturating_add(1);
     }
@@ -514,7 +515,7 @@ where
                 Some(Rx::Reply(c)) if c == code => return Ok(()),
                 Some(Rx::Nak) => return Err(Error::Nak { command }),
                 Some(Rx::Reply(rcode::POWER_ON | rcode::RESET_ACK)) if code != rcode::RESET_ACK => {
-                    self.note_reset();
+                    self.note_reset("power-on or reset reply while waiting");
                     return Err(Error::DeviceReset);
                 }
                 Some(Rx::Reply(rcode::INCORRECT)) => {
@@ -622,6 +623,7 @@ where
                 let timeout = self.config.reply_timeout_ms;
                 match self.transact_n(&Command::OnRequest, timeout, 1) {
                     Ok(()) => {
+                        log!(info, "lms: device answers at {} baud", b.bps());
                         self.device.baud = Some(b);
                         return Ok(b);
                     }
@@ -768,7 +770,7 @@ where
         let unit_ok = self.device.unit.is_none_or(|u| u == self.scan.unit());
         if !unit_ok || self.scan.status.restart() {
             // The device lost its configuration (e.g. reset to cm): re-initialise.
-            self.note_reset();
+            self.note_reset("scan with another unit or the restart flag");
             return false;
         }
         self.counters.scans = self.counters.scans.saturating_add(1);
@@ -785,7 +787,7 @@ where
             && self.elapsed_since(self.last_cmd_ms)
                 < self.config.reply_timeout_ms.saturating_mul(2);
         if matches!(c, rcode::POWER_ON | rcode::RESET_ACK | rcode::MODE) && !late_answer {
-            self.note_reset();
+            self.note_reset("unrequested reply");
         }
     }
 
@@ -800,6 +802,16 @@ where
             if self.reset_seen
                 || self.elapsed_since(self.last_scan_ms) >= self.config.silence_timeout_ms
             {
+                log!(
+                    warn,
+                    "lms: re-initialising ({}, {} ms since the last scan)",
+                    if self.reset_seen {
+                        "device reset"
+                    } else {
+                        "silence"
+                    },
+                    self.elapsed_since(self.last_scan_ms)
+                );
                 if reinits >= self.config.max_reinits_per_call {
                     self.streaming = false;
                     return Err(Error::Silence);
