@@ -85,6 +85,27 @@ fn device_without_type_and_status_commands_is_still_used() {
 }
 
 #[test]
+fn refused_baud_rate_keeps_the_one_found() {
+    // An RS-232 device without 500 000 Bd answers the switch `A0 01`: the driver streams at
+    // the rate the device answered at (9600) and says so in its counters.
+    let cfg = EmulatorConfig {
+        refused_bauds: vec![Baud::B500000],
+        ..tagged()
+    };
+    let (link, mut lms) = setup(cfg, Config::default().with_baud(Baud::B500000));
+    for k in 0..3u32 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!(s.len(), 361);
+        assert_eq!(TaggedSource::tag_of(s.codes()), Some(k));
+    }
+    assert_eq!(link.with_emulator(|e| e.baud()).unwrap(), Baud::B9600);
+    assert_eq!(link.host_baud(), Some(9600));
+    assert_eq!(lms.device().baud, Some(Baud::B9600));
+    let c = lms.counters();
+    assert_eq!((c.baud_refused, c.reinits, c.crc_errors), (1, 0, 0));
+}
+
+#[test]
 fn scan_rate_follows_baud_and_variant() {
     for (baud, variant, hz) in [
         (Baud::B38400, Variant::A180_R050, 5.2),

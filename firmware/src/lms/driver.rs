@@ -1,7 +1,8 @@
 //! LMS200 driver over `embedded-io` UART halves, a delay and a millisecond clock.
 //!
 //! Initialises like the reference clients (sicktoolbox order): probe the baud rate with `20 25`,
-//! switch baud (`20 4x`, the reply comes at the old rate, then wait ≥ 250 ms), type `3A`,
+//! switch baud (`20 4x`, the reply comes at the old rate, then wait ≥ 250 ms; a refused rate
+//! keeps the one found), type `3A`,
 //! status `31`, configuration `74`, variant `3B` when it differs, unit / measuring mode through
 //! installation mode + `77` when they differ, then continuous output `20 24`. Every wait has a
 //! timeout; commands are tried [`Config::tries`] times; silence or a device reset triggers a
@@ -160,6 +161,8 @@ pub struct Counters {
     pub bad_replies: u32,
     /// Device resets seen (0x90 / 0x91, unexpected A0, restart status).
     pub device_resets: u32,
+    /// Initialisations that kept the device's baud rate because it refused [`Config::baud`].
+    pub baud_refused: u32,
 }
 
 /// One decoded B0 scan, copied into the driver's fixed buffer.
@@ -651,12 +654,27 @@ where
         let found = self.probe()?;
         if found != self.config.baud {
             let target = self.config.baud;
-            self.mode(&Command::SetBaud(target))?;
-            // The reply came at the old rate; the device switches after sending it.
-            self.set_local_baud(target)?;
-            self.device.baud = Some(target);
-            self.delay.delay_ms(self.config.baud_switch_wait_ms);
-            self.mode(&Command::OnRequest)?;
+            match self.mode(&Command::SetBaud(target)) {
+                Ok(()) => {
+                    // The reply came at the old rate; the device switches after sending it.
+                    self.set_local_baud(target)?;
+                    self.device.baud = Some(target);
+                    self.delay.delay_ms(self.config.baud_switch_wait_ms);
+                    self.mode(&Command::OnRequest)?;
+                }
+                // A device that cannot run at the rate (an RS-232 LMS200 has no 500 000 Bd)
+                // is used at the rate it answered at.
+                Err(Error::Rejected { .. } | Error::Nak { .. }) => {
+                    log!(
+                        warn,
+                        "lms: {} baud refused, staying at {}",
+                        target.bps(),
+                        found.bps()
+                    );
+                    self.counters.baud_refused = self.counters.baud_refused.saturating_add(1);
+                }
+                Err(e) => return Err(e),
+            }
         }
         // Type string and status: informative, so a device that refuses them (92) or does
         // not answer is still used (the variant then comes from the 3B below).

@@ -192,6 +192,9 @@ pub struct EmulatorConfig {
     /// Command codes this device does not implement: answered `92` (incorrect command), as
     /// a variant or a simpler emulator might.
     pub unsupported: Vec<u8>,
+    /// Baud rates this device cannot switch to: `20 4x` for them is answered `A0 01` and the
+    /// device stays at its rate (an RS-232 LMS200 has no 500 000 Bd).
+    pub refused_bauds: Vec<Baud>,
 }
 
 impl Default for EmulatorConfig {
@@ -209,6 +212,7 @@ impl Default for EmulatorConfig {
             faults: Faults::default(),
             source: SourceKind::Room,
             unsupported: Vec::new(),
+            refused_bauds: Vec::new(),
         }
     }
 }
@@ -476,6 +480,10 @@ impl Emulator {
                     return;
                 }
                 self.install = false;
+                if Baud::from_mode_code(m).is_some_and(|b| self.cfg.refused_bauds.contains(&b)) {
+                    self.reply(at, &[rcode::MODE, 1]);
+                    return;
+                }
                 let end = self.reply(at, &[rcode::MODE, 0]);
                 if let Some(b) = Baud::from_mode_code(m) {
                     self.pending_baud = Some((end, b));
