@@ -2,7 +2,7 @@
 
 use firmware::lms::driver::{Config, Driver};
 use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
-use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
+use firmware::lms::reply::{parse_reply, ConfigBlock, Reply, ReplyOptions};
 use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
 use host_tests::emulator::{
     Emulator, EmulatorConfig, HostPort, Link, LinkClock, LinkDelay, SourceKind, TaggedSource,
@@ -103,6 +103,38 @@ fn refused_baud_rate_keeps_the_one_found() {
     assert_eq!(lms.device().baud, Some(Baud::B9600));
     let c = lms.counters();
     assert_eq!((c.baud_refused, c.reinits, c.crc_errors), (1, 0, 0));
+}
+
+#[test]
+fn refused_unit_change_streams_in_the_devices_unit() {
+    // A device left in cm that does not implement 77: the driver keeps cm, and the ranges it
+    // reports (range_mm) are the room's to the cm quantum.
+    let mut block = ConfigBlock::default_mm();
+    block.set_unit(Unit::Cm);
+    let cfg = EmulatorConfig {
+        config: block,
+        unsupported: vec![0x77],
+        ..Default::default()
+    };
+    let (link, mut lms) = setup(cfg, Config::default());
+    let mut got = Vec::new();
+    for _ in 0..3 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!(s.unit(), Unit::Cm);
+        got.push((0..s.len()).map(|i| s.range_mm(i)).collect::<Vec<_>>());
+    }
+    let sent = link.with_emulator(|e| e.report().scans.clone()).unwrap();
+    for (g, s) in got.iter().zip(&sent) {
+        for (i, (&r, &truth)) in g.iter().zip(&s.ranges_mm).enumerate() {
+            match r {
+                Some(r) => assert!((r - truth).abs() <= 5.0, "beam {i}: {r} vs {truth}"),
+                None => assert!(!(truth <= 8000.0), "beam {i}: {truth} mm lost"),
+            }
+        }
+    }
+    let c = lms.counters();
+    assert_eq!((c.config_refused, c.reinits, c.device_resets), (1, 0, 0));
+    assert_eq!(lms.device().unit, Some(Unit::Cm));
 }
 
 #[test]

@@ -2,10 +2,10 @@
 //!
 //! Initialises like the reference clients (sicktoolbox order): probe the baud rate with `20 25`,
 //! switch baud (`20 4x`, the reply comes at the old rate, then wait ≥ 250 ms; a refused rate
-//! keeps the one found), type `3A`,
-//! status `31`, configuration `74`, variant `3B` when it differs, unit / measuring mode through
-//! installation mode + `77` when they differ, then continuous output `20 24`. Every wait has a
-//! timeout; commands are tried [`Config::tries`] times; silence or a device reset triggers a
+//! keeps the one found), type `3A`, status `31`, configuration `74`, variant `3B` when it
+//! differs, unit / measuring mode through installation mode + `77` when they differ (a refusal
+//! keeps the device's: scans carry their unit), then continuous output `20 24`. Every wait has
+//! a timeout; commands are tried [`Config::tries`] times; silence or a device reset triggers a
 //! re-initialisation. No allocation, no panic.
 
 use embedded_hal::delay::DelayNs;
@@ -163,6 +163,9 @@ pub struct Counters {
     pub device_resets: u32,
     /// Initialisations that kept the device's baud rate because it refused [`Config::baud`].
     pub baud_refused: u32,
+    /// Initialisations that kept the device's unit and measuring mode because it refused
+    /// [`Config::unit`] / [`Config::measuring_mode`].
+    pub config_refused: u32,
 }
 
 /// One decoded B0 scan, copied into the driver's fixed buffer.
@@ -722,22 +725,22 @@ where
         // Unit and measuring mode.
         let want_mode = self.config.measuring_mode.unwrap_or(block.measuring_mode());
         if block.unit() != Some(self.config.unit) || block.measuring_mode() != want_mode {
-            self.mode(&Command::Install(&PASSWORD))?;
             block.set_unit(self.config.unit);
             block.set_measuring_mode(want_mode);
-            let cmd = Command::SetConfig(&block);
-            self.transact_n(&cmd, self.config.config_timeout_ms, self.config.tries)?;
-            match self.parsed().map(|p| p.reply) {
-                Some(Reply::ConfigSet { ok: true, config }) => self.apply_block(&config),
-                Some(Reply::ConfigSet { ok: false, .. }) => {
-                    return Err(Error::Rejected {
-                        command: 0x77,
-                        code: 0,
-                    })
+            match self.write_config(&block) {
+                Ok(()) => {}
+                // A device that refuses the change (password, no 77) is used as configured:
+                // every scan carries its unit, and ranges are scaled by it.
+                Err(Error::Rejected { .. } | Error::Nak { .. }) => {
+                    log!(
+                        warn,
+                        "lms: unit / measuring mode refused, using the device's"
+                    );
+                    self.counters.config_refused = self.counters.config_refused.saturating_add(1);
+                    self.mode(&Command::OnRequest)?;
                 }
-                _ => return Err(Error::BadReply { command: 0x77 }),
+                Err(e) => return Err(e),
             }
-            self.mode(&Command::OnRequest)?;
         }
         self.scan.variant = self.device.variant;
         self.mode(&Command::Continuous)?;
@@ -745,6 +748,24 @@ where
         self.reset_seen = false;
         self.last_scan_ms = self.clock.now_ms();
         Ok(())
+    }
+
+    /// Installation mode, `77` with `block`, back to request mode.
+    fn write_config(&mut self, block: &ConfigBlock) -> Result<(), Error<U::Error>> {
+        self.mode(&Command::Install(&PASSWORD))?;
+        let cmd = Command::SetConfig(block);
+        self.transact_n(&cmd, self.config.config_timeout_ms, self.config.tries)?;
+        match self.parsed().map(|p| p.reply) {
+            Some(Reply::ConfigSet { ok: true, config }) => self.apply_block(&config),
+            Some(Reply::ConfigSet { ok: false, .. }) => {
+                return Err(Error::Rejected {
+                    command: 0x77,
+                    code: 0,
+                })
+            }
+            _ => return Err(Error::BadReply { command: 0x77 }),
+        }
+        self.mode(&Command::OnRequest)
     }
 
     fn apply_block(&mut self, b: &ConfigBlock) {
