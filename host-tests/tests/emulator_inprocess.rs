@@ -141,6 +141,28 @@ fn refused_unit_change_streams_in_the_devices_unit() {
 }
 
 #[test]
+fn refused_variant_is_read_from_the_scans() {
+    // A device at 100°/0.25° that neither reports its status nor accepts 3B: the driver
+    // takes the variant from the value count (401), so the geometry is the device's.
+    let cfg = EmulatorConfig {
+        variant: Variant::A100_R025,
+        unsupported: vec![0x31, 0x3B],
+        ..tagged()
+    };
+    let (_link, mut lms) = setup(cfg, Config::default());
+    for k in 0..2u32 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!((s.len(), s.variant), (401, Variant::A100_R025));
+        assert_eq!(TaggedSource::tag_of(s.codes()), Some(k));
+        let g = s.geometry();
+        assert!((g.start_angle + 50f32.to_radians()).abs() < 1e-6);
+        assert!((g.angle_step - 0.25f32.to_radians()).abs() < 1e-7);
+    }
+    let c = lms.counters();
+    assert_eq!((c.variant_refused, c.reinits), (1, 0));
+}
+
+#[test]
 fn scan_rate_follows_baud_and_variant() {
     for (baud, variant, hz) in [
         (Baud::B38400, Variant::A180_R050, 5.2),

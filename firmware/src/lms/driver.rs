@@ -3,7 +3,8 @@
 //! Initialises like the reference clients (sicktoolbox order): probe the baud rate with `20 25`,
 //! switch baud (`20 4x`, the reply comes at the old rate, then wait ≥ 250 ms; a refused rate
 //! keeps the one found), type `3A`, status `31`, configuration `74`, variant `3B` when it
-//! differs, unit / measuring mode through installation mode + `77` when they differ (a refusal
+//! differs (a refusal keeps the device's, known from the status or the scans' value count),
+//! unit / measuring mode through installation mode + `77` when they differ (a refusal
 //! keeps the device's: scans carry their unit), then continuous output `20 24`. Every wait has
 //! a timeout; commands are tried [`Config::tries`] times; silence or a device reset triggers a
 //! re-initialisation. No allocation, no panic.
@@ -163,6 +164,8 @@ pub struct Counters {
     pub device_resets: u32,
     /// Initialisations that kept the device's baud rate because it refused [`Config::baud`].
     pub baud_refused: u32,
+    /// Initialisations that kept the device's variant because it refused [`Config::variant`].
+    pub variant_refused: u32,
     /// Initialisations that kept the device's unit and measuring mode because it refused
     /// [`Config::unit`] / [`Config::measuring_mode`].
     pub config_refused: u32,
@@ -710,16 +713,14 @@ where
         // Variant (also when the status did not say which one is set).
         if !variant_known || self.device.variant != self.config.variant {
             let v = self.config.variant;
-            self.transact(&Command::SetVariant(v))?;
-            match self.parsed().map(|p| p.reply) {
-                Some(Reply::Variant { ok: true, .. }) => self.device.variant = v,
-                Some(Reply::Variant { ok: false, .. }) => {
-                    return Err(Error::Rejected {
-                        command: 0x3B,
-                        code: 0,
-                    })
-                }
-                _ => return Err(Error::BadReply { command: 0x3B }),
+            match self.transact(&Command::SetVariant(v)) {
+                Ok(()) => match self.parsed().map(|p| p.reply) {
+                    Some(Reply::Variant { ok: true, .. }) => self.device.variant = v,
+                    Some(Reply::Variant { ok: false, .. }) => self.variant_refused(),
+                    _ => return Err(Error::BadReply { command: 0x3B }),
+                },
+                Err(Error::Rejected { .. } | Error::Nak { .. }) => self.variant_refused(),
+                Err(e) => return Err(e),
             }
         }
         // Unit and measuring mode.
@@ -748,6 +749,13 @@ where
         self.reset_seen = false;
         self.last_scan_ms = self.clock.now_ms();
         Ok(())
+    }
+
+    /// The device keeps its variant: the one its status named, else the one its scans'
+    /// value count gives (see [`Self::accept_scan`]).
+    fn variant_refused(&mut self) {
+        log!(warn, "lms: variant refused, using the device's");
+        self.counters.variant_refused = self.counters.variant_refused.saturating_add(1);
     }
 
     /// Installation mode, `77` with `block`, back to request mode.
@@ -811,6 +819,13 @@ where
             // The device lost its configuration (e.g. reset to cm): re-initialise.
             self.note_reset("scan with another unit or the restart flag");
             return false;
+        }
+        // The value count names the variant (the five counts differ): a device that was not
+        // set to the configured one, or changed, is still described right.
+        if self.scan.len() != self.device.variant.values() {
+            if let Some(v) = Variant::from_values(self.scan.len()) {
+                self.device.variant = v;
+            }
         }
         self.counters.scans = self.counters.scans.saturating_add(1);
         self.scan.seq = self.counters.scans;

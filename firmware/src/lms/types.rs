@@ -120,6 +120,11 @@ impl Variant {
         }
     }
 
+    /// The variant whose scans have `n` values (the five counts differ).
+    pub fn from_values(n: usize) -> Option<Variant> {
+        Self::VALID.into_iter().find(|v| v.values() == n)
+    }
+
     /// True for one of the five combinations the device accepts.
     pub fn is_valid(&self) -> bool {
         Self::VALID.contains(self)
