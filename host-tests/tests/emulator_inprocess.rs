@@ -141,6 +141,24 @@ fn refused_unit_change_streams_in_the_devices_unit() {
 }
 
 #[test]
+fn device_that_does_not_report_its_configuration_is_still_used() {
+    // 74 answered 92: no unit or mode change is possible; the scans (mm, the emulator's
+    // power-on unit) are delivered with their own unit.
+    let cfg = EmulatorConfig {
+        unsupported: vec![0x74],
+        ..tagged()
+    };
+    let (_link, mut lms) = setup(cfg, Config::default());
+    for k in 0..3u32 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!((s.len(), s.unit()), (361, Unit::Mm));
+        assert_eq!(TaggedSource::tag_of(s.codes()), Some(k));
+    }
+    let c = lms.counters();
+    assert_eq!((c.config_refused, c.reinits), (1, 0));
+}
+
+#[test]
 fn refused_variant_is_read_from_the_scans() {
     // A device at 100°/0.25° that neither reports its status nor accepts 3B: the driver
     // takes the variant from the value count (401), so the geometry is the device's.

@@ -167,7 +167,7 @@ pub struct Counters {
     /// Initialisations that kept the device's variant because it refused [`Config::variant`].
     pub variant_refused: u32,
     /// Initialisations that kept the device's unit and measuring mode because it refused
-    /// [`Config::unit`] / [`Config::measuring_mode`].
+    /// [`Config::unit`] / [`Config::measuring_mode`] or did not report its configuration.
     pub config_refused: u32,
 }
 
@@ -703,13 +703,20 @@ where
                 }
             }
         }
-        // Configuration.
-        self.transact(&Command::GetConfig)?;
-        let mut block = match self.parsed().map(|p| p.reply) {
-            Some(Reply::Config(c)) => c,
-            _ => return Err(Error::BadReply { command: 0x74 }),
+        // Configuration (a device that does not report it is used as it is: its scans carry
+        // their unit).
+        let block = match self.transact(&Command::GetConfig) {
+            Ok(()) => match self.parsed().map(|p| p.reply) {
+                Some(Reply::Config(c)) => Some(c),
+                _ => return Err(Error::BadReply { command: 0x74 }),
+            },
+            Err(Error::Rejected { .. } | Error::Nak { .. }) => None,
+            Err(e) => return Err(e),
         };
-        self.apply_block(&block);
+        match &block {
+            Some(b) => self.apply_block(b),
+            None => self.device.unit = None,
+        }
         // Variant (also when the status did not say which one is set).
         if !variant_known || self.device.variant != self.config.variant {
             let v = self.config.variant;
@@ -723,25 +730,35 @@ where
                 Err(e) => return Err(e),
             }
         }
-        // Unit and measuring mode.
-        let want_mode = self.config.measuring_mode.unwrap_or(block.measuring_mode());
-        if block.unit() != Some(self.config.unit) || block.measuring_mode() != want_mode {
-            block.set_unit(self.config.unit);
-            block.set_measuring_mode(want_mode);
-            match self.write_config(&block) {
-                Ok(()) => {}
-                // A device that refuses the change (password, no 77) is used as configured:
-                // every scan carries its unit, and ranges are scaled by it.
-                Err(Error::Rejected { .. } | Error::Nak { .. }) => {
-                    log!(
-                        warn,
-                        "lms: unit / measuring mode refused, using the device's"
-                    );
-                    self.counters.config_refused = self.counters.config_refused.saturating_add(1);
-                    self.mode(&Command::OnRequest)?;
+        // Unit and measuring mode. A device that refuses the change (password, no 77) or
+        // does not report its configuration is used as configured: every scan carries its
+        // unit, and ranges are scaled by it.
+        let refused = match block {
+            Some(mut block) => {
+                let want_mode = self.config.measuring_mode.unwrap_or(block.measuring_mode());
+                if block.unit() != Some(self.config.unit) || block.measuring_mode() != want_mode {
+                    block.set_unit(self.config.unit);
+                    block.set_measuring_mode(want_mode);
+                    match self.write_config(&block) {
+                        Ok(()) => false,
+                        Err(Error::Rejected { .. } | Error::Nak { .. }) => {
+                            self.mode(&Command::OnRequest)?;
+                            true
+                        }
+                        Err(e) => return Err(e),
+                    }
+                } else {
+                    false
                 }
-                Err(e) => return Err(e),
             }
+            None => true,
+        };
+        if refused {
+            log!(
+                warn,
+                "lms: unit / measuring mode not set, using the device's"
+            );
+            self.counters.config_refused = self.counters.config_refused.saturating_add(1);
         }
         self.scan.variant = self.device.variant;
         self.mode(&Command::Continuous)?;
