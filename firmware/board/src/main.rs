@@ -32,6 +32,7 @@ mod fw {
 
     use crate::scanner_uart::ScannerUart;
     use firmware::app::{App, AppError, ConfigChoice};
+    use firmware::lms::driver::MAX_VALUES;
     use firmware::lms::{Clock, Config, Driver};
 
     /// System clock, Hz.
@@ -99,8 +100,9 @@ mod fw {
         let Some(uart) = ScannerUart::new(lms_serial, rcc) else {
             defmt::panic!("scanner UART started twice");
         };
-        let app: &'static mut App<361, 48> = {
-            static mut APP: App<361, 48> = App::new(ConfigChoice::Default);
+        // Room for every LMS200 variant (up to 401 values) and 48 features.
+        let app: &'static mut App<MAX_VALUES, 48> = {
+            static mut APP: App<MAX_VALUES, 48> = App::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: the only reference to APP, taken once here.
             unsafe {

@@ -19,6 +19,7 @@ mod fw {
     use defmt_semihosting as _;
     use firmware::app::{App, AppError, ConfigChoice};
     use firmware::lms::types::Baud;
+    use firmware::lms::driver::MAX_VALUES;
     use firmware::lms::{Config, Driver};
     use firmware::output::{self, Report};
     use firmware_qemu::sys;
@@ -46,8 +47,9 @@ mod fw {
         } else {
             ConfigChoice::Default
         };
-        let app: &'static mut App<361, 48> = {
-            static mut APP: App<361, 48> = App::new(ConfigChoice::Default);
+        // Room for every LMS200 variant (up to 401 values) and 48 features.
+        let app: &'static mut App<MAX_VALUES, 48> = {
+            static mut APP: App<MAX_VALUES, 48> = App::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: the only reference to APP, taken once here.
             unsafe {
