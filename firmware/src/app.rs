@@ -130,18 +130,54 @@ impl<S: core::fmt::Debug, W: core::fmt::Debug> core::error::Error for AppError<S
 /// and the scan sequence number.
 pub struct App<const N: usize, const M: usize> {
     extractor: Extractor<N, M>,
-    config: Config,
+    config: ConfigSlot,
     seq: u32,
 }
+
+/// The configuration an [`App`] uses. The named ones are tags only, so that a new `App` with
+/// the default configuration is all zero bytes: a `static` of it goes to `.bss` instead of
+/// being copied from flash (8 KiB of flash for a 401-value extractor).
+#[derive(Clone, Copy, Debug)]
+#[repr(u8)]
+enum ConfigSlot {
+    Default = 0,
+    Paper = 1,
+    Custom(Config) = 2,
+}
+
+impl ConfigSlot {
+    const fn named(choice: ConfigChoice) -> Self {
+        match choice {
+            ConfigChoice::Default => ConfigSlot::Default,
+            ConfigChoice::Paper => ConfigSlot::Paper,
+        }
+    }
+
+    fn get(&self) -> &Config {
+        match self {
+            ConfigSlot::Default => &DEFAULT,
+            ConfigSlot::Paper => &PAPER,
+            ConfigSlot::Custom(c) => c,
+        }
+    }
+}
+
+/// What [`ConfigSlot::Default`] and [`ConfigSlot::Paper`] stand for.
+static DEFAULT: Config = Config::default_config();
+static PAPER: Config = Config::paper();
 
 impl<const N: usize, const M: usize> App<N, M> {
     /// A new application (`const`: it can live in a `static`).
     pub const fn new(choice: ConfigChoice) -> Self {
-        Self::with_config(choice.config())
+        Self::with_slot(ConfigSlot::named(choice))
     }
 
     /// A new application with any configuration.
     pub const fn with_config(config: Config) -> Self {
+        Self::with_slot(ConfigSlot::Custom(config))
+    }
+
+    const fn with_slot(config: ConfigSlot) -> Self {
         Self {
             extractor: Extractor::new(),
             config,
@@ -151,12 +187,17 @@ impl<const N: usize, const M: usize> App<N, M> {
 
     /// Changes the configuration (in place: no copy of the extractor on the stack).
     pub fn set_config(&mut self, config: Config) {
-        self.config = config;
+        self.config = ConfigSlot::Custom(config);
+    }
+
+    /// Switches to a named configuration.
+    pub fn set_choice(&mut self, choice: ConfigChoice) {
+        self.config = ConfigSlot::named(choice);
     }
 
     /// The configuration in use.
     pub fn config(&self) -> &Config {
-        &self.config
+        self.config.get()
     }
 
     /// The extractor (features, marks and stats of the last scan).
@@ -177,7 +218,7 @@ impl<const N: usize, const M: usize> App<N, M> {
         out: &mut W,
     ) -> Result<ScanHeader, EncodeError<W::Error>> {
         let s = scan.to_pfe();
-        let result = self.extractor.extract(&s, &self.config);
+        let result = self.extractor.extract(&s, self.config.get());
         let stats = self.extractor.stats();
         let status = match result {
             Ok(_) => ScanStatus::Ok,

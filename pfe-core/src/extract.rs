@@ -93,8 +93,10 @@ impl<const N: usize, const M: usize> Default for Extractor<N, M> {
 impl<const N: usize, const M: usize> Extractor<N, M> {
     /// An empty extractor (`const`, so it can live in a `static`).
     pub const fn new() -> Self {
+        // All zero bytes (points past `len` are never read), so that a `static` extractor
+        // goes to .bss rather than being copied from flash as well.
         Self {
-            points: [Point::INVALID; N],
+            points: [Point::new(0.0, 0.0); N],
             ranges: [0.0; N],
             flags: [0; N],
             len: 0,

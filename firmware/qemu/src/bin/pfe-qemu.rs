@@ -18,8 +18,8 @@ mod fw {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_semihosting as _;
     use firmware::app::{App, AppError, ConfigChoice};
-    use firmware::lms::types::Baud;
     use firmware::lms::driver::MAX_VALUES;
+    use firmware::lms::types::Baud;
     use firmware::lms::{Config, Driver};
     use firmware::output::{self, Report};
     use firmware_qemu::sys;
@@ -56,7 +56,7 @@ mod fw {
                 &mut *core::ptr::addr_of_mut!(APP)
             }
         };
-        app.set_config(choice.config());
+        app.set_choice(choice);
         defmt::info!("pfe-qemu: {} scans (0 = forever), config {}", scans, choice);
         let mut out = Uart::new(UART1);
         let baud = sys::arg_u32(2)
