@@ -159,6 +159,27 @@ fn device_that_does_not_report_its_configuration_is_still_used() {
 }
 
 #[test]
+fn restart_flag_that_stays_set_costs_one_reinit_not_the_stream() {
+    // Status 0x30 on every telegram (restart bit 5 set): the first scan looks like a device
+    // reset and re-initialises; the same flag after that is how this device reports, so the
+    // scans are delivered.
+    let cfg = EmulatorConfig {
+        status: 0x30,
+        ..tagged()
+    };
+    let (_link, mut lms) = setup(cfg, Config::default());
+    let mut tags = Vec::new();
+    for _ in 0..4 {
+        let s = lms.next_scan().unwrap();
+        assert!(s.status.restart());
+        tags.push(TaggedSource::tag_of(s.codes()).unwrap());
+    }
+    assert!(tags.windows(2).all(|w| w[1] == w[0] + 1), "{tags:?}");
+    let c = lms.counters();
+    assert_eq!((c.reinits, c.device_resets, c.scans), (1, 1, 4));
+}
+
+#[test]
 fn refused_variant_is_read_from_the_scans() {
     // A device at 100°/0.25° that neither reports its status nor accepts 3B: the driver
     // takes the variant from the value count (401), so the geometry is the device's.

@@ -340,6 +340,9 @@ pub struct Driver<U, D, C> {
     streaming: bool,
     initialised_once: bool,
     reset_seen: bool,
+    /// A scan that looks like a device reset re-initialises only while this is set; cleared
+    /// by that re-initialisation, set again by a scan that looks normal.
+    reset_check_armed: bool,
     last_scan_ms: u32,
     last_cmd_ms: u32,
     counters: Counters,
@@ -372,6 +375,7 @@ where
             streaming: false,
             initialised_once: false,
             reset_seen: false,
+            reset_check_armed: true,
             last_scan_ms: 0,
             last_cmd_ms: 0,
             counters: Counters::default(),
@@ -832,10 +836,19 @@ where
 
     fn accept_scan(&mut self) -> bool {
         let unit_ok = self.device.unit.is_none_or(|u| u == self.scan.unit());
-        if !unit_ok || self.scan.status.restart() {
-            // The device lost its configuration (e.g. reset to cm): re-initialise.
+        let looks_reset = !unit_ok || self.scan.status.restart();
+        if looks_reset && self.reset_check_armed {
+            // The device lost its configuration (e.g. reset to cm): re-initialise, once. When
+            // the scans after that look the same (a restart flag that stays set, a unit the
+            // configuration does not name), that is how the device reports: they are used,
+            // with the unit they carry.
+            self.reset_check_armed = false;
             self.note_reset("scan with another unit or the restart flag");
             return false;
+        }
+        self.reset_check_armed |= !looks_reset;
+        if !unit_ok {
+            self.device.unit = Some(self.scan.unit());
         }
         // The value count names the variant (the five counts differ): a device that was not
         // set to the configured one, or changed, is still described right.
