@@ -180,6 +180,24 @@ fn restart_flag_that_stays_set_costs_one_reinit_not_the_stream() {
 }
 
 #[test]
+fn silence_timeout_is_never_shorter_than_two_telegrams() {
+    // At 9600 Bd a 401-value telegram takes 845 ms: a 300 ms silence timeout would re-init
+    // between every two scans; the driver waits at least two telegrams' time instead.
+    let (_link, mut lms) = setup(
+        tagged(),
+        Config::default()
+            .with_baud(Baud::B9600)
+            .with_variant(Variant::A100_R025)
+            .with_silence_timeout_ms(300),
+    );
+    for k in 0..3u32 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!(TaggedSource::tag_of(s.codes()), Some(k));
+    }
+    assert_eq!(lms.counters().reinits, 0);
+}
+
+#[test]
 fn refused_variant_is_read_from_the_scans() {
     // A device at 100°/0.25° that neither reports its status nor accepts 3B: the driver
     // takes the variant from the value count (401), so the geometry is the device's.

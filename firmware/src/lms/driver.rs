@@ -57,7 +57,8 @@ pub struct Config {
     pub tries: u8,
     /// Wait after a baud change, ms (sicktoolbox 250, MRPT 500).
     pub baud_switch_wait_ms: u32,
-    /// Re-initialise when no scan arrived for this long, ms.
+    /// Re-initialise when no scan arrived for this long, ms (at least two telegrams' time at
+    /// the current baud rate).
     pub silence_timeout_ms: u32,
     /// Re-initialisations [`Driver::next_scan`] attempts before returning [`Error::Silence`].
     pub max_reinits_per_call: u8,
@@ -834,6 +835,15 @@ where
         }
     }
 
+    /// [`Config::silence_timeout_ms`], but at least two scan telegrams' time at the current
+    /// baud rate (at 9600 Bd one 361-value telegram takes 760 ms, a 401-value one 845 ms).
+    fn silence_limit_ms(&self) -> u32 {
+        let bps = self.device.baud.unwrap_or(self.config.baud).bps().max(1);
+        let bytes = (self.device.variant.values() as u32).saturating_mul(2) + 10;
+        let two_telegrams = bytes.saturating_mul(2 * 10 * 1000) / bps;
+        self.config.silence_timeout_ms.max(two_telegrams)
+    }
+
     fn accept_scan(&mut self) -> bool {
         let unit_ok = self.device.unit.is_none_or(|u| u == self.scan.unit());
         let looks_reset = !unit_ok || self.scan.status.restart();
@@ -876,16 +886,15 @@ where
     }
 
     /// Waits for the next scan, initialising first if needed and re-initialising after
-    /// [`Config::silence_timeout_ms`] without a scan or after a device reset.
+    /// [`Config::silence_timeout_ms`] (at least two telegrams' time) without a scan or after a
+    /// device reset.
     pub fn next_scan(&mut self) -> Result<&ScanData, Error<U::Error>> {
         let mut reinits = 0u8;
         if !self.streaming {
             self.init()?;
         }
         loop {
-            if self.reset_seen
-                || self.elapsed_since(self.last_scan_ms) >= self.config.silence_timeout_ms
-            {
+            if self.reset_seen || self.elapsed_since(self.last_scan_ms) >= self.silence_limit_ms() {
                 log!(
                     warn,
                     "lms: re-initialising ({}, {} ms since the last scan)",
