@@ -275,11 +275,12 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
         .any(|f| f.header == Header::Report(Report::Done { scans }));
     let em = &full.emulator;
     let silences = u32::from(em.scans.len() > SILENCE_AFTER as usize);
-    // Every device reset must lead to a re-initialisation, and so must the silence (3 s,
-    // longer than the driver's 1 s timeout plus what the pty may still hold). A re-init
-    // whose probe falls into the device's deaf time after a reset fails and is retried, so a
-    // few more are allowed; damage alone never causes one.
-    let reinits_ok = acc.last.reinits >= em.resets + silences
+    // Every device reset must lead to a re-initialisation. The silence (3 s, three times
+    // the driver's timeout) usually does too, but not always: when QEMU reads the pty more
+    // slowly than the emulator writes (a loaded host), the backlog still in the pty covers
+    // the silence. A re-init whose probe falls into the device's deaf time after a reset
+    // fails and is retried, so a few more are allowed; damage alone never causes one.
+    let reinits_ok = acc.last.reinits >= em.resets
         && acc.last.reinits <= em.resets + silences + 2 + scans / 1000;
 
     println!(
@@ -345,7 +346,7 @@ pub(crate) fn run(a: &super::Args) -> Result<bool> {
         em.resets,
         silences,
         if reinits_ok {
-            "ok: one per reset and silence, extra ones rare"
+            "ok: one per reset, extra ones rare"
         } else {
             "NOT OK"
         }
