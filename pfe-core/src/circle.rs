@@ -60,7 +60,7 @@ fn moments(points: &[Point]) -> Result<Moments, FitError> {
         ss += (p.x - mean.x) * (p.x - mean.x) + (p.y - mean.y) * (p.y - mean.y);
     }
     let scale = math::sqrt(ss / nf);
-    if !(scale > 0.0) || !scale.is_finite() {
+    if !(scale > 0.0) || !math::finite(scale) {
         return Err(FitError::Degenerate);
     }
     let mut m = Moments {
@@ -150,7 +150,7 @@ pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitE
             for _ in 0..20 {
                 let dy = dpoly(x);
                 let xn = x - y / dy;
-                if !xn.is_finite() || xn == x {
+                if !math::finite(xn) || xn == x {
                     break;
                 }
                 let yn = poly(xn);
@@ -178,7 +178,7 @@ pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitE
         center: Point::new(m.mean.x + xc * m.scale, m.mean.y + yc * m.scale),
         radius: math::sqrt(r2) * m.scale,
     };
-    if circle.center.is_valid() && circle.radius.is_finite() && circle.radius > 0.0 {
+    if circle.center.is_valid() && math::finite(circle.radius) && circle.radius > 0.0 {
         Ok(circle)
     } else {
         Err(FitError::Degenerate)
@@ -217,7 +217,7 @@ pub(crate) fn refine_from(
     }
     let mut best = initial;
     // One pass per candidate gives its SSE and, for the next step, its normal equations.
-    if !eq.sse.is_finite() {
+    if !math::finite(eq.sse) {
         return Err(FitError::NonFinite);
     }
     let mut lambda = 1e-3f32;
@@ -237,7 +237,7 @@ pub(crate) fn refine_from(
             };
             let at_cand = NormalEquations::at(points, &cand);
             let sse = at_cand.sse;
-            if sse.is_finite() && sse < eq.sse && cand.radius > 0.0 {
+            if math::finite(sse) && sse < eq.sse && cand.radius > 0.0 {
                 let gain = eq.sse - sse;
                 best = cand;
                 eq = at_cand;
@@ -378,7 +378,7 @@ fn wtw_inverse(points: &[Point], circle: &Circle) -> Result<[[f32; 3]; 3], FitEr
         accumulate(&mut wtw, &mut dummy, &[dx / d, dy / d, 1.0], 0.0);
     }
     let inv = inverse3(&wtw).ok_or(FitError::Degenerate)?;
-    if inv.iter().flatten().all(|v| v.is_finite()) {
+    if inv.iter().flatten().all(|v| math::finite(*v)) {
         Ok(inv)
     } else {
         Err(FitError::Degenerate)
@@ -395,7 +395,7 @@ pub(crate) fn inverse3(a: &[[f32; 3]; 3]) -> Option<[[f32; 3]; 3]> {
     let [[a00, a01, a02], [a10, a11, a12], [a20, a21, a22]] = *a;
     let det = det3(a);
     let norm = a.iter().flatten().fold(0.0f32, |m, v| m.max(math::abs(*v)));
-    if !(math::abs(det) > norm * norm * norm * 1e-9) || !det.is_finite() {
+    if !(math::abs(det) > norm * norm * norm * 1e-9) || !math::finite(det) {
         return None;
     }
     let inv = 1.0 / det;
@@ -424,7 +424,7 @@ fn solve3(a: &[[f32; 3]; 3], b: &[f32; 3]) -> Option<[f32; 3]> {
     for (xi, row) in x.iter_mut().zip(inv.iter()) {
         *xi = row.iter().zip(b.iter()).map(|(m, v)| m * v).sum();
     }
-    x.iter().all(|v| v.is_finite()).then_some(x)
+    x.iter().all(|v| math::finite(*v)).then_some(x)
 }
 
 fn mul3(a: &[[f32; 3]; 3], b: &[[f32; 3]; 3]) -> [[f32; 3]; 3] {

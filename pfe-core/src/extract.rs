@@ -242,7 +242,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 .ranges
                 .get_mm(i, g.r_max)
                 .map(|r| config.correction.map_or(r, |k| k.apply(r)))
-                .filter(|r| r.is_finite() && *r > 0.0);
+                .filter(|r| math::finite(*r) && *r > 0.0);
             let p = match (r, self.motion) {
                 (Some(r), Some(m)) => m.deskew(i, r, g.bearing(i)).0,
                 (Some(r), None) => Point::new(r * c, r * s),
@@ -522,7 +522,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         };
         // Sign of k's deviation from the reference line (not from its own window).
         let side = match self.predict(ref_start, ref_end, k) {
-            Some(p) if p.signed.is_finite() => p.signed,
+            Some(p) if math::finite(p.signed) => p.signed,
             _ => side,
         };
         let mut b = k;

@@ -33,7 +33,7 @@ impl Point {
 
     /// True when both coordinates are finite.
     pub fn is_valid(&self) -> bool {
-        self.x.is_finite() && self.y.is_finite()
+        math::finite(self.x) && math::finite(self.y)
     }
 
     /// Euclidean distance to `other`.
@@ -64,7 +64,7 @@ pub fn ray_line_intersection(
         return None;
     }
     let t = (rho - origin.x * c - origin.y * s) / denom;
-    if t.is_finite() {
+    if math::finite(t) {
         Some((t, math::abs(denom)))
     } else {
         None
@@ -89,5 +89,5 @@ pub fn ray_circle_intersection(
     }
     let root = math::sqrt(disc);
     let t = if b - root > 0.0 { b - root } else { b + root };
-    (t > 0.0 && t.is_finite()).then_some(t)
+    (t > 0.0 && math::finite(t)).then_some(t)
 }

@@ -140,7 +140,7 @@ fn axis_from_moments(
     sxy: f32,
 ) -> Result<LineAxis, FitError> {
     let spread = sxx + syy;
-    if !(spread > 0.0) || !spread.is_finite() {
+    if !(spread > 0.0) || !math::finite(spread) {
         return Err(FitError::Degenerate);
     }
     // Major axis (tx, ty) of [[sxx, sxy], [sxy, syy]]; the normal is (−ty, tx).
@@ -152,7 +152,7 @@ fn axis_from_moments(
         (sxy, major - sxx)
     };
     let norm = math::hypot(tx, ty);
-    if !(norm > 0.0) || !norm.is_finite() {
+    if !(norm > 0.0) || !math::finite(norm) {
         return Err(FitError::Degenerate);
     }
     let (mut nx, mut ny) = (-ty / norm, tx / norm);
@@ -162,7 +162,7 @@ fn axis_from_moments(
         nx = -nx;
         ny = -ny;
     }
-    if !rho.is_finite() {
+    if !math::finite(rho) {
         return Err(FitError::Degenerate);
     }
     Ok(LineAxis {
@@ -190,7 +190,7 @@ fn residual_sse(sxx: f32, syy: f32, sxy: f32, c: f32, s: f32) -> f32 {
 impl LineFit {
     fn from_axis(a: LineAxis) -> Result<LineFit, FitError> {
         let alpha = math::atan2(a.ny, a.nx);
-        if !alpha.is_finite() {
+        if !math::finite(alpha) {
             return Err(FitError::Degenerate);
         }
         Ok(LineFit {

@@ -60,6 +60,15 @@ pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
     (sin(x), cos(x))
 }
 
+/// True when `x` is neither infinite nor NaN. `x − x` is exactly 0 for every finite `x` and
+/// NaN otherwise: two FPU instructions, where `f32::is_finite` becomes a dozen integer ones
+/// on thumbv7em (the hot loops call this once or twice per point).
+#[inline]
+#[allow(clippy::eq_op)] // x − x is the point: 0 or NaN.
+pub(crate) fn finite(x: f32) -> bool {
+    x - x == 0.0
+}
+
 /// Absolute value without std.
 pub(crate) fn abs(x: f32) -> f32 {
     if x < 0.0 {
@@ -77,6 +86,37 @@ pub(crate) fn hypot(x: f32, y: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     extern crate std;
+
+    #[test]
+    fn finite_agrees_with_the_standard_test() {
+        let specials = [
+            0.0f32,
+            -0.0,
+            1.0,
+            -1.0,
+            f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+            -f32::NAN,
+        ];
+        for x in specials {
+            assert_eq!(super::finite(x), x.is_finite(), "{x}");
+        }
+        let mut bits = 0u32;
+        loop {
+            let x = f32::from_bits(bits);
+            assert_eq!(super::finite(x), x.is_finite(), "{bits:#x}");
+            match bits.checked_add(0x0001_0003) {
+                Some(b) => bits = b,
+                None => break,
+            }
+        }
+    }
 
     #[test]
     fn sqrt_is_within_two_ulp_everywhere() {

@@ -85,7 +85,7 @@ pub fn predict_beam(
         (sxy, suu - sxx)
     };
     let t2 = tx * tx + ty * ty;
-    if !(t2 > 0.0) || !t2.is_finite() || !(suu > 0.0) {
+    if !(t2 > 0.0) || !math::finite(t2) || !(suu > 0.0) {
         return None;
     }
     let (nx, ny) = (-ty, tx);
@@ -103,7 +103,7 @@ pub fn predict_beam(
         });
     }
     let t = (wx * nx + wy * ny) / dn;
-    let (error, signed) = if t > 0.0 && t.is_finite() {
+    let (error, signed) = if t > 0.0 && math::finite(t) {
         (math::abs(r - t), r - t)
     } else {
         (f32::INFINITY, f32::INFINITY)
@@ -140,7 +140,7 @@ pub fn predict_beam(
 pub fn predict(window: &[Point], target: Point, origin: Point) -> Option<Prediction> {
     let (bx, by) = (target.x - origin.x, target.y - origin.y);
     let r = math::hypot(bx, by);
-    if !(r > 0.0) || !r.is_finite() {
+    if !(r > 0.0) || !math::finite(r) {
         return None;
     }
     predict_beam(window, origin, bx / r, by / r, r)

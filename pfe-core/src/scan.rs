@@ -96,7 +96,7 @@ impl Ranges<'_> {
                 f32::from(v) * mm_per_unit
             }
         };
-        (r.is_finite() && r > 0.0 && r <= r_max).then_some(r)
+        (math::finite(r) && r > 0.0 && r <= r_max).then_some(r)
     }
 }
 
