@@ -486,7 +486,12 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         for p in pts {
             let r = p.distance(&circle.center) - circle.radius;
             sse += r * r;
-            worst = worst.max(math::abs(r));
+            // Not f32::max: a library call on thumbv7em (and a NaN residual leaves it alone
+            // either way).
+            let a = math::abs(r);
+            if a > worst {
+                worst = a;
+            }
         }
         let fits = worst <= tol;
         // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
