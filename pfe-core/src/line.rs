@@ -300,9 +300,12 @@ impl LineFit {
         };
         let cov_e_a = if suu > 0.0 { -su_s / (n * suu) } else { 0.0 };
         let var_e = s_s / (n * n);
+        // Σ var_i (1/n − d u_i / suu)² ≥ 0, summed by parts: when every beam runs along the
+        // line (var_i ≈ 0) and the centroid is far out, the parts cancel below zero.
+        let var_rho = var_e + d * d * var_alpha + 2.0 * d * cov_e_a;
         LineCovariance {
             var_alpha,
-            var_rho: var_e + d * d * var_alpha + 2.0 * d * cov_e_a,
+            var_rho: if var_rho < 0.0 { 0.0 } else { var_rho },
             cov_alpha_rho: cov_e_a + d * var_alpha,
         }
     }
