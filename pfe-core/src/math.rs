@@ -1,5 +1,7 @@
-//! The few f32 functions the extractor needs, from `libm` (exact, default) or `micromath`
-//! (fast approximations, feature `micromath`). Everything else in the crate calls these.
+//! The few f32 functions the extractor needs: atan2 from `libm` (exact, default) or
+//! `micromath` (fast approximations, feature `micromath`), sine and cosine from an f32 kernel
+//! (or micromath), square root and finiteness by FPU arithmetic. Everything else in the crate
+//! calls these.
 
 #[cfg(feature = "micromath")]
 mod imp {
@@ -7,11 +9,8 @@ mod imp {
     pub fn atan2(y: f32, x: f32) -> f32 {
         F32Ext::atan2(y, x)
     }
-    pub fn sin(x: f32) -> f32 {
-        F32Ext::sin(x)
-    }
-    pub fn cos(x: f32) -> f32 {
-        F32Ext::cos(x)
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        (F32Ext::sin(x), F32Ext::cos(x))
     }
 }
 
@@ -20,15 +19,59 @@ mod imp {
     pub fn atan2(y: f32, x: f32) -> f32 {
         libm::atan2f(y, x)
     }
-    pub fn sin(x: f32) -> f32 {
-        libm::sinf(x)
-    }
-    pub fn cos(x: f32) -> f32 {
-        libm::cosf(x)
+    pub fn sin_cos(x: f32) -> (f32, f32) {
+        match super::sin_cos_f32(x) {
+            Some(sc) => sc,
+            None => (libm::sinf(x), libm::cosf(x)),
+        }
     }
 }
 
-pub(crate) use imp::{atan2, cos, sin};
+pub(crate) use imp::{atan2, sin_cos};
+
+/// `sin x`.
+pub(crate) fn sin(x: f32) -> f32 {
+    sin_cos(x).0
+}
+
+/// `(sin x, cos x)` for |x| ≤ 10⁴ in f32 arithmetic only, within 2·10⁻⁷ of the exact values
+/// (`None` beyond, and for NaN or ±inf). libm's `sinf`/`cosf` evaluate in f64, which the
+/// Cortex-M4F does in software (about 700 instructions a call; de-skewing calls two per
+/// point): this is about 40. Cody–Waite reduction by π/2 in three parts (exact products for
+/// |k| < 2¹³), then the minimax polynomials of musl's `__sindf`/`__cosdf` on |r| ≤ π/4.
+#[allow(clippy::excessive_precision)] // the coefficients as published
+#[cfg_attr(feature = "micromath", allow(dead_code))]
+fn sin_cos_f32(x: f32) -> Option<(f32, f32)> {
+    const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
+    const P1: f32 = 1.570_312_5; // 8 significant bits
+    const P2: f32 = 4.837_512_969_970_703e-4; // 11 significant bits
+    const P3: f32 = 7.549_789_954_891_882e-8;
+    const S1: f32 = -0.166_666_666_416_265_24;
+    const S2: f32 = 0.008_333_329_385_889_463;
+    const S3: f32 = -0.000_198_393_348_360_966_32;
+    const S4: f32 = 0.000_002_718_311_493_989_822;
+    const C0: f32 = -0.499_999_997_251_031;
+    const C1: f32 = 0.041_666_623_323_739_06;
+    const C2: f32 = -0.001_388_676_377_460_993;
+    const C3: f32 = 0.000_024_390_448_796_277_41;
+    if !(abs(x) <= 1.0e4) {
+        return None;
+    }
+    let half = if x < 0.0 { -0.5 } else { 0.5 };
+    let k = (x * FRAC_2_PI + half) as i32; // round half away from zero; |k| ≤ 6367
+    let kf = k as f32;
+    let r = ((x - kf * P1) - kf * P2) - kf * P3;
+    let z = r * r;
+    let s = r + r * z * (S1 + z * (S2 + z * (S3 + z * S4)));
+    let w = z * z;
+    let c = ((1.0 + z * C0) + w * C1) + (w * z) * (C2 + z * C3);
+    Some(match k & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    })
+}
 
 /// Square root by a bit-level estimate and three Newton steps (within an ulp or two of the
 /// correctly rounded result). libm's `sqrtf` is a bit-by-bit software loop costing a few
@@ -53,11 +96,6 @@ pub(crate) fn sqrt(x: f32) -> f32 {
         y = 0.5 * (y + x / y);
     }
     y * scale
-}
-
-/// `(sin x, cos x)`.
-pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
-    (sin(x), cos(x))
 }
 
 /// True when `x` is neither infinite nor NaN. `x − x` is exactly 0 for every finite `x` and
@@ -86,6 +124,39 @@ pub(crate) fn hypot(x: f32, y: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     extern crate std;
+
+    #[test]
+    fn sin_cos_f32_is_within_2e7_of_exact() {
+        use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
+        let mut worst = 0.0f64;
+        let mut x = -1.0e4f32;
+        while x <= 9_998.0 {
+            for d in [0.0f32, 1e-3, 0.37, FRAC_PI_4, FRAC_PI_2] {
+                let v = x + d;
+                let (s, c) = super::sin_cos_f32(v).unwrap();
+                let e = f64::from(v);
+                worst = worst
+                    .max((f64::from(s) - e.sin()).abs())
+                    .max((f64::from(c) - e.cos()).abs());
+            }
+            x += 0.731;
+        }
+        // Multiples of π/2, where the reduction cancels most.
+        for k in -6000..=6000 {
+            let v = (f64::from(k) * core::f64::consts::FRAC_PI_2) as f32;
+            let (s, c) = super::sin_cos_f32(v).unwrap();
+            let e = f64::from(v);
+            worst = worst
+                .max((f64::from(s) - e.sin()).abs())
+                .max((f64::from(c) - e.cos()).abs());
+        }
+        assert!(worst < 2e-7, "worst error {worst:e}");
+        // Tiny angles keep their relative accuracy: sin x = x.
+        assert_eq!(super::sin_cos_f32(1e-20).unwrap(), (1e-20, 1.0));
+        assert!(super::sin_cos_f32(f32::NAN).is_none());
+        assert!(super::sin_cos_f32(f32::INFINITY).is_none());
+        assert!(super::sin_cos_f32(2.0e4).is_none());
+    }
 
     #[test]
     fn finite_agrees_with_the_standard_test() {
