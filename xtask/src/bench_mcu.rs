@@ -136,16 +136,18 @@ fn accuracy() -> Result<String> {
     }
     anyhow::ensure!(!rows.is_empty(), "no score rows parsed");
     Ok(format!(
-        "Accuracy with `libm` (exact) and `micromath` (fast approximations of atan2, sin, cos; \
+        "Accuracy with `libm` (the default: libm's atan2, and pfe-core's own f32 sine and \
+         cosine, within 2·10⁻⁷) and `micromath` (fast approximations of atan2, sin, cos; \
          pfe-core's square root is its own in both) on the host: the `score` example, 100 \
          simulated mixed scans, σ_r = 5 mm, seed 1 (`cargo run --release -p host-tests \
          --example score [--features pfe-core/micromath]`). Errors are medians over correctly \
          typed matched features.\n\n\
          | config | maths | FalseMarkRatio | FalseIdenRatio | missed | spurious | \\|Δρ\\| mm | \\|Δα\\| mrad | centre mm | \\|ΔR\\| mm |\n\
          |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n{rows}\n\
-         libm stays the default: micromath saves 3–13 % of the instructions (the speed table) \
-         but costs accuracy (its atan2 and sin/cos are approximations: larger line and circle \
-         errors and more false marks above), and with libm the firmware's features are \
-         bit-identical to the host's (the end-to-end checks rely on it).\n"
+         libm stays the default: micromath saves instructions only where the paper's \
+         threshold calls atan2 for every point (the speed table), costs accuracy (its atan2 \
+         and sin/cos are approximations: larger line and circle errors and more false marks \
+         above), and with libm the firmware's features are bit-identical to the host's (the \
+         end-to-end checks rely on it).\n"
     ))
 }
