@@ -12,7 +12,7 @@ use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::{fit_axis, fit_line};
 use crate::math;
 use crate::predict::{paper_threshold, predict_beam, Prediction};
-use crate::scan::Scan;
+use crate::scan::{Ranges, Scan};
 use crate::Motion;
 
 const VALID: u8 = 1;
@@ -228,6 +228,29 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// Converts the readings to points. Beam directions come from an exact sine and cosine
     /// every 64 beams and a rotation recurrence in between (error < 1e-5 rad: 0.1 mm at 8 m).
     fn load_points(&mut self, scan: &Scan<'_>, config: &Config) {
+        // One loop per kind of reading, so that the per-reading test is a few instructions.
+        match scan.ranges {
+            Ranges::Mm(r) => self.load_with(scan, config, |i| r.get(i).copied()),
+            Ranges::Raw {
+                values,
+                mm_per_unit,
+                max_valid,
+            } => self.load_with(scan, config, |i| {
+                let v = *values.get(i)?;
+                (v != 0 && v <= max_valid).then(|| f32::from(v) * mm_per_unit)
+            }),
+        }
+        self.stats.readings = self.len;
+    }
+
+    /// [`Self::load_points`] with `reading(i)`, the range in mm before the validity test
+    /// (`None`: no return).
+    fn load_with(
+        &mut self,
+        scan: &Scan<'_>,
+        config: &Config,
+        reading: impl Fn(usize) -> Option<f32>,
+    ) {
         const EXACT_EVERY: usize = 64;
         let g = scan.geometry;
         let (rs, rc) = math::sin_cos(g.angle_step);
@@ -238,29 +261,38 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             } else {
                 (s, c) = (s * rc + c * rs, c * rc - s * rs);
             }
-            let r = scan
-                .ranges
-                .get_mm(i, g.r_max)
-                .map(|r| config.correction.map_or(r, |k| k.apply(r)))
-                .filter(|r| math::finite(*r) && *r > 0.0);
-            let p = match (r, self.motion) {
-                (Some(r), Some(m)) => m.deskew(i, r, g.bearing(i)).0,
-                (Some(r), None) => Point::new(r * c, r * s),
-                (None, _) => Point::INVALID,
+            // As `Ranges::get_mm`, then the correction (whose result is tested again).
+            let r = reading(i)
+                .filter(|r| math::finite(*r) && *r > 0.0 && *r <= g.r_max)
+                .and_then(|r| match config.correction {
+                    None => Some(r),
+                    Some(k) => Some(k.apply(r)).filter(|r| math::finite(*r) && *r > 0.0),
+                });
+            let (p, range, flag) = match r {
+                Some(r) => {
+                    let p = match self.motion {
+                        Some(m) => m.deskew(i, r, g.bearing(i)).0,
+                        None => Point::new(r * c, r * s),
+                    };
+                    if p.is_valid() {
+                        (p, r, VALID)
+                    } else {
+                        (Point::INVALID, 0.0, 0)
+                    }
+                }
+                None => (Point::INVALID, 0.0, 0),
             };
-            let ok = p.is_valid();
             if let Some(slot) = self.points.get_mut(i) {
-                *slot = if ok { p } else { Point::INVALID };
+                *slot = p;
             }
             if let Some(slot) = self.ranges.get_mut(i) {
-                *slot = if ok { r.unwrap_or(0.0) } else { 0.0 };
+                *slot = range;
             }
             if let Some(f) = self.flags.get_mut(i) {
-                *f = if ok { VALID } else { 0 };
+                *f = flag;
             }
-            self.stats.valid += usize::from(ok);
+            self.stats.valid += usize::from(flag);
         }
-        self.stats.readings = self.len;
     }
 
     /// Predicts point `k` from points `from..to` (all valid).
