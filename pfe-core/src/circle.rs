@@ -101,8 +101,9 @@ fn moments(points: &[Point]) -> Result<Moments, FitError> {
 ///     let t = 0.1 * i as f32;
 ///     Point::new(2000.0 + 300.0 * t.cos(), 100.0 + 300.0 * t.sin())
 /// }).collect();
-/// let c = fit_circle(&pts, CircleMethod::Hyper).unwrap();
+/// let c = fit_circle(&pts, CircleMethod::Hyper)?;
 /// assert!((c.radius - 300.0).abs() < 0.1);
+/// # Ok::<(), pfe_core::FitError>(())
 /// ```
 pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitError> {
     let m = moments(points)?;

@@ -52,8 +52,9 @@ impl RangeCorrection {
     ///     let t = i as f32 * 200.0;
     ///     (t + 5.0 + 0.002 * t, t)
     /// }).collect();
-    /// let c = RangeCorrection::calibrate(&pairs).unwrap();
+    /// let c = RangeCorrection::calibrate(&pairs)?;
     /// assert!((c.apply(4005.0 + 8.0) - 4000.0).abs() < 0.1);
+    /// # Ok::<(), pfe_core::FitError>(())
     /// ```
     pub fn calibrate(pairs: &[(f32, f32)]) -> Result<Self, FitError> {
         const K: usize = DEGREE + 1;

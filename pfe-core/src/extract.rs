@@ -12,7 +12,7 @@ use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::{fit_axis, fit_line};
 use crate::math;
 use crate::predict::{paper_threshold, predict_beam, Prediction};
-use crate::scan::{Ranges, Scan};
+use crate::scan::{code_mm, valid_mm, Ranges, Scan};
 use crate::Motion;
 
 const VALID: u8 = 1;
@@ -68,10 +68,11 @@ pub struct Stats {
 ///     })
 ///     .collect();
 /// let mut ex = Extractor::<361, 32>::new();
-/// ex.extract(&Scan::from_mm(g, &ranges), &Config::default()).unwrap();
+/// ex.extract(&Scan::from_mm(g, &ranges), &Config::default())?;
 /// assert_eq!(ex.features().len(), 1);
-/// let Feature::Line(l) = ex.features()[0] else { panic!() };
-/// assert!((l.rho - 2000.0).abs() < 0.5 && l.alpha.abs() < 1e-3);
+/// assert!(matches!(ex.features().first(),
+///     Some(Feature::Line(l)) if (l.rho - 2000.0).abs() < 0.5 && l.alpha.abs() < 1e-3));
+/// # Ok::<(), pfe_core::ExtractError>(())
 /// ```
 pub struct Extractor<const N: usize, const M: usize> {
     points: [Point; N],
@@ -236,8 +237,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 mm_per_unit,
                 max_valid,
             } => self.load_with(scan, config, |i| {
-                let v = *values.get(i)?;
-                (v != 0 && v <= max_valid).then(|| f32::from(v) * mm_per_unit)
+                code_mm(*values.get(i)?, mm_per_unit, max_valid)
             }),
         }
         self.stats.readings = self.len;
@@ -262,12 +262,12 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 (s, c) = (s * rc + c * rs, c * rc - s * rs);
             }
             // As `Ranges::get_mm`, then the correction (whose result is tested again).
-            let r = reading(i)
-                .filter(|r| math::finite(*r) && *r > 0.0 && *r <= g.r_max)
-                .and_then(|r| match config.correction {
+            let r = reading(i).and_then(|r| valid_mm(r, g.r_max)).and_then(|r| {
+                match config.correction {
                     None => Some(r),
                     Some(k) => Some(k.apply(r)).filter(|r| math::finite(*r) && *r > 0.0),
-                });
+                }
+            });
             let (p, range, flag) = match r {
                 Some(r) => {
                     let p = match self.motion {

@@ -12,8 +12,9 @@
 //! use pfe_core::{Config, Extractor, Scan, ScanGeometry};
 //! let ranges = [3000.0_f32; 361]; // a round room of radius 3 m
 //! let mut ex = Extractor::<361, 32>::new();
-//! let stats = ex.extract(&Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges), &Config::paper()).unwrap();
+//! let stats = ex.extract(&Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges), &Config::paper())?;
 //! assert_eq!(stats.valid, 361);
+//! # Ok::<(), pfe_core::ExtractError>(())
 //! ```
 #![no_std]
 #![forbid(unsafe_code)]

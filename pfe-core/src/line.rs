@@ -46,8 +46,9 @@ pub struct LineCovariance {
 /// ```
 /// use pfe_core::{fit_line, Point};
 /// let pts = [Point::new(1000.0, -500.0), Point::new(1000.0, 0.0), Point::new(1000.0, 500.0)];
-/// let l = fit_line(&pts).unwrap();
+/// let l = fit_line(&pts)?;
 /// assert!(l.alpha.abs() < 1e-6 && (l.rho - 1000.0).abs() < 1e-3);
+/// # Ok::<(), pfe_core::FitError>(())
 /// ```
 pub fn fit_line(points: &[Point]) -> Result<LineFit, FitError> {
     fit_line_iter(points.iter().copied())

@@ -88,16 +88,22 @@ impl Ranges<'_> {
                 values,
                 mm_per_unit,
                 max_valid,
-            } => {
-                let v = *values.get(i)?;
-                if v == 0 || v > *max_valid {
-                    return None;
-                }
-                f32::from(v) * mm_per_unit
-            }
+            } => code_mm(*values.get(i)?, *mm_per_unit, *max_valid)?,
         };
-        (math::finite(r) && r > 0.0 && r <= r_max).then_some(r)
+        valid_mm(r, r_max)
     }
+}
+
+/// A raw code in mm, `None` for 0 and the reserved codes above `max_valid`.
+#[inline]
+pub(crate) fn code_mm(v: u16, mm_per_unit: f32, max_valid: u16) -> Option<f32> {
+    (v != 0 && v <= max_valid).then(|| f32::from(v) * mm_per_unit)
+}
+
+/// `r` when it is a return: finite, positive and at most `r_max`.
+#[inline]
+pub(crate) fn valid_mm(r: f32, r_max: f32) -> Option<f32> {
+    (math::finite(r) && r > 0.0 && r <= r_max).then_some(r)
 }
 
 /// The largest valid LMS range code in the 8 m / 80 m measuring modes; 8183 and above are

@@ -5,6 +5,11 @@
 mod bench_mcu;
 mod conformance;
 mod demo;
+/// The generated-docs section writer host-tests uses, shared as source (xtask depends on
+/// anyhow only, not on host-tests).
+#[path = "../../host-tests/src/docs.rs"]
+#[allow(dead_code)]
+mod docs;
 mod eval;
 mod fuzz;
 mod no_panic;

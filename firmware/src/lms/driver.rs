@@ -738,27 +738,7 @@ where
         // Unit and measuring mode. A device that refuses the change (password, no 77) or
         // does not report its configuration is used as configured: every scan carries its
         // unit, and ranges are scaled by it.
-        let refused = match block {
-            Some(mut block) => {
-                let want_mode = self.config.measuring_mode.unwrap_or(block.measuring_mode());
-                if block.unit() != Some(self.config.unit) || block.measuring_mode() != want_mode {
-                    block.set_unit(self.config.unit);
-                    block.set_measuring_mode(want_mode);
-                    match self.write_config(&block) {
-                        Ok(()) => false,
-                        Err(Error::Rejected { .. } | Error::Nak { .. }) => {
-                            self.mode(&Command::OnRequest)?;
-                            true
-                        }
-                        Err(e) => return Err(e),
-                    }
-                } else {
-                    false
-                }
-            }
-            None => true,
-        };
-        if refused {
+        if !self.set_unit_and_mode(block)? {
             log!(
                 warn,
                 "lms: unit / measuring mode not set, using the device's"
@@ -778,6 +758,28 @@ where
     fn variant_refused(&mut self) {
         log!(warn, "lms: variant refused, using the device's");
         self.counters.variant_refused = self.counters.variant_refused.saturating_add(1);
+    }
+
+    /// Sets [`Config::unit`] and the measuring mode where `block` (the device's configuration)
+    /// differs; `Ok(false)` when the device refused or did not report its configuration.
+    fn set_unit_and_mode(&mut self, block: Option<ConfigBlock>) -> Result<bool, Error<U::Error>> {
+        let Some(mut block) = block else {
+            return Ok(false);
+        };
+        let want_mode = self.config.measuring_mode.unwrap_or(block.measuring_mode());
+        if block.unit() == Some(self.config.unit) && block.measuring_mode() == want_mode {
+            return Ok(true);
+        }
+        block.set_unit(self.config.unit);
+        block.set_measuring_mode(want_mode);
+        match self.write_config(&block) {
+            Ok(()) => Ok(true),
+            Err(Error::Rejected { .. } | Error::Nak { .. }) => {
+                self.mode(&Command::OnRequest)?;
+                Ok(false)
+            }
+            Err(e) => Err(e),
+        }
     }
 
     /// Installation mode, `77` with `block`, back to request mode.
@@ -894,7 +896,12 @@ where
             self.init()?;
         }
         loop {
-            if self.reset_seen || self.elapsed_since(self.last_scan_ms) >= self.silence_limit_ms() {
+            // The limit is at least the configured timeout: compare with that first (this
+            // runs at every poll).
+            let silent = self.elapsed_since(self.last_scan_ms);
+            if self.reset_seen
+                || (silent >= self.config.silence_timeout_ms && silent >= self.silence_limit_ms())
+            {
                 log!(
                     warn,
                     "lms: re-initialising ({}, {} ms since the last scan)",
