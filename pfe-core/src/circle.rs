@@ -42,27 +42,29 @@ struct Moments {
 
 fn moments(points: &[Point]) -> Result<Moments, FitError> {
     let n = points.len();
-    if n < 3 {
+    let Some(first) = points.first().filter(|_| n >= 3) else {
         return Err(FitError::TooFewPoints { got: n, need: 3 });
-    }
-    let (mut sx, mut sy) = (0.0f32, 0.0f32);
+    };
+    // Mean and spread in one pass, relative to the first point (an arc's points are close
+    // together compared with their distance from the scanner: no cancellation to speak of).
+    let (mut sx, mut sy, mut sq) = (0.0f32, 0.0f32, 0.0f32);
     for p in points {
-        if !p.is_valid() {
-            return Err(FitError::NonFinite);
-        }
-        sx += p.x;
-        sy += p.y;
+        let (ex, ey) = (p.x - first.x, p.y - first.y);
+        sx += ex;
+        sy += ey;
+        sq += ex * ex + ey * ey;
     }
-    let nf = n as f32;
-    let mean = Point::new(sx / nf, sy / nf);
-    let mut ss = 0.0f32;
-    for p in points {
-        ss += (p.x - mean.x) * (p.x - mean.x) + (p.y - mean.y) * (p.y - mean.y);
+    if !(math::finite(sx) && math::finite(sy) && math::finite(sq)) {
+        return Err(FitError::NonFinite);
     }
-    let scale = math::sqrt(ss / nf);
+    let inv_n = 1.0 / n as f32;
+    let (mx, my) = (sx * inv_n, sy * inv_n);
+    let mean = Point::new(first.x + mx, first.y + my);
+    let scale = math::sqrt((sq - sx * mx - sy * my) * inv_n);
     if !(scale > 0.0) || !math::finite(scale) {
         return Err(FitError::Degenerate);
     }
+    let inv_scale = 1.0 / scale;
     let mut m = Moments {
         mean,
         scale,
@@ -74,8 +76,8 @@ fn moments(points: &[Point]) -> Result<Moments, FitError> {
         mzz: 0.0,
     };
     for p in points {
-        let x = (p.x - mean.x) / scale;
-        let y = (p.y - mean.y) / scale;
+        let x = (p.x - mean.x) * inv_scale;
+        let y = (p.y - mean.y) * inv_scale;
         let z = x * x + y * y;
         m.mxx += x * x;
         m.myy += y * y;
@@ -84,12 +86,12 @@ fn moments(points: &[Point]) -> Result<Moments, FitError> {
         m.myz += y * z;
         m.mzz += z * z;
     }
-    m.mxx /= nf;
-    m.myy /= nf;
-    m.mxy /= nf;
-    m.mxz /= nf;
-    m.myz /= nf;
-    m.mzz /= nf;
+    m.mxx *= inv_n;
+    m.myy *= inv_n;
+    m.mxy *= inv_n;
+    m.mxz *= inv_n;
+    m.myz *= inv_n;
+    m.mzz *= inv_n;
     Ok(m)
 }
 
@@ -186,6 +188,9 @@ pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitE
     }
 }
 
+/// Smallest refinement step worth evaluating, mm.
+const STEP_TOL: f32 = 1e-3;
+
 /// Geometric refinement: Gauss–Newton with Levenberg damping on Σ(|P_i − c| − R)², at most
 /// `iterations` steps, from `initial`. Returns the better of the refined and the initial circle.
 pub fn refine_circle(
@@ -232,6 +237,11 @@ pub(crate) fn refine_from(
             let Some(step) = solve3(&a, &eq.jtr) else {
                 break;
             };
+            // Converged: a step this small changes nothing that matters (and would cost a
+            // pass over the points to evaluate).
+            if step[0] * step[0] + step[1] * step[1] + step[2] * step[2] < STEP_TOL * STEP_TOL {
+                break;
+            }
             let cand = Circle {
                 center: Point::new(best.center.x - step[0], best.center.y - step[1]),
                 radius: best.radius - step[2],
@@ -282,9 +292,9 @@ impl NormalEquations {
                 continue;
             }
             // J_i = (−dx/d, −dy/d, −1): the products with −1 are exact negations, and JᵀJ is
-            // symmetric, so five sums and a count give all nine entries (the same values
-            // `accumulate` would sum, in the same order).
-            let (a, b) = (-dx / d, -dy / d);
+            // symmetric, so five sums and a count give all nine entries.
+            let inv_d = 1.0 / d;
+            let (a, b) = (-dx * inv_d, -dy * inv_d);
             s00 += a * a;
             s01 += a * b;
             s11 += b * b;

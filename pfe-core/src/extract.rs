@@ -11,7 +11,7 @@ use crate::feature::{circle_feature, line_feature, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::{fit_axis, fit_line};
 use crate::math;
-use crate::predict::{paper_threshold, predict_beam, Prediction};
+use crate::predict::{paper_threshold, Prediction, WindowLine};
 use crate::scan::{code_mm, valid_mm, Ranges, Scan};
 use crate::Motion;
 
@@ -29,6 +29,8 @@ const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
 const REFINE_AFTER: usize = 4;
 /// Points each side used to refine a boundary.
 const REFINE_SPAN: usize = 6;
+/// A window of `w` points predicts up to `w / REUSE_DIV` further points while they fit it.
+const REUSE_DIV: usize = 2;
 /// Sizes of a new segment at which it is tested for being the same arc as the one before.
 const MERGE_AT: [usize; 2] = [8, 16];
 
@@ -297,13 +299,23 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     /// Predicts point `k` from points `from..to` (all valid).
     fn predict(&mut self, from: usize, to: usize, k: usize) -> Option<Prediction> {
+        let line = self.window_line(from, to, k)?;
+        self.predict_with(&line, k)
+    }
+
+    /// The line of points `from..to`, seen from the origin of beam `k`.
+    fn window_line(&mut self, from: usize, to: usize, k: usize) -> Option<WindowLine> {
         self.stats.predictions += 1;
-        let pts = self.points.get(from..to)?;
+        WindowLine::fit(self.points.get(from..to)?, self.origin(k))
+    }
+
+    /// Predicts point `k` from a window's line.
+    fn predict_with(&self, line: &WindowLine, k: usize) -> Option<Prediction> {
         let (p, o, r) = (self.point(k), self.origin(k), self.range(k));
         if !(r > 0.0) {
             return None;
         }
-        predict_beam(pts, o, (p.x - o.x) / r, (p.y - o.y) / r, r)
+        Some(line.predict(o, p.x - o.x, p.y - o.y, r))
     }
 
     /// Whether a prediction says "mark" under the configured threshold.
@@ -347,6 +359,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// over the points that already left the old segment's line (boundary localisation).
     fn mark_noise(&mut self, m: &NoiseModel, sigma_r: f32, step: f32) {
         let mut seg: Option<usize> = None;
+        // The last fresh window's line and the last point it may predict.
+        let mut cache: Option<(WindowLine, usize)> = None;
         // Boundary awaiting refinement: (its index, the start of the segment before it).
         let mut pending: Option<(usize, usize)> = None;
         // Last boundary that was not a jump and the start of the segment before it (a jump
@@ -359,6 +373,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         for k in 0..self.len {
             if !self.valid(k) {
                 seg = None;
+                cache = None;
                 pending = None;
                 joinable = None;
                 continue;
@@ -366,6 +381,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             let Some(s) = seg else {
                 self.set(k, START);
                 seg = Some(k);
+                cache = None;
                 continue;
             };
             let c = k - s;
@@ -382,8 +398,20 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             } else if c == 1 {
                 None
             } else {
-                let w = self.window(k, c, m, sigma_r);
-                let pred = self.predict(k - w, k, k);
+                // A recent window's line first: most points continue it.
+                let stale = cache
+                    .filter(|(_, until)| k <= *until)
+                    .and_then(|(line, _)| self.predict_with(&line, k))
+                    .filter(|p| !p.exceeds(m.k, sigma_r, m.floor));
+                let pred = match stale {
+                    Some(p) => Some(p),
+                    None => {
+                        let w = self.window(k, c, m, sigma_r);
+                        let line = self.window_line(k - w, k, k);
+                        cache = line.map(|l| (l, k + w / REUSE_DIV));
+                        line.and_then(|l| self.predict_with(&l, k))
+                    }
+                };
                 let over = match pred {
                     None => true,
                     Some(p) => p.exceeds(m.k, sigma_r, m.floor),
@@ -397,6 +425,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     self.set(b, JUMP);
                 }
                 seg = Some(b);
+                cache = None;
                 pending = (!jump).then_some((b, s));
                 joinable = (!jump).then_some((b, s));
             } else if let Some((b, old)) = joinable.filter(|(b, _)| MERGE_AT.contains(&(k + 1 - b)))
@@ -407,6 +436,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 if m.arc_window >= 5 && self.arc_fit(from, k + 1, m, sigma_r).is_some() {
                     self.clear(b, START);
                     seg = Some(old);
+                    cache = None;
                     pending = None;
                     joinable = None;
                 }
@@ -418,6 +448,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                         self.clear(b, START);
                         self.set(best, START);
                         seg = Some(best);
+                        cache = None;
                         joinable = Some((best, old));
                     }
                     pending = None;
@@ -510,29 +541,29 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// radius of at most `arc_max_radius`.
     fn arc_fit(&self, from: usize, to: usize, m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
         let pts = self.points.get(from..to)?;
-        let line = fit_axis(pts).ok()?;
+        let var = sigma_r * sigma_r;
+        // The circle's residual sum is ≥ 0, so a line this good cannot be beaten by enough.
+        let line_sse = fit_axis(pts).ok()?.sse();
+        if !(line_sse >= m.arc_chi2 * var) {
+            return None;
+        }
         let circle = fit_circle(pts, crate::circle::CircleMethod::Kasa).ok()?;
+        if !(circle.radius <= m.arc_max_radius) {
+            return None;
+        }
         let tol = m.k * sigma_r + m.floor;
-        // One pass: the largest radial residual and their sum of squares (`geometric_sse`).
-        let (mut worst, mut sse) = (0.0f32, 0.0f32);
+        // One pass: every radial residual within `tol`, and their sum of squares.
+        let mut sse = 0.0f32;
         for p in pts {
             let r = p.distance(&circle.center) - circle.radius;
-            sse += r * r;
-            // Not f32::max: a library call on thumbv7em (and a NaN residual leaves it alone
-            // either way).
-            let a = math::abs(r);
-            if a > worst {
-                worst = a;
+            if !(math::abs(r) <= tol) {
+                return None;
             }
+            sse += r * r;
         }
-        let fits = worst <= tol;
         // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
         // corner does not.
-        let var = sigma_r * sigma_r;
-        (fits
-            && circle.radius <= m.arc_max_radius
-            && sse <= 2.25 * var * pts.len() as f32
-            && line.sse() - sse >= m.arc_chi2 * var)
+        (sse <= 2.25 * var * pts.len() as f32 && line_sse - sse >= m.arc_chi2 * var)
             .then_some(circle)
     }
 

@@ -101,9 +101,30 @@ impl LineAxis {
     }
 }
 
-/// [`fit_line`] without α.
+/// [`fit_line`] without α, in one pass over the points (relative to the middle one): for the
+/// extractor's tests on short runs of points, where the moments about the middle point are
+/// small enough that centring them afterwards loses nothing that matters.
 pub(crate) fn fit_axis(points: &[Point]) -> Result<LineAxis, FitError> {
-    fit_axis_iter(points.iter().copied())
+    let n = points.len();
+    let Some(o) = points.get(n / 2).filter(|_| n >= 2) else {
+        return Err(FitError::TooFewPoints { got: n, need: 2 });
+    };
+    let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+    for p in points {
+        let (ex, ey) = (p.x - o.x, p.y - o.y);
+        sx += ex;
+        sy += ey;
+        sxx += ex * ex;
+        syy += ey * ey;
+        sxy += ex * ey;
+    }
+    if !(math::finite(sxx + syy) && math::finite(sxy)) {
+        return Err(FitError::NonFinite);
+    }
+    let inv_n = 1.0 / n as f32;
+    let (mx, my) = (sx * inv_n, sy * inv_n);
+    let c = Point::new(o.x + mx, o.y + my);
+    axis_from_moments(n, c, sxx - sx * mx, syy - sy * my, sxy - sx * my)
 }
 
 fn fit_axis_iter<I>(points: I) -> Result<LineAxis, FitError>

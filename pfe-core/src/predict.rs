@@ -14,9 +14,9 @@ pub struct Prediction {
     pub error: f32,
     /// Measured range minus predicted range, mm (positive: the point is behind Line 1).
     pub signed: f32,
-    /// Beam direction · Line 1's (unnormalised) normal: ∝ sin ϕ.
+    /// ∝ sin ϕ (the beam direction times Line 1's normal, scaled).
     dn: f32,
-    /// Beam direction · Line 1's (unnormalised) direction: ∝ cos ϕ.
+    /// ∝ cos ϕ, with the same scale as `dn`.
     dt: f32,
     /// Variance of `error` in units of σ_r² for pure range noise:
     /// `1 + (1/n + u²/S_uu) · sin²ϕ̄ / sin²ϕ`, u the prediction point's position along Line 1
@@ -26,6 +26,17 @@ pub struct Prediction {
 }
 
 impl Prediction {
+    /// The prediction of a beam that runs along Line 1: says nothing (infinite error).
+    const fn along(dn: f32, dt: f32) -> Self {
+        Self {
+            error: f32::INFINITY,
+            signed: f32::INFINITY,
+            dn,
+            dt,
+            var_factor: f32::INFINITY,
+        }
+    }
+
     /// ϕ, the acute angle between Line 1 and the beam, in [0, π/2].
     pub fn phi(&self) -> f32 {
         math::atan2(math::abs(self.dn), math::abs(self.dt))
@@ -46,10 +57,114 @@ impl Prediction {
     }
 }
 
+/// Line 1 of a prediction: the least-squares line of a window of points (its principal axis:
+/// one square root, no trigonometry), fitted once and able to predict any beam. The extractor
+/// reuses one window's line for the next few beams while they fit it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WindowLine {
+    /// Centroid of the window.
+    c: Point,
+    /// Unit direction of the line; the unit normal is `(−ty, tx)`.
+    tx: f32,
+    ty: f32,
+    /// 1 / number of points.
+    inv_n: f32,
+    /// 1 / the window's spread along the line, Σu².
+    inv_suu: f32,
+    /// sin²ϕ̄: incidence of the line at the window's last point, seen from the origin given
+    /// to [`WindowLine::fit`] (1 when that point is the origin).
+    sin2_last: f32,
+}
+
+impl WindowLine {
+    /// The line of `window` (at least 2 points), its last point seen from `origin`. `None`
+    /// when the window does not define a line (fewer than 2 points, all equal, not finite).
+    pub fn fit(window: &[Point], origin: Point) -> Option<Self> {
+        let (first, last) = (window.first()?, window.last()?);
+        let n = window.len();
+        if n < 2 {
+            return None;
+        }
+        // Moments relative to the first point (the window is small: no cancellation).
+        let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
+        for p in window {
+            let (ex, ey) = (p.x - first.x, p.y - first.y);
+            sx += ex;
+            sy += ey;
+            sxx += ex * ex;
+            syy += ey * ey;
+            sxy += ex * ey;
+        }
+        let inv_n = 1.0 / n as f32;
+        let (mx, my) = (sx * inv_n, sy * inv_n);
+        let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
+        // Principal axis (tx, ty) of [[sxx, sxy], [sxy, syy]].
+        let half = 0.5 * (sxx - syy);
+        let suu = 0.5 * (sxx + syy) + math::sqrt(half * half + sxy * sxy);
+        let (tx, ty) = if sxx >= syy {
+            (suu - syy, sxy)
+        } else {
+            (sxy, suu - sxx)
+        };
+        let t2 = tx * tx + ty * ty;
+        if !(t2 > 0.0) || !math::finite(t2) || !(suu > 0.0) {
+            return None;
+        }
+        let inv_t = 1.0 / math::sqrt(t2);
+        let (tx, ty) = (tx * inv_t, ty * inv_t);
+        // Incidence at the last point: sin²ϕ̄ = (l·n)² / |l|².
+        let (lx, ly) = (last.x - origin.x, last.y - origin.y);
+        let (ln, l2) = (ty * lx - tx * ly, lx * lx + ly * ly);
+        Some(Self {
+            c: Point::new(first.x + mx, first.y + my),
+            tx,
+            ty,
+            inv_n,
+            inv_suu: 1.0 / suu,
+            sin2_last: if l2 > 0.0 { ln * ln / l2 } else { 1.0 },
+        })
+    }
+
+    /// Predicts the point at range `r` (mm) along the beam from `origin` whose direction times
+    /// `r` is `(bx, by)` (for a measured point `P`: `P − origin`). One division.
+    pub fn predict(&self, origin: Point, bx: f32, by: f32, r: f32) -> Prediction {
+        let (nx, ny) = (-self.ty, self.tx);
+        // q = r (d·n), bt = r (d·t), d the unit beam direction.
+        let q = bx * nx + by * ny;
+        let bt = bx * self.tx + by * self.ty;
+        if !(q * q >= 1e-12 * r * r) {
+            // Line 1 runs along the beam (or the input is not finite).
+            return Prediction::along(q, bt);
+        }
+        let iq = 1.0 / q;
+        let (wx, wy) = (self.c.x - origin.x, self.c.y - origin.y);
+        let (wn, wt) = (wx * nx + wy * ny, wx * self.tx + wy * self.ty);
+        // Line 1 meets the beam at t = (w·n)/(d·n).
+        let t_over_r = wn * iq;
+        let t = t_over_r * r;
+        let (error, signed) = if t > 0.0 && math::finite(t) {
+            (math::abs(r - t), r - t)
+        } else {
+            (f32::INFINITY, f32::INFINITY)
+        };
+        // The prediction point's position along Line 1 from the centroid.
+        let ut = bt * t_over_r - wt;
+        let lever = self.inv_n + ut * ut * self.inv_suu;
+        // sin²ϕ̄ / sin²ϕ, sin ϕ = d·n = q / r.
+        let ratio2 = self.sin2_last * (r * iq) * (r * iq);
+        Prediction {
+            error,
+            signed,
+            dn: q,
+            dt: bt,
+            var_factor: 1.0 + lever * ratio2,
+        }
+    }
+}
+
 /// Predicts the point at range `r` (mm, from `origin`) along the unit beam direction
 /// `(dx, dy)` from the `window` points (at least 2). `None` when the window does not define a
-/// line (fewer than 2 points, all equal, or not finite). One pass over the window and one
-/// square root.
+/// line (fewer than 2 points, all equal, or not finite).
 pub fn predict_beam(
     window: &[Point],
     origin: Point,
@@ -57,75 +172,8 @@ pub fn predict_beam(
     dy: f32,
     r: f32,
 ) -> Option<Prediction> {
-    let (first, last) = (window.first()?, window.last()?);
-    let n = window.len();
-    if n < 2 {
-        return None;
-    }
-    // Moments relative to the first point (the window is small: no cancellation).
-    let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
-    for p in window {
-        let (ex, ey) = (p.x - first.x, p.y - first.y);
-        sx += ex;
-        sy += ey;
-        sxx += ex * ex;
-        syy += ey * ey;
-        sxy += ex * ey;
-    }
-    let nf = n as f32;
-    let (mx, my) = (sx / nf, sy / nf);
-    let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
-    let c = Point::new(first.x + mx, first.y + my);
-    // Principal axis (tx, ty) of [[sxx, sxy], [sxy, syy]], not normalised; normal (−ty, tx).
-    let half = 0.5 * (sxx - syy);
-    let suu = 0.5 * (sxx + syy) + math::sqrt(half * half + sxy * sxy);
-    let (tx, ty) = if sxx >= syy {
-        (suu - syy, sxy)
-    } else {
-        (sxy, suu - sxx)
-    };
-    let t2 = tx * tx + ty * ty;
-    if !(t2 > 0.0) || !math::finite(t2) || !(suu > 0.0) {
-        return None;
-    }
-    let (nx, ny) = (-ty, tx);
-    let dn = dx * nx + dy * ny;
-    let dt = dx * tx + dy * ty;
-    let (wx, wy) = (c.x - origin.x, c.y - origin.y);
-    // |dn| < 1e-6·|t| without a second square root (each costs ~50 instructions on the M4F).
-    if dn * dn < 1e-12 * t2 {
-        return Some(Prediction {
-            error: f32::INFINITY,
-            signed: f32::INFINITY,
-            dn,
-            dt,
-            var_factor: f32::INFINITY,
-        });
-    }
-    let t = (wx * nx + wy * ny) / dn;
-    let (error, signed) = if t > 0.0 && math::finite(t) {
-        (math::abs(r - t), r - t)
-    } else {
-        (f32::INFINITY, f32::INFINITY)
-    };
-    let ut = (origin.x + dx * t - c.x) * tx + (origin.y + dy * t - c.y) * ty;
-    let lever = 1.0 / nf + ut * ut / (t2 * suu);
-    // Incidence at the window's last point: sin²ϕ̄ = (l·n)² / (|l|² |n|²); sin²ϕ = dn²/|n|².
-    let (lx, ly) = (last.x - origin.x, last.y - origin.y);
-    let ln = lx * nx + ly * ny;
-    let l2 = lx * lx + ly * ly;
-    let ratio2 = if l2 > 0.0 {
-        ln * ln / (l2 * dn * dn)
-    } else {
-        1.0 / (dn * dn) * t2
-    };
-    Some(Prediction {
-        error,
-        signed,
-        dn,
-        dt,
-        var_factor: 1.0 + lever * ratio2,
-    })
+    let line = WindowLine::fit(window, origin)?;
+    Some(line.predict(origin, dx * r, dy * r, r))
 }
 
 /// Predicts `target` (seen from `origin`) from the `window` points (at least 2).
