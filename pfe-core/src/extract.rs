@@ -34,6 +34,17 @@ const REUSE_DIV: usize = 2;
 /// Sizes of a new segment at which it is tested for being the same arc as the one before.
 const MERGE_AT: [usize; 2] = [8, 16];
 
+/// The default mode's per-point test: a window's line and the jump limit.
+struct Run {
+    line: WindowLine,
+    /// Jump limit: `gap_factor` × the previous range + `jump_add`, mm.
+    gap_factor: f32,
+    jump_add: f32,
+    /// (k σ_r)², mm².
+    k_sigma2: f32,
+    floor: f32,
+}
+
 /// What one extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -383,7 +394,39 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         // incidence (Borges & Aldon's λ), plus the noise of two readings.
         let lam = 10.0f32.to_radians();
         let gap_factor = math::abs(math::sin(step)) / math::sin(lam - math::abs(step)).max(1e-3);
-        for k in 0..self.len {
+        let jump_add = m.k * sigma_r * core::f32::consts::SQRT_2 + m.floor;
+        let k_sigma2 = (m.k * sigma_r) * (m.k * sigma_r);
+        let mut k = 0usize;
+        while k < self.len {
+            // Fast path: the points the cached line accepts, up to the next point where a
+            // boundary awaits refinement or a merge test is due.
+            if let (Some(_), Some((line, until)), None) = (seg, cache, self.motion) {
+                let mut stop = (until + 1).min(self.len);
+                if let Some((b, _)) = pending {
+                    stop = stop.min(b + REFINE_AFTER);
+                }
+                if let Some((b, _)) = joinable {
+                    for at in MERGE_AT.iter().map(|a| b + a - 1).filter(|&at| at >= k) {
+                        stop = stop.min(at);
+                    }
+                }
+                let run = Run {
+                    line,
+                    gap_factor,
+                    jump_add,
+                    k_sigma2,
+                    floor: m.floor,
+                };
+                let next = self.accepted_run(k, stop, &run);
+                self.stats.predictions += next - k;
+                k = next;
+                if k >= self.len {
+                    break;
+                }
+            }
+            let this = k;
+            k += 1;
+            let k = this;
             if !self.valid(k) {
                 seg = None;
                 cache = None;
@@ -399,9 +442,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             };
             let c = k - s;
             let (p, prev) = (self.point(k), self.point(k - 1));
-            let limit = self.range(k - 1) * gap_factor
-                + m.k * sigma_r * core::f32::consts::SQRT_2
-                + m.floor;
+            let limit = self.range(k - 1) * gap_factor + jump_add;
             let (ex, ey) = (p.x - prev.x, p.y - prev.y);
             let jump = ex * ex + ey * ey > limit * limit;
             let boundary = if jump {
@@ -468,6 +509,36 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 }
             }
         }
+    }
+
+    /// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its
+    /// predecessor, or is not accepted by `run.line`: the default mode's test for most points,
+    /// as a tight loop (no de-skewing: the scanner is at the origin).
+    fn accepted_run(&self, from: usize, to: usize, run: &Run) -> usize {
+        let slices = (
+            self.points.get(from..to),
+            self.ranges.get(from..to),
+            self.flags.get(from..to),
+        );
+        let (Some(pts), Some(rs), Some(fl)) = slices else {
+            return from;
+        };
+        let Some(before) = from.checked_sub(1) else {
+            return from;
+        };
+        let (mut prev, mut prev_r) = (self.point(before), self.range(before));
+        for (i, ((p, &r), &f)) in pts.iter().zip(rs).zip(fl).enumerate() {
+            let limit = prev_r * run.gap_factor + run.jump_add;
+            let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+            if f & VALID == 0
+                || ex * ex + ey * ey > limit * limit
+                || !run.line.accepts(p.x, p.y, r, run.k_sigma2, run.floor)
+            {
+                return from + i;
+            }
+            (prev, prev_r) = (*p, r);
+        }
+        to
     }
 
     /// Best split between a segment starting at `old` and one starting near `b` and running

@@ -62,11 +62,12 @@ impl Prediction {
 /// reuses one window's line for the next few beams while they fit it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WindowLine {
-    /// Centroid of the window.
-    c: Point,
     /// Unit direction of the line; the unit normal is `(−ty, tx)`.
     tx: f32,
     ty: f32,
+    /// The centroid's coordinates along the normal and along the line.
+    cn: f32,
+    ct: f32,
     /// 1 / number of points.
     inv_n: f32,
     /// 1 / the window's spread along the line, Σu².
@@ -115,10 +116,12 @@ impl WindowLine {
         // Incidence at the last point: sin²ϕ̄ = (l·n)² / |l|².
         let (lx, ly) = (last.x - origin.x, last.y - origin.y);
         let (ln, l2) = (ty * lx - tx * ly, lx * lx + ly * ly);
+        let c = Point::new(first.x + mx, first.y + my);
         Some(Self {
-            c: Point::new(first.x + mx, first.y + my),
             tx,
             ty,
+            cn: tx * c.y - ty * c.x,
+            ct: tx * c.x + ty * c.y,
             inv_n,
             inv_suu: 1.0 / suu,
             sin2_last: if l2 > 0.0 { ln * ln / l2 } else { 1.0 },
@@ -137,8 +140,9 @@ impl WindowLine {
             return Prediction::along(q, bt);
         }
         let iq = 1.0 / q;
-        let (wx, wy) = (self.c.x - origin.x, self.c.y - origin.y);
-        let (wn, wt) = (wx * nx + wy * ny, wx * self.tx + wy * self.ty);
+        // w = centroid − origin.
+        let wn = self.cn - (origin.x * nx + origin.y * ny);
+        let wt = self.ct - (origin.x * self.tx + origin.y * self.ty);
         // Line 1 meets the beam at t = (w·n)/(d·n).
         let t_over_r = wn * iq;
         let t = t_over_r * r;
@@ -159,6 +163,33 @@ impl WindowLine {
             dt: bt,
             var_factor: 1.0 + lever * ratio2,
         }
+    }
+}
+
+impl WindowLine {
+    /// `!predict((0, 0), x, y, r).exceeds(k, σ_r, floor)` for the point `(x, y)` at range `r`
+    /// from a scanner at the origin, with `k_sigma2 = (k σ_r)²`: the extractor's test for
+    /// most points, kept to its arithmetic.
+    #[inline]
+    pub(crate) fn accepts(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
+        let q = self.tx * y - self.ty * x;
+        if !(q * q >= 1e-12 * r * r) {
+            return false;
+        }
+        let iq = 1.0 / q;
+        let t_over_r = self.cn * iq;
+        let t = t_over_r * r;
+        if !(t > 0.0 && math::finite(t)) {
+            return false;
+        }
+        let e = math::abs(r - t) - floor;
+        if !(e > 0.0) {
+            return true;
+        }
+        let ut = (x * self.tx + y * self.ty) * t_over_r - self.ct;
+        let lever = self.inv_n + ut * ut * self.inv_suu;
+        let ri = r * iq;
+        e * e <= k_sigma2 * (1.0 + lever * (self.sin2_last * ri * ri))
     }
 }
 
