@@ -51,7 +51,7 @@ pub struct LineCovariance {
 /// # Ok::<(), pfe_core::FitError>(())
 /// ```
 pub fn fit_line(points: &[Point]) -> Result<LineFit, FitError> {
-    fit_line_iter(points.iter().copied())
+    LineFit::from_axis(fit_axis(points)?)
 }
 
 /// [`fit_line`] over any re-iterable sequence of points (two passes: mean, then centred sums).
@@ -101,9 +101,9 @@ impl LineAxis {
     }
 }
 
-/// [`fit_line`] without α, in one pass over the points (relative to the middle one): for the
-/// extractor's tests on short runs of points, where the moments about the middle point are
-/// small enough that centring them afterwards loses nothing that matters.
+/// [`fit_line`] without α, in one pass over the points, with moments about the middle point
+/// (centred afterwards: the moments about the middle point are at most about four times the
+/// centred ones, so the rounding stays of the order of a two-pass fit's).
 pub(crate) fn fit_axis(points: &[Point]) -> Result<LineAxis, FitError> {
     let n = points.len();
     let Some(o) = points.get(n / 2).filter(|_| n >= 2) else {
