@@ -398,6 +398,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let k_sigma2 = (m.k * sigma_r) * (m.k * sigma_r);
         let mut k = 0usize;
         while k < self.len {
+            let mut stale_failed = false;
             // Fast path: the points the cached line accepts, up to the next point where a
             // boundary awaits refinement or a merge test is due.
             if let (Some(_), Some((line, until)), None) = (seg, cache, self.motion) {
@@ -419,6 +420,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 };
                 let next = self.accepted_run(k, stop, &run);
                 self.stats.predictions += next - k;
+                stale_failed = next < stop;
                 k = next;
                 if k >= self.len {
                     break;
@@ -452,26 +454,23 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             } else if c == 1 {
                 None
             } else {
-                // A recent window's line first: most points continue it.
-                let stale = cache
-                    .filter(|(_, until)| k <= *until)
-                    .and_then(|(line, _)| self.predict_with(&line, k))
-                    .filter(|p| !p.exceeds(m.k, sigma_r, m.floor));
-                let pred = match stale {
-                    Some(p) => Some(p),
-                    None => {
-                        let w = self.window(k, c, m, sigma_r);
-                        let line = self.window_line(k - w, k, k);
-                        cache = line.map(|l| (l, k + w / REUSE_DIV));
-                        line.and_then(|l| self.predict_with(&l, k))
-                    }
-                };
-                let over = match pred {
-                    None => true,
-                    Some(p) => p.exceeds(m.k, sigma_r, m.floor),
-                };
-                (over && !self.continues_arc(s, k, m, sigma_r))
-                    .then(|| self.locate(s, k, pred, m, sigma_r))
+                // A recent window's line first (unless the fast path just saw it fail here).
+                let stale_ok = !stale_failed
+                    && cache
+                        .filter(|(_, until)| k <= *until)
+                        .is_some_and(|(line, _)| self.line_accepts(&line, k, m, sigma_r));
+                if stale_ok {
+                    None
+                } else {
+                    let w = self.window(k, c, m, sigma_r);
+                    let line = self.window_line(k - w, k, k);
+                    cache = line.map(|l| (l, k + w / REUSE_DIV));
+                    let over = !line.is_some_and(|l| self.line_accepts(&l, k, m, sigma_r));
+                    (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
+                        let pred = line.and_then(|l| self.predict_with(&l, k));
+                        self.locate(s, k, pred, m, sigma_r)
+                    })
+                }
             };
             if let Some(b) = boundary {
                 self.set(b, START);
@@ -539,6 +538,20 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             (prev, prev_r) = (*p, r);
         }
         to
+    }
+
+    /// Whether `line` accepts point `k` under the noise model (the inverse of
+    /// `Prediction::exceeds`, without building the prediction when not de-skewing).
+    fn line_accepts(&self, line: &WindowLine, k: usize, m: &NoiseModel, sigma_r: f32) -> bool {
+        match self.motion {
+            None => {
+                let (p, ks) = (self.point(k), m.k * sigma_r);
+                line.accepts(p.x, p.y, self.range(k), ks * ks, m.floor)
+            }
+            Some(_) => self
+                .predict_with(line, k)
+                .is_some_and(|p| !p.exceeds(m.k, sigma_r, m.floor)),
+        }
     }
 
     /// Best split between a segment starting at `old` and one starting near `b` and running
