@@ -9,7 +9,7 @@ use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{circle_feature, line_feature, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
-use crate::line::{fit_axis, fit_line};
+use crate::line::{fit_axis, fit_line, line_sse};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
 use crate::scan::{code_mm, Ranges, Scan, ScanGeometry};
@@ -563,8 +563,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         for j in lo..=(b + 1).min(end.saturating_sub(NP)) {
             let left = self.points.get(j.saturating_sub(REFINE_SPAN).max(old)..j);
             let right = self.points.get(j..end.min(j + REFINE_SPAN));
-            let sse = match (left.map(fit_axis), right.map(fit_axis)) {
-                (Some(Ok(l)), Some(Ok(r))) => l.sse() + r.sse(),
+            let sse = match (left.and_then(line_sse), right.and_then(line_sse)) {
+                (Some(l), Some(r)) => l + r,
                 _ => continue,
             };
             // Ties keep the detected boundary.
@@ -640,7 +640,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let pts = self.points.get(from..to)?;
         let var = sigma_r * sigma_r;
         // The circle's residual sum is ≥ 0, so a line this good cannot be beaten by enough.
-        let line_sse = fit_axis(pts).ok()?.sse();
+        let line_sse = line_sse(pts)?;
         if !(line_sse >= m.arc_chi2 * var) {
             return None;
         }

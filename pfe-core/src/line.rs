@@ -90,21 +90,25 @@ pub(crate) struct LineAxis {
 }
 
 impl LineAxis {
-    /// Sum of squared orthogonal residuals, from the moments.
-    pub(crate) fn sse(&self) -> f32 {
-        residual_sse(self.sxx, self.syy, self.sxy, self.nx, self.ny)
-    }
-
     /// Signed distance of `p` from the line.
     pub(crate) fn signed_distance(&self, p: &Point) -> f32 {
         p.x * self.nx + p.y * self.ny - self.rho
     }
 }
 
-/// [`fit_line`] without α, in one pass over the points, with moments about the middle point
-/// (centred afterwards: the moments about the middle point are at most about four times the
-/// centred ones, so the rounding stays of the order of a two-pass fit's).
-pub(crate) fn fit_axis(points: &[Point]) -> Result<LineAxis, FitError> {
+/// Sum of squared orthogonal residuals of the least-squares line through `points` (the smaller
+/// eigenvalue of their scatter matrix: one pass and one square root, no line); `None` for
+/// fewer than 2 points or non-finite input.
+pub(crate) fn line_sse(points: &[Point]) -> Option<f32> {
+    let (_, _, sxx, syy, sxy) = centred_moments(points).ok()?;
+    let half = 0.5 * (sxx - syy);
+    let v = 0.5 * (sxx + syy) - math::sqrt(half * half + sxy * sxy);
+    Some(if v > 0.0 { v } else { 0.0 })
+}
+
+/// Count, centroid and centred second moments of `points` in one pass (moments about the
+/// middle point, centred afterwards).
+fn centred_moments(points: &[Point]) -> Result<(usize, Point, f32, f32, f32), FitError> {
     let n = points.len();
     let Some(o) = points.get(n / 2).filter(|_| n >= 2) else {
         return Err(FitError::TooFewPoints { got: n, need: 2 });
@@ -124,7 +128,15 @@ pub(crate) fn fit_axis(points: &[Point]) -> Result<LineAxis, FitError> {
     let inv_n = 1.0 / n as f32;
     let (mx, my) = (sx * inv_n, sy * inv_n);
     let c = Point::new(o.x + mx, o.y + my);
-    axis_from_moments(n, c, sxx - sx * mx, syy - sy * my, sxy - sx * my)
+    Ok((n, c, sxx - sx * mx, syy - sy * my, sxy - sx * my))
+}
+
+/// [`fit_line`] without α, in one pass over the points, with moments about the middle point
+/// (centred afterwards: the moments about the middle point are at most about four times the
+/// centred ones, so the rounding stays of the order of a two-pass fit's).
+pub(crate) fn fit_axis(points: &[Point]) -> Result<LineAxis, FitError> {
+    let (n, c, sxx, syy, sxy) = centred_moments(points)?;
+    axis_from_moments(n, c, sxx, syy, sxy)
 }
 
 fn fit_axis_iter<I>(points: I) -> Result<LineAxis, FitError>
