@@ -123,7 +123,7 @@ impl Config {
                 k: 4.0,
                 k_locate: 2.5,
                 floor: 3.0,
-                window: 6,
+                window: 10,
                 max_window: 24,
                 min_span: 12.0,
                 arc_window: 24,

@@ -29,8 +29,6 @@ const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
 const REFINE_AFTER: usize = 4;
 /// Points each side used to refine a boundary.
 const REFINE_SPAN: usize = 6;
-/// A window of `w` points predicts up to `w / REUSE_DIV` further points while they fit it.
-const REUSE_DIV: usize = 2;
 /// Sizes of a new segment at which it is tested for being the same arc as the one before.
 const MERGE_AT: [usize; 2] = [8, 16];
 
@@ -464,7 +462,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 } else {
                     let w = self.window(k, c, m, sigma_r);
                     let line = self.window_line(k - w, k, k);
-                    cache = line.map(|l| (l, k + w / REUSE_DIV));
+                    // It may test the next 2w points while they fit it, no more loosely than
+                    // a fresh line (`WindowLine::accepts`).
+                    cache = line.map(|l| (l, k + 2 * w));
                     let over = !line.is_some_and(|l| self.line_accepts(&l, k, m, sigma_r));
                     (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
                         let pred = line.and_then(|l| self.predict_with(&l, k));

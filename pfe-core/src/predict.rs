@@ -72,6 +72,8 @@ pub struct WindowLine {
     inv_n: f32,
     /// 1 / the window's spread along the line, Σu².
     inv_suu: f32,
+    /// The lever `1/n + u²/Σu²` of the beam right after the window (see [`Self::accepts`]).
+    lever_next: f32,
     /// sin²ϕ̄: incidence of the line at the window's last point, seen from the origin given
     /// to [`WindowLine::fit`] (1 when that point is the origin).
     sin2_last: f32,
@@ -117,13 +119,21 @@ impl WindowLine {
         let (lx, ly) = (last.x - origin.x, last.y - origin.y);
         let (ln, l2) = (ty * lx - tx * ly, lx * lx + ly * ly);
         let c = Point::new(first.x + mx, first.y + my);
+        let inv_suu = 1.0 / suu;
+        // The next beam's position along the line, for evenly spaced points.
+        let (u_first, u_last) = (
+            (first.x - c.x) * tx + (first.y - c.y) * ty,
+            (last.x - c.x) * tx + (last.y - c.y) * ty,
+        );
+        let u_next = u_last + (u_last - u_first) / (n - 1) as f32;
         Some(Self {
             tx,
             ty,
             cn: tx * c.y - ty * c.x,
             ct: tx * c.x + ty * c.y,
             inv_n,
-            inv_suu: 1.0 / suu,
+            inv_suu,
+            lever_next: inv_n + u_next * u_next * inv_suu,
             sin2_last: if l2 > 0.0 { ln * ln / l2 } else { 1.0 },
         })
     }
@@ -188,6 +198,13 @@ impl WindowLine {
         }
         let ut = (x * self.tx + y * self.ty) * t_over_r - self.ct;
         let lever = self.inv_n + ut * ut * self.inv_suu;
+        // No looser than for the beam right after the window: a line kept for a few more
+        // beams tests them as strictly as a fresh one would.
+        let lever = if lever < self.lever_next {
+            lever
+        } else {
+            self.lever_next
+        };
         let ri = r * iq;
         e * e <= k_sigma2 * (1.0 + lever * (self.sin2_last * ri * ri))
     }
