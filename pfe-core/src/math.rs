@@ -107,13 +107,11 @@ pub(crate) fn finite(x: f32) -> bool {
     x - x == 0.0
 }
 
-/// Absolute value without std.
+/// Absolute value without std: the sign bit cleared (LLVM makes it one `vabs.f32`, where a
+/// comparison and a branch take five instructions on thumbv7em).
+#[inline]
 pub(crate) fn abs(x: f32) -> f32 {
-    if x < 0.0 {
-        -x
-    } else {
-        x
-    }
+    f32::from_bits(x.to_bits() & 0x7fff_ffff)
 }
 
 /// Hypotenuse.

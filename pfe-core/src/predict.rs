@@ -188,8 +188,9 @@ impl WindowLine {
         }
         let iq = 1.0 / q;
         let t_over_r = self.cn * iq;
+        // Finite: |q| ≥ 10⁻⁶ r.
         let t = t_over_r * r;
-        if !(t > 0.0 && math::finite(t)) {
+        if !(t > 0.0) {
             return false;
         }
         let e = math::abs(r - t) - floor;
