@@ -12,7 +12,7 @@ use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::{fit_axis, fit_line, line_sse};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
-use crate::scan::{code_mm, Ranges, Scan, ScanGeometry};
+use crate::scan::{max_code, Ranges, Scan, ScanGeometry};
 use crate::Motion;
 
 const VALID: u8 = 1;
@@ -239,52 +239,57 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     /// Converts the readings to points.
     fn load_points(&mut self, scan: &Scan<'_>, config: &Config) {
-        // One loop per kind of reading and per correction / de-skew, so that the common case
-        // (no correction, no motion) costs a few instructions a reading.
         let g = scan.geometry;
-        let plain = |_: usize, r: f32, c: f32, s: f32| Some((Point::new(r * c, r * s), r));
-        match (scan.ranges, config.correction, self.motion) {
-            (
-                Ranges::Raw {
-                    values,
-                    mm_per_unit,
-                    max_valid,
-                },
-                None,
-                None,
-            ) => {
-                let mm = values.iter().map(|&v| {
-                    code_mm(v, mm_per_unit, max_valid).unwrap_or(f32::NAN)
-                });
-                self.load_with(g, mm, plain);
+        let len = self.len;
+        // First the valid ranges (0 for no return), one loop per kind of reading.
+        match scan.ranges {
+            Ranges::Raw {
+                values,
+                mm_per_unit,
+                max_valid,
+            } => {
+                let max_code = max_code(mm_per_unit, max_valid, g.r_max);
+                for (slot, &v) in self.ranges.iter_mut().zip(values).take(len) {
+                    // 1 ..= max_code: in (0, r_max] mm.
+                    *slot = if v.wrapping_sub(1) < max_code {
+                        f32::from(v) * mm_per_unit
+                    } else {
+                        0.0
+                    };
+                }
             }
-            (Ranges::Mm(r), None, None) => self.load_with(g, r.iter().copied(), plain),
-            (ranges, correction, motion) => {
-                let mm = (0..self.len).map(|i| ranges.get_mm(i, g.r_max).unwrap_or(f32::NAN));
-                self.load_with(g, mm, |i, r, c, s| {
-                    let r = match correction {
-                        None => r,
-                        Some(k) => Some(k.apply(r)).filter(|r| math::finite(*r) && *r > 0.0)?,
-                    };
-                    let p = match motion {
-                        Some(m) => m.deskew(i, r, g.bearing(i)).0,
-                        None => Point::new(r * c, r * s),
-                    };
-                    p.is_valid().then_some((p, r))
-                });
+            Ranges::Mm(mm) => {
+                for (slot, &r) in self.ranges.iter_mut().zip(mm).take(len) {
+                    // As `scan::valid_mm` (r_max is finite: NaN and ±inf fail too).
+                    *slot = if r > 0.0 && r <= g.r_max { r } else { 0.0 };
+                }
             }
         }
-        self.stats.readings = self.len;
+        // Then the points, without a correction or de-skewing in the common case.
+        match (config.correction, self.motion) {
+            (None, None) => self.place(g, |_, r, c, s| Some((Point::new(r * c, r * s), r))),
+            (correction, motion) => self.place(g, |i, r, c, s| {
+                let r = match correction {
+                    None => r,
+                    Some(k) => Some(k.apply(r)).filter(|r| math::finite(*r) && *r > 0.0)?,
+                };
+                let p = match motion {
+                    Some(m) => m.deskew(i, r, g.bearing(i)).0,
+                    None => Point::new(r * c, r * s),
+                };
+                p.is_valid().then_some((p, r))
+            }),
+        }
+        self.stats.readings = len;
     }
 
-    /// [`Self::load_points`] from the `readings` in mm (not a return: NaN, 0, above r_max)
-    /// and `convert(i, r, cos, sin)`, the point and its range (`None`: not a point). Beam
-    /// directions come from an exact sine and cosine every 64 beams and a rotation recurrence
-    /// in between (error < 1e-5 rad: 0.1 mm at 8 m).
-    fn load_with(
+    /// Points from the valid ranges (0: not a return) and `convert(i, r, cos, sin)`, the point
+    /// and its range (`None`: not a point). Beam directions come from an exact sine and
+    /// cosine every 64 beams and a rotation recurrence in between (error < 1e-5 rad: 0.1 mm
+    /// at 8 m).
+    fn place(
         &mut self,
         g: ScanGeometry,
-        readings: impl Iterator<Item = f32>,
         convert: impl Fn(usize, f32, f32, f32) -> Option<(Point, f32)>,
     ) {
         const EXACT_EVERY: usize = 64;
@@ -296,15 +301,14 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             .iter_mut()
             .zip(self.ranges.iter_mut())
             .zip(self.flags.iter_mut());
-        for (i, (((point, range), flag), r)) in slots.zip(readings).take(len).enumerate() {
+        for (i, ((point, range), flag)) in slots.take(len).enumerate() {
             if i % EXACT_EVERY == 0 {
                 (s, c) = math::sin_cos(g.bearing(i));
             } else {
                 (s, c) = (s * rc + c * rs, c * rc - s * rs);
             }
-            // As `scan::valid_mm` (r_max is finite: NaN and ±inf fail too).
-            let out = if r > 0.0 && r <= g.r_max {
-                convert(i, r, c, s)
+            let out = if *range > 0.0 {
+                convert(i, *range, c, s)
             } else {
                 None
             };

@@ -100,6 +100,31 @@ pub(crate) fn code_mm(v: u16, mm_per_unit: f32, max_valid: u16) -> Option<f32> {
     (v != 0 && v <= max_valid).then(|| f32::from(v) * mm_per_unit)
 }
 
+/// The largest code `v ≤ max_valid` whose range `v · mm_per_unit` is at most `r_max` (so that
+/// codes `1 ..= max_code` are exactly the returns); 0 when there is none.
+pub(crate) fn max_code(mm_per_unit: f32, max_valid: u16, r_max: f32) -> u16 {
+    if !(mm_per_unit > 0.0) || !math::finite(mm_per_unit) {
+        return 0;
+    }
+    let fits = |v: u16| f32::from(v) * mm_per_unit <= r_max;
+    // The quotient is within a code of the answer; the two loops make it exact.
+    let q = r_max / mm_per_unit;
+    let mut v = if q >= f32::from(max_valid) {
+        max_valid
+    } else if q >= 0.0 {
+        q as u16
+    } else {
+        0
+    };
+    while v > 0 && !fits(v) {
+        v -= 1;
+    }
+    while v < max_valid && fits(v + 1) {
+        v += 1;
+    }
+    v
+}
+
 /// `r` when it is a return: finite, positive and at most `r_max`.
 #[inline]
 pub(crate) fn valid_mm(r: f32, r_max: f32) -> Option<f32> {
@@ -161,5 +186,31 @@ impl<'a> Scan<'a> {
     pub fn point(&self, i: usize) -> Option<Point> {
         let r = self.ranges.get_mm(i, self.geometry.r_max)?;
         Some(Point::from_polar(r, self.geometry.bearing(i)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `max_code` against the definition (a code is a return when `code_mm` and `valid_mm`
+    /// accept it), for unit sizes and range limits that do and do not divide evenly.
+    #[test]
+    fn max_code_is_the_last_valid_code() {
+        let units = [1.0f32, 10.0, 0.1, 0.3, 7.7, 0.0, -1.0, f32::NAN, f32::INFINITY];
+        let limits = [8000.0f32, 8182.0, 8183.0, 80_000.0, 0.05, 1.0, 4.45, 655_350.0];
+        for &mm in &units {
+            for &r_max in &limits {
+                for max_valid in [LMS_MAX_VALID_8M, 100, u16::MAX] {
+                    let expected = (1..=max_valid)
+                        .rev()
+                        .find(|&v| {
+                            code_mm(v, mm, max_valid).and_then(|r| valid_mm(r, r_max)).is_some()
+                        })
+                        .unwrap_or(0);
+                    assert_eq!(max_code(mm, max_valid, r_max), expected, "{mm} {r_max} {max_valid}");
+                }
+            }
+        }
     }
 }
