@@ -4,7 +4,7 @@
 
 use heapless::Vec;
 
-use crate::circle::{fit_circle, refine_circle, refine_from, Circle, NormalEquations};
+use crate::circle::{fit_circle, refine_circle, refine_from, ArcSums, Circle, NormalEquations};
 use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{circle_feature, line_feature, Feature};
@@ -643,12 +643,14 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     fn arc_fit(&self, from: usize, to: usize, m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
         let pts = self.points.get(from..to)?;
         let var = sigma_r * sigma_r;
-        // The circle's residual sum is ≥ 0, so a line this good cannot be beaten by enough.
-        let line_sse = line_sse(pts)?;
+        // One pass for both fits. The circle's residual sum is ≥ 0, so a line this good
+        // cannot be beaten by enough.
+        let sums = ArcSums::of(pts)?;
+        let line_sse = sums.line_sse();
         if !(line_sse >= m.arc_chi2 * var) {
             return None;
         }
-        let circle = fit_circle(pts, crate::circle::CircleMethod::Kasa).ok()?;
+        let circle = sums.kasa()?;
         if !(circle.radius <= m.arc_max_radius) {
             return None;
         }

@@ -197,18 +197,36 @@ mod tests {
     /// accept it), for unit sizes and range limits that do and do not divide evenly.
     #[test]
     fn max_code_is_the_last_valid_code() {
-        let units = [1.0f32, 10.0, 0.1, 0.3, 7.7, 0.0, -1.0, f32::NAN, f32::INFINITY];
-        let limits = [8000.0f32, 8182.0, 8183.0, 80_000.0, 0.05, 1.0, 4.45, 655_350.0];
+        let units = [
+            1.0f32,
+            10.0,
+            0.1,
+            0.3,
+            7.7,
+            0.0,
+            -1.0,
+            f32::NAN,
+            f32::INFINITY,
+        ];
+        let limits = [
+            8000.0f32, 8182.0, 8183.0, 80_000.0, 0.05, 1.0, 4.45, 655_350.0,
+        ];
         for &mm in &units {
             for &r_max in &limits {
                 for max_valid in [LMS_MAX_VALID_8M, 100, u16::MAX] {
                     let expected = (1..=max_valid)
                         .rev()
                         .find(|&v| {
-                            code_mm(v, mm, max_valid).and_then(|r| valid_mm(r, r_max)).is_some()
+                            code_mm(v, mm, max_valid)
+                                .and_then(|r| valid_mm(r, r_max))
+                                .is_some()
                         })
                         .unwrap_or(0);
-                    assert_eq!(max_code(mm, max_valid, r_max), expected, "{mm} {r_max} {max_valid}");
+                    assert_eq!(
+                        max_code(mm, max_valid, r_max),
+                        expected,
+                        "{mm} {r_max} {max_valid}"
+                    );
                 }
             }
         }
