@@ -201,6 +201,12 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         i < self.len && self.flag(i) & (START | END) != 0
     }
 
+    /// The first index from `from` whose flags satisfy `test`.
+    fn next_flag(&self, from: usize, test: impl Fn(u8) -> bool) -> Option<usize> {
+        let flags = self.flags.get(from..self.len)?;
+        Some(from + flags.iter().position(|&f| test(f))?)
+    }
+
     fn flag(&self, i: usize) -> u8 {
         self.flags.get(i).copied().unwrap_or(0)
     }
@@ -731,17 +737,13 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// with the run's own points as the window; a run longer than `Np` is tested at its last
     /// `Np` points, so its first marks stay. Runs at the end of a valid stretch are left alone.
     fn check_step(&mut self, config: &Config, r_max: f32) {
+        const MARK: u8 = VALID | START;
         let mut j = 0usize;
-        while j < self.len {
-            if self.flag(j) & (VALID | START) != VALID | START {
-                j += 1;
-                continue;
-            }
-            let mut e = j;
-            while e + 1 < self.len && self.flag(e + 1) & (VALID | START) == VALID | START {
-                e += 1;
-            }
-            let next = e + 1;
+        // The next mark, and the end of the run of marks it starts.
+        while let Some(start) = self.next_flag(j, |f| f & MARK == MARK) {
+            j = start;
+            let next = self.next_flag(j + 1, |f| f & MARK != MARK).unwrap_or(self.len);
+            let e = next - 1;
             if e > j && next < self.len && self.valid(next) {
                 let from = (e + 1).saturating_sub(NP).max(j);
                 let pred = self.predict(from, next, next);
@@ -767,17 +769,13 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         };
         let mut pending: Option<(usize, usize)> = None;
         let mut k = 0usize;
-        while k < self.len {
-            if !self.valid(k) {
-                k += 1;
-                continue;
-            }
-            let s = k;
-            let mut e = k;
-            while e + 1 < self.len && self.flag(e + 1) & (VALID | START) == VALID {
-                e += 1;
-            }
-            k = e + 1;
+        while let Some(s) = self.next_flag(k, |f| f & VALID != 0) {
+            k = s;
+            // The segment runs to the next start or invalid point.
+            k = self
+                .next_flag(k + 1, |f| f & (VALID | START) != VALID)
+                .unwrap_or(self.len);
+            let e = k - 1;
             if let (Some((ps, pe)), Some(m)) = (pending, merge) {
                 if pe + 1 == s
                     && self.flag(s) & JUMP == 0
