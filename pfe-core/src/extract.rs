@@ -742,7 +742,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         // The next mark, and the end of the run of marks it starts.
         while let Some(start) = self.next_flag(j, |f| f & MARK == MARK) {
             j = start;
-            let next = self.next_flag(j + 1, |f| f & MARK != MARK).unwrap_or(self.len);
+            let next = self
+                .next_flag(j + 1, |f| f & MARK != MARK)
+                .unwrap_or(self.len);
             let e = next - 1;
             if e > j && next < self.len && self.valid(next) {
                 let from = (e + 1).saturating_sub(NP).max(j);
