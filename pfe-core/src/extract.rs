@@ -471,7 +471,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     None
                 } else {
                     let w = self.window(k, c, m, sigma_r);
-                    let line = self.window_line(k - w, k, k);
+                    let line = self
+                        .window_line(k - w, k, k)
+                        .map(|l| l.capped(&self.point(k - w), &self.point(k - 1), w));
                     // It may test the next 2w points while they fit it, no more loosely than
                     // a fresh line (`WindowLine::accepts`).
                     cache = line.map(|l| (l, k + 2 * w));

@@ -62,21 +62,25 @@ impl Prediction {
 /// reuses one window's line for the next few beams while they fit it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WindowLine {
-    /// Unit direction of the line; the unit normal is `(−ty, tx)`.
+    /// Direction of the line, scaled so that its larger component is ±1 (|t|² = `t2` in
+    /// [1, 2]: no square root to normalise it); the normal is `(−ty, tx)`, of the same length.
     tx: f32,
     ty: f32,
-    /// The centroid's coordinates along the normal and along the line.
+    /// 10⁻¹² |t|²: a beam with (d·n)² below this runs along the line.
+    parallel: f32,
+    /// The centroid's coordinates along the normal and along the line (times |t|).
     cn: f32,
     ct: f32,
     /// 1 / number of points.
     inv_n: f32,
-    /// 1 / the window's spread along the line, Σu².
-    inv_suu: f32,
-    /// The lever `1/n + u²/Σu²` of the beam right after the window (see [`Self::accepts`]).
+    /// 1 / (|t|² Σu²), Σu² the window's spread along the line.
+    inv_t2suu: f32,
+    /// The lever `1/n + u²/Σu²` of the beam right after the window, or +∞ (see
+    /// [`Self::accepts`]).
     lever_next: f32,
-    /// sin²ϕ̄: incidence of the line at the window's last point, seen from the origin given
-    /// to [`WindowLine::fit`] (1 when that point is the origin).
-    sin2_last: f32,
+    /// |t|² sin²ϕ̄, ϕ̄ the incidence of the line at the window's last point, seen from the
+    /// origin given to [`WindowLine::fit`] (sin²ϕ̄ = 1 when that point is the origin).
+    t2_sin2_last: f32,
 }
 
 impl WindowLine {
@@ -109,33 +113,44 @@ impl WindowLine {
         } else {
             (sxy, suu - sxx)
         };
-        let t2 = tx * tx + ty * ty;
-        if !(t2 > 0.0) || !math::finite(t2) || !(suu > 0.0) {
+        let big = if math::abs(tx) >= math::abs(ty) {
+            math::abs(tx)
+        } else {
+            math::abs(ty)
+        };
+        if !(big > 0.0) || !math::finite(big) || !(suu > 0.0) {
             return None;
         }
-        let inv_t = 1.0 / math::sqrt(t2);
-        let (tx, ty) = (tx * inv_t, ty * inv_t);
-        // Incidence at the last point: sin²ϕ̄ = (l·n)² / |l|².
+        let inv_big = 1.0 / big;
+        let (tx, ty) = (tx * inv_big, ty * inv_big);
+        let t2 = tx * tx + ty * ty;
+        // Incidence at the last point: |t|² sin²ϕ̄ = (l·n)² / |l|².
         let (lx, ly) = (last.x - origin.x, last.y - origin.y);
         let (ln, l2) = (ty * lx - tx * ly, lx * lx + ly * ly);
         let c = Point::new(first.x + mx, first.y + my);
-        let inv_suu = 1.0 / suu;
-        // The next beam's position along the line, for evenly spaced points.
-        let (u_first, u_last) = (
-            (first.x - c.x) * tx + (first.y - c.y) * ty,
-            (last.x - c.x) * tx + (last.y - c.y) * ty,
-        );
-        let u_next = u_last + (u_last - u_first) / (n - 1) as f32;
         Some(Self {
             tx,
             ty,
+            parallel: 1e-12 * t2,
             cn: tx * c.y - ty * c.x,
             ct: tx * c.x + ty * c.y,
             inv_n,
-            inv_suu,
-            lever_next: inv_n + u_next * u_next * inv_suu,
-            sin2_last: if l2 > 0.0 { ln * ln / l2 } else { 1.0 },
+            inv_t2suu: 1.0 / (t2 * suu),
+            lever_next: f32::INFINITY,
+            t2_sin2_last: if l2 > 0.0 { ln * ln / l2 } else { t2 },
         })
+    }
+
+    /// The same line, with [`Self::accepts`] no looser than for the beam right after its
+    /// window (`first`, `last` and `n`: the window's first and last point and its size),
+    /// assuming evenly spaced points.
+    #[inline]
+    pub(crate) fn capped(mut self, first: &Point, last: &Point, n: usize) -> Self {
+        let u_first = first.x * self.tx + first.y * self.ty - self.ct;
+        let u_last = last.x * self.tx + last.y * self.ty - self.ct;
+        let u_next = u_last + (u_last - u_first) / n.saturating_sub(1).max(1) as f32;
+        self.lever_next = self.inv_n + u_next * u_next * self.inv_t2suu;
+        self
     }
 
     /// Predicts the point at range `r` (mm) along the beam from `origin` whose direction times
@@ -145,7 +160,7 @@ impl WindowLine {
         // q = r (d·n), bt = r (d·t), d the unit beam direction.
         let q = bx * nx + by * ny;
         let bt = bx * self.tx + by * self.ty;
-        if !(q * q >= 1e-12 * r * r) {
+        if !(q * q >= self.parallel * r * r) {
             // Line 1 runs along the beam (or the input is not finite).
             return Prediction::along(q, bt);
         }
@@ -163,9 +178,9 @@ impl WindowLine {
         };
         // The prediction point's position along Line 1 from the centroid.
         let ut = bt * t_over_r - wt;
-        let lever = self.inv_n + ut * ut * self.inv_suu;
-        // sin²ϕ̄ / sin²ϕ, sin ϕ = d·n = q / r.
-        let ratio2 = self.sin2_last * (r * iq) * (r * iq);
+        let lever = self.inv_n + ut * ut * self.inv_t2suu;
+        // sin²ϕ̄ / sin²ϕ, |t| sin ϕ = d·n = q / r.
+        let ratio2 = self.t2_sin2_last * (r * iq) * (r * iq);
         Prediction {
             error,
             signed,
@@ -183,12 +198,12 @@ impl WindowLine {
     #[inline]
     pub(crate) fn accepts(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
         let q = self.tx * y - self.ty * x;
-        if !(q * q >= 1e-12 * r * r) {
+        if !(q * q >= self.parallel * r * r) {
             return false;
         }
         let iq = 1.0 / q;
         let t_over_r = self.cn * iq;
-        // Finite: |q| ≥ 10⁻⁶ r.
+        // Finite: (d·n)² ≥ 10⁻¹² |t|².
         let t = t_over_r * r;
         if !(t > 0.0) {
             return false;
@@ -198,7 +213,7 @@ impl WindowLine {
             return true;
         }
         let ut = (x * self.tx + y * self.ty) * t_over_r - self.ct;
-        let lever = self.inv_n + ut * ut * self.inv_suu;
+        let lever = self.inv_n + ut * ut * self.inv_t2suu;
         // No looser than for the beam right after the window: a line kept for a few more
         // beams tests them as strictly as a fresh one would.
         let lever = if lever < self.lever_next {
@@ -207,7 +222,7 @@ impl WindowLine {
             self.lever_next
         };
         let ri = r * iq;
-        e * e <= k_sigma2 * (1.0 + lever * (self.sin2_last * ri * ri))
+        e * e <= k_sigma2 * (1.0 + lever * (self.t2_sin2_last * ri * ri))
     }
 }
 
