@@ -300,31 +300,35 @@ impl WireFeature {
 /// assert_eq!(firmware::output::crc32(0, b"123456789"), 0xCBF4_3926);
 /// ```
 pub fn crc32(crc: u32, data: &[u8]) -> u32 {
-    // Nibble table: 64 bytes of flash, 2 lookups per byte.
-    const T: [u32; 16] = [
-        0x0000_0000,
-        0x1DB7_1064,
-        0x3B6E_20C8,
-        0x26D9_30AC,
-        0x76DC_4190,
-        0x6B6B_51F4,
-        0x4DB2_6158,
-        0x5005_713C,
-        0xEDB8_8320,
-        0xF00F_9344,
-        0xD6D6_A3E8,
-        0xCB61_B38C,
-        0x9B64_C2B0,
-        0x86D3_D2D4,
-        0xA00A_E278,
-        0xBDBD_F21C,
-    ];
+    // Byte table (1 KiB of flash, built at compile time: an index out of range would be a
+    // build error, not a panic): one lookup per byte.
+    #[allow(clippy::indexing_slicing)]
+    const T: [u32; 256] = {
+        let mut t = [0u32; 256];
+        let mut i = 0;
+        while i < 256 {
+            let mut c = i as u32;
+            let mut k = 0;
+            while k < 8 {
+                c = if c & 1 != 0 {
+                    (c >> 1) ^ 0xEDB8_8320
+                } else {
+                    c >> 1
+                };
+                k += 1;
+            }
+            t[i] = c;
+            i += 1;
+        }
+        t
+    };
     let mut c = !crc;
     for &b in data {
-        c ^= u32::from(b);
-        for _ in 0..2 {
-            c = (c >> 4) ^ T.get((c & 0xF) as usize).copied().unwrap_or(0);
-        }
+        // The index is < 256: `get` never fails.
+        c = (c >> 8)
+            ^ T.get(((c ^ u32::from(b)) & 0xFF) as usize)
+                .copied()
+                .unwrap_or(0);
     }
     !c
 }
@@ -380,19 +384,26 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
         Ok(())
     }
 
-    fn raw(&mut self, data: &[u8]) -> Result<(), W::Error> {
-        for &b in data {
-            if b == 0 {
-                self.flush_block()?;
-            } else {
-                if let Some(slot) = self.block.get_mut(self.len) {
-                    *slot = b;
-                }
-                self.len += 1;
-                if self.len == 255 {
-                    self.flush_block()?;
-                }
+    fn raw(&mut self, mut data: &[u8]) -> Result<(), W::Error> {
+        // Runs of non-zero bytes are copied whole; a zero (or a full block) ends a block.
+        while !data.is_empty() {
+            let room = 255usize.saturating_sub(self.len);
+            let zero = data.iter().take(room).position(|&b| b == 0);
+            let n = zero.unwrap_or(room.min(data.len()));
+            let (run, rest) = data.split_at(n);
+            if let Some(dst) = self.block.get_mut(self.len..self.len + n) {
+                dst.copy_from_slice(run);
             }
+            self.len += n;
+            if zero.is_some() || self.len >= 255 {
+                self.flush_block()?;
+            }
+            // Skip the zero the flushed block stands for.
+            data = if zero.is_some() {
+                rest.get(1..).unwrap_or(&[])
+            } else {
+                rest
+            };
         }
         Ok(())
     }
