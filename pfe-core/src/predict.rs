@@ -75,9 +75,9 @@ pub struct WindowLine {
     inv_n: f32,
     /// 1 / (|t|² Σu²), Σu² the window's spread along the line.
     inv_t2suu: f32,
-    /// The lever `1/n + u²/Σu²` of the beam right after the window, or +∞ (see
-    /// [`Self::accepts`]).
-    lever_next: f32,
+    /// The lever `1/n + u²/Σu²` of the beam right after the window times `t2_sin2_last`, or
+    /// NaN before [`Self::capped`] (then [`Self::accepts`] accepts nothing).
+    lever_sin2: f32,
     /// |t|² sin²ϕ̄, ϕ̄ the incidence of the line at the window's last point, seen from the
     /// origin given to [`WindowLine::fit`] (sin²ϕ̄ = 1 when that point is the origin).
     t2_sin2_last: f32,
@@ -136,20 +136,20 @@ impl WindowLine {
             ct: tx * c.x + ty * c.y,
             inv_n,
             inv_t2suu: 1.0 / (t2 * suu),
-            lever_next: f32::INFINITY,
+            lever_sin2: f32::NAN,
             t2_sin2_last: if l2 > 0.0 { ln * ln / l2 } else { t2 },
         })
     }
 
-    /// The same line, with [`Self::accepts`] no looser than for the beam right after its
-    /// window (`first`, `last` and `n`: the window's first and last point and its size),
+    /// The same line, ready for [`Self::accepts`]: every beam tested as strictly as the one
+    /// right after its window (`first`, `last` and `n`: the window's first and last point and its size),
     /// assuming evenly spaced points.
     #[inline]
     pub(crate) fn capped(mut self, first: &Point, last: &Point, n: usize) -> Self {
         let u_first = first.x * self.tx + first.y * self.ty - self.ct;
         let u_last = last.x * self.tx + last.y * self.ty - self.ct;
         let u_next = u_last + (u_last - u_first) / n.saturating_sub(1).max(1) as f32;
-        self.lever_next = self.inv_n + u_next * u_next * self.inv_t2suu;
+        self.lever_sin2 = (self.inv_n + u_next * u_next * self.inv_t2suu) * self.t2_sin2_last;
         self
     }
 
@@ -193,8 +193,9 @@ impl WindowLine {
 
 impl WindowLine {
     /// `!predict((0, 0), x, y, r).exceeds(k, σ_r, floor)` for the point `(x, y)` at range `r`
-    /// from a scanner at the origin, with `k_sigma2 = (k σ_r)²`: the extractor's test for
-    /// most points, kept to its arithmetic.
+    /// from a scanner at the origin, with `k_sigma2 = (k σ_r)²`, and the lever of the beam
+    /// right after the window ([`Self::capped`]): the extractor's test for most points, kept
+    /// to its arithmetic.
     #[inline]
     pub(crate) fn accepts(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
         let q = self.tx * y - self.ty * x;
@@ -212,17 +213,11 @@ impl WindowLine {
         if !(e > 0.0) {
             return true;
         }
-        let ut = (x * self.tx + y * self.ty) * t_over_r - self.ct;
-        let lever = self.inv_n + ut * ut * self.inv_t2suu;
-        // No looser than for the beam right after the window: a line kept for a few more
-        // beams tests them as strictly as a fresh one would.
-        let lever = if lever < self.lever_next {
-            lever
-        } else {
-            self.lever_next
-        };
+        // The lever of the beam right after the window, for every beam: a line kept for a few
+        // more beams tests them as strictly as a fresh one would (the lever grows with the
+        // distance from the window).
         let ri = r * iq;
-        e * e <= k_sigma2 * (1.0 + lever * (self.t2_sin2_last * ri * ri))
+        e * e <= k_sigma2 * (1.0 + self.lever_sin2 * (ri * ri))
     }
 }
 
