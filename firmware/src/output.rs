@@ -390,9 +390,10 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
             let room = 255usize.saturating_sub(self.len);
             let zero = data.iter().take(room).position(|&b| b == 0);
             let n = zero.unwrap_or(room.min(data.len()));
-            let (run, rest) = data.split_at(n);
-            if let Some(dst) = self.block.get_mut(self.len..self.len + n) {
-                dst.copy_from_slice(run);
+            let (run, rest) = data.split_at_checked(n).unwrap_or((data, &[]));
+            if let Some(dst) = self.block.get_mut(self.len..) {
+                // (zip, not copy_from_slice: no length check that could panic)
+                dst.iter_mut().zip(run).for_each(|(d, s)| *d = *s);
             }
             self.len += n;
             if zero.is_some() || self.len >= 255 {
