@@ -32,15 +32,44 @@ const REFINE_SPAN: usize = 6;
 /// Sizes of a new segment at which it is tested for being the same arc as the one before.
 const MERGE_AT: [usize; 2] = [8, 16];
 
-/// The default mode's per-point test: a window's line and the jump limit.
-struct Run {
-    line: WindowLine,
-    /// Jump limit: `gap_factor` × the previous range + `jump_add`, mm.
+/// The default mode's per-point limits: the jump limit (`gap_factor` × the previous range +
+/// `jump_add`, mm) and the line test's (k σ_r)² and floor.
+struct Limits {
     gap_factor: f32,
     jump_add: f32,
-    /// (k σ_r)², mm².
     k_sigma2: f32,
     floor: f32,
+}
+
+/// The default mode's state while it walks the scan.
+#[derive(Clone, Copy, Default)]
+struct Walk {
+    /// Start of the current segment.
+    seg: Option<usize>,
+    /// The last fresh window's line and the last point it may test.
+    cache: Option<(WindowLine, usize)>,
+    /// Boundary awaiting refinement: (its index, the start of the segment before it).
+    pending: Option<(usize, usize)>,
+    /// Last boundary that was not a jump and the start of the segment before it (a jump is
+    /// never inside one surface, so never merged).
+    joinable: Option<(usize, usize)>,
+}
+
+impl Walk {
+    /// The first point from `k` (before `limit`) where a boundary is refined or a merge is
+    /// tested.
+    fn next_check(&self, k: usize, limit: usize) -> usize {
+        let refine = self.pending.map(|(b, _)| b + REFINE_AFTER);
+        let merges = self
+            .joinable
+            .into_iter()
+            .flat_map(|(b, _)| MERGE_AT.iter().map(move |a| b + a - 1));
+        refine
+            .into_iter()
+            .chain(merges)
+            .filter(|&at| at >= k)
+            .fold(limit, usize::min)
+    }
 }
 
 /// What one extraction did.
@@ -390,43 +419,25 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// a boundary), threshold `k σ_D + floor`, arc continuation, then move the boundary back
     /// over the points that already left the old segment's line (boundary localisation).
     fn mark_noise(&mut self, m: &NoiseModel, sigma_r: f32, step: f32) {
-        let mut seg: Option<usize> = None;
-        // The last fresh window's line and the last point it may predict.
-        let mut cache: Option<(WindowLine, usize)> = None;
-        // Boundary awaiting refinement: (its index, the start of the segment before it).
-        let mut pending: Option<(usize, usize)> = None;
-        // Last boundary that was not a jump and the start of the segment before it (a jump
-        // is never inside one surface, so never merged).
-        let mut joinable: Option<(usize, usize)> = None;
         // Largest gap between consecutive points of one surface: seen at down to 10°
         // incidence (Borges & Aldon's λ), plus the noise of two readings.
         let lam = 10.0f32.to_radians();
         let gap_factor = math::abs(math::sin(step)) / math::sin(lam - math::abs(step)).max(1e-3);
-        let jump_add = m.k * sigma_r * core::f32::consts::SQRT_2 + m.floor;
-        let k_sigma2 = (m.k * sigma_r) * (m.k * sigma_r);
+        let limits = Limits {
+            gap_factor,
+            jump_add: m.k * sigma_r * core::f32::consts::SQRT_2 + m.floor,
+            k_sigma2: (m.k * sigma_r) * (m.k * sigma_r),
+            floor: m.floor,
+        };
+        let mut walk = Walk::default();
         let mut k = 0usize;
         while k < self.len {
             let mut stale_failed = false;
             // Fast path: the points the cached line accepts, up to the next point where a
             // boundary awaits refinement or a merge test is due.
-            if let (Some(_), Some((line, until)), None) = (seg, cache, self.motion) {
-                let mut stop = (until + 1).min(self.len);
-                if let Some((b, _)) = pending {
-                    stop = stop.min(b + REFINE_AFTER);
-                }
-                if let Some((b, _)) = joinable {
-                    for at in MERGE_AT.iter().map(|a| b + a - 1).filter(|&at| at >= k) {
-                        stop = stop.min(at);
-                    }
-                }
-                let run = Run {
-                    line,
-                    gap_factor,
-                    jump_add,
-                    k_sigma2,
-                    floor: m.floor,
-                };
-                let next = self.accepted_run(k, stop, &run);
+            if let (Some(_), Some((line, until)), None) = (walk.seg, walk.cache, self.motion) {
+                let stop = walk.next_check(k, until + 1).min(self.len);
+                let next = self.accepted_run(k, stop, &line, &limits);
                 self.stats.predictions += next - k;
                 stale_failed = next < stop;
                 k = next;
@@ -434,98 +445,111 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     break;
                 }
             }
-            let this = k;
+            self.noise_step(k, &mut walk, stale_failed, m, sigma_r, &limits);
             k += 1;
-            let k = this;
-            if !self.valid(k) {
-                seg = None;
-                cache = None;
-                pending = None;
-                joinable = None;
-                continue;
-            }
-            let Some(s) = seg else {
-                self.set(k, START);
-                seg = Some(k);
-                cache = None;
-                continue;
-            };
-            let c = k - s;
-            let (p, prev) = (self.point(k), self.point(k - 1));
-            let limit = self.range(k - 1) * gap_factor + jump_add;
-            let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-            let jump = ex * ex + ey * ey > limit * limit;
-            let boundary = if jump {
-                // A jump no surface explains (also where the window's line runs along the
-                // beam and the prediction says nothing).
-                Some(k)
-            } else if c == 1 {
+        }
+    }
+
+    /// The default mode at point `k`, with everything the fast path does not do: segment
+    /// starts, jumps, fresh windows, arc continuation, boundary placement, refinement and
+    /// merges. `stale_failed`: the fast path just saw the cached line reject `k`.
+    fn noise_step(
+        &mut self,
+        k: usize,
+        walk: &mut Walk,
+        stale_failed: bool,
+        m: &NoiseModel,
+        sigma_r: f32,
+        limits: &Limits,
+    ) {
+        if !self.valid(k) {
+            *walk = Walk::default();
+            return;
+        }
+        let Some(s) = walk.seg else {
+            self.set(k, START);
+            walk.seg = Some(k);
+            walk.cache = None;
+            return;
+        };
+        let c = k - s;
+        let (p, prev) = (self.point(k), self.point(k - 1));
+        let limit = self.range(k - 1) * limits.gap_factor + limits.jump_add;
+        let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+        let jump = ex * ex + ey * ey > limit * limit;
+        let boundary = if jump {
+            // A jump no surface explains (also where the window's line runs along the
+            // beam and the prediction says nothing).
+            Some(k)
+        } else if c == 1 {
+            None
+        } else {
+            // A recent window's line first (unless the fast path just saw it fail here).
+            let stale_ok = !stale_failed
+                && walk
+                    .cache
+                    .filter(|(_, until)| k <= *until)
+                    .is_some_and(|(line, _)| self.line_accepts(&line, k, m, sigma_r));
+            if stale_ok {
                 None
             } else {
-                // A recent window's line first (unless the fast path just saw it fail here).
-                let stale_ok = !stale_failed
-                    && cache
-                        .filter(|(_, until)| k <= *until)
-                        .is_some_and(|(line, _)| self.line_accepts(&line, k, m, sigma_r));
-                if stale_ok {
-                    None
-                } else {
-                    let w = self.window(k, c, m, sigma_r);
-                    let line = self
-                        .window_line(k - w, k, k)
-                        .map(|l| l.capped(&self.point(k - w), &self.point(k - 1), w));
-                    // It may test the next 2w points while they fit it, no more loosely than
-                    // a fresh line (`WindowLine::accepts`).
-                    cache = line.map(|l| (l, k + 2 * w));
-                    let over = !line.is_some_and(|l| self.line_accepts(&l, k, m, sigma_r));
-                    (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
-                        let pred = line.and_then(|l| self.predict_with(&l, k));
-                        self.locate(s, k, pred, m, sigma_r)
-                    })
-                }
-            };
-            if let Some(b) = boundary {
-                self.set(b, START);
-                if jump {
-                    self.set(b, JUMP);
-                }
-                seg = Some(b);
-                cache = None;
-                pending = (!jump).then_some((b, s));
-                joinable = (!jump).then_some((b, s));
-            } else if let Some((b, old)) = joinable.filter(|(b, _)| MERGE_AT.contains(&(k + 1 - b)))
-            {
-                // An arc's edge seen at grazing incidence curves away from a short line
-                // window: when the two segments together are one arc, they are one segment.
-                let from = old.max(b.saturating_sub(m.arc_window));
-                if m.arc_window >= 5 && self.arc_fit(from, k + 1, m, sigma_r).is_some() {
-                    self.clear(b, START);
-                    seg = Some(old);
-                    cache = None;
-                    pending = None;
-                    joinable = None;
-                }
+                let w = self.window(k, c, m, sigma_r);
+                let line = self
+                    .window_line(k - w, k, k)
+                    .map(|l| l.capped(&self.point(k - w), &self.point(k - 1), w));
+                // It may test the next 2w points while they fit it, no more loosely than a
+                // fresh line (`WindowLine::accepts`).
+                walk.cache = line.map(|l| (l, k + 2 * w));
+                let over = !line.is_some_and(|l| self.line_accepts(&l, k, m, sigma_r));
+                (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
+                    let pred = line.and_then(|l| self.predict_with(&l, k));
+                    self.locate(s, k, pred, m, sigma_r)
+                })
             }
-            if let (None, Some((b, old))) = (boundary, pending) {
-                if k == b + REFINE_AFTER {
-                    let best = self.refine_boundary(old, b, k + 1);
-                    if best != b {
-                        self.clear(b, START);
-                        self.set(best, START);
-                        seg = Some(best);
-                        cache = None;
-                        joinable = Some((best, old));
-                    }
-                    pending = None;
+        };
+        if let Some(b) = boundary {
+            self.set(b, START);
+            if jump {
+                self.set(b, JUMP);
+            }
+            walk.seg = Some(b);
+            walk.cache = None;
+            walk.pending = (!jump).then_some((b, s));
+            walk.joinable = (!jump).then_some((b, s));
+        } else if let Some((b, old)) = walk
+            .joinable
+            .filter(|(b, _)| MERGE_AT.contains(&(k + 1 - b)))
+        {
+            // An arc's edge seen at grazing incidence curves away from a short line window:
+            // when the two segments together are one arc, they are one segment.
+            let from = old.max(b.saturating_sub(m.arc_window));
+            if m.arc_window >= 5 && self.arc_fit(from, k + 1, m, sigma_r).is_some() {
+                self.clear(b, START);
+                *walk = Walk {
+                    seg: Some(old),
+                    ..Walk::default()
+                };
+            }
+        }
+        if let (None, Some((b, old))) = (boundary, walk.pending) {
+            if k == b + REFINE_AFTER {
+                let best = self.refine_boundary(old, b, k + 1);
+                if best != b {
+                    self.clear(b, START);
+                    self.set(best, START);
+                    walk.seg = Some(best);
+                    walk.cache = None;
+                    walk.joinable = Some((best, old));
                 }
+                walk.pending = None;
             }
         }
     }
 
     /// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its
-    /// predecessor, or is not accepted by `run.line`: the default mode's test for most points,
+    /// predecessor, or is not accepted by `line`: the default mode's test for most points,
     /// as a tight loop (no de-skewing: the scanner is at the origin).
-    fn accepted_run(&self, from: usize, to: usize, run: &Run) -> usize {
+    fn accepted_run(&self, from: usize, to: usize, line: &WindowLine, limits: &Limits) -> usize {
         let slices = (
             self.points.get(from..to),
             self.ranges.get(from..to),
@@ -539,11 +563,11 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         };
         let (mut prev, mut prev_r) = (self.point(before), self.range(before));
         for (i, ((p, &r), &f)) in pts.iter().zip(rs).zip(fl).enumerate() {
-            let limit = prev_r * run.gap_factor + run.jump_add;
+            let limit = prev_r * limits.gap_factor + limits.jump_add;
             let (ex, ey) = (p.x - prev.x, p.y - prev.y);
             if f & VALID == 0
                 || ex * ex + ey * ey > limit * limit
-                || !run.line.accepts(p.x, p.y, r, run.k_sigma2, run.floor)
+                || !line.accepts(p.x, p.y, r, limits.k_sigma2, limits.floor)
             {
                 return from + i;
             }
