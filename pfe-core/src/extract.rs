@@ -72,6 +72,45 @@ impl Walk {
     }
 }
 
+/// What [`Extractor::next_flag`] looks for.
+#[derive(Clone, Copy)]
+enum Seek {
+    /// A valid point that starts a segment.
+    Mark,
+    /// A point that is not a valid segment start.
+    NotMark,
+    /// A valid point.
+    Valid,
+    /// The end of a segment's points: a start or an invalid point.
+    SegmentEnd,
+}
+
+impl Seek {
+    const MARK: u8 = VALID | START;
+    /// `VALID` / `VALID | START` in each byte of a word of four flags.
+    const V4: u32 = u32::from_le_bytes([VALID; 4]);
+    const M4: u32 = u32::from_le_bytes([Self::MARK; 4]);
+
+    fn hit(self, f: u8) -> bool {
+        match self {
+            Seek::Mark => f & Self::MARK == Self::MARK,
+            Seek::NotMark => f & Self::MARK != Self::MARK,
+            Seek::Valid => f & VALID != 0,
+            Seek::SegmentEnd => f & Self::MARK != VALID,
+        }
+    }
+
+    /// True when none of the four flags in `word` is a hit.
+    fn none_in(self, word: u32) -> bool {
+        match self {
+            Seek::Mark => word & (Self::M4 & !Self::V4) == 0,
+            Seek::NotMark => word & Self::M4 == Self::M4,
+            Seek::Valid => word & Self::V4 == 0,
+            Seek::SegmentEnd => word & Self::M4 == Self::V4,
+        }
+    }
+}
+
 /// What one extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -230,10 +269,24 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         i < self.len && self.flag(i) & (START | END) != 0
     }
 
-    /// The first index from `from` whose flags satisfy `test`.
-    fn next_flag(&self, from: usize, test: impl Fn(u8) -> bool) -> Option<usize> {
+    /// The first index from `from` whose flags `seek` finds, four flags at a time where it can
+    /// tell from their word that none of them is one.
+    fn next_flag(&self, from: usize, seek: Seek) -> Option<usize> {
         let flags = self.flags.get(from..self.len)?;
-        Some(from + flags.iter().position(|&f| test(f))?)
+        let mut chunks = flags.chunks_exact(4);
+        let mut base = from;
+        for chunk in chunks.by_ref() {
+            if let [a, b, c, d] = *chunk {
+                if !seek.none_in(u32::from_le_bytes([a, b, c, d])) {
+                    if let Some(i) = chunk.iter().position(|&f| seek.hit(f)) {
+                        return Some(base + i);
+                    }
+                }
+            }
+            base += 4;
+        }
+        let rest = chunks.remainder();
+        Some(base + rest.iter().position(|&f| seek.hit(f))?)
     }
 
     fn flag(&self, i: usize) -> u8 {
@@ -763,14 +816,11 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// with the run's own points as the window; a run longer than `Np` is tested at its last
     /// `Np` points, so its first marks stay. Runs at the end of a valid stretch are left alone.
     fn check_step(&mut self, config: &Config, r_max: f32) {
-        const MARK: u8 = VALID | START;
         let mut j = 0usize;
         // The next mark, and the end of the run of marks it starts.
-        while let Some(start) = self.next_flag(j, |f| f & MARK == MARK) {
+        while let Some(start) = self.next_flag(j, Seek::Mark) {
             j = start;
-            let next = self
-                .next_flag(j + 1, |f| f & MARK != MARK)
-                .unwrap_or(self.len);
+            let next = self.next_flag(j + 1, Seek::NotMark).unwrap_or(self.len);
             let e = next - 1;
             if e > j && next < self.len && self.valid(next) {
                 let from = (e + 1).saturating_sub(NP).max(j);
@@ -797,12 +847,10 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         };
         let mut pending: Option<(usize, usize)> = None;
         let mut k = 0usize;
-        while let Some(s) = self.next_flag(k, |f| f & VALID != 0) {
+        while let Some(s) = self.next_flag(k, Seek::Valid) {
             k = s;
             // The segment runs to the next start or invalid point.
-            k = self
-                .next_flag(k + 1, |f| f & (VALID | START) != VALID)
-                .unwrap_or(self.len);
+            k = self.next_flag(k + 1, Seek::SegmentEnd).unwrap_or(self.len);
             let e = k - 1;
             if let (Some((ps, pe)), Some(m)) = (pending, merge) {
                 if pe + 1 == s
@@ -905,6 +953,26 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         match as_circle {
             Some(c) => circle_feature(pts, s, e, &c, origin, config.sigma_r),
             None => line_feature(pts, s, e, &line?, origin, config.sigma_r),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Seek::none_in` never skips a word with a hit: every word of four flags made of the
+    /// five flag bits.
+    #[test]
+    fn seek_skips_only_words_without_hits() {
+        for seek in [Seek::Mark, Seek::NotMark, Seek::Valid, Seek::SegmentEnd] {
+            for w in 0u32..1 << 20 {
+                let bytes = [0u32, 5, 10, 15].map(|s| ((w >> s) & 0x1f) as u8);
+                let word = u32::from_le_bytes(bytes);
+                if seek.none_in(word) {
+                    assert!(!bytes.iter().any(|&f| seek.hit(f)), "{word:#010x}");
+                }
+            }
         }
     }
 }
