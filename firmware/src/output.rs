@@ -384,27 +384,19 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
         Ok(())
     }
 
-    fn raw(&mut self, mut data: &[u8]) -> Result<(), W::Error> {
-        // Runs of non-zero bytes are copied whole; a zero (or a full block) ends a block.
-        while !data.is_empty() {
-            let room = 255usize.saturating_sub(self.len);
-            let zero = data.iter().take(room).position(|&b| b == 0);
-            let n = zero.unwrap_or(room.min(data.len()));
-            let (run, rest) = data.split_at_checked(n).unwrap_or((data, &[]));
-            if let Some(dst) = self.block.get_mut(self.len..) {
-                // (zip, not copy_from_slice: no length check that could panic)
-                dst.iter_mut().zip(run).for_each(|(d, s)| *d = *s);
-            }
-            self.len += n;
-            if zero.is_some() || self.len >= 255 {
+    fn raw(&mut self, data: &[u8]) -> Result<(), W::Error> {
+        for &b in data {
+            if b == 0 {
                 self.flush_block()?;
-            }
-            // Skip the zero the flushed block stands for.
-            data = if zero.is_some() {
-                rest.get(1..).unwrap_or(&[])
             } else {
-                rest
-            };
+                if let Some(slot) = self.block.get_mut(self.len) {
+                    *slot = b;
+                }
+                self.len += 1;
+                if self.len == 255 {
+                    self.flush_block()?;
+                }
+            }
         }
         Ok(())
     }
