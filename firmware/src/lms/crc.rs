@@ -7,6 +7,15 @@
 /// Polynomial of the LMS2xx checksum.
 pub const POLY: u16 = 0x8005;
 
+/// One byte `b` after `prev`: shift the register once (folding in the polynomial when its top
+/// bit falls out), then add the data word `prev << 8 | b`.
+#[inline(always)]
+fn step(crc: u16, prev: u8, b: u8) -> u16 {
+    // All ones when the top bit is set (arithmetic shift), else zero.
+    let fold = ((crc as i16) >> 15) as u16 & POLY;
+    ((crc << 1) ^ fold) ^ ((u16::from(prev) << 8) | u16::from(b))
+}
+
 /// Incremental form of [`crc16`]: feed bytes in any chunking, read [`Crc::value`].
 ///
 /// ```
@@ -30,15 +39,22 @@ impl Crc {
 
     /// Adds `bytes`.
     pub fn update(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.crc = if self.crc & 0x8000 != 0 {
-                ((self.crc & 0x7FFF) << 1) ^ POLY
-            } else {
-                self.crc << 1
-            };
-            self.crc ^= (u16::from(self.prev) << 8) | u16::from(b);
-            self.prev = b;
+        // Two bytes an iteration, the register and the previous byte in locals: the decoder
+        // runs this over every telegram byte.
+        let (mut crc, mut prev) = (self.crc, self.prev);
+        let mut pairs = bytes.chunks_exact(2);
+        for pair in pairs.by_ref() {
+            if let [a, b] = *pair {
+                crc = step(crc, prev, a);
+                crc = step(crc, a, b);
+                prev = b;
+            }
         }
+        for &b in pairs.remainder() {
+            crc = step(crc, prev, b);
+            prev = b;
+        }
+        (self.crc, self.prev) = (crc, prev);
     }
 
     /// The checksum so far.
