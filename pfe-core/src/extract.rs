@@ -12,7 +12,7 @@ use crate::geometry::{ray_circle_intersection, Point};
 use crate::line::{fit_axis, fit_line, line_sse};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
-use crate::scan::{max_code, Ranges, Scan, ScanGeometry};
+use crate::scan::{max_code, valid_mm, Ranges, Scan, ScanGeometry};
 use crate::Motion;
 
 const VALID: u8 = 1;
@@ -348,8 +348,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             }
             Ranges::Mm(mm) => {
                 for (slot, &r) in self.ranges.iter_mut().zip(mm).take(len) {
-                    // As `scan::valid_mm` (r_max is finite: NaN and ±inf fail too).
-                    *slot = if r > 0.0 && r <= g.r_max { r } else { 0.0 };
+                    *slot = valid_mm(r, g.r_max).unwrap_or(0.0);
                 }
             }
         }

@@ -101,18 +101,37 @@ impl LineAxis {
 /// fewer than 2 points or non-finite input.
 pub(crate) fn line_sse(points: &[Point]) -> Option<f32> {
     let (_, _, sxx, syy, sxy) = centred_moments(points).ok()?;
-    let half = 0.5 * (sxx - syy);
-    let v = 0.5 * (sxx + syy) - math::sqrt(half * half + sxy * sxy);
-    Some(if v > 0.0 { v } else { 0.0 })
+    Some(smaller_eigenvalue(sxx, syy, sxy))
 }
 
-/// Count, centroid and centred second moments of `points` in one pass (moments about the
-/// middle point, centred afterwards).
-fn centred_moments(points: &[Point]) -> Result<(usize, Point, f32, f32, f32), FitError> {
-    let n = points.len();
-    let Some(o) = points.get(n / 2).filter(|_| n >= 2) else {
-        return Err(FitError::TooFewPoints { got: n, need: 2 });
+/// The larger eigenvalue of the scatter matrix `[[sxx, sxy], [sxy, syy]]` and an eigenvector
+/// `(tx, ty)` of it (not normalised): a fitted line's spread along it and its direction.
+pub(crate) fn major_axis(sxx: f32, syy: f32, sxy: f32) -> (f32, f32, f32) {
+    let half = 0.5 * (sxx - syy);
+    let major = 0.5 * (sxx + syy) + math::sqrt(half * half + sxy * sxy);
+    let (tx, ty) = if sxx >= syy {
+        (major - syy, sxy)
+    } else {
+        (sxy, major - sxx)
     };
+    (major, tx, ty)
+}
+
+/// The smaller eigenvalue of `[[sxx, sxy], [sxy, syy]]`, at least 0: the residual sum of the
+/// least-squares line.
+pub(crate) fn smaller_eigenvalue(sxx: f32, syy: f32, sxy: f32) -> f32 {
+    let half = 0.5 * (sxx - syy);
+    let v = 0.5 * (sxx + syy) - math::sqrt(half * half + sxy * sxy);
+    if v > 0.0 {
+        v
+    } else {
+        0.0
+    }
+}
+
+/// `[Σx, Σy, Σx², Σy², Σxy]` of `points` about `o` (a point near them: the sums stay small).
+#[inline]
+pub(crate) fn sums_about(points: &[Point], o: &Point) -> [f32; 5] {
     let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     for p in points {
         let (ex, ey) = (p.x - o.x, p.y - o.y);
@@ -122,6 +141,17 @@ fn centred_moments(points: &[Point]) -> Result<(usize, Point, f32, f32, f32), Fi
         syy += ey * ey;
         sxy += ex * ey;
     }
+    [sx, sy, sxx, syy, sxy]
+}
+
+/// Count, centroid and centred second moments of `points` in one pass (moments about the
+/// middle point, centred afterwards).
+fn centred_moments(points: &[Point]) -> Result<(usize, Point, f32, f32, f32), FitError> {
+    let n = points.len();
+    let Some(o) = points.get(n / 2).filter(|_| n >= 2) else {
+        return Err(FitError::TooFewPoints { got: n, need: 2 });
+    };
+    let [sx, sy, sxx, syy, sxy] = sums_about(points, o);
     if !(math::finite(sxx + syy) && math::finite(sxy)) {
         return Err(FitError::NonFinite);
     }
@@ -177,14 +207,8 @@ fn axis_from_moments(
     if !(spread > 0.0) || !math::finite(spread) {
         return Err(FitError::Degenerate);
     }
-    // Major axis (tx, ty) of [[sxx, sxy], [sxy, syy]]; the normal is (−ty, tx).
-    let half = 0.5 * (sxx - syy);
-    let major = 0.5 * spread + math::sqrt(half * half + sxy * sxy);
-    let (tx, ty) = if sxx >= syy {
-        (major - syy, sxy)
-    } else {
-        (sxy, major - sxx)
-    };
+    // Major axis (tx, ty); the normal is (−ty, tx).
+    let (_, tx, ty) = major_axis(sxx, syy, sxy);
     let norm = math::hypot(tx, ty);
     if !(norm > 0.0) || !math::finite(norm) {
         return Err(FitError::Degenerate);

@@ -124,14 +124,14 @@ mod tests {
     extern crate std;
 
     #[test]
-    fn sin_cos_f32_is_within_2e7_of_exact() {
+    fn sin_cos_f32_is_within_2e7_of_exact() -> Result<(), f32> {
         use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
         let mut worst = 0.0f64;
         let mut x = -1.0e4f32;
         while x <= 9_998.0 {
             for d in [0.0f32, 1e-3, 0.37, FRAC_PI_4, FRAC_PI_2] {
                 let v = x + d;
-                let (s, c) = super::sin_cos_f32(v).unwrap();
+                let (s, c) = super::sin_cos_f32(v).ok_or(v)?;
                 let e = f64::from(v);
                 worst = worst
                     .max((f64::from(s) - e.sin()).abs())
@@ -142,7 +142,7 @@ mod tests {
         // Multiples of π/2, where the reduction cancels most.
         for k in -6000..=6000 {
             let v = (f64::from(k) * core::f64::consts::FRAC_PI_2) as f32;
-            let (s, c) = super::sin_cos_f32(v).unwrap();
+            let (s, c) = super::sin_cos_f32(v).ok_or(v)?;
             let e = f64::from(v);
             worst = worst
                 .max((f64::from(s) - e.sin()).abs())
@@ -150,10 +150,11 @@ mod tests {
         }
         assert!(worst < 2e-7, "worst error {worst:e}");
         // Tiny angles keep their relative accuracy: sin x = x.
-        assert_eq!(super::sin_cos_f32(1e-20).unwrap(), (1e-20, 1.0));
+        assert_eq!(super::sin_cos_f32(1e-20), Some((1e-20, 1.0)));
         assert!(super::sin_cos_f32(f32::NAN).is_none());
         assert!(super::sin_cos_f32(f32::INFINITY).is_none());
         assert!(super::sin_cos_f32(2.0e4).is_none());
+        Ok(())
     }
 
     #[test]

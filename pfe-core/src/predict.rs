@@ -4,6 +4,7 @@
 //! principal axis of the window's centred moments (one square root).
 
 use crate::geometry::Point;
+use crate::line;
 use crate::math;
 
 /// Outcome of predicting one point.
@@ -93,26 +94,13 @@ impl WindowLine {
             return None;
         }
         // Moments relative to the first point (the window is small: no cancellation).
-        let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
-        for p in window {
-            let (ex, ey) = (p.x - first.x, p.y - first.y);
-            sx += ex;
-            sy += ey;
-            sxx += ex * ex;
-            syy += ey * ey;
-            sxy += ex * ey;
-        }
+        let [sx, sy, sxx, syy, sxy] = line::sums_about(window, first);
         let inv_n = 1.0 / n as f32;
         let (mx, my) = (sx * inv_n, sy * inv_n);
         let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
-        // Principal axis (tx, ty) of [[sxx, sxy], [sxy, syy]].
-        let half = 0.5 * (sxx - syy);
-        let suu = 0.5 * (sxx + syy) + math::sqrt(half * half + sxy * sxy);
-        let (tx, ty) = if sxx >= syy {
-            (suu - syy, sxy)
-        } else {
-            (sxy, suu - sxx)
-        };
+        let c = Point::new(first.x + mx, first.y + my);
+        // Principal axis (tx, ty) and the spread along it.
+        let (suu, tx, ty) = line::major_axis(sxx, syy, sxy);
         let big = if math::abs(tx) >= math::abs(ty) {
             math::abs(tx)
         } else {
@@ -127,7 +115,6 @@ impl WindowLine {
         // Incidence at the last point: |t|² sin²ϕ̄ = (l·n)² / |l|².
         let (lx, ly) = (last.x - origin.x, last.y - origin.y);
         let (ln, l2) = (ty * lx - tx * ly, lx * lx + ly * ly);
-        let c = Point::new(first.x + mx, first.y + my);
         Some(Self {
             tx,
             ty,
@@ -142,8 +129,8 @@ impl WindowLine {
     }
 
     /// The same line, ready for [`Self::accepts`]: every beam tested as strictly as the one
-    /// right after its window (`first`, `last` and `n`: the window's first and last point and its size),
-    /// assuming evenly spaced points.
+    /// right after its window (`first`, `last` and `n`: the window's first and last point and
+    /// its size), assuming evenly spaced points.
     #[inline]
     pub(crate) fn capped(mut self, first: &Point, last: &Point, n: usize) -> Self {
         let u_first = first.x * self.tx + first.y * self.ty - self.ct;
