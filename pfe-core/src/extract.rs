@@ -133,7 +133,7 @@ pub struct Stats {
     pub predictions: usize,
 }
 
-/// Feature extractor with room for `N` readings and `M` features. About `13·N + 64·M` bytes:
+/// Feature extractor with room for `N` readings and `M` features. About `21·N + 64·M` bytes:
 /// put it in a `static` on a microcontroller.
 ///
 /// ```
@@ -155,6 +155,10 @@ pub struct Stats {
 /// ```
 pub struct Extractor<const N: usize, const M: usize> {
     points: [Point; N],
+    /// Beam directions (cos, sin) of the geometry `dirs_of` (start angle and step, as bits;
+    /// a step of 0, never valid, for none yet).
+    dirs: [Point; N],
+    dirs_of: (u32, u32),
     /// Corrected measured range of each valid point, mm (its distance from the scanner).
     ranges: [f32; N],
     flags: [u8; N],
@@ -177,6 +181,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         // goes to .bss rather than being copied from flash as well.
         Self {
             points: [Point::new(0.0, 0.0); N],
+            dirs: [Point::new(0.0, 0.0); N],
+            dirs_of: (0, 0),
             ranges: [0.0; N],
             flags: [0; N],
             len: 0,
@@ -328,88 +334,105 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// Converts the readings to points.
     fn load_points(&mut self, scan: &Scan<'_>, config: &Config) {
         let g = scan.geometry;
-        let len = self.len;
-        // First the valid ranges (0 for no return), one loop per kind of reading.
-        match scan.ranges {
+        self.directions(g);
+        // One loop per kind of reading, without a correction or de-skewing.
+        let invalid = match scan.ranges {
             Ranges::Raw {
                 values,
                 mm_per_unit,
                 max_valid,
             } => {
                 let max_code = max_code(mm_per_unit, max_valid, g.r_max);
-                for (slot, &v) in self.ranges.iter_mut().zip(values).take(len) {
-                    // 1 ..= max_code: in (0, r_max] mm.
-                    *slot = if v.wrapping_sub(1) < max_code {
-                        f32::from(v) * mm_per_unit
-                    } else {
-                        0.0
-                    };
-                }
+                // 1 ..= max_code: in (0, r_max] mm.
+                self.place(values, |v| {
+                    (v.wrapping_sub(1) < max_code).then(|| f32::from(v) * mm_per_unit)
+                })
             }
-            Ranges::Mm(mm) => {
-                for (slot, &r) in self.ranges.iter_mut().zip(mm).take(len) {
-                    *slot = valid_mm(r, g.r_max).unwrap_or(0.0);
-                }
-            }
+            Ranges::Mm(mm) => self.place(mm, |r| valid_mm(r, g.r_max)),
+        };
+        self.stats.readings = self.len;
+        self.stats.valid = self.len - invalid;
+        if config.correction.is_some() || self.motion.is_some() {
+            self.adjust_points(g, config);
         }
-        // Then the points, without a correction or de-skewing in the common case.
-        match (config.correction, self.motion) {
-            (None, None) => self.place(g, |_, r, c, s| Some(Point::new(*r * c, *r * s))),
-            (correction, motion) => self.place(g, |i, range, c, s| {
-                if let Some(k) = correction {
-                    *range = Some(k.apply(*range)).filter(|r| math::finite(*r) && *r > 0.0)?;
-                }
-                let r = *range;
-                let p = match motion {
-                    Some(m) => m.deskew(i, r, g.bearing(i)).0,
-                    None => Point::new(r * c, r * s),
-                };
-                p.is_valid().then_some(p)
-            }),
-        }
-        self.stats.readings = len;
     }
 
-    /// Points from the valid ranges (0: not a return) and `convert(i, &mut r, cos, sin)`, the
-    /// point (`None`: not a point), which may correct the range in place. Beam directions come
-    /// from an exact sine and cosine every 64 beams and a rotation recurrence in between
-    /// (error < 1e-5 rad: 0.1 mm at 8 m).
-    fn place(
-        &mut self,
-        g: ScanGeometry,
-        convert: impl Fn(usize, &mut f32, f32, f32) -> Option<Point>,
-    ) {
+    /// Beam directions (cos, sin) of `g` for the first `N` beams, unless already there: an
+    /// exact sine and cosine every 64 beams and a rotation recurrence in between (error
+    /// < 1e-5 rad: 0.1 mm at 8 m).
+    fn directions(&mut self, g: ScanGeometry) {
         const EXACT_EVERY: usize = 64;
+        let key = (g.start_angle.to_bits(), g.angle_step.to_bits());
+        if self.dirs_of == key {
+            return;
+        }
         let (rs, rc) = math::sin_cos(g.angle_step);
         let (mut s, mut c) = (0.0f32, 1.0f32);
-        // Counting the (few) invalid readings keeps the common path short.
-        let (len, mut invalid) = (self.len, 0usize);
-        let slots = self
-            .points
-            .iter_mut()
-            .zip(self.ranges.iter_mut())
-            .zip(self.flags.iter_mut());
-        for (i, ((point, range), flag)) in slots.take(len).enumerate() {
+        for (i, d) in self.dirs.iter_mut().enumerate() {
             if i % EXACT_EVERY == 0 {
                 (s, c) = math::sin_cos(g.bearing(i));
             } else {
                 (s, c) = (s * rc + c * rs, c * rc - s * rs);
             }
-            let out = if *range > 0.0 {
-                convert(i, range, c, s)
-            } else {
-                None
-            };
-            (*point, *flag) = match out {
-                Some(p) => (p, VALID),
+            *d = Point::new(c, s);
+        }
+        self.dirs_of = key;
+    }
+
+    /// Points, ranges and flags from `readings` and `range(reading)`, the range in mm of a
+    /// return (`None`: no return). Returns the number of invalid readings (counting them keeps
+    /// the common path short).
+    fn place<T: Copy>(&mut self, readings: &[T], range: impl Fn(T) -> Option<f32>) -> usize {
+        let mut invalid = 0usize;
+        let slots = self
+            .points
+            .iter_mut()
+            .zip(self.ranges.iter_mut())
+            .zip(self.flags.iter_mut())
+            .zip(self.dirs.iter().zip(readings));
+        for (((point, slot), flag), (d, &v)) in slots.take(self.len) {
+            (*point, *slot, *flag) = match range(v) {
+                Some(r) => (Point::new(r * d.x, r * d.y), r, VALID),
                 None => {
                     invalid += 1;
-                    *range = 0.0;
-                    (Point::INVALID, 0)
+                    (Point::INVALID, 0.0, 0)
                 }
             };
         }
-        self.stats.valid = len - invalid;
+        invalid
+    }
+
+    /// Applies the range correction and de-skewing to the valid points; a point they make
+    /// invalid is dropped.
+    fn adjust_points(&mut self, g: ScanGeometry, config: &Config) {
+        let (correction, motion) = (config.correction, self.motion);
+        let slots = self
+            .points
+            .iter_mut()
+            .zip(self.ranges.iter_mut())
+            .zip(self.flags.iter_mut())
+            .zip(self.dirs.iter());
+        let mut dropped = 0usize;
+        for (i, (((point, range), flag), d)) in slots.take(self.len).enumerate() {
+            if *flag & VALID == 0 {
+                continue;
+            }
+            let mut r = *range;
+            if let Some(k) = correction {
+                r = k.apply(r);
+            }
+            let p = match motion {
+                Some(m) => m.deskew(i, r, g.bearing(i)).0,
+                None => Point::new(r * d.x, r * d.y),
+            };
+            if math::finite(r) && r > 0.0 && p.is_valid() {
+                (*point, *range) = (p, r);
+            } else {
+                dropped += 1;
+                (*point, *range, *flag) = (Point::INVALID, 0.0, 0);
+            }
+        }
+        self.stats.valid -= dropped;
     }
 
     /// Predicts point `k` from points `from..to` (all valid).
