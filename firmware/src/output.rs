@@ -300,6 +300,12 @@ impl WireFeature {
 /// assert_eq!(firmware::output::crc32(0, b"123456789"), 0xCBF4_3926);
 /// ```
 pub fn crc32(crc: u32, data: &[u8]) -> u32 {
+    !data.iter().fold(!crc, |c, &b| crc32_byte(c, b))
+}
+
+/// One byte of CRC-32 (on the complemented register).
+#[inline(always)]
+fn crc32_byte(c: u32, b: u8) -> u32 {
     // Byte table (1 KiB of flash, built at compile time: an index out of range would be a
     // build error, not a panic): one lookup per byte.
     #[allow(clippy::indexing_slicing)]
@@ -322,15 +328,11 @@ pub fn crc32(crc: u32, data: &[u8]) -> u32 {
         }
         t
     };
-    let mut c = !crc;
-    for &b in data {
-        // The index is < 256: `get` never fails.
-        c = (c >> 8)
-            ^ T.get(((c ^ u32::from(b)) & 0xFF) as usize)
-                .copied()
-                .unwrap_or(0);
-    }
-    !c
+    // The index is < 256: `get` never fails.
+    (c >> 8)
+        ^ T.get(((c ^ u32::from(b)) & 0xFF) as usize)
+            .copied()
+            .unwrap_or(0)
 }
 
 /// Why a frame could not be written.
@@ -384,26 +386,41 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
         Ok(())
     }
 
-    fn raw(&mut self, data: &[u8]) -> Result<(), W::Error> {
+    /// COBS-encodes `data` (with `crc` its CRC-32 is also taken: one loop for both).
+    fn encode(&mut self, data: &[u8], crc: bool) -> Result<(), W::Error> {
+        let mut c = !self.crc;
+        // Kept below 255 between bytes: a full block is flushed at once.
+        let mut len = self.len;
         for &b in data {
-            if b == 0 {
-                self.flush_block()?;
-            } else {
-                if let Some(slot) = self.block.get_mut(self.len) {
+            if crc {
+                c = crc32_byte(c, b);
+            }
+            if b != 0 {
+                if let Some(slot) = self.block.get_mut(len) {
                     *slot = b;
                 }
-                self.len += 1;
-                if self.len == 255 {
-                    self.flush_block()?;
+                len += 1;
+                if len < 255 {
+                    continue;
                 }
             }
+            self.len = len;
+            self.flush_block()?;
+            len = 1;
+        }
+        self.len = len;
+        if crc {
+            self.crc = !c;
         }
         Ok(())
     }
 
+    fn raw(&mut self, data: &[u8]) -> Result<(), W::Error> {
+        self.encode(data, false)
+    }
+
     fn put(&mut self, data: &[u8]) -> Result<(), W::Error> {
-        self.crc = crc32(self.crc, data);
-        self.raw(data)
+        self.encode(data, true)
     }
 
     fn put_item<T: Serialize>(&mut self, item: &T) -> Result<(), EncodeError<W::Error>> {
