@@ -17,7 +17,8 @@
 //! # Ok::<(), pfe_core::ExtractError>(())
 //! ```
 #![no_std]
-#![forbid(unsafe_code)]
+// One audited exception: `math::sqrt`'s `vsqrt.f32` on hard-float Arm.
+#![deny(unsafe_code)]
 #![deny(missing_docs)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
