@@ -185,26 +185,24 @@ impl WindowLine {
     /// to its arithmetic.
     #[inline]
     pub(crate) fn accepts(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
+        // q = r (d·n), d the unit beam direction: Line 1 meets the beam at t = r·cn/q, in
+        // front of the scanner when cn·q > 0 (false for q = 0 and NaN).
         let q = self.tx * y - self.ty * x;
-        if !(q * q >= self.parallel * r * r) {
+        if !(self.cn * q > 0.0) {
             return false;
         }
-        let iq = 1.0 / q;
-        let t_over_r = self.cn * iq;
-        // Finite: (d·n)² ≥ 10⁻¹² |t|².
-        let t = t_over_r * r;
-        if !(t > 0.0) {
-            return false;
-        }
-        let e = math::abs(r - t) - floor;
-        if !(e > 0.0) {
+        // (|r − t| − floor)·|q|, without a division: |r − t|·|q| = |r (q − cn)|.
+        let aq = math::abs(q);
+        let e = math::abs(r * (q - self.cn)) - floor * aq;
+        if e <= 0.0 {
             return true;
         }
-        // The lever of the beam right after the window, for every beam: a line kept for a few
-        // more beams tests them as strictly as a fresh one would (the lever grows with the
-        // distance from the window).
-        let ri = r * iq;
-        e * e <= k_sigma2 * (1.0 + self.lever_sin2 * (ri * ri))
+        // e² ≤ (k σ_r)² (1 + lever (r/q)²), times q². The lever of the beam right after the
+        // window, for every beam: a line kept for a few more beams tests them as strictly as
+        // a fresh one would (the lever grows with the distance from the window). A beam along
+        // the line (q → 0) is accepted only when the line runs through the scanner, within the
+        // noise: then the point is on it.
+        e * e <= k_sigma2 * (q * q + self.lever_sin2 * (r * r))
     }
 }
 
@@ -253,4 +251,87 @@ pub fn paper_threshold(d0: f32, lambda: f32, r: f32, r_max: f32, phi: f32) -> f3
     let rr = (r / r_max).clamp(0.0, 1.0);
     let phi = phi.clamp(0.0, core::f32::consts::FRAC_PI_2);
     (d0 / lambda) * (rr + (core::f32::consts::PI - phi) / core::f32::consts::PI)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `accepts` (no division) decides as the prediction does, with the capped lever: over
+    /// lines at every angle and distance, beams across the window's continuation, and test
+    /// ranges from well inside to well outside the threshold (cases within 0.1 % of it are
+    /// left out: the two forms round differently).
+    #[test]
+    fn accepts_matches_the_prediction() -> Result<(), &'static str> {
+        let (ks2, floor) = (20.0f32 * 20.0, 3.0f32);
+        let (mut agreed, mut accepted) = (0usize, 0usize);
+        for ia in 0..24 {
+            let alpha = -3.1 + 0.26 * ia as f32;
+            for rho in [150.0f32, 800.0, 2500.0, 7000.0] {
+                let (c, s) = (math::sin_cos(alpha).1, math::sin_cos(alpha).0);
+                // Ten points of the line x cos α + y sin α = ρ, 0.5° apart, with a wiggle.
+                let window: heapless::Vec<Point, 10> = (0..10)
+                    .map(|i| {
+                        let u = (i as f32 - 4.5) * rho * 0.0087;
+                        let d = if i % 2 == 0 { 2.0 } else { -2.0 };
+                        Point::new((rho + d) * c - u * s, (rho + d) * s + u * c)
+                    })
+                    .collect();
+                let (first, last) = (
+                    window.first().ok_or("empty")?,
+                    window.last().ok_or("empty")?,
+                );
+                let line = WindowLine::fit(&window, Point::new(0.0, 0.0))
+                    .ok_or("fit")?
+                    .capped(first, last, window.len());
+                for ib in -6..=6 {
+                    let b = last.y.atan2(last.x) + 0.0087 * ib as f32;
+                    let (bs, bc) = math::sin_cos(b);
+                    // Where Line 1 meets this beam, and the threshold there.
+                    let r0 = rho / (bc * c + bs * s).max(0.05);
+                    let p0 = line.predict(Point::new(0.0, 0.0), r0 * bc, r0 * bs, r0);
+                    let t = r0 - p0.signed;
+                    let ti = f64::from(r0) / f64::from(p0.dn);
+                    let bound0 =
+                        (f64::from(ks2) * (1.0 + f64::from(line.lever_sin2) * ti * ti)).sqrt();
+                    for m in [
+                        -3.0f32, -1.1, -1.01, -0.99, -0.5, 0.0, 0.5, 0.99, 1.01, 1.1, 3.0,
+                    ] {
+                        let off = (floor + m.abs() * bound0 as f32).copysign(m);
+                        let r = if t.is_finite() { t + off } else { r0 };
+                        if !(r > 0.0) {
+                            continue;
+                        }
+                        let (x, y) = (r * bc, r * bs);
+                        let p = line.predict(Point::new(0.0, 0.0), x, y, r);
+                        let reference = if !p.error.is_finite() {
+                            Some(false)
+                        } else {
+                            let e = f64::from(p.error) - f64::from(floor);
+                            let ri = f64::from(r) / f64::from(p.dn);
+                            let bound =
+                                f64::from(ks2) * (1.0 + f64::from(line.lever_sin2) * ri * ri);
+                            let margin = (e.max(0.0) * e.max(0.0) - bound) / bound;
+                            (e <= 0.0 || margin.abs() > 1e-3).then_some(e <= 0.0 || margin <= 0.0)
+                        };
+                        if let Some(want) = reference {
+                            assert_eq!(
+                                line.accepts(x, y, r, ks2, floor),
+                                want,
+                                "α {alpha} ρ {rho} beam {ib} m {m}"
+                            );
+                            agreed += 1;
+                            accepted += usize::from(want);
+                        }
+                    }
+                }
+            }
+        }
+        // Both outcomes were exercised.
+        assert!(
+            agreed > 5000 && accepted > 1000 && agreed - accepted > 1000,
+            "{agreed} {accepted}"
+        );
+        Ok(())
+    }
 }
