@@ -336,19 +336,24 @@ impl LineFit {
     {
         let (nc, ns) = self.normal();
         let (tx, ty) = (-ns, nc);
+        // Sums of u², u² cos²β, u cos²β and cos²β (σ_r² applied after), with b the beam
+        // vector and u = b·t − (c − origin)·t.
+        let ct = (self.centroid.x - origin.x) * tx + (self.centroid.y - origin.y) * ty;
         let (mut suu, mut suu_s, mut su_s, mut s_s) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);
         for p in points {
-            // cos²β = (b·n)² / |b|², without a square root.
             let (bx, by) = (p.x - origin.x, p.y - origin.y);
-            let (bn2, bdot) = (bx * bx + by * by, bx * nc + by * ns);
-            let cos2b = if bn2 > 0.0 { bdot * bdot / bn2 } else { 1.0 };
-            let var_i = sigma_r * sigma_r * cos2b;
-            let u = (p.x - self.centroid.x) * tx + (p.y - self.centroid.y) * ty;
+            let bdot = bx * nc + by * ns;
+            // cos²β = (b·n)² / |b|², without a square root (0 for a point at the origin).
+            let cos2b = bdot * bdot / (bx * bx + by * by + f32::MIN_POSITIVE);
+            let u = bx * tx + by * ty - ct;
+            let uc = u * cos2b;
             suu += u * u;
-            suu_s += u * u * var_i;
-            su_s += u * var_i;
-            s_s += var_i;
+            suu_s += u * uc;
+            su_s += uc;
+            s_s += cos2b;
         }
+        let var = sigma_r * sigma_r;
+        let (suu_s, su_s, s_s) = (suu_s * var, su_s * var, s_s * var);
         let n = self.n.max(1) as f32;
         let d = self.centroid.x * tx + self.centroid.y * ty;
         let var_alpha = if suu > 0.0 {
