@@ -574,9 +574,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 let line = self
                     .window_line(k - w, k, k)
                     .map(|l| l.capped(&self.point(k - w), &self.point(k - 1), w));
-                // It may test the next 2w points while they fit it, no more loosely than a
-                // fresh line (`WindowLine::accepts`).
-                walk.cache = line.map(|l| (l, k + 2 * w));
+                // It may test the next 4w points while they fit it, no more loosely than a
+                // fresh line (`WindowLine::accepts`); a point it rejects gets a fresh window.
+                walk.cache = line.map(|l| (l, k + 4 * w));
                 let over = !line.is_some_and(|l| self.line_accepts(&l, k, m, sigma_r));
                 (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
                     let pred = line.and_then(|l| self.predict_with(&l, k));
