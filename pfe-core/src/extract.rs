@@ -627,23 +627,18 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// predecessor, or is not accepted by `line`: the default mode's test for most points,
     /// as a tight loop (no de-skewing: the scanner is at the origin).
     fn accepted_run(&self, from: usize, to: usize, line: &WindowLine, limits: &Limits) -> usize {
-        let slices = (
-            self.points.get(from..to),
-            self.ranges.get(from..to),
-            self.flags.get(from..to),
-        );
-        let (Some(pts), Some(rs), Some(fl)) = slices else {
+        let (Some(pts), Some(rs)) = (self.points.get(from..to), self.ranges.get(from..to)) else {
             return from;
         };
         let Some(before) = from.checked_sub(1) else {
             return from;
         };
         let (mut prev, mut prev_r) = (self.point(before), self.range(before));
-        for (i, ((p, &r), &f)) in pts.iter().zip(rs).zip(fl).enumerate() {
+        for (i, (p, &r)) in pts.iter().zip(rs).enumerate() {
             let limit = prev_r * limits.gap_factor + limits.jump_add;
             let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-            if f & VALID == 0
-                || ex * ex + ey * ey > limit * limit
+            // An invalid point is NaN (`Point::INVALID`): it fails the jump test.
+            if !(ex * ex + ey * ey <= limit * limit)
                 || !line.accepts(p.x, p.y, r, limits.k_sigma2, limits.floor)
             {
                 return from + i;
