@@ -100,8 +100,8 @@ fn moments(points: &[Point]) -> Result<Moments, FitError> {
 pub(crate) struct ArcSums {
     n: f32,
     origin: Point,
-    /// Σx, Σy, Σx², Σy², Σxy, Σx³, Σx²y, Σxy², Σy³ (coordinates about `origin`).
-    s: [f32; 9],
+    /// Σx, Σy, Σx², Σy², Σxy, Σxz, Σyz with z = x² + y² (coordinates about `origin`).
+    s: [f32; 7],
 }
 
 impl ArcSums {
@@ -109,20 +109,19 @@ impl ArcSums {
     pub(crate) fn of(points: &[Point]) -> Option<Self> {
         let n = points.len();
         let o = *points.get(n / 2).filter(|_| n >= 3)?;
-        let mut s = [0.0f32; 9];
+        let mut s = [0.0f32; 7];
         for p in points {
             let (x, y) = (p.x - o.x, p.y - o.y);
             let (xx, yy, xy) = (x * x, y * y, x * y);
+            let z = xx + yy;
             s = [
                 s[0] + x,
                 s[1] + y,
                 s[2] + xx,
                 s[3] + yy,
                 s[4] + xy,
-                s[5] + xx * x,
-                s[6] + xx * y,
-                s[7] + x * yy,
-                s[8] + yy * y,
+                s[5] + x * z,
+                s[6] + y * z,
             ];
         }
         s.iter().all(|v| math::finite(*v)).then_some(Self {
@@ -147,14 +146,14 @@ impl ArcSums {
 
     /// The Kåsa circle (as [`fit_circle`] with [`CircleMethod::Kasa`], from centred moments).
     pub(crate) fn kasa(&self) -> Option<Circle> {
-        let [_, _, sxx, syy, sxy, sxxx, sxxy, sxyy, syyy] = self.s;
+        let [_, _, sxx, syy, sxy, sxz, syz] = self.s;
         let n = self.n;
         let (a, b, suu, svv, suv) = self.centred();
         // Centred third moments: Σu³ + Σuv² and Σu²v + Σv³ (u = x − a, v = y − b).
-        let uz = (sxxx - 3.0 * a * sxx + 2.0 * n * a * a * a)
-            + (sxyy - 2.0 * b * sxy - a * syy + 2.0 * n * a * b * b);
-        let vz = (sxxy - 2.0 * a * sxy - b * sxx + 2.0 * n * a * a * b)
-            + (syyy - 3.0 * b * syy + 2.0 * n * b * b * b);
+        let uz = sxz - 3.0 * a * sxx + 2.0 * n * a * a * a - 2.0 * b * sxy - a * syy
+            + 2.0 * n * a * b * b;
+        let vz = syz - 2.0 * a * sxy - b * sxx + 2.0 * n * a * a * b - 3.0 * b * syy
+            + 2.0 * n * b * b * b;
         // [Suu Suv; Suv Svv] [B C]ᵀ = −[Suz Svz]ᵀ; centre (−B/2, −C/2) from the centroid.
         let det = suu * svv - suv * suv;
         let spread = suu + svv;
