@@ -377,6 +377,52 @@ mod props {
             prop_assert_eq!(last.features.len(), 12);
         }
 
+        /// Features of any bit patterns (zero bytes anywhere, runs of every length): the frame
+        /// is exactly what the `cobs` crate makes of the postcard payload and its CRC-32.
+        #[test]
+        fn any_payload_matches_independent_cobs(
+            words in proptest::collection::vec((any::<u32>(), 0u8..4), 5..400),
+            lens in proptest::collection::vec(0u16..400, 1..64),
+            sparse in 0u32..10,
+        ) {
+            // Bit patterns with a zero byte in a random place, in one word of 2^sparse (the
+            // rest made zero-free): long zero-free runs fill COBS blocks at every offset.
+            let f = |i: usize| {
+                let (w, z) = words[i % words.len()];
+                f32::from_bits(if (w >> 7) % (1 << sparse) == 0 {
+                    w & !(0xFF << (8 * u32::from(z)))
+                } else {
+                    w | 0x0101_0101
+                })
+            };
+            let feats: Vec<Feature> = lens
+                .iter()
+                .enumerate()
+                .map(|(k, &n)| {
+                    let i = 9 * k;
+                    Feature::Line(LineFeature {
+                        first: n,
+                        last: n.wrapping_mul(3),
+                        points: n / 2,
+                        alpha: f(i),
+                        rho: f(i + 1),
+                        var_alpha: f(i + 2),
+                        var_rho: f(i + 3),
+                        cov_alpha_rho: f(i + 4),
+                        start: Point::new(f(i + 5), f(i + 6)),
+                        end: Point::new(f(i + 7), f(i + 8)),
+                    })
+                })
+                .collect();
+            let wire = scan_frame(u32::from(lens[0]), &feats);
+            let raw = cobs::decode_vec(&wire[..wire.len() - 1]).unwrap();
+            let (payload, crc) = raw.split_at(raw.len() - 4);
+            prop_assert_eq!(u32::from_le_bytes(crc.try_into().unwrap()), crc32fast::hash(payload));
+            let mut other = cobs::encode_vec(&raw);
+            other.push(0);
+            prop_assert_eq!(other, wire);
+        }
+
         /// Random damage to a frame (any bytes replaced) never yields a different frame.
         #[test]
         fn damage_never_yields_a_wrong_frame(pos in proptest::collection::vec((0usize..400, 1u8..=255), 1..6)) {
