@@ -159,15 +159,6 @@ fn run_bench(elf: &Path) -> Result<BenchRun> {
             _ => {}
         }
     }
-    if let Ok(path) = std::env::var("PFE_BENCH_RAW") {
-        let mut t = String::new();
-        for (k, v) in &r.stages {
-            for (i, (a, b)) in v.iter().enumerate() {
-                t.push_str(&format!("{k} {i} {a} {b}\n"));
-            }
-        }
-        std::fs::write(path, t).ok();
-    }
     if r.scans == 0 {
         bail!("the bench firmware measured no scan");
     }
