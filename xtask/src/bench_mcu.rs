@@ -138,7 +138,7 @@ fn accuracy() -> Result<String> {
     Ok(format!(
         "Accuracy with `libm` (the default: libm's atan2, and pfe-core's own f32 sine and \
          cosine, within 2·10⁻⁷) and `micromath` (fast approximations of atan2, sin, cos; \
-         the square root is the FPU's in both) on the host: the `score` example, 100 \
+         a correctly rounded square root in both) on the host: the `score` example, 100 \
          simulated mixed scans, σ_r = 5 mm, seed 1 (`cargo run --release -p host-tests \
          --example score [--features pfe-core/micromath]`). Errors are medians over correctly \
          typed matched features.\n\n\
