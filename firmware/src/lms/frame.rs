@@ -504,7 +504,10 @@ mod tests {
         let mut buf = [0u8; 32];
         let n = encode_telegram(DEVICE_ADDRESS, &[0xA0, 0x00, 0x10], &mut buf)?;
         let sent = buf.get(..n).ok_or(FrameError::BufferTooSmall)?;
-        assert_eq!(sent, &[0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A]);
+        assert_eq!(
+            sent,
+            &[0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A]
+        );
         assert!(Telegram::parse(sent).is_ok());
         assert_eq!(
             encode_telegram(0x80, &[0; 10], &mut [0u8; 15]),
