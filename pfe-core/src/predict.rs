@@ -93,14 +93,21 @@ impl WindowLine {
         if n < 2 {
             return None;
         }
-        // Moments relative to the first point (the window is small: no cancellation).
-        let [sx, sy, sxx, syy, sxy] = line::sums_about(window, first);
         let inv_n = 1.0 / n as f32;
-        let (mx, my) = (sx * inv_n, sy * inv_n);
-        let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
-        let c = Point::new(first.x + mx, first.y + my);
-        // Principal axis (tx, ty) and the spread along it.
-        let (suu, tx, ty) = line::major_axis(sxx, syy, sxy);
+        let (c, suu, tx, ty) = if n == 2 {
+            // The line through two points (a new segment's first window): no moments.
+            let (dx, dy) = (last.x - first.x, last.y - first.y);
+            let c = Point::new(first.x + 0.5 * dx, first.y + 0.5 * dy);
+            (c, 0.5 * (dx * dx + dy * dy), dx, dy)
+        } else {
+            // Moments relative to the first point (the window is small: no cancellation).
+            let [sx, sy, sxx, syy, sxy] = line::sums_about(window, first);
+            let (mx, my) = (sx * inv_n, sy * inv_n);
+            let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
+            // Principal axis (tx, ty) and the spread along it.
+            let (suu, tx, ty) = line::major_axis(sxx, syy, sxy);
+            (Point::new(first.x + mx, first.y + my), suu, tx, ty)
+        };
         let big = if math::abs(tx) >= math::abs(ty) {
             math::abs(tx)
         } else {
