@@ -21,11 +21,14 @@
 //! let mut buf = [0u8; 1024];
 //! let mut out = &mut buf[..];
 //! let scan = RawScan::lms_8m(g, &values, 1.0);
-//! let header = app.process(&scan, Counters::default(), &mut out).unwrap();
+//! let header = app.process(&scan, Counters::default(), &mut out)?;
 //! assert_eq!(header.n_features, 1);
 //! let n = 1024 - out.len();
-//! let Feed::Frame { frame, .. } = FrameDecoder::<1024>::new().feed(&buf[..n]) else { panic!() };
+//! let Feed::Frame { frame, .. } = FrameDecoder::<1024>::new().feed(&buf[..n]) else {
+//!     return Err("no frame".into());
+//! };
 //! assert!(frame.features[0].is_line());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 use embedded_hal::delay::DelayNs;

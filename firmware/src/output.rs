@@ -31,13 +31,16 @@
 //!     dropped: 0, n_features: 1, status: Default::default() };
 //! let mut buf = [0u8; 512];
 //! let mut w = &mut buf[..];
-//! write_scan(&mut w, &header, &[f]).unwrap();
+//! write_scan(&mut w, &header, &[f])?;
 //! let n = 512 - w.len();
 //! let mut dec = FrameDecoder::<4096>::new();
-//! let Feed::Frame { frame, remaining } = dec.feed(&buf[..n]) else { panic!() };
+//! let Feed::Frame { frame, remaining } = dec.feed(&buf[..n]) else {
+//!     return Err("no frame".into());
+//! };
 //! assert!(remaining.is_empty());
 //! assert_eq!(frame.header, Header::Scan(header));
 //! assert_eq!(frame.features[0].to_feature(), f);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
 use heapless::Vec;
@@ -745,7 +748,8 @@ mod tests {
     /// zero bytes at every position relative to a block's end and to the words, fed in pieces
     /// of every size.
     #[test]
-    fn encoder_matches_cobs_and_crc32_at_every_alignment() {
+    fn encoder_matches_cobs_and_crc32_at_every_alignment() -> Result<(), core::convert::Infallible>
+    {
         for before in 0..300usize {
             for piece in [1usize, 3, 4, 7, 64] {
                 let mut data: std::vec::Vec<u8> =
@@ -757,9 +761,9 @@ mod tests {
                 let mut out = Out(std::vec::Vec::new());
                 let mut enc = CobsWriter::new(&mut out);
                 for chunk in data.chunks(piece) {
-                    enc.put(chunk).unwrap();
+                    enc.put(chunk)?;
                 }
-                enc.finish().unwrap();
+                enc.finish()?;
                 let mut raw = data.clone();
                 raw.extend(crc32fast::hash(&data).to_le_bytes());
                 let mut want = cobs::encode_vec(&raw);
@@ -767,5 +771,6 @@ mod tests {
                 assert_eq!(out.0, want, "before {before} piece {piece}");
             }
         }
+        Ok(())
     }
 }
