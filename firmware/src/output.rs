@@ -721,7 +721,7 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
 
 #[cfg(test)]
 mod tests {
-    #![allow(clippy::indexing_slicing, clippy::unwrap_used)]
+    #![allow(clippy::indexing_slicing)]
     use super::*;
 
     extern crate std;
