@@ -7,9 +7,9 @@ use heapless::Vec;
 use crate::circle::{fit_circle, refine_circle, refine_from, ArcSums, Circle, NormalEquations};
 use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
-use crate::feature::{circle_feature, line_feature, Feature};
+use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
-use crate::line::{fit_axis, fit_line, line_sse};
+use crate::line::{fill_spreads, fit_axis, fit_line, line_sse, BeamSpan};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
 use crate::scan::{max_code, valid_mm, Ranges, Scan, ScanGeometry};
@@ -133,7 +133,7 @@ pub struct Stats {
     pub predictions: usize,
 }
 
-/// Feature extractor with room for `N` readings and `M` features. About `21·N + 64·M` bytes:
+/// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
 /// put it in a `static` on a microcontroller.
 ///
 /// ```
@@ -158,6 +158,10 @@ pub struct Extractor<const N: usize, const M: usize> {
     /// Beam directions (cos, sin) of the geometry `dirs_of` (start angle and step, as bits;
     /// a step of 0, never valid, for none yet).
     dirs: [Point; N],
+    /// The [`BeamSpan::spread`] of `k + 1` beams of that geometry at `k`, and the direction
+    /// of half a step (cos, sin).
+    spreads: [f32; N],
+    half_step: Point,
     dirs_of: (u32, u32),
     /// Corrected measured range of each valid point, mm (its distance from the scanner).
     ranges: [f32; N],
@@ -182,6 +186,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         Self {
             points: [Point::new(0.0, 0.0); N],
             dirs: [Point::new(0.0, 0.0); N],
+            spreads: [0.0; N],
+            half_step: Point::new(0.0, 0.0),
             dirs_of: (0, 0),
             ranges: [0.0; N],
             flags: [0; N],
@@ -359,7 +365,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     /// Beam directions (cos, sin) of `g` for the first `N` beams, unless already there: an
     /// exact sine and cosine every 64 beams and a rotation recurrence in between (error
-    /// < 1e-5 rad: 0.1 mm at 8 m).
+    /// < 1e-5 rad: 0.1 mm at 8 m); and the spreads of runs of them.
     fn directions(&mut self, g: ScanGeometry) {
         const EXACT_EVERY: usize = 64;
         let key = (g.start_angle.to_bits(), g.angle_step.to_bits());
@@ -376,6 +382,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             }
             *d = Point::new(c, s);
         }
+        fill_spreads(&mut self.spreads, g.angle_step);
+        let (s, c) = math::sin_cos(0.5 * g.angle_step);
+        self.half_step = Point::new(c, s);
         self.dirs_of = key;
     }
 
@@ -911,6 +920,25 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
     }
 
+    /// The beams `s..=e` (a segment's: all valid, consecutive).
+    fn beam_span(&self, s: usize, e: usize) -> Option<BeamSpan> {
+        let count = (e + 1).checked_sub(s)?;
+        let d = *self.dirs.get(s + (count - 1) / 2)?;
+        // An even count's middle lies half a step past the lower middle beam.
+        let h = self.half_step;
+        let mid = if count % 2 == 1 {
+            d
+        } else {
+            Point::new(d.x * h.x - d.y * h.y, d.y * h.x + d.x * h.y)
+        };
+        Some(BeamSpan {
+            count,
+            mid,
+            ends: [*self.dirs.get(s)?, *self.dirs.get(e)?],
+            spread: *self.spreads.get(count.checked_sub(1)?)?,
+        })
+    }
+
     fn fit_segment(&self, s: usize, e: usize, config: &Config) -> Option<Feature> {
         let pts = self.points.get(s..=e)?;
         let origin = self.origin((s + e) / 2);
@@ -971,7 +999,18 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         };
         match as_circle {
             Some(c) => circle_feature(pts, s, e, &c, origin, config.sigma_r),
-            None => line_feature(pts, s, e, &line?, origin, config.sigma_r),
+            None => {
+                let line = line?;
+                let ends = [pts.first()?, pts.last()?];
+                let cov = self
+                    .beam_span(s, e)
+                    .filter(|_| self.motion.is_none())
+                    .and_then(|beams| line.covariance_beams(&beams, ends, config.sigma_r));
+                match cov {
+                    Some(cov) => line_feature_with(pts, s, e, &line, cov),
+                    None => line_feature(pts, s, e, &line, origin, config.sigma_r),
+                }
+            }
         }
     }
 }

@@ -2,7 +2,7 @@
 
 use crate::circle::{circle_covariance_range, Circle};
 use crate::geometry::Point;
-use crate::line::LineFit;
+use crate::line::{LineCovariance, LineFit};
 use crate::math;
 
 /// A line feature `x cos α + y sin α = ρ`.
@@ -120,6 +120,17 @@ pub fn line_feature(
     sigma_r: f32,
 ) -> Option<Feature> {
     let cov = line.covariance_range(pts.iter().copied(), origin, sigma_r);
+    line_feature_with(pts, first, last, line, cov)
+}
+
+/// [`line_feature`] with its covariance.
+pub(crate) fn line_feature_with(
+    pts: &[Point],
+    first: usize,
+    last: usize,
+    line: &LineFit,
+    cov: LineCovariance,
+) -> Option<Feature> {
     let f = Feature::Line(LineFeature {
         first: u16::try_from(first).ok()?,
         last: u16::try_from(last).ok()?,

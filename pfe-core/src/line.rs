@@ -96,6 +96,32 @@ impl LineAxis {
     }
 }
 
+/// A run of consecutive beams from the origin, as [`LineFit::covariance_beams`] needs it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BeamSpan {
+    /// Number of beams.
+    pub(crate) count: usize,
+    /// Unit direction of the run's middle (a beam's, or halfway between two).
+    pub(crate) mid: Point,
+    /// Unit directions of the first and the last beam.
+    pub(crate) ends: [Point; 2],
+    /// `E = Σ_j 2 sin²(jδ)` over the beams' offsets `j` from the middle (…, −½, ½, … or
+    /// …, −1, 0, 1, …) in steps `δ`: how far their directions fan out.
+    pub(crate) spread: f32,
+}
+
+/// Fills `table[k]` with the [`BeamSpan::spread`] of `k + 1` beams `step` apart.
+pub(crate) fn fill_spreads(table: &mut [f32], step: f32) {
+    // From k − 1 to k + 1 beams, E grows by the two outermost, ±k/2 steps from the middle.
+    let mut last = [0.0f32; 2];
+    for (k, e) in table.iter_mut().enumerate() {
+        let s = math::sin(0.5 * k as f32 * step);
+        let [older, newer] = last;
+        *e = older + 4.0 * s * s;
+        last = [newer, *e];
+    }
+}
+
 /// Sum of squared orthogonal residuals of the least-squares line through `points` (the smaller
 /// eigenvalue of their scatter matrix: one pass and one square root, no line); `None` for
 /// fewer than 2 points or non-finite input.
@@ -352,10 +378,64 @@ impl LineFit {
             su_s += uc;
             s_s += cos2b;
         }
+        let d = self.centroid.x * tx + self.centroid.y * ty;
+        self.covariance_from([suu, suu_s, su_s, s_s], d, sigma_r)
+    }
+
+    /// `covariance_range` for the points of consecutive `beams` from the origin (`ends`: the
+    /// first and the last), with each point's lever and incidence taken where its beam meets
+    /// the line (the same first-order propagation, evaluated at the fitted points instead of
+    /// the measured ones) and summed in closed form: no pass over the points. `None` when the
+    /// beams meet the line more than 2 % of the run's length away from the measured ends (at
+    /// grazing incidence, or for a line along the beams): then the fitted points are not a
+    /// stand-in for the measured ones.
+    pub(crate) fn covariance_beams(
+        &self,
+        beams: &BeamSpan,
+        ends: [&Point; 2],
+        sigma_r: f32,
+    ) -> Option<LineCovariance> {
+        let (nc, ns) = self.normal();
+        let (tx, ty) = (-ns, nc);
+        let [d0, d1] = beams.ends;
+        let [p0, p1] = ends;
+        // Where beam d meets the line minus where p projects on it, along the line.
+        let shift = |d: &Point, p: &Point| {
+            let c = d.x * nc + d.y * ns;
+            (self.rho * (d.x * tx + d.y * ty) - (p.x * tx + p.y * ty) * c) / c
+        };
+        let length = (p1.x - p0.x) * tx + (p1.y - p0.y) * ty;
+        if !(math::abs(shift(&d0, p0)) + math::abs(shift(&d1, p1)) <= 0.02 * math::abs(length)) {
+            return None;
+        }
+        // Beam i meets the line at range ρ/cos φ_i, φ_i its angle from the normal, at
+        // u_i = ρ tan φ_i − τ along it (τ the centroid's position), where cos²β_i = cos²φ_i.
+        // With φ_i = φ + jδ (φ the span's middle, j the offsets from it), Σcos 2jδ = n − E
+        // and Σsin 2jδ = 0: the sums of cos²φ_i, u_i cos²φ_i and u_i² cos²φ_i follow from
+        // cos φ, sin φ and E.
+        let (rho, tau) = (self.rho, self.centroid.x * tx + self.centroid.y * ty);
+        let (c, a) = (
+            beams.mid.x * nc + beams.mid.y * ns,
+            beams.mid.x * tx + beams.mid.y * ty,
+        );
+        let (half_e, dn) = (0.5 * beams.spread, beams.count as f32 - beams.spread);
+        // ρ sin φ − τ cos φ: u cos φ at the middle.
+        let w = rho * a - tau * c;
+        let s_s = half_e + dn * c * c;
+        let su_s = dn * c * w - half_e * tau;
+        let suu_s = half_e * (rho * rho + tau * tau) + dn * w * w;
+        // Σu² of the measured points: the scatter along the line.
+        let suu = self.sxx * tx * tx + 2.0 * self.sxy * tx * ty + self.syy * ty * ty;
+        Some(self.covariance_from([suu, suu_s, su_s, s_s], tau, sigma_r))
+    }
+
+    /// The covariance from Σu², Σu² cos²β, Σu cos²β and Σcos²β (before σ_r²) and `d`, the
+    /// centroid's position along the line.
+    fn covariance_from(&self, sums: [f32; 4], d: f32, sigma_r: f32) -> LineCovariance {
         let var = sigma_r * sigma_r;
+        let [suu, suu_s, su_s, s_s] = sums;
         let (suu_s, su_s, s_s) = (suu_s * var, su_s * var, s_s * var);
         let n = self.n.max(1) as f32;
-        let d = self.centroid.x * tx + self.centroid.y * ty;
         let var_alpha = if suu > 0.0 {
             suu_s / (suu * suu)
         } else {
@@ -371,5 +451,128 @@ impl LineFit {
             var_rho: if var_rho < 0.0 { 0.0 } else { var_rho },
             cov_alpha_rho: cov_e_a + d * var_alpha,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed form agrees with the pass over the points for points on the line (where
+    /// the fitted and the measured points coincide), over lines at every angle and distance,
+    /// runs of 4 to 120 beams at every incidence, steps of either sign; and the spreads agree
+    /// with their definition.
+    #[test]
+    fn covariance_beams_matches_the_pass_on_the_line() -> Result<(), FitError> {
+        let mut checked = 0;
+        for step_deg in [0.25f64, 0.5, 1.0, -0.5] {
+            let step = step_deg.to_radians();
+            let mut spreads = [0.0f32; 121];
+            fill_spreads(&mut spreads, step as f32);
+            for (k, e) in spreads.iter().enumerate() {
+                let half = k as f64 / 2.0;
+                let want: f64 = (0..=k)
+                    .map(|i| 2.0 * ((i as f64 - half) * step).sin().powi(2))
+                    .sum();
+                assert!(
+                    (f64::from(*e) - want).abs() <= 1e-6 * want.max(1e-3),
+                    "E {k} {e} {want}"
+                );
+            }
+            for alpha_deg in [-170.0f64, -95.0, -30.0, 0.0, 44.0, 120.0] {
+                for rho in [300.0f64, 2000.0, 7500.0] {
+                    for count in [4usize, 5, 17, 60, 120] {
+                        // The run's middle from 60° on one side of the normal to 60° on the other.
+                        for phi_deg in [-60.0f64, -20.0, 0.0, 7.0, 45.0] {
+                            let span = (count - 1) as f64 * step.abs() / 2.0;
+                            if phi_deg.abs().to_radians() + span > 80f64.to_radians() {
+                                continue;
+                            }
+                            let alpha = alpha_deg.to_radians();
+                            let first =
+                                alpha + phi_deg.to_radians() - (count - 1) as f64 * step / 2.0;
+                            let pts: heapless::Vec<Point, 120> = (0..count)
+                                .map(|i| {
+                                    let b = first + i as f64 * step;
+                                    let r = rho / (b - alpha).cos();
+                                    Point::new((r * b.cos()) as f32, (r * b.sin()) as f32)
+                                })
+                                .collect();
+                            let line = fit_line(&pts)?;
+                            let mid_b = first + (count - 1) as f64 * step / 2.0;
+                            let dir = |b: f64| Point::new(b.cos() as f32, b.sin() as f32);
+                            let last_b = first + (count - 1) as f64 * step;
+                            let beams = BeamSpan {
+                                count,
+                                mid: dir(mid_b),
+                                ends: [dir(first), dir(last_b)],
+                                spread: spreads[count - 1],
+                            };
+                            let ends = [&pts[0], &pts[count - 1]];
+                            let a = line
+                                .covariance_beams(&beams, ends, 5.0)
+                                .ok_or(FitError::Degenerate)?;
+                            let b = line.covariance_range(
+                                pts.iter().copied(),
+                                Point::new(0.0, 0.0),
+                                5.0,
+                            );
+                            let close = |x: f32, y: f32, scale: f32| (x - y).abs() <= 5e-4 * scale;
+                            let s_ar = (a.var_alpha * a.var_rho).sqrt();
+                            assert!(
+                                close(a.var_alpha, b.var_alpha, b.var_alpha)
+                                    && close(a.var_rho, b.var_rho, b.var_rho)
+                                    && close(a.cov_alpha_rho, b.cov_alpha_rho, s_ar),
+                                "step {step_deg} α {alpha_deg} ρ {rho} n {count} φ {phi_deg}: {a:?} vs {b:?}"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 800, "{checked}");
+        Ok(())
+    }
+
+    /// A short run seen almost along its beams: the beams meet the fitted line far from the
+    /// measured points, and the closed form declines (the extractor then makes the pass).
+    #[test]
+    fn covariance_beams_declines_along_the_beams() -> Result<(), FitError> {
+        let step = 0.5f32.to_radians();
+        let pts: heapless::Vec<Point, 4> = [
+            (1000.0f32, 0.0f32),
+            (1040.0, 1.0),
+            (1060.0, 2.0),
+            (1110.0, 3.0),
+        ]
+        .iter()
+        .map(|&(r, i)| Point::new(r * (i * step).cos(), r * (i * step).sin()))
+        .collect();
+        let mut spreads = [0.0f32; 4];
+        fill_spreads(&mut spreads, step);
+        let dir = |i: f32| Point::new((i * step).cos(), (i * step).sin());
+        let beams = BeamSpan {
+            count: 4,
+            mid: dir(1.5),
+            ends: [dir(0.0), dir(3.0)],
+            spread: spreads[3],
+        };
+        let line = fit_line(&pts)?;
+        assert!(line
+            .covariance_beams(&beams, [&pts[0], &pts[3]], 5.0)
+            .is_none());
+        // Four points of a wall across the same beams: accepted.
+        let wall: heapless::Vec<Point, 4> = (0..4)
+            .map(|i| {
+                let b = i as f32 * step;
+                Point::new(1000.0, 1000.0 * b.tan())
+            })
+            .collect();
+        let line = fit_line(&wall)?;
+        assert!(line
+            .covariance_beams(&beams, [&wall[0], &wall[3]], 5.0)
+            .is_some());
+        Ok(())
     }
 }
