@@ -283,6 +283,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     /// The first index from `from` whose flags `seek` finds, four flags at a time where it can
     /// tell from their word that none of them is one.
+    #[inline(always)]
     fn next_flag(&self, from: usize, seek: Seek) -> Option<usize> {
         let flags = self.flags.get(from..self.len)?;
         let mut chunks = flags.chunks_exact(4);
