@@ -483,7 +483,16 @@ fn det3(a: &[[f32; 3]; 3]) -> f32 {
 pub(crate) fn inverse3(a: &[[f32; 3]; 3]) -> Option<[[f32; 3]; 3]> {
     let [[a00, a01, a02], [a10, a11, a12], [a20, a21, a22]] = *a;
     let det = det3(a);
-    let norm = a.iter().flatten().fold(0.0f32, |m, v| m.max(math::abs(*v)));
+    // The largest |entry| (a comparison: `f32::max` is a libm call on thumbv7em; a NaN entry
+    // is skipped here and caught by the determinant's test).
+    let norm = a.iter().flatten().fold(0.0f32, |m, v| {
+        let v = math::abs(*v);
+        if v > m {
+            v
+        } else {
+            m
+        }
+    });
     if !(math::abs(det) > norm * norm * norm * 1e-9) || !math::finite(det) {
         return None;
     }
