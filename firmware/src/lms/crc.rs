@@ -27,57 +27,61 @@ const fn shift(mut crc: u16, k: u32) -> u16 {
     crc
 }
 
-/// Contributions to the register after four bytes `b0 b1 b2 b3` following `prev`: `L⁴(c) ^
-/// L³(prev << 8 | b0) ^ L²(b0 << 8 | b1) ^ L(b1 << 8 | b2) ^ (b2 << 8 | b3)`, L one shift.
-/// Tables built at compile time (1.6 KiB of flash); `L(b2) = b2 << 1` and `b3` need none.
+/// Contributions to the register after eight bytes `b0 … b7` following `prev`:
+/// `L⁸(c) ^ L⁷(prev << 8 | b0) ^ L⁶(b0 << 8 | b1) ^ … ^ L(b5 << 8 | b6) ^ (b6 << 8 | b7)`, L
+/// one shift, grouped by byte. Tables built at compile time (4 KiB of flash); `L(b6) = b6 << 1`
+/// and `b7` need none.
 struct Tables {
-    /// `L⁴` of the register's top four bits (the low twelve just shift).
-    top: [u16; 16],
-    /// `L³(prev << 8)`.
+    /// `L⁸` of the register's top eight bits (the low eight just shift).
+    top: [u16; 256],
+    /// `L⁷(prev << 8)`.
     prev: [u16; 256],
-    /// `L³(b0) ^ L²(b0 << 8)`.
-    b0: [u16; 256],
-    /// `L²(b1) ^ L(b1 << 8)`.
-    b1: [u16; 256],
+    /// `L^(7−k)(b) ^ L^(6−k)(b << 8)` for byte `k` = 0 … 5.
+    bytes: [[u16; 256]; 6],
 }
 
 #[allow(clippy::indexing_slicing)] // compile time: an index out of range is a build error
 const TABLES: Tables = {
     let mut t = Tables {
-        top: [0; 16],
+        top: [0; 256],
         prev: [0; 256],
-        b0: [0; 256],
-        b1: [0; 256],
+        bytes: [[0; 256]; 6],
     };
     let mut i = 0;
     while i < 256 {
         let v = i as u16;
-        if i < 16 {
-            t.top[i] = shift(v << 12, 4);
+        t.top[i] = shift(v << 8, 8);
+        t.prev[i] = shift(v << 8, 7);
+        let mut k = 0;
+        while k < 6 {
+            t.bytes[k][i] = shift(v, 7 - k as u32) ^ shift(v << 8, 6 - k as u32);
+            k += 1;
         }
-        t.prev[i] = shift(v << 8, 3);
-        t.b0[i] = shift(v, 3) ^ shift(v << 8, 2);
-        t.b1[i] = shift(v, 2) ^ shift(v << 8, 1);
         i += 1;
     }
     t
 };
 
-/// Four bytes at once (see [`Tables`]); indices are < 16 or < 256 by type, so `get` never
-/// fails.
+/// Eight bytes at once (see [`Tables`]); indices are < 256 by type, so `get` never fails.
 #[inline(always)]
-fn step4(crc: u16, prev: u8, [b0, b1, b2, b3]: [u8; 4]) -> u16 {
+fn step8(crc: u16, prev: u8, b: [u8; 8]) -> u16 {
     let t = &TABLES;
-    let at = |table: &[u16], i: usize| table.get(i).copied().unwrap_or(0);
-    let b2 = u16::from(b2);
-    (crc << 4)
-        ^ at(&t.top, usize::from(crc >> 12))
-        ^ at(&t.prev, usize::from(prev))
-        ^ at(&t.b0, usize::from(b0))
-        ^ at(&t.b1, usize::from(b1))
-        ^ (b2 << 1)
-        ^ (b2 << 8)
-        ^ u16::from(b3)
+    let at = |table: &[u16; 256], i: u8| table.get(usize::from(i)).copied().unwrap_or(0);
+    let [b0, b1, b2, b3, b4, b5, b6, b7] = b;
+    let [tb0, tb1, tb2, tb3, tb4, tb5] = &t.bytes;
+    let b6 = u16::from(b6);
+    (crc << 8)
+        ^ at(&t.top, (crc >> 8) as u8)
+        ^ at(&t.prev, prev)
+        ^ at(tb0, b0)
+        ^ at(tb1, b1)
+        ^ at(tb2, b2)
+        ^ at(tb3, b3)
+        ^ at(tb4, b4)
+        ^ at(tb5, b5)
+        ^ (b6 << 1)
+        ^ (b6 << 8)
+        ^ u16::from(b7)
 }
 
 /// Incremental form of [`crc16`]: feed bytes in any chunking, read [`Crc::value`].
@@ -103,17 +107,17 @@ impl Crc {
 
     /// Adds `bytes`.
     pub fn update(&mut self, bytes: &[u8]) {
-        // Four bytes an iteration, the register and the previous byte in locals: the decoder
+        // Eight bytes an iteration, the register and the previous byte in locals: the decoder
         // runs this over every telegram byte.
         let (mut crc, mut prev) = (self.crc, self.prev);
-        let mut quads = bytes.chunks_exact(4);
-        for quad in quads.by_ref() {
-            if let [a, b, c, d] = *quad {
-                crc = step4(crc, prev, [a, b, c, d]);
-                prev = d;
+        let mut octets = bytes.chunks_exact(8);
+        for octet in octets.by_ref() {
+            if let Ok(b) = <[u8; 8]>::try_from(octet) {
+                crc = step8(crc, prev, b);
+                prev = b[7];
             }
         }
-        for &b in quads.remainder() {
+        for &b in octets.remainder() {
             crc = step(crc, prev, b);
             prev = b;
         }
@@ -151,24 +155,28 @@ mod tests {
         assert_ne!(v, 0x8119);
     }
 
-    /// Four bytes at once agree with four single steps, for every register value with the
-    /// top four bits and many byte quadruples.
+    /// Eight bytes at once agree with eight single steps, for registers, previous bytes and
+    /// byte octets of every kind.
     #[test]
-    fn four_bytes_at_once_match_four_steps() {
-        let mut x = 0x1234_5678u32;
+    fn eight_bytes_at_once_match_eight_steps() {
+        let mut x = 0x1234_5678_9abc_def0u64;
         for k in 0..200_000u32 {
             // xorshift: bytes and registers of every kind.
             x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            let [a, b, c, d] = x.to_le_bytes();
-            let crc = (x >> 7) as u16 ^ (k as u16);
-            let prev = (x >> 24) as u8 ^ (k >> 8) as u8;
-            let by_one = step(step(step(step(crc, prev, a), a, b), b, c), c, d);
+            x ^= x >> 7;
+            x ^= x << 17;
+            let b = x.to_le_bytes();
+            let crc = (x >> 11) as u16 ^ (k as u16);
+            let prev = (x >> 40) as u8 ^ (k >> 8) as u8;
+            let (mut by_one, mut p) = (crc, prev);
+            for &byte in &b {
+                by_one = step(by_one, p, byte);
+                p = byte;
+            }
             assert_eq!(
-                step4(crc, prev, [a, b, c, d]),
+                step8(crc, prev, b),
                 by_one,
-                "{crc:#06x} {prev:#04x} {x:#010x}"
+                "{crc:#06x} {prev:#04x} {x:#018x}"
             );
         }
     }
