@@ -710,3 +710,35 @@ mod props {
         }
     }
 }
+
+/// `range_codes` (two values a word) agrees with decoding value by value, for every count
+/// of values, output length and measuring mode, with flag bits set in the words.
+#[test]
+fn range_codes_match_value_by_value() {
+    use firmware::lms::reply::MeasuredValues;
+    for n in 0..=9usize {
+        let mut payload = vec![0xB0, n as u8, 0x00];
+        for i in 0..n {
+            // Range bits plus flag bits above them.
+            let w = 0xE000u16 | (1000 + 37 * i as u16);
+            payload.extend_from_slice(&w.to_le_bytes());
+        }
+        payload.push(0x10);
+        let v = MeasuredValues::parse(&payload, ReplyOptions::default()).unwrap();
+        for mode in [MeasuringMode(0), MeasuringMode(6)] {
+            for len in 0..=10usize {
+                let mut out = [0xFFFFu16; 10];
+                let k = v.range_codes(mode, &mut out[..len]);
+                assert_eq!(k, n.min(len), "n {n} len {len}");
+                for (i, &code) in out.iter().enumerate() {
+                    let want = if i < k {
+                        v.word(i).unwrap() & mode.range_mask()
+                    } else {
+                        0xFFFF
+                    };
+                    assert_eq!(code, want, "n {n} len {len} value {i}");
+                }
+            }
+        }
+    }
+}

@@ -396,12 +396,30 @@ impl<'a> MeasuredValues<'a> {
     /// (`min(len, out.len())`).
     pub fn range_codes(&self, mode: MeasuringMode, out: &mut [u16]) -> usize {
         let mask = mode.range_mask();
-        let mut k = 0;
-        for (o, w) in out.iter_mut().zip(self.words()) {
-            *o = w & mask;
-            k += 1;
+        let n = out.len().min(self.data.len() / 2);
+        let (Some(out), Some(data)) = (out.get_mut(..n), self.data.get(..2 * n)) else {
+            return 0;
+        };
+        // Two values a word.
+        let mask2 = u32::from(mask) * 0x1_0001;
+        let mut outs = out.chunks_exact_mut(2);
+        let mut words = data.chunks_exact(4);
+        for (o, w) in outs.by_ref().zip(words.by_ref()) {
+            if let (Ok(o), Ok(w)) = (<&mut [u16; 2]>::try_from(o), <[u8; 4]>::try_from(w)) {
+                let v = u32::from_le_bytes(w) & mask2;
+                *o = [v as u16, (v >> 16) as u16];
+            }
         }
-        k
+        for (o, w) in outs
+            .into_remainder()
+            .iter_mut()
+            .zip(words.remainder().chunks_exact(2))
+        {
+            if let Ok(w) = <[u8; 2]>::try_from(w) {
+                *o = u16::from_le_bytes(w) & mask;
+            }
+        }
+        n
     }
 }
 
