@@ -330,7 +330,9 @@ pub(crate) fn refine_from(
                 let gain = eq.sse - sse;
                 best = cand;
                 eq = at_cand;
-                lambda = (lambda * 0.3).max(1e-7);
+                // (A comparison: `f32::max` is a libm call on thumbv7em.)
+                let smaller = lambda * 0.3;
+                lambda = if smaller > 1e-7 { smaller } else { 1e-7 };
                 improved = gain > sse * 1e-7;
                 break;
             }
