@@ -9,7 +9,7 @@ use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
-use crate::line::{fill_spreads, fit_axis, fit_line, line_sse, BeamSpan};
+use crate::line::{fill_spreads, fit_axis, fit_line, BeamSpan, RunningSums};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
 use crate::scan::{max_code, valid_mm, Ranges, Scan, ScanGeometry};
@@ -674,14 +674,43 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     /// Best split between a segment starting at `old` and one starting near `b` and running
     /// to `end` (exclusive): the candidate (`b − 3 ..= b + 1`) that minimises the two local
-    /// line fits' squared residuals (at most `REFINE_SPAN` points each side).
+    /// line fits' squared residuals (at most `REFINE_SPAN` points each side), with their sums
+    /// moved along from one candidate to the next.
     fn refine_boundary(&self, old: usize, b: usize, end: usize) -> usize {
-        let (mut best, mut best_sse) = (b, f32::INFINITY);
         let lo = b.saturating_sub(3).max(old + NP);
-        for j in lo..=(b + 1).min(end.saturating_sub(NP)) {
-            let left = self.points.get(j.saturating_sub(REFINE_SPAN).max(old)..j);
-            let right = self.points.get(j..end.min(j + REFINE_SPAN));
-            let sse = match (left.and_then(line_sse), right.and_then(line_sse)) {
+        let hi = (b + 1).min(end.saturating_sub(NP));
+        let o = self.point(b);
+        let (mut left, mut right) = (RunningSums::about(o), RunningSums::about(o));
+        for p in self
+            .points
+            .get(lo.saturating_sub(REFINE_SPAN).max(old)..lo)
+            .unwrap_or(&[])
+        {
+            left.change(p, 1.0);
+        }
+        for p in self
+            .points
+            .get(lo..end.min(lo + REFINE_SPAN))
+            .unwrap_or(&[])
+        {
+            right.change(p, 1.0);
+        }
+        let (mut best, mut best_sse) = (b, f32::INFINITY);
+        for j in lo..=hi {
+            if j > lo {
+                // Point j − 1 moves from the right to the left; the left loses its first
+                // point, the right gains its next, where the spans allow.
+                let moved = self.point(j - 1);
+                left.change(&moved, 1.0);
+                right.change(&moved, -1.0);
+                if let Some(first) = (j - 1).checked_sub(REFINE_SPAN).filter(|&f| f >= old) {
+                    left.change(&self.point(first), -1.0);
+                }
+                if j - 1 + REFINE_SPAN < end {
+                    right.change(&self.point(j - 1 + REFINE_SPAN), 1.0);
+                }
+            }
+            let sse = match (left.sse(), right.sse()) {
                 (Some(l), Some(r)) => l + r,
                 _ => continue,
             };

@@ -122,12 +122,61 @@ pub(crate) fn fill_spreads(table: &mut [f32], step: f32) {
     }
 }
 
-/// Sum of squared orthogonal residuals of the least-squares line through `points` (the smaller
-/// eigenvalue of their scatter matrix: one pass and one square root, no line); `None` for
-/// fewer than 2 points or non-finite input.
-pub(crate) fn line_sse(points: &[Point]) -> Option<f32> {
-    let (_, _, sxx, syy, sxy) = centred_moments(points).ok()?;
-    Some(smaller_eigenvalue(sxx, syy, sxy))
+/// Running sums of a few points about a point near them, for the residual sum of their
+/// least-squares line as points join and leave (the extractor's boundary refinement).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct RunningSums {
+    n: u32,
+    o: Point,
+    s: [f32; 5],
+}
+
+impl RunningSums {
+    /// No points yet; sums about `o`.
+    pub(crate) fn about(o: Point) -> Self {
+        Self {
+            n: 0,
+            o,
+            s: [0.0; 5],
+        }
+    }
+
+    /// Adds (`sign` 1) or removes (`sign` −1) `p`.
+    #[inline]
+    pub(crate) fn change(&mut self, p: &Point, sign: f32) {
+        let (x, y) = (p.x - self.o.x, p.y - self.o.y);
+        let [sx, sy, sxx, syy, sxy] = self.s;
+        let (sx2, sy2) = (sign * x, sign * y);
+        self.s = [
+            sx + sx2,
+            sy + sy2,
+            sxx + sx2 * x,
+            syy + sy2 * y,
+            sxy + sx2 * y,
+        ];
+        self.n = if sign > 0.0 {
+            self.n + 1
+        } else {
+            self.n.saturating_sub(1)
+        };
+    }
+
+    /// Sum of squared orthogonal residuals of the least-squares line through the points (the
+    /// smaller eigenvalue of their scatter matrix: no line); `None` for fewer than 2 points
+    /// or non-finite sums.
+    pub(crate) fn sse(&self) -> Option<f32> {
+        let [sx, sy, sxx, syy, sxy] = self.s;
+        if self.n < 2 || !(math::finite(sxx + syy) && math::finite(sxy)) {
+            return None;
+        }
+        let inv_n = 1.0 / self.n as f32;
+        let (mx, my) = (sx * inv_n, sy * inv_n);
+        Some(smaller_eigenvalue(
+            sxx - sx * mx,
+            syy - sy * my,
+            sxy - sx * my,
+        ))
+    }
 }
 
 /// The larger eigenvalue of the scatter matrix `[[sxx, sxy], [sxy, syy]]` and an eigenvector
