@@ -625,7 +625,11 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     self.clear(b, START);
                     self.set(best, START);
                     walk.seg = Some(best);
-                    walk.cache = None;
+                    // A line of the points from b on is still one of the segment's when it
+                    // starts earlier.
+                    if best > b {
+                        walk.cache = None;
+                    }
                     walk.joinable = Some((best, old));
                 }
                 walk.pending = None;
