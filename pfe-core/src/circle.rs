@@ -390,14 +390,27 @@ impl NormalEquations {
     }
 }
 
-fn accumulate(jtj: &mut [[f32; 3]; 3], jtr: &mut [f32; 3], j: &[f32; 3], r: f32) {
-    for (row, ji) in jtj.iter_mut().zip(j.iter()) {
-        for (v, jk) in row.iter_mut().zip(j.iter()) {
-            *v += ji * jk;
-        }
+/// A symmetric 3×3 sum of outer products `j jᵀ` (its six distinct entries).
+#[derive(Clone, Copy, Default)]
+struct OuterSum([f32; 6]);
+
+impl OuterSum {
+    #[inline]
+    fn add(&mut self, [a, b, c]: [f32; 3]) {
+        let [s00, s01, s02, s11, s12, s22] = self.0;
+        self.0 = [
+            s00 + a * a,
+            s01 + a * b,
+            s02 + a * c,
+            s11 + b * b,
+            s12 + b * c,
+            s22 + c * c,
+        ];
     }
-    for (v, ji) in jtr.iter_mut().zip(j.iter()) {
-        *v += ji * r;
+
+    fn matrix(&self) -> [[f32; 3]; 3] {
+        let [s00, s01, s02, s11, s12, s22] = self.0;
+        [[s00, s01, s02], [s01, s11, s12], [s02, s12, s22]]
     }
 }
 
@@ -432,43 +445,50 @@ pub fn circle_covariance_range(
     origin: Point,
     sigma_r: f32,
 ) -> Result<[[f32; 3]; 3], FitError> {
-    let inv = wtw_inverse(points, circle)?;
-    let mut mid = [[0.0f32; 3]; 3];
-    let mut dummy = [0.0f32; 3];
-    for p in points {
-        let (dx, dy) = (p.x - circle.center.x, p.y - circle.center.y);
-        let d = math::hypot(dx, dy);
-        let (bx, by) = (p.x - origin.x, p.y - origin.y);
-        let bn = math::hypot(bx, by);
-        if !(d > 0.0) || !(bn > 0.0) {
-            continue;
-        }
-        let (u, v) = (dx / d, dy / d);
-        let cosg = (u * bx + v * by) / bn;
-        let w = sigma_r * cosg;
-        accumulate(&mut mid, &mut dummy, &[u * w, v * w, w], 0.0);
-    }
-    Ok(mul3(&mul3(&inv, &mid), &inv))
-}
-
-fn wtw_inverse(points: &[Point], circle: &Circle) -> Result<[[f32; 3]; 3], FitError> {
-    if points.len() < 3 {
-        return Err(FitError::TooFewPoints {
-            got: points.len(),
-            need: 3,
-        });
-    }
-    let mut wtw = [[0.0f32; 3]; 3];
-    let mut dummy = [0.0f32; 3];
+    // WᵀW and WᵀΣW in one pass.
+    let (mut wtw, mut mid) = (OuterSum::default(), OuterSum::default());
     for p in points {
         let (dx, dy) = (p.x - circle.center.x, p.y - circle.center.y);
         let d = math::hypot(dx, dy);
         if !(d > 0.0) {
             continue;
         }
-        accumulate(&mut wtw, &mut dummy, &[dx / d, dy / d, 1.0], 0.0);
+        let (u, v) = (dx / d, dy / d);
+        wtw.add([u, v, 1.0]);
+        let (bx, by) = (p.x - origin.x, p.y - origin.y);
+        let bn = math::hypot(bx, by);
+        if !(bn > 0.0) {
+            continue;
+        }
+        let w = sigma_r * ((u * bx + v * by) / bn);
+        mid.add([u * w, v * w, w]);
     }
-    let inv = inverse3(&wtw).ok_or(FitError::Degenerate)?;
+    let inv = invert(points, &wtw)?;
+    Ok(mul3(&mul3(&inv, &mid.matrix()), &inv))
+}
+
+fn wtw_inverse(points: &[Point], circle: &Circle) -> Result<[[f32; 3]; 3], FitError> {
+    let mut wtw = OuterSum::default();
+    for p in points {
+        let (dx, dy) = (p.x - circle.center.x, p.y - circle.center.y);
+        let d = math::hypot(dx, dy);
+        if !(d > 0.0) {
+            continue;
+        }
+        wtw.add([dx / d, dy / d, 1.0]);
+    }
+    invert(points, &wtw)
+}
+
+/// `(WᵀW)⁻¹` of the `points`' W (at least 3 of them, finite).
+fn invert(points: &[Point], wtw: &OuterSum) -> Result<[[f32; 3]; 3], FitError> {
+    if points.len() < 3 {
+        return Err(FitError::TooFewPoints {
+            got: points.len(),
+            need: 3,
+        });
+    }
+    let inv = inverse3(&wtw.matrix()).ok_or(FitError::Degenerate)?;
     if inv.iter().flatten().all(|v| math::finite(*v)) {
         Ok(inv)
     } else {
