@@ -956,7 +956,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
 
     /// The beams `s..=e` (a segment's: all valid, consecutive).
     fn beam_span(&self, s: usize, e: usize) -> Option<BeamSpan> {
-        let count = (e + 1).checked_sub(s)?;
+        let count = (e + 1).checked_sub(s).filter(|&c| c > 0)?;
         let d = *self.dirs.get(s + (count - 1) / 2)?;
         // An even count's middle lies half a step past the lower middle beam.
         let h = self.half_step;
