@@ -522,9 +522,10 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             let mut stale_failed = false;
             // Fast path: the points the cached line accepts, up to the next point where a
             // boundary awaits refinement or a merge test is due.
-            if let (Some(_), Some((line, until)), None) = (walk.seg, walk.cache, self.motion) {
+            let cached = walk.cache.as_ref().filter(|_| walk.seg.is_some());
+            if let (Some((line, until)), true) = (cached, self.motion.is_none()) {
                 let stop = walk.next_check(k, until + 1).min(self.len);
-                let next = self.accepted_run(k, stop, &line, &limits);
+                let next = self.accepted_run(k, stop, line, &limits);
                 self.stats.predictions += next - k;
                 stale_failed = next < stop;
                 k = next;
@@ -573,10 +574,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         } else {
             // A recent window's line first (unless the fast path just saw it fail here).
             let stale_ok = !stale_failed
-                && walk
-                    .cache
-                    .filter(|(_, until)| k <= *until)
-                    .is_some_and(|(line, _)| self.line_accepts(&line, k, m, sigma_r));
+                && walk.cache.as_ref().is_some_and(|(line, until)| {
+                    k <= *until && self.line_accepts(line, k, m, sigma_r)
+                });
             if stale_ok {
                 None
             } else {
@@ -587,7 +587,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 // It may test the next 4w points while they fit it, no more loosely than a
                 // fresh line (`WindowLine::accepts`); a point it rejects gets a fresh window.
                 walk.cache = line.map(|l| (l, k + 4 * w));
-                let over = !line.is_some_and(|l| self.line_accepts(&l, k, m, sigma_r));
+                let over = !line
+                    .as_ref()
+                    .is_some_and(|l| self.line_accepts(l, k, m, sigma_r));
                 (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
                     let pred = line.and_then(|l| self.predict_with(&l, k));
                     self.locate(s, k, pred, m, sigma_r)
