@@ -36,9 +36,10 @@ impl<'a> Telegram<'a> {
     ///
     /// ```
     /// use firmware::lms::frame::Telegram;
-    /// let t = Telegram::parse(&[0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A]).unwrap();
+    /// let t = Telegram::parse(&[0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A])?;
     /// assert_eq!(t.command(), 0xA0);
     /// assert_eq!(t.payload(), &[0xA0, 0x00, 0x10]);
+    /// # Ok::<(), firmware::lms::frame::FrameError>(())
     /// ```
     pub fn parse(raw: &'a [u8]) -> Result<Self, FrameError> {
         let (head, _) = raw.split_first_chunk::<4>().ok_or(FrameError::Truncated)?;
@@ -138,8 +139,9 @@ impl core::error::Error for FrameError {}
 /// ```
 /// use firmware::lms::frame::{encode_telegram, HOST_ADDRESS};
 /// let mut buf = [0u8; 16];
-/// let n = encode_telegram(HOST_ADDRESS, &[0x20, 0x24], &mut buf).unwrap();
+/// let n = encode_telegram(HOST_ADDRESS, &[0x20, 0x24], &mut buf)?;
 /// assert_eq!(&buf[..n], &[0x02, 0x00, 0x02, 0x00, 0x20, 0x24, 0x34, 0x08]);
+/// # Ok::<(), firmware::lms::frame::FrameError>(())
 /// ```
 pub fn encode_telegram(adr: u8, payload: &[u8], out: &mut [u8]) -> Result<usize, FrameError> {
     encode_parts(adr, &[payload], out)
@@ -237,16 +239,17 @@ enum Settle {
 /// let mut seen = 0;
 /// loop {
 ///     let (used, ev) = dec.feed(rest);
-///     rest = &rest[used..];
+///     rest = rest.get(used..).unwrap_or(&[]);
 ///     match ev {
 ///         Some(Event::Ack) => seen += 1,
 ///         Some(Event::Telegram(t)) => { assert_eq!(t.payload(), &[0xA0, 0x00, 0x10]); seen += 1 }
-///         Some(Event::Nak) => unreachable!(),
+///         Some(Event::Nak) => return Err("no NAK in this stream"),
 ///         None => break,
 ///     }
 /// }
 /// assert_eq!(seen, 2);
 /// assert_eq!(dec.stats().bytes_skipped, 1);
+/// # Ok::<(), &'static str>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct Decoder<const CAP: usize> {

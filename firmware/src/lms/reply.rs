@@ -162,9 +162,10 @@ pub enum Reply<'a> {
 ///
 /// ```
 /// use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
-/// let r = parse_reply(&[0xA0, 0x00, 0x10], ReplyOptions::default()).unwrap();
+/// let r = parse_reply(&[0xA0, 0x00, 0x10], ReplyOptions::default())?;
 /// assert_eq!(r.reply, Reply::Mode(0));
 /// assert_eq!(r.status.0, 0x10);
+/// # Ok::<(), firmware::lms::reply::ReplyError>(())
 /// ```
 pub fn parse_reply(payload: &[u8], opts: ReplyOptions) -> Result<ParsedReply<'_>, ReplyError> {
     let (&code, rest) = payload.split_first().ok_or(ReplyError::Empty)?;
