@@ -528,13 +528,9 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
         self.encode(data, true)
     }
 
-    /// Serializes `item` into `scratch` and adds it.
-    fn put_item<T: Serialize>(
-        &mut self,
-        scratch: &mut [u8; 96],
-        item: &T,
-    ) -> Result<(), EncodeError<W::Error>> {
-        let bytes = postcard::to_slice(item, scratch).map_err(|_| EncodeError::Serialize)?;
+    fn put_item<T: Serialize>(&mut self, item: &T) -> Result<(), EncodeError<W::Error>> {
+        let mut scratch = [0u8; 96];
+        let bytes = postcard::to_slice(item, &mut scratch).map_err(|_| EncodeError::Serialize)?;
         self.put(bytes).map_err(EncodeError::Write)
     }
 
@@ -558,7 +554,7 @@ pub fn write_scan<W: embedded_io::Write>(
     let mut h = *header;
     h.n_features = u16::try_from(features.len()).unwrap_or(u16::MAX);
     let mut enc = CobsWriter::new(w);
-    enc.put_item(&mut [0u8; 96], &Header::Scan(h))?;
+    enc.put_item(&Header::Scan(h))?;
     let mut bytes = [0u8; MAX_FEATURE_LEN];
     for f in features.iter().take(usize::from(h.n_features)) {
         let n = feature_bytes(f, &mut bytes);
@@ -574,7 +570,7 @@ pub fn write_report<W: embedded_io::Write>(
     report: &Report,
 ) -> Result<(), EncodeError<W::Error>> {
     let mut enc = CobsWriter::new(w);
-    enc.put_item(&mut [0u8; 96], &Header::Report(*report))?;
+    enc.put_item(&Header::Report(*report))?;
     enc.finish().map_err(EncodeError::Write)
 }
 

@@ -361,8 +361,7 @@ impl NormalEquations {
             jtr: [0.0; 3],
             sse: 0.0,
         };
-        let (mut s00, mut s01, mut s11, mut s0, mut s1, mut count) =
-            (0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0);
+        let mut jtj = OuterSum::default();
         for p in points {
             let (dx, dy) = (p.x - c.center.x, p.y - c.center.y);
             let d = math::hypot(dx, dy);
@@ -371,26 +370,21 @@ impl NormalEquations {
             if !(d > 0.0) {
                 continue;
             }
-            // J_i = (−dx/d, −dy/d, −1): the products with −1 are exact negations, and JᵀJ is
-            // symmetric, so five sums and a count give all nine entries.
+            // J_i = (−dx/d, −dy/d, −1).
             let inv_d = 1.0 / d;
             let (a, b) = (-dx * inv_d, -dy * inv_d);
-            s00 += a * a;
-            s01 += a * b;
-            s11 += b * b;
-            s0 -= a;
-            s1 -= b;
-            count += 1.0;
+            jtj.add([a, b, -1.0]);
             eq.jtr[0] += a * r;
             eq.jtr[1] += b * r;
             eq.jtr[2] -= r;
         }
-        eq.jtj = [[s00, s01, s0], [s01, s11, s1], [s0, s1, count]];
+        eq.jtj = jtj.matrix();
         eq
     }
 }
 
-/// A symmetric 3×3 sum of outer products `j jᵀ` (its six distinct entries).
+/// A symmetric 3×3 sum of outer products `j jᵀ` (its six distinct entries; products with ±1
+/// are exact).
 #[derive(Clone, Copy, Default)]
 struct OuterSum([f32; 6]);
 

@@ -165,18 +165,22 @@ impl RunningSums {
     /// smaller eigenvalue of their scatter matrix: no line); `None` for fewer than 2 points
     /// or non-finite sums.
     pub(crate) fn sse(&self) -> Option<f32> {
-        let [sx, sy, sxx, syy, sxy] = self.s;
+        let [_, _, sxx, syy, sxy] = self.s;
         if self.n < 2 || !(math::finite(sxx + syy) && math::finite(sxy)) {
             return None;
         }
-        let inv_n = 1.0 / self.n as f32;
-        let (mx, my) = (sx * inv_n, sy * inv_n);
-        Some(smaller_eigenvalue(
-            sxx - sx * mx,
-            syy - sy * my,
-            sxy - sx * my,
-        ))
+        let (_, [sxx, syy, sxy]) = centre(self.s, 1.0 / self.n as f32);
+        Some(smaller_eigenvalue(sxx, syy, sxy))
     }
+}
+
+/// The mean offset `(x̄, ȳ)` and the centred moments `[Sxx, Syy, Sxy]` of points from their
+/// sums `[Σx, Σy, Σx², Σy², Σxy]` about a point and `inv_n` = 1 / their number.
+#[inline]
+pub(crate) fn centre(sums: [f32; 5], inv_n: f32) -> ((f32, f32), [f32; 3]) {
+    let [sx, sy, sxx, syy, sxy] = sums;
+    let (mx, my) = (sx * inv_n, sy * inv_n);
+    ((mx, my), [sxx - sx * mx, syy - sy * my, sxy - sx * my])
 }
 
 /// The larger eigenvalue of the scatter matrix `[[sxx, sxy], [sxy, syy]]` and an eigenvector
@@ -226,14 +230,13 @@ fn centred_moments(points: &[Point]) -> Result<(usize, Point, f32, f32, f32), Fi
     let Some(o) = points.get(n / 2).filter(|_| n >= 2) else {
         return Err(FitError::TooFewPoints { got: n, need: 2 });
     };
-    let [sx, sy, sxx, syy, sxy] = sums_about(points, o);
+    let sums = sums_about(points, o);
+    let [_, _, sxx, syy, sxy] = sums;
     if !(math::finite(sxx + syy) && math::finite(sxy)) {
         return Err(FitError::NonFinite);
     }
-    let inv_n = 1.0 / n as f32;
-    let (mx, my) = (sx * inv_n, sy * inv_n);
-    let c = Point::new(o.x + mx, o.y + my);
-    Ok((n, c, sxx - sx * mx, syy - sy * my, sxy - sx * my))
+    let ((mx, my), [sxx, syy, sxy]) = centre(sums, 1.0 / n as f32);
+    Ok((n, Point::new(o.x + mx, o.y + my), sxx, syy, sxy))
 }
 
 /// [`fit_line`] without α, in one pass over the points, with moments about the middle point

@@ -101,9 +101,7 @@ impl WindowLine {
             (c, 0.5 * (dx * dx + dy * dy), dx, dy)
         } else {
             // Moments relative to the first point (the window is small: no cancellation).
-            let [sx, sy, sxx, syy, sxy] = line::sums_about(window, first);
-            let (mx, my) = (sx * inv_n, sy * inv_n);
-            let (sxx, syy, sxy) = (sxx - sx * mx, syy - sy * my, sxy - sx * my);
+            let ((mx, my), [sxx, syy, sxy]) = line::centre(line::sums_about(window, first), inv_n);
             // Principal axis (tx, ty) and the spread along it.
             let (suu, tx, ty) = line::major_axis(sxx, syy, sxy);
             (Point::new(first.x + mx, first.y + my), suu, tx, ty)
