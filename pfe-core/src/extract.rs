@@ -352,7 +352,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 let max_code = max_code(mm_per_unit, max_valid, g.r_max);
                 // 1 ..= max_code: in (0, r_max] mm.
                 self.place(values, |v| {
-                    (v.wrapping_sub(1) < max_code).then(|| f32::from(v) * mm_per_unit)
+                    (u32::from(v).wrapping_sub(1) < u32::from(max_code))
+                        .then(|| f32::from(v) * mm_per_unit)
                 })
             }
             Ranges::Mm(mm) => self.place(mm, |r| valid_mm(r, g.r_max)),
@@ -394,13 +395,26 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// the common path short).
     fn place<T: Copy>(&mut self, readings: &[T], range: impl Fn(T) -> Option<f32>) -> usize {
         let mut invalid = 0usize;
-        let slots = self
-            .points
+        let n = self.len;
+        // Every slice cut to `n` up front: one loop counter.
+        let slots = (
+            self.points.get_mut(..n),
+            self.ranges.get_mut(..n),
+            self.flags.get_mut(..n),
+            self.dirs.get(..n),
+            readings.get(..n),
+        );
+        let (Some(points), Some(ranges), Some(flags), Some(dirs), Some(readings)) = slots else {
+            // Not reached (`extract` checked `n`): an empty scan rather than stale points.
+            self.len = 0;
+            return 0;
+        };
+        let slots = points
             .iter_mut()
-            .zip(self.ranges.iter_mut())
-            .zip(self.flags.iter_mut())
-            .zip(self.dirs.iter().zip(readings));
-        for (((point, slot), flag), (d, &v)) in slots.take(self.len) {
+            .zip(ranges.iter_mut())
+            .zip(flags.iter_mut())
+            .zip(dirs.iter().zip(readings));
+        for (((point, slot), flag), (d, &v)) in slots {
             (*point, *slot, *flag) = match range(v) {
                 Some(r) => (Point::new(r * d.x, r * d.y), r, VALID),
                 None => {
