@@ -595,17 +595,16 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 None
             } else {
                 let w = self.window(k, c, m, sigma_r);
-                let line = self
-                    .window_line(k - w, k, k)
-                    .map(|l| l.capped(&self.point(k - w), &self.point(k - 1), w));
+                let (first, last) = (self.point(k - w), self.point(k - 1));
                 // It may test the next 4w points while they fit it, no more loosely than a
                 // fresh line (`WindowLine::accepts`); a point it rejects gets a fresh window.
-                walk.cache = line.map(|l| (l, k + 4 * w));
-                let over = !line
-                    .as_ref()
-                    .is_some_and(|l| self.line_accepts(l, k, m, sigma_r));
+                walk.cache = self
+                    .window_line(k - w, k, k)
+                    .map(|l| (l.capped(&first, &last, w), k + 4 * w));
+                let line = walk.cache.as_ref().map(|(l, _)| l);
+                let over = !line.is_some_and(|l| self.line_accepts(l, k, m, sigma_r));
                 (over && !self.continues_arc(s, k, m, sigma_r)).then(|| {
-                    let pred = line.and_then(|l| self.predict_with(&l, k));
+                    let pred = line.and_then(|l| self.predict_with(l, k));
                     self.locate(s, k, pred, m, sigma_r)
                 })
             }
