@@ -2,6 +2,7 @@
 
 use crate::circle::CircleMethod;
 use crate::correction::RangeCorrection;
+use crate::math;
 
 /// How the mark-point threshold is computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -160,29 +161,29 @@ impl Config {
     pub fn is_valid(&self) -> bool {
         let t = match self.threshold {
             Threshold::Paper { d0, lambda } => {
-                d0.is_finite() && d0 > 0.0 && lambda.is_finite() && lambda > 0.0
+                math::finite(d0) && d0 > 0.0 && math::finite(lambda) && lambda > 0.0
             }
             Threshold::Noise(m) => {
-                m.k.is_finite()
+                math::finite(m.k)
                     && m.k > 0.0
-                    && m.k_locate.is_finite()
-                    && m.floor.is_finite()
+                    && math::finite(m.k_locate)
+                    && math::finite(m.floor)
                     && m.floor >= 0.0
                     && m.window >= 2
-                    && m.min_span.is_finite()
-                    && m.arc_chi2.is_finite()
+                    && math::finite(m.min_span)
+                    && math::finite(m.arc_chi2)
                     && m.arc_max_radius > 0.0
             }
         };
         let ty = match self.typing {
-            Typing::MeanDistance { d_f } => d_f.is_finite() && d_f >= 0.0,
+            Typing::MeanDistance { d_f } => math::finite(d_f) && d_f >= 0.0,
             Typing::CompareFits {
                 chi2,
                 ratio,
                 max_radius,
-            } => chi2.is_finite() && ratio.is_finite() && max_radius > 0.0,
+            } => math::finite(chi2) && math::finite(ratio) && max_radius > 0.0,
         };
-        t && ty && self.sigma_r.is_finite() && self.sigma_r > 0.0 && self.min_points >= 2
+        t && ty && math::finite(self.sigma_r) && self.sigma_r > 0.0 && self.min_points >= 2
     }
 }
 

@@ -29,7 +29,7 @@ pub struct Pose {
 impl Motion {
     /// True when all fields are finite.
     pub fn is_valid(&self) -> bool {
-        self.v.is_finite() && self.omega.is_finite() && self.beam_dt.is_finite()
+        math::all_finite(&[self.v, self.omega, self.beam_dt])
     }
 
     /// Scanner pose when beam `i` was taken, in the frame of beam 0 (exact arc of a circle).

@@ -90,19 +90,37 @@ impl Feature {
         match self {
             Feature::Line(l) => {
                 l.first <= l.last
-                    && [l.alpha, l.rho, l.var_alpha, l.var_rho, l.cov_alpha_rho]
-                        .iter()
-                        .all(|v| v.is_finite())
-                    && l.start.is_valid()
-                    && l.end.is_valid()
+                    && math::all_finite(&[
+                        l.alpha,
+                        l.rho,
+                        l.var_alpha,
+                        l.var_rho,
+                        l.cov_alpha_rho,
+                        l.start.x,
+                        l.start.y,
+                        l.end.x,
+                        l.end.y,
+                    ])
             }
             Feature::Circle(c) => {
+                let [[a, b, d], [e, f, g], [h, i, j]] = c.cov;
                 c.first <= c.last
-                    && c.center.is_valid()
-                    && c.radius.is_finite()
-                    && c.cov.iter().flatten().all(|v| v.is_finite())
-                    && c.start_angle.is_finite()
-                    && c.end_angle.is_finite()
+                    && math::all_finite(&[
+                        c.center.x,
+                        c.center.y,
+                        c.radius,
+                        a,
+                        b,
+                        d,
+                        e,
+                        f,
+                        g,
+                        h,
+                        i,
+                        j,
+                        c.start_angle,
+                        c.end_angle,
+                    ])
             }
         }
     }

@@ -133,6 +133,13 @@ pub(crate) fn finite(x: f32) -> bool {
     x - x == 0.0
 }
 
+/// True when every value is finite: `v · 0` is ±0 for a finite `v` and NaN otherwise, so
+/// their sum is 0 exactly when all are (one multiply-add a value, no overflow).
+#[inline]
+pub(crate) fn all_finite(values: &[f32]) -> bool {
+    values.iter().fold(0.0f32, |acc, v| acc + v * 0.0) == 0.0
+}
+
 /// Absolute value without std: the sign bit cleared (LLVM makes it one `vabs.f32`, where a
 /// comparison and a branch take five instructions on thumbv7em).
 #[inline]
@@ -202,11 +209,17 @@ mod tests {
         ];
         for x in specials {
             assert_eq!(super::finite(x), x.is_finite(), "{x}");
+            assert_eq!(super::all_finite(&[1.0, x, -2.5]), x.is_finite(), "{x}");
         }
         let mut bits = 0u32;
         loop {
             let x = f32::from_bits(bits);
             assert_eq!(super::finite(x), x.is_finite(), "{bits:#x}");
+            assert_eq!(
+                super::all_finite(&[f32::MAX, x, f32::MIN]),
+                x.is_finite(),
+                "{bits:#x}"
+            );
             match bits.checked_add(0x0001_0003) {
                 Some(b) => bits = b,
                 None => break,

@@ -41,11 +41,9 @@ impl ScanGeometry {
 
     /// True when the geometry can be used.
     pub fn is_valid(&self) -> bool {
-        self.start_angle.is_finite()
-            && self.angle_step.is_finite()
+        math::all_finite(&[self.start_angle, self.angle_step, self.r_max])
             && self.angle_step != 0.0
             && math::abs(self.angle_step) < 1.0
-            && self.r_max.is_finite()
             && self.r_max > 0.0
     }
 }
