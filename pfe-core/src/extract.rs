@@ -663,18 +663,34 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             return from;
         };
         let (mut prev, mut prev_r) = (self.point(before), self.range(before));
-        for (i, (p, &r)) in pts.iter().zip(rs).enumerate() {
+        // Point `p` at range `r` after `prev` at `prev_r`: no jump, and on the line. An
+        // invalid point is NaN (`Point::INVALID`): it fails the jump test.
+        let fits = |prev: &Point, prev_r: f32, p: &Point, r: f32| {
             let limit = prev_r * limits.gap_factor + limits.jump_add;
             let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-            // An invalid point is NaN (`Point::INVALID`): it fails the jump test.
-            if !(ex * ex + ey * ey <= limit * limit)
-                || !line.accepts(p.x, p.y, r, limits.k_sigma2, limits.floor)
-            {
-                return from + i;
+            ex * ex + ey * ey <= limit * limit
+                && line.accepts(p.x, p.y, r, limits.k_sigma2, limits.floor)
+        };
+        // Two points an iteration: the second one's predecessor is still in registers, and
+        // the loop's counting is shared.
+        let mut pairs = pts.chunks_exact(2).zip(rs.chunks_exact(2));
+        let mut at = from;
+        for (p2, r2) in pairs.by_ref() {
+            if let ([a, b], &[ra, rb]) = (p2, r2) {
+                if !fits(&prev, prev_r, a, ra) {
+                    return at;
+                }
+                if !fits(a, ra, b, rb) {
+                    return at + 1;
+                }
+                (prev, prev_r) = (*b, rb);
             }
-            (prev, prev_r) = (*p, r);
+            at += 2;
         }
-        to
+        match (pts.get(at - from), rs.get(at - from)) {
+            (Some(p), Some(&r)) if !fits(&prev, prev_r, p, r) => at,
+            _ => to,
+        }
     }
 
     /// Whether `line` accepts point `k` under the noise model (the inverse of
