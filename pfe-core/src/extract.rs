@@ -530,6 +530,11 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             k_sigma2: (m.k * sigma_r) * (m.k * sigma_r),
             floor: m.floor,
         };
+        // The fast path: no de-skewing (the scanner at the origin) and a floor small enough
+        // for its test (`WindowLine::accepts_within`); otherwise every point takes the slow
+        // path, with the same outcome.
+        let fast = self.motion.is_none()
+            && limits.floor * limits.floor <= WindowLine::FLOOR2_WITHIN * limits.k_sigma2;
         let mut walk = Walk::default();
         let mut k = 0usize;
         while k < self.len {
@@ -537,7 +542,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             // Fast path: the points the cached line accepts, up to the next point where a
             // boundary awaits refinement or a merge test is due.
             let cached = walk.cache.as_ref().filter(|_| walk.seg.is_some());
-            if let (Some((line, until)), true) = (cached, self.motion.is_none()) {
+            if let (Some((line, until)), true) = (cached, fast) {
                 let stop = walk.next_check(k, until + 1).min(self.len);
                 let next = self.accepted_run(k, stop, line, &limits);
                 self.stats.predictions += next - k;
@@ -669,7 +674,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             let limit = prev_r * limits.gap_factor + limits.jump_add;
             let (ex, ey) = (p.x - prev.x, p.y - prev.y);
             ex * ex + ey * ey <= limit * limit
-                && line.accepts(p.x, p.y, r, limits.k_sigma2, limits.floor)
+                && line.accepts_within(p.x, p.y, r, limits.k_sigma2, limits.floor)
         };
         // Two points an iteration: the second one's predecessor is still in registers, and
         // the loop's counting is shared.

@@ -209,6 +209,22 @@ impl WindowLine {
         // noise: then the point is on it.
         e * e <= k_sigma2 * (q * q + self.lever_sin2 * (r * r))
     }
+
+    /// [`Self::accepts`] without its test of `e ≤ 0`: the same answer when
+    /// `floor² ≤ 0.999 k_sigma2` ([`Self::FLOOR2_WITHIN`]), where `e ≥ −floor·|q|` makes
+    /// `e² ≤ k_sigma2·q²` hold anyway (the factor covers the rounding). The fast path's test.
+    #[inline]
+    pub(crate) fn accepts_within(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
+        let q = self.tx * y - self.ty * x;
+        if !(self.cn * q > 0.0) {
+            return false;
+        }
+        let e = math::abs(r * (q - self.cn)) - floor * math::abs(q);
+        e * e <= k_sigma2 * (q * q + self.lever_sin2 * (r * r))
+    }
+
+    /// See [`Self::accepts_within`].
+    pub(crate) const FLOOR2_WITHIN: f32 = 0.999;
 }
 
 /// Predicts the point at range `r` (mm, from `origin`) along the unit beam direction
@@ -269,7 +285,7 @@ mod tests {
     #[test]
     fn accepts_matches_the_prediction() -> Result<(), &'static str> {
         let (ks2, floor) = (20.0f32 * 20.0, 3.0f32);
-        let (mut agreed, mut accepted) = (0usize, 0usize);
+        let (mut agreed, mut accepted, mut within) = (0usize, 0usize, 0usize);
         for ia in 0..24 {
             let alpha = -3.1 + 0.26 * ia as f32;
             for rho in [150.0f32, 800.0, 2500.0, 7000.0] {
@@ -299,6 +315,16 @@ mod tests {
                     let ti = f64::from(r0) / f64::from(p0.dn);
                     let bound0 =
                         (f64::from(ks2) * (1.0 + f64::from(line.lever_sin2) * ti * ti)).sqrt();
+                    // Within the floor of Line 1 (`e ≤ 0`): accepted by both forms.
+                    for d in [-2.9f32, -1.0, 0.0, 1.5, 2.9] {
+                        let r = t + d;
+                        if t.is_finite() && r > 0.0 {
+                            let (x, y) = (r * bc, r * bs);
+                            assert!(line.accepts(x, y, r, ks2, floor), "α {alpha} ρ {rho} {d}");
+                            assert!(line.accepts_within(x, y, r, ks2, floor), "α {alpha} {d}");
+                            within += 1;
+                        }
+                    }
                     for m in [
                         -3.0f32, -1.1, -1.01, -0.99, -0.5, 0.0, 0.5, 0.99, 1.01, 1.1, 3.0,
                     ] {
@@ -308,6 +334,12 @@ mod tests {
                             continue;
                         }
                         let (x, y) = (r * bc, r * bs);
+                        // The fast path's form agrees everywhere, thresholds or not.
+                        assert_eq!(
+                            line.accepts_within(x, y, r, ks2, floor),
+                            line.accepts(x, y, r, ks2, floor),
+                            "α {alpha} ρ {rho} beam {ib} m {m}"
+                        );
                         let p = line.predict(Point::new(0.0, 0.0), x, y, r);
                         let reference = if !p.error.is_finite() {
                             Some(false)
@@ -334,8 +366,8 @@ mod tests {
         }
         // Both outcomes were exercised.
         assert!(
-            agreed > 5000 && accepted > 1000 && agreed - accepted > 1000,
-            "{agreed} {accepted}"
+            agreed > 5000 && accepted > 1000 && agreed - accepted > 1000 && within > 1000,
+            "{agreed} {accepted} {within}"
         );
         Ok(())
     }
