@@ -109,12 +109,11 @@ impl ArcSums {
     pub(crate) fn of(points: &[Point]) -> Option<Self> {
         let n = points.len();
         let o = *points.get(n / 2).filter(|_| n >= 3)?;
-        let mut s = [0.0f32; 7];
-        for p in points {
+        let add = |s: [f32; 7], p: &Point| {
             let (x, y) = (p.x - o.x, p.y - o.y);
             let (xx, yy, xy) = (x * x, y * y, x * y);
             let z = xx + yy;
-            s = [
+            [
                 s[0] + x,
                 s[1] + y,
                 s[2] + xx,
@@ -122,8 +121,17 @@ impl ArcSums {
                 s[4] + xy,
                 s[5] + x * z,
                 s[6] + y * z,
-            ];
+            ]
+        };
+        // Two points an iteration (the same sums in the same order).
+        let mut s = [0.0f32; 7];
+        let mut pairs = points.chunks_exact(2);
+        for pair in pairs.by_ref() {
+            if let [a, b] = pair {
+                s = add(add(s, a), b);
+            }
         }
+        let s = pairs.remainder().iter().fold(s, add);
         s.iter().all(|v| math::finite(*v)).then_some(Self {
             n: n as f32,
             origin: o,
