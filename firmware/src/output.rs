@@ -57,6 +57,9 @@ pub const MAX_FEATURES: usize = 64;
 /// Largest postcard encoding of one [`WireFeature`] (a circle: tag + 3 u16 varints + 15 f32).
 pub const MAX_FEATURE_LEN: usize = 1 + 3 * 3 + 15 * 4;
 
+/// Bytes of features [`write_scan`] encodes at a time.
+const FEATURE_CHUNK: usize = 6 * MAX_FEATURE_LEN;
+
 /// Largest frame on the wire for `features` features (header, features, CRC, COBS overhead
 /// and the terminating zero): size a receive buffer with it.
 pub const fn max_frame_len(features: usize) -> usize {
@@ -302,7 +305,7 @@ impl WireFeature {
 /// beam indices as varints, the `f32`s as 4 little-endian bytes each, fields in declaration
 /// order): the same bytes as `postcard::to_slice`, for a tenth of its instructions. Returns
 /// their length.
-fn feature_bytes(f: &Feature, out: &mut [u8; MAX_FEATURE_LEN]) -> usize {
+fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
     let mut w = Cursor { out, at: 0 };
     match f {
         Feature::Line(l) => {
@@ -310,28 +313,49 @@ fn feature_bytes(f: &Feature, out: &mut [u8; MAX_FEATURE_LEN]) -> usize {
             w.varint(l.first);
             w.varint(l.last);
             w.varint(l.points);
-            w.floats(&[l.alpha, l.rho, l.var_alpha, l.var_rho, l.cov_alpha_rho]);
-            w.floats(&[l.start.x, l.start.y, l.end.x, l.end.y]);
+            w.floats([
+                l.alpha,
+                l.rho,
+                l.var_alpha,
+                l.var_rho,
+                l.cov_alpha_rho,
+                l.start.x,
+                l.start.y,
+                l.end.x,
+                l.end.y,
+            ]);
         }
         Feature::Circle(c) => {
             w.varint(1);
             w.varint(c.first);
             w.varint(c.last);
             w.varint(c.points);
-            w.floats(&[c.center.x, c.center.y, c.radius]);
-            for row in &c.cov {
-                w.floats(row);
-            }
-            w.floats(&[c.start_angle, c.end_angle]);
+            let [[a, b, d], [e, f, g], [h, i, j]] = c.cov;
+            w.floats([
+                c.center.x,
+                c.center.y,
+                c.radius,
+                a,
+                b,
+                d,
+                e,
+                f,
+                g,
+                h,
+                i,
+                j,
+                c.start_angle,
+                c.end_angle,
+            ]);
         }
     }
     w.at
 }
 
-/// Writes into a [`MAX_FEATURE_LEN`] buffer, which every feature fits (a write past it would
-/// be dropped, never a panic).
+/// Writes into a buffer (given at least [`MAX_FEATURE_LEN`] bytes, which every feature fits;
+/// a write past its end is dropped, never a panic).
 struct Cursor<'a> {
-    out: &'a mut [u8; MAX_FEATURE_LEN],
+    out: &'a mut [u8],
     at: usize,
 }
 
@@ -352,12 +376,13 @@ impl Cursor<'_> {
         }
     }
 
-    fn floats(&mut self, values: &[f32]) {
-        for v in values {
-            if let Some(slot) = self.out.get_mut(self.at..self.at + 4) {
+    /// The values as 4 little-endian bytes each (one bounds check for all of them).
+    fn floats<const K: usize>(&mut self, values: [f32; K]) {
+        if let Some(out) = self.out.get_mut(self.at..self.at + 4 * K) {
+            for (slot, v) in out.chunks_exact_mut(4).zip(values) {
                 slot.copy_from_slice(&v.to_le_bytes());
-                self.at += 4;
             }
+            self.at += 4 * K;
         }
     }
 }
@@ -464,9 +489,9 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
         Ok(())
     }
 
-    /// COBS-encodes `data` (with `crc` its CRC-32 is also taken: one loop for both), four
+    /// COBS-encodes `data` (with `CRC` its CRC-32 is also taken: one loop for both), four
     /// bytes at a time where they hold no zero and fit the block.
-    fn encode(&mut self, data: &[u8], crc: bool) -> Result<(), W::Error> {
+    fn encode<const CRC: bool>(&mut self, data: &[u8]) -> Result<(), W::Error> {
         let mut c = !self.crc;
         // Kept below 255 between bytes: a full block is flushed at once.
         let mut len = self.len;
@@ -476,7 +501,7 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
                 continue;
             };
             let w = u32::from_le_bytes(bytes);
-            if crc {
+            if CRC {
                 c = crc32_word(c, w);
             }
             // No zero byte in `w` (the classic bit trick: exact for "has none").
@@ -495,7 +520,7 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
             }
         }
         self.len = self.bytes(words.remainder(), len)?;
-        if crc {
+        if CRC {
             self.crc = !words.remainder().iter().fold(c, |c, &b| crc32_byte(c, b));
         }
         Ok(())
@@ -521,11 +546,11 @@ impl<'w, W: embedded_io::Write> CobsWriter<'w, W> {
     }
 
     fn raw(&mut self, data: &[u8]) -> Result<(), W::Error> {
-        self.encode(data, false)
+        self.encode::<false>(data)
     }
 
     fn put(&mut self, data: &[u8]) -> Result<(), W::Error> {
-        self.encode(data, true)
+        self.encode::<true>(data)
     }
 
     fn put_item<T: Serialize>(&mut self, item: &T) -> Result<(), EncodeError<W::Error>> {
@@ -555,12 +580,20 @@ pub fn write_scan<W: embedded_io::Write>(
     h.n_features = u16::try_from(features.len()).unwrap_or(u16::MAX);
     let mut enc = CobsWriter::new(w);
     enc.put_item(&Header::Scan(h))?;
-    let mut bytes = [0u8; MAX_FEATURE_LEN];
+    // Features gathered into a chunk, encoded a chunk at a time (fewer calls, and fewer
+    // bytes left over from the encoder's words).
+    let mut chunk = [0u8; FEATURE_CHUNK];
+    let mut len = 0usize;
     for f in features.iter().take(usize::from(h.n_features)) {
-        let n = feature_bytes(f, &mut bytes);
-        enc.put(bytes.get(..n).unwrap_or(&[]))
-            .map_err(EncodeError::Write)?;
+        if len + MAX_FEATURE_LEN > FEATURE_CHUNK {
+            enc.put(chunk.get(..len).unwrap_or(&[]))
+                .map_err(EncodeError::Write)?;
+            len = 0;
+        }
+        len += chunk.get_mut(len..).map_or(0, |rest| feature_bytes(f, rest));
     }
+    enc.put(chunk.get(..len).unwrap_or(&[]))
+        .map_err(EncodeError::Write)?;
     enc.finish().map_err(EncodeError::Write)
 }
 
