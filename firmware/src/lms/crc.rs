@@ -8,83 +8,45 @@
 pub const POLY: u16 = 0x8005;
 
 /// One byte `b` after `prev`: shift the register once (folding in the polynomial when its top
-/// bit falls out), then add the data word `prev << 8 | b`.
-#[inline(always)]
+/// bit falls out), then add the data word `prev << 8 | b`. The definition; [`Crc`] computes
+/// the same value faster (and is tested against it).
+#[cfg(test)]
 const fn step(crc: u16, prev: u8, b: u8) -> u16 {
-    // All ones when the top bit is set (arithmetic shift), else zero.
-    let fold = ((crc as i16) >> 15) as u16 & POLY;
-    ((crc << 1) ^ fold) ^ (((prev as u16) << 8) | b as u16)
+    shift(crc, 1) ^ (((prev as u16) << 8) | b as u16)
 }
 
-/// The register shifted `k` times with no data (the checksum is linear over GF(2): four steps
-/// are the register shifted four times plus each byte's own contribution).
+/// `Lᵏ(crc)`: the register shifted `k` times with no data, L one shift.
+#[inline(always)]
 const fn shift(mut crc: u16, k: u32) -> u16 {
     let mut i = 0;
     while i < k {
-        crc = step(crc, 0, 0);
+        // All ones when the top bit is set (arithmetic shift), else zero.
+        let fold = ((crc as i16) >> 15) as u16 & POLY;
+        crc = (crc << 1) ^ fold;
         i += 1;
     }
     crc
 }
 
-/// Contributions to the register after eight bytes `b0 … b7` following `prev`:
-/// `L⁸(c) ^ L⁷(prev << 8 | b0) ^ L⁶(b0 << 8 | b1) ^ … ^ L(b5 << 8 | b6) ^ (b6 << 8 | b7)`, L
-/// one shift, grouped by byte. Tables built at compile time (4 KiB of flash); `L(b6) = b6 << 1`
-/// and `b7` need none.
-struct Tables {
-    /// `L⁸` of the register's top eight bits (the low eight just shift).
-    top: [u16; 256],
-    /// `L⁷(prev << 8)`.
-    prev: [u16; 256],
-    /// `L^(7−k)(b) ^ L^(6−k)(b << 8)` for byte `k` = 0 … 5.
-    bytes: [[u16; 256]; 6],
-}
-
+/// `L⁸` of the register's top eight bits, built at compile time (512 bytes of flash); the low
+/// eight just shift.
 #[allow(clippy::indexing_slicing)] // compile time: an index out of range is a build error
-const TABLES: Tables = {
-    let mut t = Tables {
-        top: [0; 256],
-        prev: [0; 256],
-        bytes: [[0; 256]; 6],
-    };
+const TOP: [u16; 256] = {
+    let mut t = [0u16; 256];
     let mut i = 0;
     while i < 256 {
-        let v = i as u16;
-        t.top[i] = shift(v << 8, 8);
-        t.prev[i] = shift(v << 8, 7);
-        let mut k = 0;
-        while k < 6 {
-            t.bytes[k][i] = shift(v, 7 - k as u32) ^ shift(v << 8, 6 - k as u32);
-            k += 1;
-        }
+        t[i] = shift((i as u16) << 8, 8);
         i += 1;
     }
     t
 };
 
-/// Eight bytes at once (see [`Tables`]); indices are < 256 by type, so `get` never fails.
-#[inline(always)]
-fn step8(crc: u16, prev: u8, b: [u8; 8]) -> u16 {
-    let t = &TABLES;
-    let at = |table: &[u16; 256], i: u8| table.get(usize::from(i)).copied().unwrap_or(0);
-    let [b0, b1, b2, b3, b4, b5, b6, b7] = b;
-    let [tb0, tb1, tb2, tb3, tb4, tb5] = &t.bytes;
-    let b6 = u16::from(b6);
-    (crc << 8)
-        ^ at(&t.top, (crc >> 8) as u8)
-        ^ at(&t.prev, prev)
-        ^ at(tb0, b0)
-        ^ at(tb1, b1)
-        ^ at(tb2, b2)
-        ^ at(tb3, b3)
-        ^ at(tb4, b4)
-        ^ at(tb5, b5)
-        ^ (b6 << 1)
-        ^ (b6 << 8)
-        ^ u16::from(b7)
-}
-
 /// Incremental form of [`crc16`]: feed bytes in any chunking, read [`Crc::value`].
+///
+/// The checksum is linear over GF(2) and a byte shifted up to eight times never reaches the
+/// register's top bit, so the data words split: after bytes `b₀ … bₙ₋₁` the checksum is
+/// `S ^ L⁷(S ^ bₙ₋₁)` with `S = Σ Lⁿ⁻¹⁻ʲ(bⱼ)` the plain byte sum (`S ← L(S) ^ b` a byte),
+/// and eight bytes add to `S` as `L⁸(S) ^ Σ bⱼ << (7 − j)`: shifts and one table lookup.
 ///
 /// ```
 /// use firmware::lms::crc::Crc;
@@ -95,39 +57,60 @@ fn step8(crc: u16, prev: u8, b: [u8; 8]) -> u16 {
 /// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Crc {
-    crc: u16,
-    prev: u8,
+    /// `S`, the plain byte sum.
+    sum: u16,
+    /// The last byte.
+    last: u8,
 }
 
 impl Crc {
     /// A checksum over no bytes.
     pub const fn new() -> Self {
-        Self { crc: 0, prev: 0 }
+        Self { sum: 0, last: 0 }
     }
 
     /// Adds `bytes`.
     pub fn update(&mut self, bytes: &[u8]) {
-        // Eight bytes an iteration, the register and the previous byte in locals: the decoder
-        // runs this over every telegram byte.
-        let (mut crc, mut prev) = (self.crc, self.prev);
+        // Eight bytes an iteration, the sum in a local: the decoder runs this over every
+        // telegram byte.
+        let mut sum = self.sum;
         let mut octets = bytes.chunks_exact(8);
         for octet in octets.by_ref() {
             if let Ok(b) = <[u8; 8]>::try_from(octet) {
-                crc = step8(crc, prev, b);
-                prev = b[7];
+                sum = add8(sum, b);
             }
         }
         for &b in octets.remainder() {
-            crc = step(crc, prev, b);
-            prev = b;
+            sum = shift(sum, 1) ^ u16::from(b);
         }
-        (self.crc, self.prev) = (crc, prev);
+        self.sum = sum;
+        if let Some(&b) = bytes.last() {
+            self.last = b;
+        }
     }
 
     /// The checksum so far.
     pub const fn value(&self) -> u16 {
-        self.crc
+        self.sum ^ shift(self.sum ^ self.last as u16, 7)
     }
+}
+
+/// Eight bytes added to the plain sum `s` (see [`Crc`]); the table index is < 256 by type, so
+/// `get` never fails.
+#[inline(always)]
+fn add8(s: u16, b: [u8; 8]) -> u16 {
+    let [b0, b1, b2, b3, b4, b5, b6, b7] = b;
+    let [w0, w1] = [[b0, b1, b2, b3], [b4, b5, b6, b7]].map(u32::from_le_bytes);
+    // Byte j of the eight moved to bit 7 − j (its four bytes from `top` down).
+    let spread = |w: u32, top: u32| {
+        ((w & 0xFF) << top)
+            ^ (((w >> 8) & 0xFF) << (top - 1))
+            ^ (((w >> 16) & 0xFF) << (top - 2))
+            ^ ((w >> 24) << (top - 3))
+    };
+    let bytes = spread(w0, 7) ^ spread(w1, 3);
+    let top = TOP.get(usize::from(s >> 8)).copied().unwrap_or(0);
+    (s << 8) ^ top ^ bytes as u16
 }
 
 /// Checksum of `bytes` (STX up to the last byte before the CRC).
@@ -155,29 +138,35 @@ mod tests {
         assert_ne!(v, 0x8119);
     }
 
-    /// Eight bytes at once agree with eight single steps, for registers, previous bytes and
-    /// byte octets of every kind.
+    /// The fast form agrees with the definition, byte by byte, for data of every kind and
+    /// length (0 to 40 bytes, so every remainder after the eight-byte steps) fed in any
+    /// chunking.
     #[test]
-    fn eight_bytes_at_once_match_eight_steps() {
+    fn fast_form_matches_the_definition() {
         let mut x = 0x1234_5678_9abc_def0u64;
-        for k in 0..200_000u32 {
-            // xorshift: bytes and registers of every kind.
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            let b = x.to_le_bytes();
-            let crc = (x >> 11) as u16 ^ (k as u16);
-            let prev = (x >> 40) as u8 ^ (k >> 8) as u8;
-            let (mut by_one, mut p) = (crc, prev);
-            for &byte in &b {
-                by_one = step(by_one, p, byte);
-                p = byte;
+        for k in 0..100_000u32 {
+            // xorshift: bytes of every kind.
+            let mut data = [0u8; 40];
+            for b in &mut data {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                *b = (x >> 24) as u8;
             }
-            assert_eq!(
-                step8(crc, prev, b),
-                by_one,
-                "{crc:#06x} {prev:#04x} {x:#018x}"
-            );
+            let len = (k % 41) as usize;
+            let data = &data[..len];
+            let (mut want, mut prev) = (0u16, 0u8);
+            for &b in data {
+                want = step(want, prev, b);
+                prev = b;
+            }
+            assert_eq!(crc16(data), want, "{data:02x?}");
+            let cut = (x as usize) % (len + 1);
+            let mut c = Crc::new();
+            c.update(&data[..cut]);
+            c.update(&[]);
+            c.update(&data[cut..]);
+            assert_eq!(c.value(), want, "{data:02x?} cut at {cut}");
         }
     }
 
