@@ -274,8 +274,13 @@ pub fn fit_circle(points: &[Point], method: CircleMethod) -> Result<Circle, FitE
     }
 }
 
-/// Smallest refinement step worth evaluating, mm.
-const STEP_TOL: f32 = 1e-3;
+/// Smallest refinement step worth evaluating, mm (a hundredth of a millimetre: far below the
+/// fitted parameters' own uncertainty for any range noise worth modelling).
+const STEP_TOL: f32 = 1e-2;
+
+/// Relative residual-sum gain below which a refinement step ends the refinement (the sum's
+/// own relative spread is √(2/n), tens of percent).
+const GAIN_TOL: f32 = 1e-5;
 
 /// Geometric refinement: Gauss–Newton with Levenberg damping on Σ(|P_i − c| − R)², at most
 /// `iterations` steps, from `initial`. Returns the better of the refined and the initial circle.
@@ -341,7 +346,7 @@ pub(crate) fn refine_from(
                 // (A comparison: `f32::max` is a libm call on thumbv7em.)
                 let smaller = lambda * 0.3;
                 lambda = if smaller > 1e-7 { smaller } else { 1e-7 };
-                improved = gain > sse * 1e-7;
+                improved = gain > sse * GAIN_TOL;
                 break;
             }
             lambda *= 10.0;
