@@ -162,6 +162,9 @@ pub struct Extractor<const N: usize, const M: usize> {
     /// of half a step (cos, sin).
     spreads: [f32; N],
     half_step: Point,
+    /// Largest gap between consecutive points of one surface per mm of range (see
+    /// `directions`).
+    gap_factor: f32,
     dirs_of: (u32, u32),
     /// Corrected measured range of each valid point, mm (its distance from the scanner).
     ranges: [f32; N],
@@ -188,6 +191,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             dirs: [Point::new(0.0, 0.0); N],
             spreads: [0.0; N],
             half_step: Point::new(0.0, 0.0),
+            gap_factor: 0.0,
             dirs_of: (0, 0),
             ranges: [0.0; N],
             flags: [0; N],
@@ -232,7 +236,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         match config.threshold {
             Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, scan.geometry.r_max),
             Threshold::Noise(model) => {
-                self.mark_noise(&model, config.sigma_r, scan.geometry.angle_step)
+                self.mark_noise(&model, config.sigma_r)
             }
         }
         if config.check_step {
@@ -387,6 +391,11 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         fill_spreads(&mut self.spreads, g.angle_step);
         let (s, c) = math::sin_cos(0.5 * g.angle_step);
         self.half_step = Point::new(c, s);
+        // Largest gap between consecutive points of one surface: seen at down to 10°
+        // incidence (Borges & Aldon's λ); the default mode adds the noise of two readings.
+        let (step, lam) = (math::abs(g.angle_step), 10.0f32.to_radians());
+        let below = math::sin(lam - step);
+        self.gap_factor = math::sin(step) / if below > 1e-3 { below } else { 1e-3 };
         self.dirs_of = key;
     }
 
@@ -519,13 +528,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// Default mode: predict only from points of the current segment (so no window straddles
     /// a boundary), threshold `k σ_D + floor`, arc continuation, then move the boundary back
     /// over the points that already left the old segment's line (boundary localisation).
-    fn mark_noise(&mut self, m: &NoiseModel, sigma_r: f32, step: f32) {
-        // Largest gap between consecutive points of one surface: seen at down to 10°
-        // incidence (Borges & Aldon's λ), plus the noise of two readings.
-        let lam = 10.0f32.to_radians();
-        let gap_factor = math::abs(math::sin(step)) / math::sin(lam - math::abs(step)).max(1e-3);
+    fn mark_noise(&mut self, m: &NoiseModel, sigma_r: f32) {
         let limits = Limits {
-            gap_factor,
+            gap_factor: self.gap_factor,
             jump_add: m.k * sigma_r * core::f32::consts::SQRT_2 + m.floor,
             k_sigma2: (m.k * sigma_r) * (m.k * sigma_r),
             floor: m.floor,
