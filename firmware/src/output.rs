@@ -590,7 +590,9 @@ pub fn write_scan<W: embedded_io::Write>(
                 .map_err(EncodeError::Write)?;
             len = 0;
         }
-        len += chunk.get_mut(len..).map_or(0, |rest| feature_bytes(f, rest));
+        len += chunk
+            .get_mut(len..)
+            .map_or(0, |rest| feature_bytes(f, rest));
     }
     enc.put(chunk.get(..len).unwrap_or(&[]))
         .map_err(EncodeError::Write)?;

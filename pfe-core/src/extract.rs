@@ -235,9 +235,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         self.load_points(scan, config);
         match config.threshold {
             Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, scan.geometry.r_max),
-            Threshold::Noise(model) => {
-                self.mark_noise(&model, config.sigma_r)
-            }
+            Threshold::Noise(model) => self.mark_noise(&model, config.sigma_r),
         }
         if config.check_step {
             self.check_step(config, scan.geometry.r_max);

@@ -214,7 +214,13 @@ pub(crate) fn sums_about(points: &[Point], o: &Point) -> [f32; 5] {
     let mut s = [0.0f32; 5];
     let add = |[sx, sy, sxx, syy, sxy]: [f32; 5], p: &Point| {
         let (ex, ey) = (p.x - o.x, p.y - o.y);
-        [sx + ex, sy + ey, sxx + ex * ex, syy + ey * ey, sxy + ex * ey]
+        [
+            sx + ex,
+            sy + ey,
+            sxx + ex * ex,
+            syy + ey * ey,
+            sxy + ex * ey,
+        ]
     };
     // Two points an iteration (the same sums in the same order: half the loop overhead).
     let mut pairs = points.chunks_exact(2);
