@@ -313,40 +313,14 @@ fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
             w.varint(l.first);
             w.varint(l.last);
             w.varint(l.points);
-            w.floats([
-                l.alpha,
-                l.rho,
-                l.var_alpha,
-                l.var_rho,
-                l.cov_alpha_rho,
-                l.start.x,
-                l.start.y,
-                l.end.x,
-                l.end.y,
-            ]);
+            w.floats(l.values());
         }
         Feature::Circle(c) => {
             w.varint(1);
             w.varint(c.first);
             w.varint(c.last);
             w.varint(c.points);
-            let [[a, b, d], [e, f, g], [h, i, j]] = c.cov;
-            w.floats([
-                c.center.x,
-                c.center.y,
-                c.radius,
-                a,
-                b,
-                d,
-                e,
-                f,
-                g,
-                h,
-                i,
-                j,
-                c.start_angle,
-                c.end_angle,
-            ]);
+            w.floats(c.values());
         }
     }
     w.at

@@ -31,6 +31,70 @@ pub struct LineFeature {
     pub end: Point,
 }
 
+impl LineFeature {
+    /// Its numbers in declaration order: α, ρ, σ_α², σ_ρ², cov(α, ρ), start x, y, end x, y.
+    ///
+    /// ```
+    /// use pfe_core::{LineFeature, Point};
+    /// let l = LineFeature {
+    ///     first: 0, last: 9, points: 10, alpha: 0.5, rho: 2000.0, var_alpha: 1e-6,
+    ///     var_rho: 4.0, cov_alpha_rho: 0.0,
+    ///     start: Point::new(1.0, 2.0), end: Point::new(3.0, 4.0),
+    /// };
+    /// assert_eq!(l.values(), [0.5, 2000.0, 1e-6, 4.0, 0.0, 1.0, 2.0, 3.0, 4.0]);
+    /// ```
+    pub fn values(&self) -> [f32; 9] {
+        let (s, e) = (self.start, self.end);
+        [
+            self.alpha,
+            self.rho,
+            self.var_alpha,
+            self.var_rho,
+            self.cov_alpha_rho,
+            s.x,
+            s.y,
+            e.x,
+            e.y,
+        ]
+    }
+}
+
+impl CircleFeature {
+    /// Its numbers in declaration order: centre x, y, radius, the covariance row by row, start
+    /// and end angle.
+    ///
+    /// ```
+    /// use pfe_core::{CircleFeature, Point};
+    /// let c = CircleFeature {
+    ///     first: 0, last: 9, points: 10, center: Point::new(1.0, 2.0), radius: 3.0,
+    ///     cov: [[4.0, 5.0, 6.0], [5.0, 7.0, 8.0], [6.0, 8.0, 9.0]],
+    ///     start_angle: -0.5, end_angle: 0.5,
+    /// };
+    /// assert_eq!(c.values()[..5], [1.0, 2.0, 3.0, 4.0, 5.0]);
+    /// assert_eq!(c.values()[11..], [9.0, -0.5, 0.5]);
+    /// ```
+    pub fn values(&self) -> [f32; 14] {
+        let [[a, b, d], [e, f, g], [h, i, j]] = self.cov;
+        let c = self.center;
+        [
+            c.x,
+            c.y,
+            self.radius,
+            a,
+            b,
+            d,
+            e,
+            f,
+            g,
+            h,
+            i,
+            j,
+            self.start_angle,
+            self.end_angle,
+        ]
+    }
+}
+
 /// A circle (or arc) feature.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -88,40 +152,8 @@ impl Feature {
     /// True when every parameter is finite and first ≤ last.
     pub fn is_well_formed(&self) -> bool {
         match self {
-            Feature::Line(l) => {
-                l.first <= l.last
-                    && math::all_finite(&[
-                        l.alpha,
-                        l.rho,
-                        l.var_alpha,
-                        l.var_rho,
-                        l.cov_alpha_rho,
-                        l.start.x,
-                        l.start.y,
-                        l.end.x,
-                        l.end.y,
-                    ])
-            }
-            Feature::Circle(c) => {
-                let [[a, b, d], [e, f, g], [h, i, j]] = c.cov;
-                c.first <= c.last
-                    && math::all_finite(&[
-                        c.center.x,
-                        c.center.y,
-                        c.radius,
-                        a,
-                        b,
-                        d,
-                        e,
-                        f,
-                        g,
-                        h,
-                        i,
-                        j,
-                        c.start_angle,
-                        c.end_angle,
-                    ])
-            }
+            Feature::Line(l) => l.first <= l.last && math::all_finite(&l.values()),
+            Feature::Circle(c) => c.first <= c.last && math::all_finite(&c.values()),
         }
     }
 }
