@@ -17,8 +17,9 @@
 //!   [`WireFeature`]s; [`Header::Report`] (stack high-water mark, timing) by nothing.
 //!
 //! The encoder ([`write_scan`], [`write_report`]) streams to any [`embedded_io::Write`] with a
-//! fixed 255-byte COBS block and a 96-byte scratch buffer (features are written by hand, byte
-//! for byte what postcard writes): the frame size does not need RAM.
+//! fixed 255-byte COBS block, a 96-byte scratch buffer for the header and a 420-byte chunk of
+//! features (written by hand, byte for byte what postcard writes): the frame size does not
+//! need RAM.
 //! The decoder ([`FrameDecoder`]) is sans-IO: feed it byte chunks, get frames out.
 //!
 //! ```
@@ -309,17 +310,11 @@ fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
     let mut w = Cursor { out, at: 0 };
     match f {
         Feature::Line(l) => {
-            w.varint(0);
-            w.varint(l.first);
-            w.varint(l.last);
-            w.varint(l.points);
+            w.head(0, [l.first, l.last, l.points]);
             w.floats(l.values());
         }
         Feature::Circle(c) => {
-            w.varint(1);
-            w.varint(c.first);
-            w.varint(c.last);
-            w.varint(c.points);
+            w.head(1, [c.first, c.last, c.points]);
             w.floats(c.values());
         }
     }
@@ -334,6 +329,16 @@ struct Cursor<'a> {
 }
 
 impl Cursor<'_> {
+    /// The variant index and the beam indices (first, last, number of points).
+    #[inline(always)]
+    fn head(&mut self, tag: u16, beams: [u16; 3]) {
+        let [first, last, points] = beams;
+        self.varint(tag);
+        self.varint(first);
+        self.varint(last);
+        self.varint(points);
+    }
+
     /// LEB128, as postcard writes integers.
     fn varint(&mut self, mut v: u16) {
         while v >= 0x80 {

@@ -190,24 +190,7 @@ impl WindowLine {
     /// to its arithmetic.
     #[inline]
     pub(crate) fn accepts(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
-        // q = r (d·n), d the unit beam direction: Line 1 meets the beam at t = r·cn/q, in
-        // front of the scanner when cn·q > 0 (false for q = 0 and NaN).
-        let q = self.tx * y - self.ty * x;
-        if !(self.cn * q > 0.0) {
-            return false;
-        }
-        // (|r − t| − floor)·|q|, without a division: |r − t|·|q| = |r (q − cn)|.
-        let aq = math::abs(q);
-        let e = math::abs(r * (q - self.cn)) - floor * aq;
-        if e <= 0.0 {
-            return true;
-        }
-        // e² ≤ (k σ_r)² (1 + lever (r/q)²), times q². The lever of the beam right after the
-        // window, for every beam: a line kept for a few more beams tests them as strictly as
-        // a fresh one would (the lever grows with the distance from the window). A beam along
-        // the line (q → 0) is accepted only when the line runs through the scanner, within the
-        // noise: then the point is on it.
-        e * e <= k_sigma2 * (q * q + self.lever_sin2 * (r * r))
+        self.test::<true>(x, y, r, k_sigma2, floor)
     }
 
     /// [`Self::accepts`] without its test of `e ≤ 0`: the same answer when
@@ -215,11 +198,36 @@ impl WindowLine {
     /// `e² ≤ k_sigma2·q²` hold anyway (the factor covers the rounding). The fast path's test.
     #[inline]
     pub(crate) fn accepts_within(&self, x: f32, y: f32, r: f32, k_sigma2: f32, floor: f32) -> bool {
+        self.test::<false>(x, y, r, k_sigma2, floor)
+    }
+
+    /// The acceptance test, with (`WITHIN_FLOOR`) or without the early answer for points
+    /// within the floor of the line.
+    #[inline(always)]
+    fn test<const WITHIN_FLOOR: bool>(
+        &self,
+        x: f32,
+        y: f32,
+        r: f32,
+        k_sigma2: f32,
+        floor: f32,
+    ) -> bool {
+        // q = r (d·n), d the unit beam direction: Line 1 meets the beam at t = r·cn/q, in
+        // front of the scanner when cn·q > 0 (false for q = 0 and NaN).
         let q = self.tx * y - self.ty * x;
         if !(self.cn * q > 0.0) {
             return false;
         }
+        // (|r − t| − floor)·|q|, without a division: |r − t|·|q| = |r (q − cn)|.
         let e = math::abs(r * (q - self.cn)) - floor * math::abs(q);
+        if WITHIN_FLOOR && e <= 0.0 {
+            return true;
+        }
+        // e² ≤ (k σ_r)² (1 + lever (r/q)²), times q². The lever of the beam right after the
+        // window, for every beam: a line kept for a few more beams tests them as strictly as
+        // a fresh one would (the lever grows with the distance from the window). A beam along
+        // the line (q → 0) is accepted only when the line runs through the scanner, within the
+        // noise: then the point is on it.
         e * e <= k_sigma2 * (q * q + self.lever_sin2 * (r * r))
     }
 
