@@ -877,14 +877,31 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         let Some(side) = at_k.map(|p| p.signed) else {
             return k;
         };
+        // Predictions from the reference line. Without de-skewing every beam sees it from
+        // the same origin: k's fit serves them all (each still counts as a prediction).
+        let fixed = self
+            .motion
+            .is_none()
+            .then(|| self.window_line(ref_start, ref_end, k));
+        let k_from_ref = match fixed {
+            Some(line) => line.and_then(|l| self.predict_with(&l, k)),
+            None => self.predict(ref_start, ref_end, k),
+        };
+        let predict = |ex: &mut Self, j: usize| match fixed {
+            Some(line) => {
+                ex.stats.predictions += 1;
+                line.and_then(|l| ex.predict_with(&l, j))
+            }
+            None => ex.predict(ref_start, ref_end, j),
+        };
         // Sign of k's deviation from the reference line (not from its own window).
-        let side = match self.predict(ref_start, ref_end, k) {
+        let side = match k_from_ref {
             Some(p) if math::finite(p.signed) => p.signed,
             _ => side,
         };
         let mut b = k;
         for j in (ref_end..k).rev() {
-            match self.predict(ref_start, ref_end, j) {
+            match predict(self, j) {
                 Some(p) if p.signed * side > 0.0 && p.exceeds(m.k_locate, sigma_r, m.floor) => {
                     b = j
                 }
