@@ -660,45 +660,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
     }
 
-    /// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its
-    /// predecessor, or is not accepted by `line`: the default mode's test for most points,
-    /// as a tight loop (no de-skewing: the scanner is at the origin).
+    /// [`accepted_run`] over this scan's points.
     fn accepted_run(&self, from: usize, to: usize, line: &WindowLine, limits: &Limits) -> usize {
-        let (Some(pts), Some(rs)) = (self.points.get(from..to), self.ranges.get(from..to)) else {
-            return from;
-        };
-        let Some(before) = from.checked_sub(1) else {
-            return from;
-        };
-        let (mut prev, mut prev_r) = (self.point(before), self.range(before));
-        // Point `p` at range `r` after `prev` at `prev_r`: no jump, and on the line. An
-        // invalid point is NaN (`Point::INVALID`): it fails the jump test.
-        let fits = |prev: &Point, prev_r: f32, p: &Point, r: f32| {
-            let limit = prev_r * limits.gap_factor + limits.jump_add;
-            let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-            ex * ex + ey * ey <= limit * limit
-                && line.accepts_within(p.x, p.y, r, limits.k_sigma2, limits.floor)
-        };
-        // Two points an iteration: the second one's predecessor is still in registers, and
-        // the loop's counting is shared.
-        let mut pairs = pts.chunks_exact(2).zip(rs.chunks_exact(2));
-        let mut at = from;
-        for (p2, r2) in pairs.by_ref() {
-            if let ([a, b], &[ra, rb]) = (p2, r2) {
-                if !fits(&prev, prev_r, a, ra) {
-                    return at;
-                }
-                if !fits(a, ra, b, rb) {
-                    return at + 1;
-                }
-                (prev, prev_r) = (*b, rb);
-            }
-            at += 2;
-        }
-        match (pts.get(at - from), rs.get(at - from)) {
-            (Some(p), Some(&r)) if !fits(&prev, prev_r, p, r) => at,
-            _ => to,
-        }
+        accepted_run(&self.points, &self.ranges, from, to, line, limits)
     }
 
     /// Whether `line` accepts point `k` under the noise model (the inverse of
@@ -715,55 +679,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
     }
 
-    /// Best split between a segment starting at `old` and one starting near `b` and running
-    /// to `end` (exclusive): the candidate (`b − 3 ..= b + 1`) that minimises the two local
-    /// line fits' squared residuals (at most `REFINE_SPAN` points each side), with their sums
-    /// moved along from one candidate to the next.
+    /// [`refine_boundary`] over this scan's points.
     fn refine_boundary(&self, old: usize, b: usize, end: usize) -> usize {
-        let lo = b.saturating_sub(3).max(old + NP);
-        let hi = (b + 1).min(end.saturating_sub(NP));
-        let o = self.point(b);
-        let (mut left, mut right) = (RunningSums::about(o), RunningSums::about(o));
-        for p in self
-            .points
-            .get(lo.saturating_sub(REFINE_SPAN).max(old)..lo)
-            .unwrap_or(&[])
-        {
-            left.change(p, 1.0);
-        }
-        for p in self
-            .points
-            .get(lo..end.min(lo + REFINE_SPAN))
-            .unwrap_or(&[])
-        {
-            right.change(p, 1.0);
-        }
-        let (mut best, mut best_sse) = (b, f32::INFINITY);
-        for j in lo..=hi {
-            if j > lo {
-                // Point j − 1 moves from the right to the left; the left loses its first
-                // point, the right gains its next, where the spans allow.
-                let moved = self.point(j - 1);
-                left.change(&moved, 1.0);
-                right.change(&moved, -1.0);
-                if let Some(first) = (j - 1).checked_sub(REFINE_SPAN).filter(|&f| f >= old) {
-                    left.change(&self.point(first), -1.0);
-                }
-                if j - 1 + REFINE_SPAN < end {
-                    right.change(&self.point(j - 1 + REFINE_SPAN), 1.0);
-                }
-            }
-            let sse = match (left.sse(), right.sse()) {
-                (Some(l), Some(r)) => l + r,
-                _ => continue,
-            };
-            // Ties keep the detected boundary.
-            if sse < best_sse || (sse == best_sse && j == b) {
-                best = j;
-                best_sse = sse;
-            }
-        }
-        best
+        refine_boundary(&self.points, old, b, end)
     }
 
     /// Prediction window for point `k` with `c` points of its segment before it: `window`
@@ -823,37 +741,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
     }
 
-    /// Circle through points `from..to` when it explains them significantly better than a
-    /// line (by `arc_chi2 σ_r²`), with every radial residual within `k σ_r + floor` and a
-    /// radius of at most `arc_max_radius`.
+    /// [`arc_fit`] of points `from..to`.
     fn arc_fit(&self, from: usize, to: usize, m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
-        let pts = self.points.get(from..to)?;
-        let var = sigma_r * sigma_r;
-        // One pass for both fits. The circle's residual sum is ≥ 0, so a line this good
-        // cannot be beaten by enough.
-        let sums = ArcSums::of(pts)?;
-        let line_sse = sums.line_sse();
-        if !(line_sse >= m.arc_chi2 * var) {
-            return None;
-        }
-        let circle = sums.kasa()?;
-        if !(circle.radius <= m.arc_max_radius) {
-            return None;
-        }
-        let tol = m.k * sigma_r + m.floor;
-        // One pass: every radial residual within `tol`, and their sum of squares.
-        let mut sse = 0.0f32;
-        for p in pts {
-            let r = p.distance(&circle.center) - circle.radius;
-            if !(math::abs(r) <= tol) {
-                return None;
-            }
-            sse += r * r;
-        }
-        // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
-        // corner does not.
-        (sse <= 2.25 * var * pts.len() as f32 && line_sse - sse >= m.arc_chi2 * var)
-            .then_some(circle)
+        arc_fit(self.points.get(from..to)?, m, sigma_r)
     }
 
     /// The earliest of the (up to 4) points before `k` that, with `k`, deviate on the same
@@ -1102,6 +992,140 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 }
             }
         }
+    }
+}
+
+// The loops over many points, as free functions of slices: not generic, so they are compiled
+// once, here, at this crate's optimisation level (3), whatever `N` and `M` (the extractor's
+// own methods are compiled where its capacities are named: at "s" in the firmware). `cargo
+// xtask bench-mcu`: 3 instructions a point less for the pipeline.
+
+/// Circle through `pts` when it explains them significantly better than a line (by
+/// `arc_chi2 σ_r²`), with every radial residual within `k σ_r + floor` and a radius of at most
+/// `arc_max_radius`.
+fn arc_fit(pts: &[Point], m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
+    let var = sigma_r * sigma_r;
+    // One pass for both fits. The circle's residual sum is ≥ 0, so a line this good
+    // cannot be beaten by enough.
+    let sums = ArcSums::of(pts)?;
+    let line_sse = sums.line_sse();
+    if !(line_sse >= m.arc_chi2 * var) {
+        return None;
+    }
+    let circle = sums.kasa()?;
+    if !(circle.radius <= m.arc_max_radius) {
+        return None;
+    }
+    let tol = m.k * sigma_r + m.floor;
+    // One pass: every radial residual within `tol`, and their sum of squares.
+    let mut sse = 0.0f32;
+    for p in pts {
+        let r = p.distance(&circle.center) - circle.radius;
+        if !(math::abs(r) <= tol) {
+            return None;
+        }
+        sse += r * r;
+    }
+    // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
+    // corner does not.
+    (sse <= 2.25 * var * pts.len() as f32 && line_sse - sse >= m.arc_chi2 * var).then_some(circle)
+}
+
+/// Best split between a segment starting at `old` and one starting near `b` and running to
+/// `end` (exclusive): the candidate (`b − 3 ..= b + 1`) that minimises the two local line fits'
+/// squared residuals (at most `REFINE_SPAN` points each side), with their sums moved along
+/// from one candidate to the next.
+fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize) -> usize {
+    let point = |i: usize| points.get(i).copied().unwrap_or(Point::INVALID);
+    let lo = b.saturating_sub(3).max(old + NP);
+    let hi = (b + 1).min(end.saturating_sub(NP));
+    let o = point(b);
+    let (mut left, mut right) = (RunningSums::about(o), RunningSums::about(o));
+    for p in points
+        .get(lo.saturating_sub(REFINE_SPAN).max(old)..lo)
+        .unwrap_or(&[])
+    {
+        left.change(p, 1.0);
+    }
+    for p in points.get(lo..end.min(lo + REFINE_SPAN)).unwrap_or(&[]) {
+        right.change(p, 1.0);
+    }
+    let (mut best, mut best_sse) = (b, f32::INFINITY);
+    for j in lo..=hi {
+        if j > lo {
+            // Point j − 1 moves from the right to the left; the left loses its first
+            // point, the right gains its next, where the spans allow.
+            let moved = point(j - 1);
+            left.change(&moved, 1.0);
+            right.change(&moved, -1.0);
+            if let Some(first) = (j - 1).checked_sub(REFINE_SPAN).filter(|&f| f >= old) {
+                left.change(&point(first), -1.0);
+            }
+            if j - 1 + REFINE_SPAN < end {
+                right.change(&point(j - 1 + REFINE_SPAN), 1.0);
+            }
+        }
+        let sse = match (left.sse(), right.sse()) {
+            (Some(l), Some(r)) => l + r,
+            _ => continue,
+        };
+        // Ties keep the detected boundary.
+        if sse < best_sse || (sse == best_sse && j == b) {
+            best = j;
+            best_sse = sse;
+        }
+    }
+    best
+}
+
+/// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its
+/// predecessor, or is not accepted by `line`: the default mode's test for most points, as a
+/// tight loop (no de-skewing: the scanner is at the origin).
+fn accepted_run(
+    points: &[Point],
+    ranges: &[f32],
+    from: usize,
+    to: usize,
+    line: &WindowLine,
+    limits: &Limits,
+) -> usize {
+    let (Some(pts), Some(rs)) = (points.get(from..to), ranges.get(from..to)) else {
+        return from;
+    };
+    let Some(before) = from.checked_sub(1) else {
+        return from;
+    };
+    let (Some(&p0), Some(&r0)) = (points.get(before), ranges.get(before)) else {
+        return from;
+    };
+    let (mut prev, mut prev_r) = (p0, r0);
+    // Point `p` at range `r` after `prev` at `prev_r`: no jump, and on the line. An
+    // invalid point is NaN (`Point::INVALID`): it fails the jump test.
+    let fits = |prev: &Point, prev_r: f32, p: &Point, r: f32| {
+        let limit = prev_r * limits.gap_factor + limits.jump_add;
+        let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+        ex * ex + ey * ey <= limit * limit
+            && line.accepts_within(p.x, p.y, r, limits.k_sigma2, limits.floor)
+    };
+    // Two points an iteration: the second one's predecessor is still in registers, and
+    // the loop's counting is shared.
+    let mut pairs = pts.chunks_exact(2).zip(rs.chunks_exact(2));
+    let mut at = from;
+    for (p2, r2) in pairs.by_ref() {
+        if let ([a, b], &[ra, rb]) = (p2, r2) {
+            if !fits(&prev, prev_r, a, ra) {
+                return at;
+            }
+            if !fits(a, ra, b, rb) {
+                return at + 1;
+            }
+            (prev, prev_r) = (*b, rb);
+        }
+        at += 2;
+    }
+    match (pts.get(at - from), rs.get(at - from)) {
+        (Some(p), Some(&r)) if !fits(&prev, prev_r, p, r) => at,
+        _ => to,
     }
 }
 
