@@ -325,7 +325,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     fn point(&self, i: usize) -> Point {
-        self.points.get(i).copied().unwrap_or(Point::INVALID)
+        point_at(&self.points, i)
     }
 
     /// Scanner position when beam `i` was taken (origin unless de-skewing).
@@ -520,7 +520,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             let cached = walk.cache.as_ref().filter(|_| walk.seg.is_some());
             if let (Some((line, until)), true) = (cached, fast) {
                 let stop = walk.next_check(k, until + 1).min(self.len);
-                let next = self.accepted_run(k, stop, line, &limits);
+                let next = accepted_run(&self.points, &self.ranges, k, stop, line, &limits);
                 self.stats.predictions += next - k;
                 stale_failed = next < stop;
                 k = next;
@@ -616,7 +616,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
         if let (None, Some((b, old))) = (boundary, walk.pending) {
             if k == b + REFINE_AFTER {
-                let best = self.refine_boundary(old, b, k + 1);
+                let best = refine_boundary(&self.points, old, b, k + 1);
                 if best != b {
                     self.clear(b, START);
                     self.set(best, START);
@@ -633,11 +633,6 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         }
     }
 
-    /// [`accepted_run`] over this scan's points.
-    fn accepted_run(&self, from: usize, to: usize, line: &WindowLine, limits: &Limits) -> usize {
-        accepted_run(&self.points, &self.ranges, from, to, line, limits)
-    }
-
     /// Whether `line` accepts point `k` under the noise model (the inverse of
     /// `Prediction::exceeds`, without building the prediction when not de-skewing).
     fn line_accepts(&self, line: &WindowLine, k: usize, m: &NoiseModel, sigma_r: f32) -> bool {
@@ -650,11 +645,6 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 .predict_with(line, k)
                 .is_some_and(|p| !p.exceeds(m.k, sigma_r, m.floor)),
         }
-    }
-
-    /// [`refine_boundary`] over this scan's points.
-    fn refine_boundary(&self, old: usize, b: usize, end: usize) -> usize {
-        refine_boundary(&self.points, old, b, end)
     }
 
     /// Prediction window for point `k` with `c` points of its segment before it: `window`
@@ -968,10 +958,15 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 }
 
-// The loops over many points, as free functions of slices: not generic, so they are compiled
-// once, here, at this crate's optimisation level (3), whatever `N` and `M` (the extractor's
-// own methods are compiled where its capacities are named: at "s" in the firmware). `cargo
-// xtask bench-mcu`: 5 instructions a point less for the pipeline.
+// The loops over many points, as functions of slices that are not generic, so they are
+// compiled once, here, at this crate's optimisation level (3), whatever `N` and `M` (the
+// extractor's own methods are compiled where its capacities are named: at "s" in the
+// firmware). `cargo xtask bench-mcu`: 5 instructions a point less for the pipeline.
+
+/// Point `i` of `points` ([`Point::INVALID`] past their end).
+fn point_at(points: &[Point], i: usize) -> Point {
+    points.get(i).copied().unwrap_or(Point::INVALID)
+}
 
 /// The slots of a scan's beams (points, ranges, flags) and their directions, all of one length.
 type Slots<'a> = (&'a mut [Point], &'a mut [f32], &'a mut [u8], &'a [Point]);
@@ -1051,7 +1046,7 @@ fn arc_fit(pts: &[Point], m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
 /// squared residuals (at most `REFINE_SPAN` points each side), with their sums moved along
 /// from one candidate to the next.
 fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize) -> usize {
-    let point = |i: usize| points.get(i).copied().unwrap_or(Point::INVALID);
+    let point = |i: usize| point_at(points, i);
     let lo = b.saturating_sub(3).max(old + NP);
     let hi = (b + 1).min(end.saturating_sub(NP));
     let o = point(b);
@@ -1110,10 +1105,11 @@ fn accepted_run(
     let Some(before) = from.checked_sub(1) else {
         return from;
     };
-    let (Some(&p0), Some(&r0)) = (points.get(before), ranges.get(before)) else {
+    let (Some(mut prev), Some(mut prev_r)) =
+        (points.get(before).copied(), ranges.get(before).copied())
+    else {
         return from;
     };
-    let (mut prev, mut prev_r) = (p0, r0);
     // Point `p` at range `r` after `prev` at `prev_r`: no jump, and on the line. An
     // invalid point is NaN (`Point::INVALID`): it fails the jump test.
     let fits = |prev: &Point, prev_r: f32, p: &Point, r: f32| {
