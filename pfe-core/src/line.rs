@@ -141,24 +141,22 @@ impl RunningSums {
         }
     }
 
-    /// Adds (`sign` 1) or removes (`sign` −1) `p`.
+    /// Adds `p`.
     #[inline]
-    pub(crate) fn change(&mut self, p: &Point, sign: f32) {
+    pub(crate) fn add(&mut self, p: &Point) {
         let (x, y) = (p.x - self.o.x, p.y - self.o.y);
         let [sx, sy, sxx, syy, sxy] = self.s;
-        let (sx2, sy2) = (sign * x, sign * y);
-        self.s = [
-            sx + sx2,
-            sy + sy2,
-            sxx + sx2 * x,
-            syy + sy2 * y,
-            sxy + sx2 * y,
-        ];
-        self.n = if sign > 0.0 {
-            self.n + 1
-        } else {
-            self.n.saturating_sub(1)
-        };
+        self.s = [sx + x, sy + y, sxx + x * x, syy + y * y, sxy + x * y];
+        self.n += 1;
+    }
+
+    /// Removes `p` (added before).
+    #[inline]
+    pub(crate) fn remove(&mut self, p: &Point) {
+        let (x, y) = (p.x - self.o.x, p.y - self.o.y);
+        let [sx, sy, sxx, syy, sxy] = self.s;
+        self.s = [sx - x, sy - y, sxx - x * x, syy - y * y, sxy - x * y];
+        self.n = self.n.saturating_sub(1);
     }
 
     /// Sum of squared orthogonal residuals of the least-squares line through the points (the
