@@ -22,6 +22,8 @@ const START: u8 = 2;
 const END: u8 = 4;
 /// A segment start caused by a jump (never inside one surface, so never merged).
 const JUMP: u8 = 8;
+/// Most neighbouring segment starts the default mode's walk notes for its check step.
+const NEIGHBOURS: usize = 16;
 /// Sizes of the union of two neighbouring segments tested for being one arc after
 /// segmentation (fewer points do not show an arc above the noise).
 const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
@@ -167,6 +169,10 @@ pub struct Extractor<const N: usize, const M: usize> {
     /// Corrected measured range of each valid point, mm (its distance from the scanner).
     ranges: [f32; N],
     flags: [u8; N],
+    /// Segment starts the default mode's walk set right after another one, in increasing
+    /// order: the only places where its check step can act. `None` when not known (the
+    /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
+    neighbours: Option<Vec<u16, NEIGHBOURS>>,
     len: usize,
     motion: Option<Motion>,
     features: Vec<Feature, M>,
@@ -193,6 +199,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             dirs_of: (0, 0),
             ranges: [0.0; N],
             flags: [0; N],
+            neighbours: None,
             len: 0,
             motion: None,
             features: Vec::new(),
@@ -231,6 +238,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         self.len = n;
         self.motion = scan.motion.filter(|m| m.is_valid());
         self.load_points(scan, config);
+        self.neighbours = None;
         match config.threshold {
             Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, scan.geometry.r_max),
             Threshold::Noise(model) => self.mark_noise(&model, config.sigma_r),
@@ -509,6 +517,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         // path, with the same outcome.
         let fast = self.motion.is_none()
             && limits.floor * limits.floor <= WindowLine::FLOOR2_WITHIN * limits.k_sigma2;
+        self.neighbours = Some(Vec::new());
         let mut walk = Walk::default();
         let mut k = 0usize;
         while k < self.len {
@@ -548,7 +557,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             return;
         }
         let Some(s) = walk.seg else {
-            self.set(k, START);
+            self.start(k);
             walk.seg = Some(k);
             walk.cache = None;
             return;
@@ -589,7 +598,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             }
         };
         if let Some(b) = boundary {
-            self.set(b, START);
+            self.start(b);
             if jump {
                 self.set(b, JUMP);
             }
@@ -624,6 +633,21 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     walk.joinable = Some((best, old));
                 }
                 walk.pending = None;
+            }
+        }
+    }
+
+    /// Starts a segment at `i` in the default mode's walk (which sets starts in increasing
+    /// order), noting it when point `i − 1` starts one too.
+    fn start(&mut self, i: usize) {
+        self.set(i, START);
+        if i.checked_sub(1).is_some_and(|j| self.flag(j) & START != 0) {
+            let noted = match (&mut self.neighbours, u16::try_from(i)) {
+                (Some(list), Ok(i)) => list.push(i).is_ok(),
+                _ => false,
+            };
+            if !noted {
+                self.neighbours = None;
             }
         }
     }
@@ -782,23 +806,45 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// with the run's own points as the window; a run longer than `Np` is tested at its last
     /// `Np` points, so its first marks stay. Runs at the end of a valid stretch are left alone.
     fn check_step(&mut self, config: &Config, r_max: f32) {
-        let mut j = 0usize;
-        // The next mark, and the end of the run of marks it starts.
-        while let Some(start) = self.next_flag(j, Seek::Mark) {
-            j = start;
-            let next = self.next_flag(j + 1, Seek::NotMark).unwrap_or(self.len);
-            let e = next - 1;
-            if e > j && next < self.len && self.valid(next) {
-                let from = (e + 1).saturating_sub(NP).max(j);
-                let pred = self.predict(from, next, next);
-                if !self.exceeds(pred, next, config, r_max) {
-                    for i in from + 1..next {
-                        self.clear(i, START);
+        match self.neighbours.take() {
+            // The default mode's walk noted every start next to another (in increasing
+            // order): the runs of marks are where they are.
+            Some(list) => {
+                let mut done = 0usize;
+                for i in list.iter().map(|&i| usize::from(i)) {
+                    if i < done || self.flag(i) & Seek::MARK != Seek::MARK {
+                        continue;
                     }
+                    let mut j = i;
+                    while j > done && self.flag(j - 1) & Seek::MARK == Seek::MARK {
+                        j -= 1;
+                    }
+                    done = self.check_run(j, config, r_max);
                 }
             }
-            j = next;
+            None => {
+                let mut j = 0usize;
+                while let Some(start) = self.next_flag(j, Seek::Mark) {
+                    j = self.check_run(start, config, r_max);
+                }
+            }
         }
+    }
+
+    /// The check step for the run of marks starting at `j`; returns the point after it.
+    fn check_run(&mut self, j: usize, config: &Config, r_max: f32) -> usize {
+        let next = self.next_flag(j + 1, Seek::NotMark).unwrap_or(self.len);
+        let e = next - 1;
+        if e > j && next < self.len && self.valid(next) {
+            let from = (e + 1).saturating_sub(NP).max(j);
+            let pred = self.predict(from, next, next);
+            if !self.exceeds(pred, next, config, r_max) {
+                for i in from + 1..next {
+                    self.clear(i, START);
+                }
+            }
+        }
+        next
     }
 
     /// §3.4–3.5: every segment's last point is paired with the next segment's first; segments
@@ -1139,6 +1185,70 @@ fn accepted_run(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The default mode's check step, run over the starts its walk noted, changes the same
+    /// marks as the check step reading every flag: a corridor (side walls seen at grazing
+    /// incidence, where every point jumps from the one before: runs of starts the check step
+    /// joins) with random spikes and dropouts, with few and with more runs than are noted.
+    #[test]
+    fn noted_neighbours_give_the_full_check_step() {
+        let g = ScanGeometry::LMS200_180_050;
+        let config = Config::default();
+        let Threshold::Noise(m) = config.threshold else {
+            panic!("the default mode has a noise threshold");
+        };
+        let (mut seed, mut noted, mut overflowed, mut joined) = (7u32, 0, 0, 0);
+        let (mut a, mut b) = (Extractor::<361, 32>::new(), Extractor::<361, 32>::new());
+        for t in 0..200u32 {
+            let (spikes, side) = (t % 40, 300.0 + 40.0 * (t % 30) as f32);
+            let ranges: [f32; 361] = core::array::from_fn(|i| {
+                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let u = seed >> 24;
+                let (sin, cos) = math::sin_cos(g.bearing(i));
+                if u < spikes {
+                    500.0 + 7.0 * u as f32
+                } else if u < spikes + 4 {
+                    f32::NAN
+                } else {
+                    // Side walls at ±side mm, an end wall at 7 m.
+                    let to_side = side / math::abs(sin);
+                    let to_end = if cos > 0.0 {
+                        7000.0 / cos
+                    } else {
+                        f32::INFINITY
+                    };
+                    let r = if to_side < to_end { to_side } else { to_end };
+                    if r < 7900.0 {
+                        r
+                    } else {
+                        f32::NAN
+                    }
+                }
+            });
+            let scan = Scan::from_mm(g, &ranges);
+            let mut flags = [[0u8; 361]; 2];
+            for (ex, all) in [(&mut a, false), (&mut b, true)] {
+                ex.len = ranges.len();
+                ex.motion = None;
+                ex.load_points(&scan, &config);
+                ex.mark_noise(&m, config.sigma_r);
+                let before = ex.flags;
+                match (&ex.neighbours, all) {
+                    (_, true) => ex.neighbours = None,
+                    (Some(_), false) => noted += 1,
+                    (None, false) => overflowed += 1,
+                }
+                ex.check_step(&config, g.r_max);
+                joined += usize::from(!all && ex.flags != before);
+                flags[usize::from(all)] = ex.flags;
+            }
+            assert_eq!(flags[0], flags[1], "scan {t}");
+        }
+        assert!(
+            noted > 20 && overflowed > 20 && joined > 20,
+            "{noted} noted, {overflowed} overflowed, {joined} joined"
+        );
+    }
 
     /// `Seek::none_in` never skips a word with a hit: every word of four flags made of the
     /// five flag bits.
