@@ -832,6 +832,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// The check step for the run of marks starting at `j`; returns the point after it.
+    #[inline(always)]
     fn check_run(&mut self, j: usize, config: &Config, r_max: f32) -> usize {
         let next = self.next_flag(j + 1, Seek::NotMark).unwrap_or(self.len);
         let e = next - 1;
