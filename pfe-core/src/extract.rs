@@ -9,7 +9,7 @@ use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
 use crate::geometry::{ray_circle_intersection, Point};
-use crate::line::{fill_spreads, fit_axis, fit_line, BeamSpan, RunningSums};
+use crate::line::{fill_spreads, fit_axis, fit_line, BeamSpan};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
 use crate::scan::{max_code, valid_mm, Ranges, Scan, ScanGeometry};
@@ -27,8 +27,9 @@ const NEIGHBOURS: usize = 16;
 /// Sizes of the union of two neighbouring segments tested for being one arc after
 /// segmentation (fewer points do not show an arc above the noise).
 const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
-/// Points of the new segment seen before its boundary is refined.
-const REFINE_AFTER: usize = 4;
+/// Points of the new segment seen before its boundary is refined (its line in the refinement
+/// is fitted to the points after the candidates).
+const REFINE_AFTER: usize = 6;
 /// Points each side used to refine a boundary.
 const REFINE_SPAN: usize = 6;
 /// Size of a new segment at which it is tested for being the same arc as the one before (a
@@ -1084,51 +1085,42 @@ fn arc_fit(pts: &[Point], m: &NoiseModel, sigma_r: f32) -> Option<Circle> {
 }
 
 /// Best split between a segment starting at `old` and one starting near `b` and running to
-/// `end` (exclusive): the candidate (`b − 3 ..= b + 1`) that minimises the two local line fits'
-/// squared residuals (at most `REFINE_SPAN` points each side), with their sums moved along
-/// from one candidate to the next.
+/// `end` (exclusive): the candidate in `b − 3 ..= b + 1` that puts the points between them on
+/// the nearer of two fixed lines, the left one fitted to up to `REFINE_SPAN` points before the
+/// candidates (the old segment's), the right one to up to `REFINE_SPAN` from the last candidate
+/// on (the new segment's): least sum of squared distances, one fit each side, not two fits
+/// per candidate.
 #[inline(never)]
 fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize) -> usize {
-    let point = |i: usize| point_at(points, i);
     let lo = b.saturating_sub(3).max(old + NP);
     let hi = (b + 1).min(end.saturating_sub(NP));
-    let o = point(b);
-    let (mut left, mut right) = (RunningSums::about(o), RunningSums::about(o));
-    for p in points
-        .get(lo.saturating_sub(REFINE_SPAN).max(old)..lo)
-        .unwrap_or(&[])
-    {
-        left.add(p);
+    if lo >= hi {
+        return b;
     }
-    for p in points.get(lo..end.min(lo + REFINE_SPAN)).unwrap_or(&[]) {
-        right.add(p);
-    }
-    let (mut best, mut best_sse) = (b, f32::INFINITY);
-    for j in lo..hi + 1 {
-        if j > lo {
-            // Point j − 1 moves from the right to the left; the left loses its first
-            // point, the right gains its next, where the spans allow.
-            let moved = point(j - 1);
-            left.add(&moved);
-            right.remove(&moved);
-            if let Some(first) = (j - 1).checked_sub(REFINE_SPAN).filter(|&f| f >= old) {
-                left.remove(&point(first));
-            }
-            if j - 1 + REFINE_SPAN < end {
-                right.add(&point(j - 1 + REFINE_SPAN));
-            }
-        }
-        let sse = match (left.sse(), right.sse()) {
-            (Some(l), Some(r)) => l + r,
-            _ => continue,
-        };
-        // Ties keep the detected boundary.
+    let left = points.get(lo.saturating_sub(REFINE_SPAN).max(old)..lo);
+    let right = points.get(hi..end.min(hi + REFINE_SPAN));
+    let (Some(Ok(left)), Some(Ok(right))) = (left.map(fit_axis), right.map(fit_axis)) else {
+        return b;
+    };
+    let Some(contested) = points.get(lo..hi) else {
+        return b;
+    };
+    // Split j: points lo..j on the left line, j..hi on the right one.
+    let mut sse: f32 = contested.iter().map(|p| sq(right.signed_distance(p))).sum();
+    let (mut best, mut best_sse) = (lo, sse);
+    for (j, p) in (lo + 1..).zip(contested) {
+        sse += sq(left.signed_distance(p)) - sq(right.signed_distance(p));
         if sse < best_sse || (sse == best_sse && j == b) {
             best = j;
             best_sse = sse;
         }
     }
     best
+}
+
+/// `x²`.
+fn sq(x: f32) -> f32 {
+    x * x
 }
 
 /// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its

@@ -122,56 +122,6 @@ pub(crate) fn fill_spreads(table: &mut [f32], step: f32) {
     }
 }
 
-/// Running sums of a few points about a point near them, for the residual sum of their
-/// least-squares line as points join and leave (the extractor's boundary refinement).
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct RunningSums {
-    n: u32,
-    o: Point,
-    s: [f32; 5],
-}
-
-impl RunningSums {
-    /// No points yet; sums about `o`.
-    pub(crate) fn about(o: Point) -> Self {
-        Self {
-            n: 0,
-            o,
-            s: [0.0; 5],
-        }
-    }
-
-    /// Adds `p`.
-    #[inline]
-    pub(crate) fn add(&mut self, p: &Point) {
-        let (x, y) = (p.x - self.o.x, p.y - self.o.y);
-        let [sx, sy, sxx, syy, sxy] = self.s;
-        self.s = [sx + x, sy + y, sxx + x * x, syy + y * y, sxy + x * y];
-        self.n += 1;
-    }
-
-    /// Removes `p` (added before).
-    #[inline]
-    pub(crate) fn remove(&mut self, p: &Point) {
-        let (x, y) = (p.x - self.o.x, p.y - self.o.y);
-        let [sx, sy, sxx, syy, sxy] = self.s;
-        self.s = [sx - x, sy - y, sxx - x * x, syy - y * y, sxy - x * y];
-        self.n = self.n.saturating_sub(1);
-    }
-
-    /// Sum of squared orthogonal residuals of the least-squares line through the points (the
-    /// smaller eigenvalue of their scatter matrix: no line); `None` for fewer than 2 points
-    /// or non-finite sums.
-    pub(crate) fn sse(&self) -> Option<f32> {
-        let [_, _, sxx, syy, sxy] = self.s;
-        if self.n < 2 || !(math::finite(sxx + syy) && math::finite(sxy)) {
-            return None;
-        }
-        let (_, [sxx, syy, sxy]) = centre(self.s, 1.0 / self.n as f32);
-        Some(smaller_eigenvalue(sxx, syy, sxy))
-    }
-}
-
 /// The mean offset `(x̄, ȳ)` and the centred moments `[Sxx, Syy, Sxy]` of points from their
 /// sums `[Σx, Σy, Σx², Σy², Σxy]` about a point and `inv_n` = 1 / their number.
 #[inline]
