@@ -43,7 +43,7 @@ pub use config::{Config, NoiseModel, Threshold, Typing, NP};
 pub use correction::RangeCorrection;
 pub use deskew::Motion;
 pub use error::{ExtractError, FitError};
-pub use extract::{Extractor, Stats};
+pub use extract::{Extractor, LmsExtractor, Stats, LMS_FEATURES, LMS_READINGS};
 pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
 pub use geometry::Point;
 pub use line::{fit_line, LineCovariance, LineFit};

@@ -101,8 +101,9 @@ mod fw {
             defmt::panic!("scanner UART started twice");
         };
         // Room for every LMS200 variant (up to 401 values) and 48 features.
-        let app: &'static mut App<MAX_VALUES, 48> = {
-            static mut APP: App<MAX_VALUES, 48> = App::new(ConfigChoice::Default);
+        let app: &'static mut App<MAX_VALUES, { pfe_core::LMS_FEATURES }> = {
+            static mut APP: App<MAX_VALUES, { pfe_core::LMS_FEATURES }> =
+                App::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: the only reference to APP, taken once here.
             unsafe {

@@ -27,7 +27,8 @@ mod fw {
     use pfe_core::{Config, Extractor, Scan, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
-    const N: usize = 361;
+    // The firmware's extractor (`pfe_core::LmsExtractor`), for 361-value scans.
+    const N: usize = pfe_core::LMS_READINGS;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
     struct Sink;
@@ -83,16 +84,16 @@ mod fw {
             );
             sys::exit(sys::EXIT_USAGE);
         }
-        let ex: &'static mut Extractor<N, 48> = {
-            static mut EX: Extractor<N, 48> = Extractor::new();
+        let ex: &'static mut Extractor<N, { pfe_core::LMS_FEATURES }> = {
+            static mut EX: Extractor<N, { pfe_core::LMS_FEATURES }> = Extractor::new();
             #[allow(unsafe_code)]
             // SAFETY: the only reference to EX, taken once before the loop.
             unsafe {
                 &mut *core::ptr::addr_of_mut!(EX)
             }
         };
-        let app: &'static mut App<N, 48> = {
-            static mut APP: App<N, 48> = App::new(ConfigChoice::Default);
+        let app: &'static mut App<N, { pfe_core::LMS_FEATURES }> = {
+            static mut APP: App<N, { pfe_core::LMS_FEATURES }> = App::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: as above.
             unsafe {
