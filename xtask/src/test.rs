@@ -3,12 +3,10 @@
 //! Installs what it needs (the thumbv7em target; as root, Debian's qemu-system-arm, and
 //! libmrpt-hwdrivers-dev for the conformance step), then: formatting, clippy, rustdoc, the no_std
 //! builds, every host test (unit, integration, doc, the end-to-end QEMU and emulator runs),
-//! firmware sizes and their budgets, MRPT conformance, the no-panic build, fuzzing (60 s per
-//! target under `CI`, 10 s otherwise) and a short soak. `--quick` stops after the host tests
-//! and skips the QEMU end-to-end test.
-//!
-//! The instruction-count budget (`cargo xtask bench-mcu`) is not a step while it is broken
-//! (see docs/PERFORMANCE.md); run it on its own.
+//! firmware sizes and their budgets, the instruction-count budget (`cargo xtask bench-mcu`:
+//! counts under `-icount` are deterministic), MRPT conformance, the no-panic build, fuzzing
+//! (60 s per target under `CI`, 10 s otherwise) and a short soak. `--quick` stops after the
+//! host tests and skips the QEMU end-to-end test.
 
 use anyhow::Result;
 
@@ -80,6 +78,9 @@ pub fn run_all(quick: bool) -> Result<()> {
     }
     step("firmware binaries: sizes, stack and budgets", || {
         crate::size::run(&[])
+    })?;
+    step("firmware instruction counts and their budget", || {
+        crate::bench_mcu::run(&[])
     })?;
     step("MRPT conformance", || crate::conformance::run(&[]))?;
     step(
