@@ -129,6 +129,10 @@ impl<S: core::fmt::Debug, W: core::fmt::Debug> core::fmt::Display for AppError<S
 
 impl<S: core::fmt::Debug, W: core::fmt::Debug> core::error::Error for AppError<S, W> {}
 
+/// The application the firmware runs: room for every LMS2xx scan and [`pfe_core::LMS_FEATURES`]
+/// features, its extraction that of [`pfe_core::LmsExtractor`] (compiled in pfe-core).
+pub type LmsApp = App<{ pfe_core::LMS_READINGS }, { pfe_core::LMS_FEATURES }>;
+
 /// The application: extractor with room for `N` readings and `M` features, a configuration
 /// and the scan sequence number.
 pub struct App<const N: usize, const M: usize> {

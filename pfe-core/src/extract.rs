@@ -248,11 +248,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         self.len = n;
         self.motion = scan.motion.filter(|m| m.is_valid());
         self.load_points(scan, config);
-        self.neighbours = None;
-        match config.threshold {
-            Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, scan.geometry.r_max),
-            Threshold::Noise(model) => self.mark_noise(&model, config.sigma_r),
-        }
+        self.mark(config, scan.geometry.r_max);
         if config.check_step {
             self.check_step(config, scan.geometry.r_max);
         }
@@ -484,6 +480,16 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                 p.error > paper_threshold(d0, lambda, self.range(k), r_max, p.phi())
             }
             Threshold::Noise(m) => p.exceeds(m.k, config.sigma_r, m.floor),
+        }
+    }
+
+    /// Mark points under the configured threshold (the paper's, or the default mode's walk).
+    #[inline(always)]
+    fn mark(&mut self, config: &Config, r_max: f32) {
+        self.neighbours = None;
+        match config.threshold {
+            Threshold::Paper { d0, lambda } => self.mark_paper(d0, lambda, r_max),
+            Threshold::Noise(model) => self.mark_noise(&model, config.sigma_r),
         }
     }
 
@@ -1046,8 +1052,9 @@ fn extract_lms(
 
 // The loops over many points, as functions of slices that are not generic, so they are
 // compiled once, here, at this crate's optimisation level (3), whatever `N` and `M` (the
-// extractor's own methods are compiled where its capacities are named: at "s" in the
-// firmware). `cargo xtask bench-mcu`: 5 instructions a point less for the pipeline.
+// extractor's own methods are compiled where its capacities are named, at "s" in a firmware
+// that names any other than `LmsExtractor`'s). `cargo xtask bench-mcu`: 5 instructions a point
+// less for the pipeline, measured before `LmsExtractor`.
 
 /// Point `i` of `points` ([`Point::INVALID`] past their end).
 fn point_at(points: &[Point], i: usize) -> Point {
@@ -1153,6 +1160,7 @@ fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize) -> usize 
     let (mut best, mut best_sse) = (lo, sse);
     for (j, p) in (lo + 1..).zip(contested) {
         sse += sq(left.signed_distance(p)) - sq(right.signed_distance(p));
+        // Ties keep the detected boundary.
         if sse < best_sse || (sse == best_sse && j == b) {
             best = j;
             best_sse = sse;
@@ -1230,9 +1238,6 @@ mod tests {
     fn noted_neighbours_give_the_full_check_step() {
         let g = ScanGeometry::LMS200_180_050;
         let config = Config::default();
-        let Threshold::Noise(m) = config.threshold else {
-            panic!("the default mode has a noise threshold");
-        };
         let (mut seed, mut noted, mut overflowed, mut joined) = (7u32, 0, 0, 0);
         let (mut a, mut b) = (Extractor::<361, 32>::new(), Extractor::<361, 32>::new());
         for t in 0..200u32 {
@@ -1243,7 +1248,7 @@ mod tests {
                 ex.len = ranges.len();
                 ex.motion = None;
                 ex.load_points(&scan, &config);
-                ex.mark_noise(&m, config.sigma_r);
+                ex.mark(&config, g.r_max);
                 let before = ex.flags;
                 match (&ex.neighbours, all) {
                     (_, true) => ex.neighbours = None,

@@ -31,8 +31,7 @@ mod fw {
     };
 
     use crate::scanner_uart::ScannerUart;
-    use firmware::app::{App, AppError, ConfigChoice};
-    use firmware::lms::driver::MAX_VALUES;
+    use firmware::app::{AppError, ConfigChoice, LmsApp};
     use firmware::lms::{Clock, Config, Driver};
 
     /// System clock, Hz.
@@ -101,9 +100,8 @@ mod fw {
             defmt::panic!("scanner UART started twice");
         };
         // Room for every LMS200 variant (up to 401 values) and 48 features.
-        let app: &'static mut App<MAX_VALUES, { pfe_core::LMS_FEATURES }> = {
-            static mut APP: App<MAX_VALUES, { pfe_core::LMS_FEATURES }> =
-                App::new(ConfigChoice::Default);
+        let app: &'static mut LmsApp = {
+            static mut APP: LmsApp = LmsApp::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: the only reference to APP, taken once here.
             unsafe {

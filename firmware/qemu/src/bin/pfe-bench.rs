@@ -17,17 +17,17 @@ fn main() {
 mod fw {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_semihosting as _;
-    use firmware::app::{App, ConfigChoice, RawScan};
+    use firmware::app::{ConfigChoice, LmsApp, RawScan};
     use firmware::lms::{frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions};
     use firmware::output::{self, Counters, Report, Stage};
     use firmware_qemu::{
         sys, time,
         uart::{Uart, UART1},
     };
-    use pfe_core::{Config, Extractor, Scan, ScanGeometry};
+    use pfe_core::{Config, LmsExtractor, Scan, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
-    // The firmware's extractor (`pfe_core::LmsExtractor`), for 361-value scans.
+    /// Values a telegram may hold (the bench's scans have 361).
     const N: usize = pfe_core::LMS_READINGS;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
@@ -84,16 +84,17 @@ mod fw {
             );
             sys::exit(sys::EXIT_USAGE);
         }
-        let ex: &'static mut Extractor<N, { pfe_core::LMS_FEATURES }> = {
-            static mut EX: Extractor<N, { pfe_core::LMS_FEATURES }> = Extractor::new();
+        // The firmware's extractor and application (the scans have 361 values).
+        let ex: &'static mut LmsExtractor = {
+            static mut EX: LmsExtractor = LmsExtractor::new();
             #[allow(unsafe_code)]
             // SAFETY: the only reference to EX, taken once before the loop.
             unsafe {
                 &mut *core::ptr::addr_of_mut!(EX)
             }
         };
-        let app: &'static mut App<N, { pfe_core::LMS_FEATURES }> = {
-            static mut APP: App<N, { pfe_core::LMS_FEATURES }> = App::new(ConfigChoice::Default);
+        let app: &'static mut LmsApp = {
+            static mut APP: LmsApp = LmsApp::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: as above.
             unsafe {

@@ -17,8 +17,7 @@ fn main() {
 mod fw {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_semihosting as _;
-    use firmware::app::{App, AppError, ConfigChoice};
-    use firmware::lms::driver::MAX_VALUES;
+    use firmware::app::{AppError, ConfigChoice, LmsApp};
     use firmware::lms::types::Baud;
     use firmware::lms::{Config, Driver};
     use firmware::output::{self, Report};
@@ -48,9 +47,8 @@ mod fw {
             ConfigChoice::Default
         };
         // Room for every LMS200 variant (up to 401 values) and 48 features.
-        let app: &'static mut App<MAX_VALUES, { pfe_core::LMS_FEATURES }> = {
-            static mut APP: App<MAX_VALUES, { pfe_core::LMS_FEATURES }> =
-                App::new(ConfigChoice::Default);
+        let app: &'static mut LmsApp = {
+            static mut APP: LmsApp = LmsApp::new(ConfigChoice::Default);
             #[allow(unsafe_code)]
             // SAFETY: the only reference to APP, taken once here.
             unsafe {
