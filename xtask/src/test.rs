@@ -4,7 +4,9 @@
 //! libmrpt-hwdrivers-dev for the conformance step), then: formatting, clippy, rustdoc, the no_std
 //! builds, every host test (unit, integration, doc, the end-to-end QEMU and emulator runs),
 //! firmware sizes and their budgets, the instruction-count budget (`cargo xtask bench-mcu`:
-//! counts under `-icount` are deterministic), MRPT conformance, the no-panic build, fuzzing
+//! counts under `-icount` are deterministic), the host speed against the baselines (`pfe
+//! bench --report-only`: timings depend on the machine, so they are printed, not asserted),
+//! MRPT conformance, the no-panic build, fuzzing
 //! (60 s per target under `CI`, 10 s otherwise) and a short soak. `--quick` stops after the
 //! host tests and skips the QEMU end-to-end test.
 
@@ -82,6 +84,25 @@ pub fn run_all(quick: bool) -> Result<()> {
     step("firmware instruction counts and their budget", || {
         crate::bench_mcu::run(&[])
     })?;
+    step(
+        "host speed against the baselines (reported, not asserted)",
+        || {
+            sh(cargo().args([
+                "run",
+                "--release",
+                "-q",
+                "-p",
+                "host-tests",
+                "--bin",
+                "pfe",
+                "--",
+                "bench",
+                "--reps",
+                "5",
+                "--report-only",
+            ]))
+        },
+    )?;
     step("MRPT conformance", || crate::conformance::run(&[]))?;
     step(
         "no panic path in the firmware",

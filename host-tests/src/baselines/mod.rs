@@ -49,6 +49,14 @@ pub fn scan_points(geometry: &ScanGeometry, ranges_mm: &[f32]) -> Vec<Option<Poi
         .collect()
 }
 
+/// Every beam's point ([`scan_points`]), a reading with no return as [`Point::INVALID`].
+pub fn beam_points(geometry: &ScanGeometry, ranges_mm: &[f32]) -> Vec<Point> {
+    scan_points(geometry, ranges_mm)
+        .into_iter()
+        .map(|p| p.unwrap_or(Point::INVALID))
+        .collect()
+}
+
 /// Which model a segment gets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Model {
@@ -130,6 +138,28 @@ pub(crate) fn assemble(pts: &[Point], pieces: &[Piece], sigma_r: f32) -> crate::
     crate::method::Extraction { marks, features }
 }
 
+/// The fits alone of `features` (found in the scan whose points are `pts`, every beam's,
+/// invalid ones as [`Point::INVALID`]): each feature's beams fitted again as its model, as the
+/// baselines fit their pieces. Their cost is a floor under any method that outputs these
+/// features (`pfe bench`'s `fits-only` row).
+pub fn refit(pts: &[Point], features: &[Feature], sigma_r: f32) -> crate::method::Extraction {
+    let pieces: Vec<Piece> = features
+        .iter()
+        .map(|f| {
+            let (first, last, model) = match f {
+                Feature::Line(l) => (l.first, l.last, Model::Line),
+                Feature::Circle(c) => (c.first, c.last, Model::Circle),
+            };
+            Piece {
+                first: usize::from(first),
+                last: usize::from(last),
+                model,
+            }
+        })
+        .collect();
+    assemble(pts, &pieces, sane_sigma(sigma_r))
+}
+
 /// A sane σ_r: positive and finite, else the default.
 pub(crate) fn sane_sigma(sigma_r: f32) -> f32 {
     if sigma_r.is_finite() && sigma_r > 0.0 {
@@ -170,5 +200,39 @@ pub(crate) fn settle_boundaries(pts: &[Point], pieces: &mut [Piece]) {
         if let Some(p) = pieces.get_mut(i) {
             p.first = first;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::method::Method;
+    use crate::sim::{Scenario, SceneKind};
+
+    /// `refit` fits exactly the beams and models it is given: on split-and-merge's and ACF's
+    /// extractions (fitted by the same recipe) it gives back every feature, bit for bit.
+    #[test]
+    fn refit_gives_back_the_baselines_features() {
+        let mut methods: [Box<dyn Method>; 2] = [Box::new(SplitMerge::new()), Box::new(Acf::new())];
+        let (mut lines, mut circles) = (0, 0);
+        for seed in 0..40 {
+            let s = Scenario::new(SceneKind::Mixed, seed).simulate();
+            let pts = beam_points(&s.geometry, &s.ranges_mm);
+            for m in methods.iter_mut() {
+                let out = m.extract(&s.geometry, &s.ranges_mm);
+                let again = refit(&pts, &out.features, DEFAULT_SIGMA_R);
+                assert_eq!(again.features, out.features, "{} seed {seed}", m.name());
+                for f in &out.features {
+                    match f {
+                        Feature::Line(_) => lines += 1,
+                        Feature::Circle(_) => circles += 1,
+                    }
+                }
+            }
+        }
+        assert!(
+            lines > 100 && circles > 10,
+            "{lines} lines, {circles} circles"
+        );
     }
 }

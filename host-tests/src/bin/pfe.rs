@@ -59,16 +59,6 @@ impl ConfigName {
     }
 }
 
-/// Range noise assumed for a format unless `--sigma-r` says otherwise, mm: the LMS200 data
-/// sheet's 5 mm for mm-mode data (csv, lms200); 10 mm for CARMEN logs (cm-quantised LMS data)
-/// and for the Hokuyo URG-04LX (±10 mm at short range).
-fn default_sigma(format: Format) -> f32 {
-    match format {
-        Format::Csv | Format::Lms200 => 5.0,
-        Format::Carmen | Format::Hokuyo => 10.0,
-    }
-}
-
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Extract features: one JSON object per scan on stdout, one line each.
@@ -173,7 +163,7 @@ fn main() -> ExitCode {
             file,
         } => extract(
             format,
-            config.method(sigma_r.unwrap_or(default_sigma(format))),
+            config.method(sigma_r.unwrap_or(format.sigma_r())),
             &file,
         ),
         Command::Decode { format, file } => decode(format, &file),
@@ -187,7 +177,7 @@ fn main() -> ExitCode {
         } => plot(
             &file,
             format,
-            config.method(sigma_r.unwrap_or(default_sigma(format))),
+            config.method(sigma_r.unwrap_or(format.sigma_r())),
             scan,
             &output,
         ),

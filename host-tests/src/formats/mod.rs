@@ -44,6 +44,19 @@ pub enum Format {
     Hokuyo,
 }
 
+impl Format {
+    /// Range noise assumed for this format's data, mm: the LMS200 data sheet's 5 mm for
+    /// mm-mode data (csv, lms200); 10 mm for CARMEN logs (cm-quantised LMS data) and for the
+    /// Hokuyo URG-04LX (±10 mm at short range). The `pfe` CLI's default for `--sigma-r`, and
+    /// `pfe bench`'s σ_r for the CARMEN logs.
+    pub fn sigma_r(self) -> f32 {
+        match self {
+            Format::Csv | Format::Lms200 => 5.0,
+            Format::Carmen | Format::Hokuyo => 10.0,
+        }
+    }
+}
+
 impl fmt::Display for Format {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
