@@ -6,9 +6,8 @@
 //! firmware sizes and their budgets, the instruction-count budget (`cargo xtask bench-mcu`:
 //! counts under `-icount` are deterministic), the host speed against the baselines (`pfe
 //! bench --report-only`: timings depend on the machine, so they are printed, not asserted),
-//! MRPT conformance, the no-panic build, fuzzing
-//! (60 s per target under `CI`, 10 s otherwise) and a short soak. `--quick` stops after the
-//! host tests and skips the QEMU end-to-end test.
+//! MRPT conformance, the no-panic build, fuzzing (60 s per target under `CI`, 10 s otherwise)
+//! and a short soak. `--quick` stops after the host tests and skips the QEMU end-to-end test.
 
 use anyhow::Result;
 
