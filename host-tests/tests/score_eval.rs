@@ -3,8 +3,8 @@
 use host_tests::eval::{
     evaluate, parse_args, quick_report, report, run_methods, scenarios, svg, EvalOptions,
 };
-use host_tests::method::{Extraction, Method};
-use host_tests::sim::{Scenario, SceneKind, SimScan};
+use host_tests::methods::{Extraction, Method};
+use host_tests::scene::{Scenario, SceneKind, SimScan};
 use pfe_core::ScanGeometry;
 
 /// Finds nothing.

@@ -280,7 +280,7 @@ impl host_tests::emulator::ScanSource for SimSource {
 /// One QEMU session: the firmware against the emulated LMS200 serving simulated scans.
 pub struct Session {
     /// The simulated scans (the emulator serves `sims[k % len]` as its k-th B0 telegram).
-    pub sims: Vec<host_tests::sim::SimScan>,
+    pub sims: Vec<host_tests::scene::SimScan>,
     /// What the emulator did.
     pub emulator: host_tests::emulator::EmulatorReport,
     /// QEMU's run.
@@ -302,7 +302,7 @@ pub fn session(
 ) -> Result<Session> {
     use host_tests::emulator::serve::{serve_on, Pty};
     use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits};
-    use host_tests::sim::{Scenario, SceneKind};
+    use host_tests::scene::{Scenario, SceneKind};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 

@@ -21,7 +21,7 @@ use firmware::app::ConfigChoice;
 use firmware::output::{Counters, Frame, Header, Report, WireFeature};
 use host_tests::emulator::serve::{serve_on, Pty};
 use host_tests::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
-use host_tests::sim::{Scenario, SceneKind};
+use host_tests::scene::{Scenario, SceneKind};
 
 use super::qemu;
 

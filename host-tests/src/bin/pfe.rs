@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use host_tests::formats::{self, lms200, Format, Record, ScanJson};
-use host_tests::method::{Method, Pfe};
+use host_tests::methods::{Method, Pfe};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pfe_core::Config;
 use serde::Serialize;
@@ -182,7 +182,7 @@ fn main() -> ExitCode {
             &output,
         ),
         Command::Eval { args } => delegate("eval", host_tests::eval::cli(&args)),
-        Command::Bench { args } => delegate("bench", host_tests::bench::cli(&args)),
+        Command::Bench { args } => delegate("bench", host_tests::eval::bench::cli(&args)),
         Command::Emulate { args } => delegate("emulate", host_tests::emulator::cli(&args)),
         Command::Record { args } => delegate("record", host_tests::record::cli(&args)),
     };

@@ -3,13 +3,15 @@
 //! [`quick_report`] is the lead's tuning loop; [`cli`] (`pfe eval`, `cargo xtask eval`)
 //! reproduces the paper's comparison and writes `docs/EVALUATION.md` and plots.
 
+pub mod bench;
 pub mod report;
+pub mod score;
 pub mod svg;
 
-use crate::baselines::{Acf, SplitMerge};
-use crate::method::{Method, Pfe};
-use crate::score::{quantile, score_sim, Score};
-use crate::sim::{Scenario, SceneKind, SimScan};
+use crate::eval::score::{quantile, score_sim, Score};
+use crate::methods::baselines::{Acf, SplitMerge};
+use crate::methods::{Method, Pfe};
+use crate::scene::{Scenario, SceneKind, SimScan};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -152,7 +154,7 @@ pub struct Level {
     /// Of which circles.
     pub truth_circles: usize,
     /// Cramér–Rao bounds of every truth feature (`true` for lines).
-    pub truth_crb: Vec<(bool, crate::sim::Crb)>,
+    pub truth_crb: Vec<(bool, crate::scene::Crb)>,
     /// One per method, in order.
     pub results: Vec<MethodResult>,
 }
@@ -193,7 +195,7 @@ pub fn run_scenarios(
 ) -> Level {
     let sims: Vec<SimScan> = scenarios.iter().map(Scenario::simulate).collect();
     let truth_features = sims.iter().map(|s| s.truth.len()).sum();
-    let truth_crb: Vec<(bool, crate::sim::Crb)> = sims
+    let truth_crb: Vec<(bool, crate::scene::Crb)> = sims
         .iter()
         .flat_map(|s| s.truth.iter())
         .map(|f| (f.kind.is_line(), f.crb))
@@ -221,10 +223,10 @@ pub fn conditions() -> Vec<Condition> {
         ("systematic bias ±15 mm (uncorrected)", |s| s.bias = true),
         ("mixed pixels at depth jumps", |s| s.mixed_pixels = true),
         ("0.25° resolution (721 beams)", |s| {
-            s.resolution = crate::sim::Resolution::Quarter
+            s.resolution = crate::scene::Resolution::Quarter
         }),
         ("1° resolution (181 beams)", |s| {
-            s.resolution = crate::sim::Resolution::One
+            s.resolution = crate::scene::Resolution::One
         }),
     ]
 }
@@ -426,8 +428,8 @@ pub fn crb_medians(s: &Score) -> [f64; 4] {
 ///
 /// ```
 /// use host_tests::eval::quick_report;
-/// use host_tests::method::{Method, Pfe};
-/// use host_tests::sim::SceneKind;
+/// use host_tests::methods::{Method, Pfe};
+/// use host_tests::scene::SceneKind;
 /// let mut pfe = Pfe::paper();
 /// let report = quick_report(&mut [&mut pfe as &mut dyn Method], SceneKind::Office, 2, 5.0, 1);
 /// assert!(report.contains("pfe-paper"));

@@ -1,6 +1,6 @@
 //! `pfe bench`: host speed of every method on the same scans, in one run, single thread.
 //!
-//! Data sets: simulated scans ([`crate::sim`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
+//! Data sets: simulated scans ([`crate::scene`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
 //! and, when `../shared/data/carmen` is present, real CARMEN logs read by
 //! [`crate::formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
 //! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
@@ -16,7 +16,7 @@
 //! fitting pfe-default's features again, with no segmentation at all.
 //!
 //! ```no_run
-//! host_tests::bench::cli(&["--json".to_string()]).unwrap();
+//! host_tests::eval::bench::cli(&["--json".to_string()]).unwrap();
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -27,11 +27,11 @@ use clap::Parser;
 use pfe_core::{Feature, Point, ScanGeometry};
 use serde::Serialize;
 
-use crate::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
 use crate::eval::methods_for;
 use crate::formats::Format;
-use crate::method::Method;
-use crate::sim::{Scenario, SceneKind};
+use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
+use crate::methods::Method;
+use crate::scene::{Scenario, SceneKind};
 
 /// Command-line options of `pfe bench`.
 #[derive(Parser, Debug)]
@@ -160,7 +160,7 @@ pub struct BenchReport {
 /// The method every other is compared with (the ratio column, the budgets).
 pub const REFERENCE: &str = "pfe-default";
 
-/// Name of the row that times the fits alone ([`crate::baselines::refit`] of pfe-default's
+/// Name of the row that times the fits alone ([`crate::methods::baselines::refit`] of pfe-default's
 /// features): what any method that outputs those features pays, whatever its segmentation.
 pub const FITS_ONLY: &str = "fits-only";
 
@@ -246,7 +246,7 @@ pub fn time_methods(
     }
 }
 
-/// `n` simulated LMS200 scans (361 beams, 8 m, σ_r = 5 mm): [`crate::sim`]'s mixed scenes
+/// `n` simulated LMS200 scans (361 beams, 8 m, σ_r = 5 mm): [`crate::scene`]'s mixed scenes
 /// (office, clutter, pillars, corridor) with seeds `seed, seed + 1, …`.
 pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
     (0..n as u64)
@@ -403,7 +403,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
     let full: Vec<BenchScan> = (0..n as u64)
         .map(|k| {
             let mut sc = Scenario::new(SceneKind::Mixed, seed.wrapping_add(k));
-            sc.resolution = crate::sim::Resolution::Quarter;
+            sc.resolution = crate::scene::Resolution::Quarter;
             let s = sc.simulate();
             BenchScan {
                 geometry: s.geometry,
