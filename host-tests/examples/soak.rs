@@ -37,7 +37,7 @@ mod qemu;
 #[path = "soak_qemu/mod.rs"]
 mod soak_qemu;
 
-use host_tests::emulator::{
+use host_tests::device::emulator::{
     Emulator, EmulatorConfig, Faults, Link, RunLimits, SentScan, SourceKind, TaggedSource,
 };
 
@@ -482,7 +482,7 @@ mod tty {
 
 /// The pseudo-terminal run; `Ok(true)` when the account balances.
 pub(crate) fn pty(a: &Args) -> Result<bool> {
-    use host_tests::emulator::serve::{serve_on, Pty};
+    use host_tests::device::emulator::serve::{serve_on, Pty};
     let cfg = EmulatorConfig {
         source: SourceKind::Tagged,
         faults: faults(a.damage),

@@ -9,7 +9,7 @@ mod qemu;
 use firmware::app::{App, ConfigChoice};
 use firmware::lms::{Config, Driver};
 use firmware::output::{Frame, ScanStatus};
-use host_tests::emulator::{Emulator, EmulatorConfig, Faults, Link};
+use host_tests::device::emulator::{Emulator, EmulatorConfig, Faults, Link};
 use host_tests::methods::Extraction;
 use host_tests::scene::{Scenario, SceneKind, SimScan};
 
@@ -25,7 +25,7 @@ fn run(
     sims: &[SimScan],
     scans: usize,
     faults: Faults,
-) -> (Vec<Frame>, host_tests::emulator::EmulatorReport) {
+) -> (Vec<Frame>, host_tests::device::emulator::EmulatorReport) {
     let source = qemu::SimSource::new(sims.iter().map(|s| s.ranges_mm.clone()).collect());
     let cfg = EmulatorConfig {
         faults,

@@ -266,7 +266,7 @@ impl SimSource {
     }
 }
 
-impl host_tests::emulator::ScanSource for SimSource {
+impl host_tests::device::emulator::RangeSource for SimSource {
     fn next_scan(&mut self, n: usize, _start_deg: f32, _step_deg: f32) -> Vec<f32> {
         let r = match self.ranges.get(self.next % self.ranges.len().max(1)) {
             Some(r) if r.len() == n => r.clone(),
@@ -282,7 +282,7 @@ pub struct Session {
     /// The simulated scans (the emulator serves `sims[k % len]` as its k-th B0 telegram).
     pub sims: Vec<host_tests::scene::SimScan>,
     /// What the emulator did.
-    pub emulator: host_tests::emulator::EmulatorReport,
+    pub emulator: host_tests::device::emulator::EmulatorReport,
     /// QEMU's run.
     pub run: Run,
     /// Frames from UART1.
@@ -300,8 +300,8 @@ pub fn session(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
-    use host_tests::emulator::serve::{serve_on, Pty};
-    use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits};
+    use host_tests::device::emulator::serve::{serve_on, Pty};
+    use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
     use host_tests::scene::{Scenario, SceneKind};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;

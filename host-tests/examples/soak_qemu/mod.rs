@@ -19,8 +19,8 @@ use std::time::{Duration, Instant};
 use anyhow::{Context, Result};
 use firmware::app::ConfigChoice;
 use firmware::output::{Counters, Frame, Header, Report, WireFeature};
-use host_tests::emulator::serve::{serve_on, Pty};
-use host_tests::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
+use host_tests::device::emulator::serve::{serve_on, Pty};
+use host_tests::device::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
 use host_tests::scene::{Scenario, SceneKind};
 
 use super::qemu;

@@ -1,7 +1,7 @@
 //! Evaluation: every [`Method`] on the same simulated scans, scored against ground truth.
 //!
-//! [`quick_report`] is the lead's tuning loop; [`cli`] (`pfe eval`, `cargo xtask eval`)
-//! reproduces the paper's comparison and writes `docs/EVALUATION.md` and plots.
+//! [`quick_report`] is the lead's tuning loop; [`evaluate`] reproduces the paper's comparison, which
+//! `pfe eval` ([`crate::cli::eval`]) writes to `docs/EVALUATION.md` with its plots.
 
 pub mod bench;
 pub mod report;
@@ -281,80 +281,6 @@ pub fn evaluate(methods: &mut [Box<dyn Method>], options: &EvalOptions) -> Evalu
         sweep,
         robustness,
     }
-}
-
-const HELP: &str =
-    "pfe eval [--kind mixed|office|clutter|pillars|corridor] [--scans 100] [--seed 1]
-         [--sigma 5] [--sweep 1,2,5,10] [--passes 5] [--out docs | --no-write] [--command TEXT]
-
-Runs PFE paper, PFE default, ACF and split-and-merge on simulated LMS200 scans with ground truth,
-prints the tables and writes OUT/EVALUATION.md and OUT/eval-*.svg. Build in release for times.";
-
-/// Parses the evaluation's arguments (`Ok(None)` for `--help`).
-pub fn parse_args(args: &[String]) -> anyhow::Result<Option<EvalOptions>> {
-    use anyhow::Context as _;
-    let mut o = EvalOptions::default();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || it.next().with_context(|| format!("{a} needs a value"));
-        match a.as_str() {
-            "--kind" => o.kind = val()?.parse().map_err(anyhow::Error::msg)?,
-            "--scans" => o.scans = val()?.parse()?,
-            "--seed" => o.seed = val()?.parse()?,
-            "--sigma" => o.sigma = val()?.parse()?,
-            "--sweep" => {
-                o.sweep = val()?
-                    .split(',')
-                    .map(|s| s.trim().parse::<f32>())
-                    .collect::<Result<_, _>>()?
-            }
-            "--passes" => o.passes = val()?.parse()?,
-            "--out" => o.out = Some(val()?.into()),
-            "--no-write" => o.out = None,
-            "--command" => o.command = val()?.clone(),
-            "-h" | "--help" => return Ok(None),
-            other => anyhow::bail!("unknown argument `{other}`\n\n{HELP}"),
-        }
-    }
-    let bad = |s: f32| s.is_nan() || s < 0.0;
-    if o.scans == 0 || bad(o.sigma) || o.sweep.iter().any(|s| bad(*s)) {
-        anyhow::bail!("--scans must be > 0 and every σ ≥ 0");
-    }
-    Ok(Some(o))
-}
-
-/// Entry point of `pfe eval` (and of `cargo xtask eval` through the `eval` example).
-pub fn cli(args: &[String]) -> anyhow::Result<()> {
-    use anyhow::Context as _;
-    let Some(options) = parse_args(args)? else {
-        println!("{HELP}");
-        return Ok(());
-    };
-    if cfg!(debug_assertions) {
-        eprintln!("warning: debug build: times are not representative (use --release)");
-    }
-    let mut methods = default_methods();
-    let ev = evaluate(&mut methods, &options);
-    let md = report::markdown(&ev);
-    print!("{}", report::text(&ev));
-    if let Some(dir) = &options.out {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let write = |name: &str, body: String| -> anyhow::Result<()> {
-            let p = dir.join(name);
-            std::fs::write(&p, body).with_context(|| format!("cannot write {}", p.display()))?;
-            eprintln!("wrote {}", p.display());
-            Ok(())
-        };
-        write("EVALUATION.md", md)?;
-        write("eval-errors.svg", svg::errors_vs_noise(&ev))?;
-        write("eval-ratios.svg", svg::ratios_vs_noise(&ev))?;
-        write("eval-time.svg", svg::time_per_scan(&ev))?;
-        write(
-            "eval-scenes.svg",
-            svg::scene_gallery(options.seed, options.sigma),
-        )?;
-    }
-    Ok(())
 }
 
 fn fmt_q(values: &[f64], q: f64, scale: f64, digits: usize) -> String {
