@@ -8,4 +8,6 @@ pub mod eval;
 pub mod formats;
 pub mod methods;
 pub mod plot;
+pub mod qemu;
 pub mod scene;
+pub mod soak;

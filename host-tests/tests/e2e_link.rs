@@ -3,8 +3,7 @@
 //! `firmware::app::App` → feature frames → decoder. The features must equal pfe-core run on
 //! the value words the emulator sent, also when the link damages telegrams.
 
-#[path = "../examples/demo_host/qemu.rs"]
-mod qemu;
+use host_tests::qemu;
 
 use firmware::app::{App, ConfigChoice};
 use firmware::lms::{Config, Driver};

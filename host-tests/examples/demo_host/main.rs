@@ -7,7 +7,7 @@
 //! demo_host demo --elf pfe-qemu [--scans 10] [--config default|paper] [--svg demo.svg]
 //! ```
 
-mod qemu;
+use host_tests::qemu;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

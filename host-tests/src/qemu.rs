@@ -1,8 +1,6 @@
 //! Running the pfe firmware under QEMU (mps2-an386) from the host, and reading its output:
-//! shared by `examples/demo_host` (`cargo xtask demo`, `bench-mcu`, `size`) and
-//! `tests/e2e_qemu.rs`.
-
-#![allow(dead_code)]
+//! shared by `examples/demo_host` (`cargo xtask demo`, `bench-mcu`, `size`), the soak and
+//! the end-to-end tests.
 
 use std::io::Read;
 use std::net::TcpListener;
@@ -266,7 +264,7 @@ impl SimSource {
     }
 }
 
-impl host_tests::device::emulator::RangeSource for SimSource {
+impl crate::device::emulator::RangeSource for SimSource {
     fn next_scan(&mut self, n: usize, _start_deg: f32, _step_deg: f32) -> Vec<f32> {
         let r = match self.ranges.get(self.next % self.ranges.len().max(1)) {
             Some(r) if r.len() == n => r.clone(),
@@ -280,9 +278,9 @@ impl host_tests::device::emulator::RangeSource for SimSource {
 /// One QEMU session: the firmware against the emulated LMS200 serving simulated scans.
 pub struct Session {
     /// The simulated scans (the emulator serves `sims[k % len]` as its k-th B0 telegram).
-    pub sims: Vec<host_tests::scene::SimScan>,
+    pub sims: Vec<crate::scene::SimScan>,
     /// What the emulator did.
-    pub emulator: host_tests::device::emulator::EmulatorReport,
+    pub emulator: crate::device::emulator::EmulatorReport,
     /// QEMU's run.
     pub run: Run,
     /// Frames from UART1.
@@ -300,9 +298,9 @@ pub fn session(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
-    use host_tests::device::emulator::serve::{serve_on, Pty};
-    use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
-    use host_tests::scene::{Scenario, SceneKind};
+    use crate::device::emulator::serve::{serve_on, Pty};
+    use crate::device::emulator::{Emulator, EmulatorConfig, RunLimits};
+    use crate::scene::{Scenario, SceneKind};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 
