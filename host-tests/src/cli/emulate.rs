@@ -5,9 +5,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use firmware::lms::types::{Baud, Unit, Variant};
 
-use super::lms_args;
+use super::lms_args::LmsArgs;
 use crate::device::emulator::{
     serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind,
 };
@@ -32,12 +31,8 @@ pub struct Args {
     seconds: Option<f64>,
     #[arg(long)]
     seed: Option<u64>,
-    #[arg(long, value_parser = lms_args::baud)]
-    baud: Option<Baud>,
-    #[arg(long, value_parser = lms_args::variant)]
-    variant: Option<Variant>,
-    #[arg(long, value_parser = lms_args::unit)]
-    unit: Option<Unit>,
+    #[command(flatten)]
+    lms: LmsArgs,
     #[arg(long, value_parser = source)]
     source: Option<SourceKind>,
     #[arg(long)]
@@ -72,13 +67,13 @@ pub fn run(a: Args) -> Result<()> {
     if let Some(seed) = a.seed {
         cfg.seed = seed;
     }
-    if let Some(b) = a.baud {
+    if let Some(b) = a.lms.baud {
         cfg.initial_baud = b;
     }
-    if let Some(v) = a.variant {
+    if let Some(v) = a.lms.variant {
         cfg.variant = v;
     }
-    if let Some(u) = a.unit {
+    if let Some(u) = a.lms.unit {
         cfg.config.set_unit(u);
     }
     if let Some(s) = a.source {

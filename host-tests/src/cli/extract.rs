@@ -3,31 +3,24 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::input::{flush, open, stdout, write_json, ConfigName};
+use super::input::{flush, open, stdout, write_json, MethodArgs};
 use super::Failure;
-use crate::formats::{self, Format, ScanJson};
+use crate::formats::{self, ScanJson};
 use crate::methods::Method;
 
 /// Arguments of `pfe extract`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input format.
-    #[arg(long, short)]
-    format: Format,
-    /// Extractor configuration.
-    #[arg(long, short, default_value = "default")]
-    config: ConfigName,
-    /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
-    #[arg(long)]
-    sigma_r: Option<f32>,
+    #[command(flatten)]
+    method: MethodArgs,
     /// Input file (gzip is read transparently; `-` = stdin).
     file: PathBuf,
 }
 
 /// Runs `pfe extract`.
 pub fn run(a: Args) -> Result<(), Failure> {
-    let (format, file) = (a.format, a.file.as_path());
-    let mut method = a.config.method(a.sigma_r, format);
+    let (format, file) = (a.method.format, a.file.as_path());
+    let mut method = a.method.method();
     let (input, bar) = open(file, format)?;
     let mut out = stdout();
     let t0 = Instant::now();

@@ -34,6 +34,27 @@ impl ConfigName {
     }
 }
 
+/// The input format and the extractor to run on it (`extract`, `plot`).
+#[derive(clap::Args, Debug)]
+pub struct MethodArgs {
+    /// Input format.
+    #[arg(long, short)]
+    pub format: Format,
+    /// Extractor configuration.
+    #[arg(long, short, default_value = "default")]
+    pub config: ConfigName,
+    /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
+    #[arg(long)]
+    pub sigma_r: Option<f32>,
+}
+
+impl MethodArgs {
+    /// The extractor these arguments name.
+    pub fn method(&self) -> Pfe {
+        self.config.method(self.sigma_r, self.format)
+    }
+}
+
 /// Opens `file` with a byte-counting progress bar on stderr (hidden when stderr is not a
 /// terminal).
 pub fn open(file: &Path, format: Format) -> Result<(Box<dyn io::BufRead>, ProgressBar), Failure> {

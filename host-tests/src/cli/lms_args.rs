@@ -1,4 +1,4 @@
-//! Parsers of the LMS200 settings that `emulate` and `record` take.
+//! The LMS200 settings that `emulate` and `record` take.
 
 use firmware::lms::types::{Baud, Unit, Variant};
 
@@ -30,4 +30,15 @@ pub fn unit(s: &str) -> Result<Unit, String> {
         "cm" => Ok(Unit::Cm),
         other => Err(format!("unknown unit {other}")),
     }
+}
+
+/// `--baud`, `--variant`, `--unit` (unset: the device's or driver's default).
+#[derive(clap::Args, Debug)]
+pub struct LmsArgs {
+    #[arg(long, value_parser = baud)]
+    pub baud: Option<Baud>,
+    #[arg(long, value_parser = variant)]
+    pub variant: Option<Variant>,
+    #[arg(long, value_parser = unit)]
+    pub unit: Option<Unit>,
 }

@@ -2,9 +2,9 @@
 
 use std::path::PathBuf;
 
-use super::input::{open, ConfigName};
+use super::input::{open, MethodArgs};
 use super::Failure;
-use crate::formats::{self, Format, Record};
+use crate::formats::{self, Record};
 use crate::methods::Method;
 
 /// Arguments of `pfe plot`.
@@ -12,15 +12,8 @@ use crate::methods::Method;
 pub struct Args {
     /// Input file.
     file: PathBuf,
-    /// Input format.
-    #[arg(long, short)]
-    format: Format,
-    /// Extractor configuration.
-    #[arg(long, short, default_value = "default")]
-    config: ConfigName,
-    /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
-    #[arg(long)]
-    sigma_r: Option<f32>,
+    #[command(flatten)]
+    method: MethodArgs,
     /// Scan ID to plot (the csv ID, else the 0-based ordinal).
     #[arg(long, short)]
     scan: u64,
@@ -31,8 +24,13 @@ pub struct Args {
 
 /// Runs `pfe plot`.
 pub fn run(a: Args) -> Result<(), Failure> {
-    let (file, format, scan, output) = (a.file.as_path(), a.format, a.scan, a.output.as_path());
-    let mut method = a.config.method(a.sigma_r, format);
+    let (file, format, scan, output) = (
+        a.file.as_path(),
+        a.method.format,
+        a.scan,
+        a.output.as_path(),
+    );
+    let mut method = a.method.method();
     let (input, bar) = open(file, format)?;
     let mut found: Option<Record> = None;
     let mut count = 0u64;

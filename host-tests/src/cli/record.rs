@@ -4,9 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Result};
 use firmware::lms::driver::Config;
-use firmware::lms::types::{Baud, Unit, Variant};
 
-use super::lms_args;
+use super::lms_args::LmsArgs;
 use crate::device::record::record;
 
 const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE
@@ -25,12 +24,8 @@ pub struct Args {
     output: Option<PathBuf>,
     #[arg(long, default_value_t = 10)]
     scans: u32,
-    #[arg(long, value_parser = lms_args::baud)]
-    baud: Option<Baud>,
-    #[arg(long, value_parser = lms_args::variant)]
-    variant: Option<Variant>,
-    #[arg(long, value_parser = lms_args::unit)]
-    unit: Option<Unit>,
+    #[command(flatten)]
+    lms: LmsArgs,
 }
 
 /// `pfe record` from an argument list.
@@ -44,13 +39,13 @@ pub fn cli(args: &[String]) -> Result<()> {
 /// Runs `pfe record`.
 pub fn run(a: Args) -> Result<()> {
     let mut cfg = Config::default();
-    if let Some(b) = a.baud {
+    if let Some(b) = a.lms.baud {
         cfg.baud = b;
     }
-    if let Some(v) = a.variant {
+    if let Some(v) = a.lms.variant {
         cfg.variant = v;
     }
-    if let Some(u) = a.unit {
+    if let Some(u) = a.lms.unit {
         cfg.unit = u;
     }
     let (Some(port), Some(out)) = (a.port, a.output) else {
