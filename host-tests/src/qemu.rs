@@ -49,10 +49,10 @@ pub fn have_target() -> bool {
 
 /// Builds a firmware-qemu binary in release for the target; returns the ELF path.
 /// `target_dir` should differ from the calling cargo's (its lock is held during `cargo test`).
-pub fn build_firmware(
+pub fn build_firmware<V: AsRef<std::ffi::OsStr>>(
     bin: &str,
     features: &[&str],
-    env: &[(&str, &str)],
+    env: &[(&str, V)],
     target_dir: &Path,
 ) -> Result<PathBuf> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
@@ -247,8 +247,9 @@ pub fn b0_telegram(values: &[u16], mm: bool) -> Result<Vec<u8>> {
     Ok(out)
 }
 
-/// The build profile the firmware ships with (size budget): `opt-level = "s"` on top of the
-/// workspace's release profile (LTO, one codegen unit).
+/// The build profile the firmware ships with and the flash budget is measured on
+/// (`cargo xtask size`, `bench-mcu`): `opt-level = "s"` on top of the workspace's release
+/// profile (LTO, one codegen unit; pfe-core at 3, see the workspace Cargo.toml).
 pub const FIRMWARE_OPT_LEVEL: &str = "s";
 
 /// Simulated scenes served by the emulator, in order (cycling).
