@@ -6,7 +6,7 @@
 //!
 //! ```
 //! use host_tests::formats::Record;
-//! use host_tests::method::{Method, Pfe};
+//! use host_tests::methods::{Method, Pfe};
 //! use pfe_core::ScanGeometry;
 //! let g = ScanGeometry::LMS200_180_050;
 //! let ranges: Vec<f32> = (0..361).map(|i| 2000.0 / g.bearing(i).cos().max(0.3)).collect();
@@ -21,7 +21,7 @@ use std::fmt::Write;
 use pfe_core::Feature;
 
 use crate::formats::Record;
-use crate::method::Extraction;
+use crate::methods::Extraction;
 
 const POINT: &str = "#5a6b7d";
 const MARK: &str = "#d62728";

@@ -5,8 +5,7 @@
 //! Skipped (with a message) when `qemu-system-arm` or the `thumbv7em-none-eabihf` target is
 //! missing; `cargo xtask test` installs both, so CI runs it.
 
-#[path = "../examples/demo_host/qemu.rs"]
-mod qemu;
+use host_tests::qemu;
 
 use std::path::PathBuf;
 use std::time::Duration;

@@ -10,8 +10,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use firmware::lms::types::{Baud, MeasuringMode, Unit};
-use host_tests::emulator::serve::{serve_on, Pty};
-use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind, TaggedSource};
+use host_tests::device::emulator::serve::{serve_on, Pty};
+use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind, TaggedSource};
 
 const SCANS: usize = 12;
 

@@ -1,15 +1,11 @@
 //! `cargo xtask <command>`: the project's commands (see README.md).
 //!
-//! Each command lives in its own module; `util` holds what they share.
+//! Each command lives in its own module; `util` holds what they share; generated document
+//! sections are written by `host_tests::docs`, as `pfe bench` writes them.
 
 mod bench_mcu;
 mod conformance;
 mod demo;
-/// The generated-docs section writer host-tests uses, shared as source (xtask depends on
-/// anyhow only, not on host-tests).
-#[path = "../../host-tests/src/docs.rs"]
-#[allow(dead_code)]
-mod docs;
 mod eval;
 mod fuzz;
 mod no_panic;

@@ -557,7 +557,7 @@ pub fn readers(data: &[u8]) -> usize {
             Some(Ok(r)) => {
                 records += 1;
                 assert!(
-                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= host_tests::method::MAX_BEAMS
+                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= host_tests::methods::MAX_BEAMS
                 );
                 assert!(
                     r.geometry.is_valid(),

@@ -3,7 +3,7 @@
 //! Ranges in mm; 0 or ≥ 8183 (the LMS reserved codes) = no return, so the maximum range is
 //! 8182 mm. Blank lines and lines starting with `#` are skipped. Any other malformed line
 //! (missing field, a field that is not a number, a negative or non-finite range, more than
-//! [`MAX_BEAMS`](crate::method::MAX_BEAMS) ranges) is an error with its line number.
+//! [`MAX_BEAMS`](crate::methods::MAX_BEAMS) ranges) is an error with its line number.
 //!
 //! ```
 //! use host_tests::formats::csv::Reader;

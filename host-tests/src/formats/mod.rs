@@ -29,7 +29,7 @@ use std::path::Path;
 use pfe_core::{Feature, ScanGeometry};
 use serde::Serialize;
 
-use crate::method::{Extraction, MAX_BEAMS};
+use crate::methods::{Extraction, MAX_BEAMS};
 
 /// Input file formats understood by `pfe`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -389,7 +389,7 @@ impl From<&Feature> for FeatureJson {
 ///
 /// ```
 /// use host_tests::formats::ScanJson;
-/// use host_tests::method::Extraction;
+/// use host_tests::methods::Extraction;
 /// let j = ScanJson::new(3, &Extraction { marks: vec![0, 9], features: vec![] });
 /// assert_eq!(serde_json::to_string(&j).unwrap(), r#"{"scan":3,"marks":[0,9],"features":[]}"#);
 /// ```

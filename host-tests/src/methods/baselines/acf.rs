@@ -53,14 +53,14 @@ use super::{
     abd::Abd, assemble, circle_fit, sane_sigma, scan_points, settle_boundaries, slice, Model,
     Piece, MIN_POINTS,
 };
-use crate::method::{Extraction, Method};
+use crate::methods::{Extraction, Method};
 use pfe_core::{Point, ScanGeometry};
 
 /// The adaptive-curvature-function extractor with ABD.
 ///
 /// ```
-/// use host_tests::baselines::Acf;
-/// use host_tests::method::Method;
+/// use host_tests::methods::baselines::Acf;
+/// use host_tests::methods::Method;
 /// use pfe_core::ScanGeometry;
 /// let g = ScanGeometry::LMS200_180_050;
 /// // A wall 2 m ahead over ±45°: one line.

@@ -1,6 +1,6 @@
 //! `pfe bench`: host speed of every method on the same scans, in one run, single thread.
 //!
-//! Data sets: simulated scans ([`crate::sim`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
+//! Data sets: simulated scans ([`crate::scene`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
 //! and, when `../shared/data/carmen` is present, real CARMEN logs read by
 //! [`crate::formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
 //! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
@@ -16,58 +16,21 @@
 //! fitting pfe-default's features again, with no segmentation at all.
 //!
 //! ```no_run
-//! host_tests::bench::cli(&["--json".to_string()]).unwrap();
+//! host_tests::cli::bench::cli(&["--json".to_string()]).unwrap();
 //! ```
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use clap::Parser;
 use pfe_core::{Feature, Point, ScanGeometry};
 use serde::Serialize;
 
-use crate::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
 use crate::eval::methods_for;
 use crate::formats::Format;
-use crate::method::Method;
-use crate::sim::{Scenario, SceneKind};
-
-/// Command-line options of `pfe bench`.
-#[derive(Parser, Debug)]
-#[command(
-    name = "pfe bench",
-    about = "Speed of pfe-paper, pfe-default, split-merge and acf on the same scans"
-)]
-struct Args {
-    /// Number of simulated scans.
-    #[arg(long, default_value_t = 200)]
-    sim_scans: usize,
-    /// Seed of the simulated scans.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Directory of CARMEN logs (*.log.gz); skipped with a message when absent.
-    #[arg(long, default_value = "../shared/data/carmen")]
-    carmen: PathBuf,
-    /// At most this many scans from each CARMEN log (0 = all).
-    #[arg(long, default_value_t = 200)]
-    per_log: usize,
-    /// Timed passes per data set and method; the median is reported.
-    #[arg(long, default_value_t = 11)]
-    reps: usize,
-    /// Print machine-readable JSON instead of the table.
-    #[arg(long)]
-    json: bool,
-    /// Also time every method against the number of beams (0.25° scans cut to their first n
-    /// beams) and write the tables into the `host` section of this Markdown file, with the
-    /// plot next to it (`perf-scaling.svg`).
-    #[arg(long)]
-    md: Option<PathBuf>,
-    /// Report the budgets but exit 0 when one is broken (CI: host timings depend on the
-    /// machine and its load, so they are reported there, not asserted).
-    #[arg(long)]
-    report_only: bool,
-}
+use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
+use crate::methods::Method;
+use crate::scene::{Scenario, SceneKind};
 
 /// Host budgets (issue: "PFE default ≥ 3× faster than split-and-merge and ≥ 10× faster than
 /// ACF per scan, in the same run, on the same scans"): (method, least `× pfe-default`).
@@ -160,7 +123,7 @@ pub struct BenchReport {
 /// The method every other is compared with (the ratio column, the budgets).
 pub const REFERENCE: &str = "pfe-default";
 
-/// Name of the row that times the fits alone ([`crate::baselines::refit`] of pfe-default's
+/// Name of the row that times the fits alone ([`crate::methods::baselines::refit`] of pfe-default's
 /// features): what any method that outputs those features pays, whatever its segmentation.
 pub const FITS_ONLY: &str = "fits-only";
 
@@ -246,7 +209,7 @@ pub fn time_methods(
     }
 }
 
-/// `n` simulated LMS200 scans (361 beams, 8 m, σ_r = 5 mm): [`crate::sim`]'s mixed scenes
+/// `n` simulated LMS200 scans (361 beams, 8 m, σ_r = 5 mm): [`crate::scene`]'s mixed scenes
 /// (office, clutter, pillars, corridor) with seeds `seed, seed + 1, …`.
 pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
     (0..n as u64)
@@ -285,8 +248,23 @@ pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>
     Ok(out)
 }
 
+/// What `pfe bench` times.
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    /// Number of simulated scans.
+    pub sim_scans: usize,
+    /// Seed of the simulated scans.
+    pub seed: u64,
+    /// Directory of CARMEN logs (*.log.gz); skipped with a message when absent.
+    pub carmen: PathBuf,
+    /// At most this many scans from each CARMEN log (0 = all).
+    pub per_log: usize,
+    /// Timed passes per data set and method; the median is reported.
+    pub reps: usize,
+}
+
 /// Runs the benchmark and returns the report.
-fn run(args: &Args) -> anyhow::Result<BenchReport> {
+pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
     let mut datasets = Vec::new();
     let sim = simulated_scans(args.sim_scans.max(1), args.seed);
     let mut methods = methods_for(DEFAULT_SIGMA_R);
@@ -357,42 +335,6 @@ pub fn table(report: &BenchReport) -> String {
     s
 }
 
-/// Entry point of `pfe bench`; parses its own arguments.
-pub fn cli(args: &[String]) -> anyhow::Result<()> {
-    let args = match Args::try_parse_from(
-        std::iter::once("pfe bench".to_string()).chain(args.iter().cloned()),
-    ) {
-        Ok(a) => a,
-        Err(e)
-            if matches!(
-                e.kind(),
-                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
-            ) =>
-        {
-            print!("{e}");
-            return Ok(());
-        }
-        Err(e) => return Err(e.into()),
-    };
-    let report = run(&args)?;
-    let (budgets, met) = budget_lines(&report);
-    if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-        eprintln!("{}", budgets.join("\n"));
-    } else {
-        println!("{}\n{}", table(&report), budgets.join("\n"));
-    }
-    if let Some(md) = &args.md {
-        let sweep = scaling(args.sim_scans.clamp(1, 50), args.seed, args.reps);
-        write_markdown(md, &report, &budgets, &sweep)?;
-        eprintln!("wrote {} and perf-scaling.svg next to it", md.display());
-    }
-    if !met && !args.report_only {
-        anyhow::bail!("a host budget is not met (see above; --report-only to exit 0)");
-    }
-    Ok(())
-}
-
 /// Beam counts of the scaling sweep.
 pub const SCALING_BEAMS: [usize; 8] = [91, 181, 271, 361, 451, 541, 631, 721];
 
@@ -403,7 +345,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
     let full: Vec<BenchScan> = (0..n as u64)
         .map(|k| {
             let mut sc = Scenario::new(SceneKind::Mixed, seed.wrapping_add(k));
-            sc.resolution = crate::sim::Resolution::Quarter;
+            sc.resolution = crate::scene::Resolution::Quarter;
             let s = sc.simulate();
             BenchScan {
                 geometry: s.geometry,
@@ -435,7 +377,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
 
 /// Writes the `host` section of `md` (the report and the scaling sweep) and
 /// `perf-scaling.svg` next to it.
-fn write_markdown(
+pub fn write_markdown(
     md: &Path,
     report: &BenchReport,
     budgets: &[String],

@@ -1,5 +1,5 @@
 //! Real-time transports for the emulator: a pseudo-terminal (for real clients such as MRPT or
-//! `pfe record`) and a TCP socket (for QEMU's `-serial tcp:…`), and the `pfe emulate` CLI.
+//! `pfe record`) and a TCP socket (for QEMU's `-serial tcp:…`), on which `pfe emulate` runs.
 
 use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
@@ -7,12 +7,11 @@ use std::os::fd::{AsFd, OwnedFd};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::sys::termios::{self, BaudRate, SetArg};
 
-use super::{Emulator, EmulatorConfig, EmulatorReport, SourceKind};
-use firmware::lms::types::{Baud, Unit, Variant};
+use super::{Emulator, EmulatorConfig, EmulatorReport};
 
 /// When a real-time run stops.
 #[derive(Clone, Debug, Default)]
@@ -140,7 +139,7 @@ pub fn serve_tcp(
     serve_tcp_with(listener, Emulator::from_config(config), limits)
 }
 
-/// [`serve_tcp`] with a ready-made emulator (any [`ScanSource`](super::ScanSource)).
+/// [`serve_tcp`] with a ready-made emulator (any [`RangeSource`](super::RangeSource)).
 pub fn serve_tcp_with(
     listener: TcpListener,
     mut emu: Emulator,
@@ -264,102 +263,4 @@ pub fn serve_pty(link: &Path, mut emu: Emulator, limits: RunLimits) -> Result<Em
 pub fn serve_on(pty: &mut Pty, mut emu: Emulator, limits: RunLimits) -> Result<EmulatorReport> {
     run_realtime(&mut emu, &mut pty.wire, &limits)?;
     Ok(emu.report().clone())
-}
-
-const USAGE: &str = "pfe emulate (--pty PATH | --tcp ADDR) [--scans N] [--seconds S] [--seed N]
-    [--baud 9600|19200|38400|500000] [--variant 180/0.5] [--unit mm|cm] [--source room|tagged] [--trace]
-
-Emulates a SICK LMS200 on a pseudo-terminal (symlink PATH to the slave) or on a TCP socket
-(listens on ADDR and serves one connection). Prints a JSON summary on exit.";
-
-/// `pfe emulate`: parses its own arguments (see the usage text) and runs.
-pub fn cli(args: &[String]) -> Result<()> {
-    let mut cfg = EmulatorConfig::default();
-    let mut limits = RunLimits::default();
-    let mut pty = None;
-    let mut tcp = None;
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || {
-            it.next()
-                .cloned()
-                .with_context(|| format!("{a} needs a value\n\n{USAGE}"))
-        };
-        match a.as_str() {
-            "--pty" => pty = Some(PathBuf::from(val()?)),
-            "--tcp" => tcp = Some(val()?),
-            "--scans" => limits.scans = Some(val()?.parse().context("--scans")?),
-            "--seconds" => {
-                limits.max_time = Some(Duration::from_secs_f64(
-                    val()?.parse().context("--seconds")?,
-                ))
-            }
-            "--seed" => cfg.seed = val()?.parse().context("--seed")?,
-            "--baud" => {
-                let b: u32 = val()?.parse().context("--baud")?;
-                cfg.initial_baud =
-                    Baud::from_bps(b).with_context(|| format!("unsupported baud {b}"))?;
-            }
-            "--variant" => {
-                let v = val()?;
-                let (a, r) = v
-                    .split_once('/')
-                    .context("--variant ANGLE/RES, e.g. 180/0.5")?;
-                let a: u16 = a.parse()?;
-                let r: f32 = r.parse()?;
-                let var = Variant::new(a, (r * 100.0).round() as u16);
-                if !var.is_valid() {
-                    bail!("invalid variant {v}");
-                }
-                cfg.variant = var;
-            }
-            "--unit" => {
-                let u = match val()?.as_str() {
-                    "mm" => Unit::Mm,
-                    "cm" => Unit::Cm,
-                    other => bail!("unknown unit {other}"),
-                };
-                cfg.config.set_unit(u);
-            }
-            "--source" => {
-                cfg.source = match val()?.as_str() {
-                    "room" => SourceKind::Room,
-                    "tagged" => SourceKind::Tagged,
-                    other => bail!("unknown source {other}"),
-                }
-            }
-            "--trace" => limits.trace = true,
-            "-h" | "--help" => {
-                println!("{USAGE}");
-                return Ok(());
-            }
-            other => bail!("unknown argument {other}\n\n{USAGE}"),
-        }
-    }
-    let report = match (pty, tcp) {
-        (Some(p), None) => {
-            eprintln!("emulating an LMS200 on {}", p.display());
-            serve_pty(&p, Emulator::from_config(cfg), limits)?
-        }
-        (None, Some(addr)) => {
-            let l = TcpListener::bind(&addr).with_context(|| format!("binding {addr}"))?;
-            eprintln!("emulating an LMS200 on tcp {}", l.local_addr()?);
-            serve_tcp(l, cfg, limits)?
-        }
-        _ => bail!("give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"),
-    };
-    println!(
-        "{}",
-        serde_json::json!({
-            "scans_sent": report.scans.len(),
-            "scans_damaged": report.scans.iter().filter(|s| s.damaged).count(),
-            "commands": report.commands.len(),
-            "bad_commands": report.bad_commands,
-            "garbled_in": report.garbled_in,
-            "garbled_out": report.garbled_out,
-            "bytes_out": report.bytes_out,
-            "resets": report.resets,
-        })
-    );
-    Ok(())
 }

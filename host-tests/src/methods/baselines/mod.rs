@@ -1,5 +1,5 @@
 //! The two baseline extractors the PFE paper compares against, behind the same
-//! [`Method`](crate::method::Method) interface as PFE:
+//! [`Method`](crate::methods::Method) interface as PFE:
 //!
 //! - [`SplitMerge`]: adaptive breakpoint detection ([`abd`]) followed by split-and-merge
 //!   (iterative end-point fit) inside each segment, with a circle test;
@@ -118,7 +118,11 @@ pub(crate) struct Piece {
 
 /// Marks and features from the final pieces (in scan order). `pts` holds every beam's point
 /// (invalid ones as [`Point::INVALID`]); a piece never spans an invalid beam.
-pub(crate) fn assemble(pts: &[Point], pieces: &[Piece], sigma_r: f32) -> crate::method::Extraction {
+pub(crate) fn assemble(
+    pts: &[Point],
+    pieces: &[Piece],
+    sigma_r: f32,
+) -> crate::methods::Extraction {
     let mut marks = Vec::with_capacity(2 * pieces.len());
     let mut features = Vec::new();
     for p in pieces {
@@ -135,14 +139,14 @@ pub(crate) fn assemble(pts: &[Point], pieces: &[Piece], sigma_r: f32) -> crate::
     }
     marks.sort_unstable();
     marks.dedup();
-    crate::method::Extraction { marks, features }
+    crate::methods::Extraction { marks, features }
 }
 
 /// The fits alone of `features` (found in the scan whose points are `pts`, every beam's,
 /// invalid ones as [`Point::INVALID`]): each feature's beams fitted again as its model, as the
 /// baselines fit their pieces. Their cost is a floor under any method that outputs these
 /// features (`pfe bench`'s `fits-only` row).
-pub fn refit(pts: &[Point], features: &[Feature], sigma_r: f32) -> crate::method::Extraction {
+pub fn refit(pts: &[Point], features: &[Feature], sigma_r: f32) -> crate::methods::Extraction {
     let pieces: Vec<Piece> = features
         .iter()
         .map(|f| {
@@ -206,8 +210,8 @@ pub(crate) fn settle_boundaries(pts: &[Point], pieces: &mut [Piece]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::method::Method;
-    use crate::sim::{Scenario, SceneKind};
+    use crate::methods::Method;
+    use crate::scene::{Scenario, SceneKind};
 
     /// `refit` fits exactly the beams and models it is given: on split-and-merge's and ACF's
     /// extractions (fitted by the same recipe) it gives back every feature, bit for bit.

@@ -16,19 +16,19 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use crate::device::emulator::serve::{serve_on, Pty};
+use crate::device::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
+use crate::scene::{Scenario, SceneKind};
 use anyhow::{Context, Result};
 use firmware::app::ConfigChoice;
 use firmware::output::{Counters, Frame, Header, Report, WireFeature};
-use host_tests::emulator::serve::{serve_on, Pty};
-use host_tests::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
-use host_tests::sim::{Scenario, SceneKind};
 
-use super::qemu;
+use crate::qemu;
 
 /// Scans in the warm-up run whose stack high-water mark the full run must stay close to.
-const WARMUP_SCANS: u32 = 200;
+pub const WARMUP_SCANS: u32 = 200;
 /// How far, bytes, the full run's stack high-water mark may exceed the warm-up's.
-const STACK_SLACK: u32 = 1024;
+pub const STACK_SLACK: u32 = 1024;
 /// The emulator resets itself after this many B0 telegrams (in both runs).
 const RESET_AFTER: u32 = 60;
 /// The emulator falls silent (longer than the driver's 1 s silence timeout) after this many.
@@ -247,7 +247,7 @@ fn account(r: &QemuRun) -> Result<Account> {
 }
 
 /// Runs the QEMU soak for `scans` scans (and the warm-up run); `Ok(true)` when it balances.
-pub(crate) fn run(a: &super::Args) -> Result<bool> {
+pub fn run(a: &super::Args) -> Result<bool> {
     if !qemu::have("qemu-system-arm") || !qemu::have_target() {
         println!(
             "\nsoak (QEMU): SKIPPED — needs qemu-system-arm and the thumbv7em-none-eabihf target"

@@ -28,14 +28,14 @@ use super::{
     abd::Abd, assemble, circle_fit, circle_max_residual, line_max_residual, sane_sigma,
     scan_points, settle_boundaries, slice, Model, Piece,
 };
-use crate::method::{Extraction, Method};
+use crate::methods::{Extraction, Method};
 use pfe_core::{fit_line, Point, ScanGeometry};
 
 /// Split-and-merge with ABD and a circle test.
 ///
 /// ```
-/// use host_tests::baselines::SplitMerge;
-/// use host_tests::method::Method;
+/// use host_tests::methods::baselines::SplitMerge;
+/// use host_tests::methods::Method;
 /// use pfe_core::{Feature, ScanGeometry};
 /// let g = ScanGeometry::LMS200_180_050;
 /// // A wall 2 m ahead, perpendicular to the x axis, seen over ±45°.

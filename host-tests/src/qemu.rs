@@ -1,8 +1,6 @@
 //! Running the pfe firmware under QEMU (mps2-an386) from the host, and reading its output:
-//! shared by `examples/demo_host` (`cargo xtask demo`, `bench-mcu`, `size`) and
-//! `tests/e2e_qemu.rs`.
-
-#![allow(dead_code)]
+//! shared by `examples/demo_host` (`cargo xtask demo`, `bench-mcu`, `size`), the soak and
+//! the end-to-end tests.
 
 use std::io::Read;
 use std::net::TcpListener;
@@ -51,10 +49,10 @@ pub fn have_target() -> bool {
 
 /// Builds a firmware-qemu binary in release for the target; returns the ELF path.
 /// `target_dir` should differ from the calling cargo's (its lock is held during `cargo test`).
-pub fn build_firmware(
+pub fn build_firmware<V: AsRef<std::ffi::OsStr>>(
     bin: &str,
     features: &[&str],
-    env: &[(&str, &str)],
+    env: &[(&str, V)],
     target_dir: &Path,
 ) -> Result<PathBuf> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
@@ -249,8 +247,9 @@ pub fn b0_telegram(values: &[u16], mm: bool) -> Result<Vec<u8>> {
     Ok(out)
 }
 
-/// The build profile the firmware ships with (size budget): `opt-level = "s"` on top of the
-/// workspace's release profile (LTO, one codegen unit).
+/// The build profile the firmware ships with and the flash budget is measured on
+/// (`cargo xtask size`, `bench-mcu`): `opt-level = "s"` on top of the workspace's release
+/// profile (LTO, one codegen unit; pfe-core at 3, see the workspace Cargo.toml).
 pub const FIRMWARE_OPT_LEVEL: &str = "s";
 
 /// Simulated scenes served by the emulator, in order (cycling).
@@ -266,7 +265,7 @@ impl SimSource {
     }
 }
 
-impl host_tests::emulator::ScanSource for SimSource {
+impl crate::device::emulator::RangeSource for SimSource {
     fn next_scan(&mut self, n: usize, _start_deg: f32, _step_deg: f32) -> Vec<f32> {
         let r = match self.ranges.get(self.next % self.ranges.len().max(1)) {
             Some(r) if r.len() == n => r.clone(),
@@ -280,9 +279,9 @@ impl host_tests::emulator::ScanSource for SimSource {
 /// One QEMU session: the firmware against the emulated LMS200 serving simulated scans.
 pub struct Session {
     /// The simulated scans (the emulator serves `sims[k % len]` as its k-th B0 telegram).
-    pub sims: Vec<host_tests::sim::SimScan>,
+    pub sims: Vec<crate::scene::SimScan>,
     /// What the emulator did.
-    pub emulator: host_tests::emulator::EmulatorReport,
+    pub emulator: crate::device::emulator::EmulatorReport,
     /// QEMU's run.
     pub run: Run,
     /// Frames from UART1.
@@ -300,9 +299,9 @@ pub fn session(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
-    use host_tests::emulator::serve::{serve_on, Pty};
-    use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits};
-    use host_tests::sim::{Scenario, SceneKind};
+    use crate::device::emulator::serve::{serve_on, Pty};
+    use crate::device::emulator::{Emulator, EmulatorConfig, RunLimits};
+    use crate::scene::{Scenario, SceneKind};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 

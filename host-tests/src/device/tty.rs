@@ -1,19 +1,15 @@
-//! `pfe record`: capture raw LMS200 bytes from a serial port through the firmware driver.
-//!
-//! The firmware [`Driver`] runs over small std adapters ([`TtyPort`]: termios on the tty,
-//! [`StdDelay`], [`StdClock`]); every byte received from the port is written to the capture file
-//! (the capture format is just the raw device bytes, decodable with `pfe decode --format lms200`).
+//! std adapters that let the firmware's LMS200 driver run on a host: [`TtyPort`] (termios on
+//! a tty, raw and non-blocking), [`StdDelay`], [`StdClock`].
 
 use std::fs::{File, OpenOptions};
 use std::io::{ErrorKind, Read, Write};
 use std::os::fd::AsFd;
 use std::os::unix::fs::OpenOptionsExt;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
-use firmware::lms::driver::{Clock, Config, Driver, SetBaud};
-use firmware::lms::types::{Baud, Unit, Variant};
+use anyhow::{Context, Result};
+use firmware::lms::driver::{Clock, SetBaud};
 use nix::sys::termios::{self, BaudRate, SetArg};
 
 /// A tty opened raw and non-blocking, usable as an `embedded-io` UART by the firmware driver.
@@ -178,105 +174,4 @@ impl Clock for StdClock {
     fn now_ms(&mut self) -> u32 {
         self.0.elapsed().as_millis() as u32
     }
-}
-
-const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE
-    [--variant 180/0.5] [--unit mm|cm]
-
-Initialises the LMS200 on PATH with the firmware driver, streams N scans (default 10) and writes
-every raw byte received to FILE. Prints a JSON summary (driver counters).";
-
-/// Summary of a recording.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct RecordSummary {
-    /// Scans delivered by the driver.
-    pub scans: u32,
-    /// Raw bytes written to the capture.
-    pub bytes: u64,
-    /// Good telegrams.
-    pub telegrams_ok: u32,
-    /// CRC errors.
-    pub crc_errors: u32,
-    /// Bytes skipped.
-    pub bytes_skipped: u32,
-    /// Re-initialisations.
-    pub reinits: u32,
-}
-
-/// Records `scans` scans from `port` into `out` with driver config `cfg`.
-pub fn record(port: &Path, cfg: Config, scans: u32, out: &Path) -> Result<RecordSummary> {
-    let sink = File::create(out).with_context(|| format!("creating {}", out.display()))?;
-    let tty = TtyPort::open(port)?.with_capture(Box::new(std::io::BufWriter::new(sink)));
-    let mut lms = Driver::new(tty, StdDelay, StdClock::default(), cfg);
-    for _ in 0..scans {
-        lms.next_scan()
-            .map_err(|e| anyhow::anyhow!("LMS200 on {}: {e}", port.display()))?;
-    }
-    // Leave the device quiet (request mode); a failure here does not spoil the capture.
-    let _ = lms.stop();
-    let c = lms.counters();
-    let (mut tty, _, _) = lms.release();
-    tty.finish()?;
-    Ok(RecordSummary {
-        scans: c.scans,
-        bytes: tty.captured(),
-        telegrams_ok: c.telegrams_ok,
-        crc_errors: c.crc_errors,
-        bytes_skipped: c.bytes_skipped,
-        reinits: c.reinits,
-    })
-}
-
-/// Entry point of `pfe record`; parses its own arguments (see the usage text).
-pub fn cli(args: &[String]) -> Result<()> {
-    let mut port = None;
-    let mut out = None;
-    let mut scans = 10u32;
-    let mut cfg = Config::default();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || {
-            it.next()
-                .cloned()
-                .with_context(|| format!("{a} needs a value\n\n{USAGE}"))
-        };
-        match a.as_str() {
-            "--port" => port = Some(PathBuf::from(val()?)),
-            "-o" | "--output" => out = Some(PathBuf::from(val()?)),
-            "--scans" => scans = val()?.parse().context("--scans")?,
-            "--baud" => {
-                let b: u32 = val()?.parse().context("--baud")?;
-                cfg.baud = Baud::from_bps(b).with_context(|| format!("unsupported baud {b}"))?;
-            }
-            "--variant" => {
-                let v = val()?;
-                let (a, r) = v
-                    .split_once('/')
-                    .context("--variant ANGLE/RES, e.g. 180/0.5")?;
-                let var = Variant::new(a.parse()?, (r.parse::<f32>()? * 100.0).round() as u16);
-                if !var.is_valid() {
-                    bail!("invalid variant {v}");
-                }
-                cfg.variant = var;
-            }
-            "--unit" => {
-                cfg.unit = match val()?.as_str() {
-                    "mm" => Unit::Mm,
-                    "cm" => Unit::Cm,
-                    other => bail!("unknown unit {other}"),
-                }
-            }
-            "-h" | "--help" => {
-                println!("{USAGE}");
-                return Ok(());
-            }
-            other => bail!("unknown argument {other}\n\n{USAGE}"),
-        }
-    }
-    let (Some(port), Some(out)) = (port, out) else {
-        bail!("--port and -o are required\n\n{USAGE}");
-    };
-    let s = record(&port, cfg, scans, &out)?;
-    println!("{}", serde_json::to_string(&s)?);
-    Ok(())
 }

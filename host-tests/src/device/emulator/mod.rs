@@ -5,17 +5,19 @@
 //!   measuring modes, request mode and `30` single scans, continuous B0 output at the rate the
 //!   baud and variant allow, reset `10`, incorrect command `92`), with deterministic fault
 //!   injection ([`Faults`]).
-//! * [`ScanSource`]: where the ranges come from ([`RoomSource`], [`TaggedSource`], or the scene
+//! * [`RangeSource`]: where the ranges come from ([`RoomSource`], [`TaggedSource`], or the scene
 //!   simulator).
 //! * [`link`]: an in-process byte link with virtual time, usable by the firmware driver through
 //!   `embedded-io` (host baud modelled, bytes garbled when it differs from the device's).
-//! * [`serve`]: real-time transports: pseudo-terminal and TCP; [`cli`] for `pfe emulate`.
+//! * [`serve`]: real-time transports: pseudo-terminal and TCP (`pfe emulate`).
 
 pub mod link;
 pub mod serve;
+pub mod source;
 
 pub use link::{HostPort, Link, LinkClock, LinkDelay, LinkError};
-pub use serve::{cli, serve_pty, serve_tcp, serve_tcp_with, RunLimits};
+pub use serve::{serve_pty, serve_tcp, serve_tcp_with, RunLimits};
+pub use source::{RangeSource, RoomSource, SourceKind, TaggedSource};
 
 use std::collections::VecDeque;
 
@@ -27,116 +29,6 @@ use firmware::lms::reply::{code as rcode, status_offset, ConfigBlock};
 use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-/// Where emulated ranges come from. Another module's scene simulator plugs in here.
-pub trait ScanSource: Send {
-    /// Ranges in mm for `n_values` beams starting at `start_deg` (value 0, right-hand edge,
-    /// 0° = straight ahead) in steps of `step_deg` counter-clockwise; NaN = no return.
-    fn next_scan(&mut self, n_values: usize, start_deg: f32, step_deg: f32) -> Vec<f32>;
-}
-
-/// A rectangular room around the scanner (walls at `x = front`, `y = ±half_width`,
-/// `x = -back`), the default source.
-#[derive(Clone, Debug)]
-pub struct RoomSource {
-    /// Distance to the front wall, mm.
-    pub front_mm: f32,
-    /// Distance to the left and right walls, mm.
-    pub half_width_mm: f32,
-    /// Distance to the wall behind, mm.
-    pub back_mm: f32,
-}
-
-impl Default for RoomSource {
-    fn default() -> Self {
-        Self {
-            front_mm: 4000.0,
-            half_width_mm: 2500.0,
-            back_mm: 1000.0,
-        }
-    }
-}
-
-impl RoomSource {
-    /// Range along bearing `deg`, mm.
-    pub fn range(&self, deg: f32) -> f32 {
-        let (s, c) = deg.to_radians().sin_cos();
-        let mut best = f32::INFINITY;
-        if c > 1e-6 {
-            best = best.min(self.front_mm / c);
-        }
-        if c < -1e-6 {
-            best = best.min(self.back_mm / -c);
-        }
-        if s.abs() > 1e-6 {
-            best = best.min(self.half_width_mm / s.abs());
-        }
-        best
-    }
-}
-
-impl ScanSource for RoomSource {
-    fn next_scan(&mut self, n: usize, start_deg: f32, step_deg: f32) -> Vec<f32> {
-        (0..n)
-            .map(|i| self.range(start_deg + step_deg * i as f32))
-            .collect()
-    }
-}
-
-/// A source whose every scan is unique and recognisable: value 0 is `1000 + seq % 4000`,
-/// value 1 is `1000 + seq / 4000`, the rest a seq-dependent pattern in 200..7200 mm.
-/// [`TaggedSource::tag_of`] recovers `seq` from delivered ranges.
-#[derive(Clone, Debug, Default)]
-pub struct TaggedSource {
-    next: u32,
-}
-
-impl TaggedSource {
-    /// Ranges of scan `seq` with `n` values.
-    pub fn ranges(seq: u32, n: usize) -> Vec<f32> {
-        (0..n)
-            .map(|i| match i {
-                0 => 1000.0 + (seq % 4000) as f32,
-                1 => 1000.0 + (seq / 4000) as f32,
-                _ => 200.0 + ((seq as usize * 131 + i * 17) % 7000) as f32,
-            })
-            .collect()
-    }
-    /// The scan number encoded in the first two range codes (mm).
-    pub fn tag_of(codes: &[u16]) -> Option<u32> {
-        let a = u32::from(*codes.first()?).checked_sub(1000)?;
-        let b = u32::from(*codes.get(1)?).checked_sub(1000)?;
-        Some(b * 4000 + a)
-    }
-}
-
-impl ScanSource for TaggedSource {
-    fn next_scan(&mut self, n: usize, _start_deg: f32, _step_deg: f32) -> Vec<f32> {
-        let r = Self::ranges(self.next, n);
-        self.next += 1;
-        r
-    }
-}
-
-/// Which built-in source a config selects.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum SourceKind {
-    /// [`RoomSource::default`].
-    #[default]
-    Room,
-    /// [`TaggedSource`].
-    Tagged,
-}
-
-impl SourceKind {
-    /// A fresh source of this kind.
-    pub fn build(self) -> Box<dyn ScanSource> {
-        match self {
-            SourceKind::Room => Box::new(RoomSource::default()),
-            SourceKind::Tagged => Box::new(TaggedSource::default()),
-        }
-    }
-}
 
 /// Fault injection on the device's output, deterministic from [`EmulatorConfig::seed`].
 /// Probabilities are per B0 telegram; at most one damaging fault hits one telegram.
@@ -187,7 +79,7 @@ pub struct EmulatorConfig {
     pub seed: u64,
     /// Faults to inject.
     pub faults: Faults,
-    /// Built-in scan source (used by [`serve_tcp`] / [`cli`]).
+    /// Built-in scan source (used by [`serve_tcp`] and `pfe emulate`).
     pub source: SourceKind,
     /// Command codes this device does not implement: answered `92` (incorrect command), as
     /// a variant or a simpler emulator might.
@@ -267,7 +159,7 @@ pub struct EmulatorReport {
 /// The emulated LMS200.
 pub struct Emulator {
     cfg: EmulatorConfig,
-    source: Box<dyn ScanSource>,
+    source: Box<dyn RangeSource>,
     decoder: Decoder<MAX_TELEGRAM>,
     baud: Baud,
     pending_baud: Option<(u64, Baud)>,
@@ -294,7 +186,7 @@ fn byte_time_us(baud: u32) -> u64 {
 
 impl Emulator {
     /// A device at power-on with `cfg`, drawing ranges from `source`.
-    pub fn new(cfg: EmulatorConfig, source: Box<dyn ScanSource>) -> Self {
+    pub fn new(cfg: EmulatorConfig, source: Box<dyn RangeSource>) -> Self {
         Self {
             source,
             decoder: Decoder::with_address(HOST_ADDRESS),

@@ -1,15 +1,17 @@
 //! Evaluation: every [`Method`] on the same simulated scans, scored against ground truth.
 //!
-//! [`quick_report`] is the lead's tuning loop; [`cli`] (`pfe eval`, `cargo xtask eval`)
-//! reproduces the paper's comparison and writes `docs/EVALUATION.md` and plots.
+//! [`quick_report`] is the lead's tuning loop; [`evaluate`] reproduces the paper's comparison, which
+//! `pfe eval` ([`crate::cli::eval`]) writes to `docs/EVALUATION.md` with its plots.
 
+pub mod bench;
 pub mod report;
+pub mod score;
 pub mod svg;
 
-use crate::baselines::{Acf, SplitMerge};
-use crate::method::{Method, Pfe};
-use crate::score::{quantile, score_sim, Score};
-use crate::sim::{Scenario, SceneKind, SimScan};
+use crate::eval::score::{quantile, score_sim, Score};
+use crate::methods::baselines::{Acf, SplitMerge};
+use crate::methods::{Method, Pfe};
+use crate::scene::{Scenario, SceneKind, SimScan};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
@@ -152,7 +154,7 @@ pub struct Level {
     /// Of which circles.
     pub truth_circles: usize,
     /// Cramér–Rao bounds of every truth feature (`true` for lines).
-    pub truth_crb: Vec<(bool, crate::sim::Crb)>,
+    pub truth_crb: Vec<(bool, crate::scene::Crb)>,
     /// One per method, in order.
     pub results: Vec<MethodResult>,
 }
@@ -193,7 +195,7 @@ pub fn run_scenarios(
 ) -> Level {
     let sims: Vec<SimScan> = scenarios.iter().map(Scenario::simulate).collect();
     let truth_features = sims.iter().map(|s| s.truth.len()).sum();
-    let truth_crb: Vec<(bool, crate::sim::Crb)> = sims
+    let truth_crb: Vec<(bool, crate::scene::Crb)> = sims
         .iter()
         .flat_map(|s| s.truth.iter())
         .map(|f| (f.kind.is_line(), f.crb))
@@ -221,10 +223,10 @@ pub fn conditions() -> Vec<Condition> {
         ("systematic bias ±15 mm (uncorrected)", |s| s.bias = true),
         ("mixed pixels at depth jumps", |s| s.mixed_pixels = true),
         ("0.25° resolution (721 beams)", |s| {
-            s.resolution = crate::sim::Resolution::Quarter
+            s.resolution = crate::scene::Resolution::Quarter
         }),
         ("1° resolution (181 beams)", |s| {
-            s.resolution = crate::sim::Resolution::One
+            s.resolution = crate::scene::Resolution::One
         }),
     ]
 }
@@ -279,80 +281,6 @@ pub fn evaluate(methods: &mut [Box<dyn Method>], options: &EvalOptions) -> Evalu
         sweep,
         robustness,
     }
-}
-
-const HELP: &str =
-    "pfe eval [--kind mixed|office|clutter|pillars|corridor] [--scans 100] [--seed 1]
-         [--sigma 5] [--sweep 1,2,5,10] [--passes 5] [--out docs | --no-write] [--command TEXT]
-
-Runs PFE paper, PFE default, ACF and split-and-merge on simulated LMS200 scans with ground truth,
-prints the tables and writes OUT/EVALUATION.md and OUT/eval-*.svg. Build in release for times.";
-
-/// Parses the evaluation's arguments (`Ok(None)` for `--help`).
-pub fn parse_args(args: &[String]) -> anyhow::Result<Option<EvalOptions>> {
-    use anyhow::Context as _;
-    let mut o = EvalOptions::default();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || it.next().with_context(|| format!("{a} needs a value"));
-        match a.as_str() {
-            "--kind" => o.kind = val()?.parse().map_err(anyhow::Error::msg)?,
-            "--scans" => o.scans = val()?.parse()?,
-            "--seed" => o.seed = val()?.parse()?,
-            "--sigma" => o.sigma = val()?.parse()?,
-            "--sweep" => {
-                o.sweep = val()?
-                    .split(',')
-                    .map(|s| s.trim().parse::<f32>())
-                    .collect::<Result<_, _>>()?
-            }
-            "--passes" => o.passes = val()?.parse()?,
-            "--out" => o.out = Some(val()?.into()),
-            "--no-write" => o.out = None,
-            "--command" => o.command = val()?.clone(),
-            "-h" | "--help" => return Ok(None),
-            other => anyhow::bail!("unknown argument `{other}`\n\n{HELP}"),
-        }
-    }
-    let bad = |s: f32| s.is_nan() || s < 0.0;
-    if o.scans == 0 || bad(o.sigma) || o.sweep.iter().any(|s| bad(*s)) {
-        anyhow::bail!("--scans must be > 0 and every σ ≥ 0");
-    }
-    Ok(Some(o))
-}
-
-/// Entry point of `pfe eval` (and of `cargo xtask eval` through the `eval` example).
-pub fn cli(args: &[String]) -> anyhow::Result<()> {
-    use anyhow::Context as _;
-    let Some(options) = parse_args(args)? else {
-        println!("{HELP}");
-        return Ok(());
-    };
-    if cfg!(debug_assertions) {
-        eprintln!("warning: debug build: times are not representative (use --release)");
-    }
-    let mut methods = default_methods();
-    let ev = evaluate(&mut methods, &options);
-    let md = report::markdown(&ev);
-    print!("{}", report::text(&ev));
-    if let Some(dir) = &options.out {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let write = |name: &str, body: String| -> anyhow::Result<()> {
-            let p = dir.join(name);
-            std::fs::write(&p, body).with_context(|| format!("cannot write {}", p.display()))?;
-            eprintln!("wrote {}", p.display());
-            Ok(())
-        };
-        write("EVALUATION.md", md)?;
-        write("eval-errors.svg", svg::errors_vs_noise(&ev))?;
-        write("eval-ratios.svg", svg::ratios_vs_noise(&ev))?;
-        write("eval-time.svg", svg::time_per_scan(&ev))?;
-        write(
-            "eval-scenes.svg",
-            svg::scene_gallery(options.seed, options.sigma),
-        )?;
-    }
-    Ok(())
 }
 
 fn fmt_q(values: &[f64], q: f64, scale: f64, digits: usize) -> String {
@@ -426,8 +354,8 @@ pub fn crb_medians(s: &Score) -> [f64; 4] {
 ///
 /// ```
 /// use host_tests::eval::quick_report;
-/// use host_tests::method::{Method, Pfe};
-/// use host_tests::sim::SceneKind;
+/// use host_tests::methods::{Method, Pfe};
+/// use host_tests::scene::SceneKind;
 /// let mut pfe = Pfe::paper();
 /// let report = quick_report(&mut [&mut pfe as &mut dyn Method], SceneKind::Office, 2, 5.0, 1);
 /// assert!(report.contains("pfe-paper"));

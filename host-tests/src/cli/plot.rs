@@ -1,0 +1,68 @@
+//! `pfe plot`: one scan with its mark points and features as SVG (like Fig. 7 of the paper).
+
+use std::path::PathBuf;
+
+use super::input::{open, MethodArgs};
+use super::Failure;
+use crate::formats::{self, Record};
+use crate::methods::Method;
+
+/// Arguments of `pfe plot`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Input file.
+    file: PathBuf,
+    #[command(flatten)]
+    method: MethodArgs,
+    /// Scan ID to plot (the csv ID, else the 0-based ordinal).
+    #[arg(long, short)]
+    scan: u64,
+    /// Output SVG file.
+    #[arg(short, long)]
+    output: PathBuf,
+}
+
+/// Runs `pfe plot`.
+pub fn run(a: Args) -> Result<(), Failure> {
+    let (file, format, scan, output) = (
+        a.file.as_path(),
+        a.method.format,
+        a.scan,
+        a.output.as_path(),
+    );
+    let mut method = a.method.method();
+    let (input, bar) = open(file, format)?;
+    let mut found: Option<Record> = None;
+    let mut count = 0u64;
+    for record in formats::scans(format, input) {
+        let record = record.map_err(|e| Failure::input(format!("{}: {e}", file.display())))?;
+        count += 1;
+        if record.id == scan {
+            found = Some(record);
+            break;
+        }
+    }
+    bar.finish_and_clear();
+    let record = found.ok_or_else(|| {
+        Failure::input(format!(
+            "{}: no scan with ID {scan} ({count} scans read)",
+            file.display()
+        ))
+    })?;
+    let ex = method.extract(&record.geometry, &record.ranges_mm);
+    let name = file
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let title = format!("{name} — scan {scan} — {}", method.name());
+    let svg = crate::plot::svg(&record, &ex, &title);
+    std::fs::write(output, svg)
+        .map_err(|e| Failure::other(format!("{}: cannot write: {e}", output.display())))?;
+    eprintln!(
+        "pfe: wrote {} ({} marks, {} features)",
+        output.display(),
+        ex.marks.len(),
+        ex.features.len()
+    );
+    Ok(())
+}
