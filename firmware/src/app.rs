@@ -36,7 +36,7 @@ use embedded_io::Write;
 use embedded_io::{Read, ReadReady};
 use pfe_core::{Config, ExtractError, Extractor, Ranges, Scan, ScanGeometry};
 
-use crate::lms::driver::{Clock, Driver, SetBaud};
+use crate::lms::driver::{Clock, Driver, ScanData, SetBaud};
 
 use crate::output::{self, Counters, EncodeError, ScanHeader, ScanStatus};
 
@@ -75,6 +75,35 @@ impl<'a> RawScan<'a> {
             },
             motion: None,
         }
+    }
+}
+
+/// The LMS scan → pfe-core bridge: the geometry of the scan's variant and the scan as
+/// pfe-core input.
+impl ScanData {
+    /// Beam geometry (centred field, value 0 on the right, counter-clockwise).
+    pub fn geometry(&self) -> ScanGeometry {
+        let mut g = ScanGeometry::lms200(
+            f32::from(self.variant.angle_deg),
+            self.variant.resolution_deg(),
+        );
+        g.r_max = f32::from(self.max_valid()) * self.mm_per_unit();
+        g
+    }
+
+    /// The scan as [`RawScan`] (raw codes, no copy).
+    pub fn raw(&self) -> RawScan<'_> {
+        RawScan {
+            geometry: self.geometry(),
+            values: self.codes(),
+            mm_per_unit: self.mm_per_unit(),
+            max_valid: self.max_valid(),
+        }
+    }
+
+    /// The scan as pfe-core input (raw codes, no copy).
+    pub fn as_pfe_scan(&self) -> Scan<'_> {
+        self.raw().to_pfe()
     }
 }
 
@@ -280,13 +309,6 @@ where
             bytes_skipped: c.bytes_skipped,
             reinits: c.reinits,
         };
-        let scan = self.last_scan();
-        let raw = RawScan {
-            geometry: scan.geometry(),
-            values: scan.codes(),
-            mm_per_unit: scan.mm_per_unit(),
-            max_valid: scan.max_valid(),
-        };
-        Ok((raw, counters))
+        Ok((self.last_scan().raw(), counters))
     }
 }

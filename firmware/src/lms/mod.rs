@@ -6,7 +6,6 @@
 
 pub mod codec;
 pub mod driver;
-pub mod error;
 
 pub use codec::{command, crc, frame, reply, types};
 
@@ -14,5 +13,5 @@ pub use codec::command::Command;
 pub use codec::frame::{Decoder, DecoderStats, Event, Telegram, MAX_TELEGRAM};
 pub use codec::reply::{parse_reply, MeasuredValues, ParsedReply, Reply, ReplyOptions, Status};
 pub use codec::types::{Baud, MeasuringMode, Unit, Variant};
+pub use driver::error::{self, Error};
 pub use driver::{Clock, Config, Counters, DeviceState, Driver, ScanData, SetBaud};
-pub use error::Error;

@@ -2,7 +2,8 @@
 
 use super::frame::MAX_LEN;
 
-/// Why a byte slice is not a telegram ([`Telegram::parse`](super::frame::Telegram::parse)) or a telegram cannot be encoded.
+/// Why a byte slice is not a telegram ([`Telegram::parse`](super::frame::Telegram::parse)) or
+/// a telegram cannot be encoded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
@@ -13,7 +14,7 @@ pub enum FrameError {
     TrailingBytes,
     /// First byte is not STX.
     NoStx,
-    /// `LEN` is 0 or above [`MAX_LEN`](super::frame::MAX_LEN).
+    /// `LEN` is 0 or above [`MAX_LEN`].
     BadLength(usize),
     /// Checksum mismatch.
     Crc {
