@@ -17,18 +17,18 @@ fn main() {
 mod fw {
     use cortex_m_rt::{entry, exception, ExceptionFrame};
     use defmt_semihosting as _;
-    use firmware::app::{ConfigChoice, LmsApp, RawScan};
+    use firmware::app::{ConfigChoice, LmsApp, LmsExtractor, RawScan, LMS_READINGS};
     use firmware::lms::{frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions};
     use firmware::output::{self, Counters, Report, Stage};
     use firmware_qemu::{
         sys, time,
         uart::{Uart, UART1},
     };
-    use pfe_core::{Config, LmsExtractor, Scan, ScanGeometry};
+    use pfe_core::{Config, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
     /// Values a telegram may hold (the bench's scans have 361).
-    const N: usize = pfe_core::LMS_READINGS;
+    const N: usize = LMS_READINGS;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
     struct Sink;
@@ -116,7 +116,7 @@ mod fw {
                 break;
             }
             let values = codes.get(..n).unwrap_or(&[]);
-            let scan = Scan::from_lms(g, values, 1.0);
+            let scan = RawScan::lms_8m(g, values, 1.0).to_pfe();
             let t0 = time::ticks();
             let _ = core::hint::black_box(ex.extract(&scan, &paper));
             let t_paper = time::ticks() - t0;
