@@ -33,8 +33,8 @@ impl<E: core::fmt::Debug> core::error::Error for EncodeError<E> {}
 
 /// The postcard bytes of `WireFeature::from(f)` in `out`, written directly (variant index and
 /// beam indices as varints, the `f32`s as 4 little-endian bytes each, fields in declaration
-/// order): the same bytes as `postcard::to_slice`, for a tenth of its instructions. Returns
-/// their length.
+/// order): the same bytes as `postcard::to_slice`, with fewer instructions. Returns their
+/// length.
 fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
     let mut w = Cursor { out, at: 0 };
     match f {
