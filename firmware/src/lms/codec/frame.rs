@@ -6,7 +6,8 @@
 //! `LEN` counts CMD through the byte before the CRC. The whole telegram is at most
 //! [`MAX_TELEGRAM`] bytes. Single ACK (0x06) / NAK (0x15) bytes between telegrams are events.
 
-use crate::lms::crc::{crc16, Crc};
+use super::crc::{crc16, Crc};
+pub use super::error::FrameError;
 
 /// Start of a telegram.
 pub const STX: u8 = 0x02;
@@ -89,50 +90,6 @@ impl<'a> Telegram<'a> {
         self.raw.get(4).copied().unwrap_or(0)
     }
 }
-
-/// Why a byte slice is not a telegram ([`Telegram::parse`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[non_exhaustive]
-pub enum FrameError {
-    /// Fewer bytes than the header and `LEN` announce.
-    Truncated,
-    /// More bytes than `LEN` announces.
-    TrailingBytes,
-    /// First byte is not STX.
-    NoStx,
-    /// `LEN` is 0 or above [`MAX_LEN`].
-    BadLength(usize),
-    /// Checksum mismatch.
-    Crc {
-        /// Checksum computed over the received bytes.
-        expected: u16,
-        /// Checksum carried by the telegram.
-        got: u16,
-    },
-    /// The output buffer is too small.
-    BufferTooSmall,
-}
-
-impl core::fmt::Display for FrameError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Truncated => f.write_str("telegram truncated"),
-            Self::TrailingBytes => f.write_str("bytes after the telegram's CRC"),
-            Self::NoStx => f.write_str("telegram does not start with STX"),
-            Self::BadLength(l) => write!(f, "telegram LEN {l} out of range 1..={MAX_LEN}"),
-            Self::Crc { expected, got } => {
-                write!(
-                    f,
-                    "CRC mismatch: computed {expected:#06x}, received {got:#06x}"
-                )
-            }
-            Self::BufferTooSmall => f.write_str("output buffer too small"),
-        }
-    }
-}
-
-impl core::error::Error for FrameError {}
 
 /// Writes a telegram `STX | adr | LEN | payload | CRC` into `out`; returns its length.
 ///

@@ -1,9 +1,10 @@
 //! LMS→host reply parsing: the status byte and every reply the driver and clients use.
 //!
 //! All parsers take the telegram payload (`LEN` bytes: reply code, data, status byte; see
-//! [`Telegram::payload`](crate::lms::frame::Telegram::payload)) and borrow from it.
+//! [`Telegram::payload`](super::frame::Telegram::payload)) and borrow from it.
 
-use crate::lms::types::{Baud, MeasuringMode, Unit, Variant};
+pub use super::error::ReplyError;
+use super::types::{Baud, MeasuringMode, Unit, Variant};
 
 /// Reply codes (first payload byte).
 pub mod code {
@@ -67,42 +68,6 @@ pub struct ReplyOptions {
     /// 0x02).
     pub realtime_index: bool,
 }
-
-/// Why a payload is not a well-formed reply.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[non_exhaustive]
-pub enum ReplyError {
-    /// Payload shorter than reply code + status.
-    Empty,
-    /// The payload length does not fit the reply's layout.
-    Length {
-        /// Reply code.
-        code: u8,
-        /// Payload bytes expected (0 when unknown).
-        expected: usize,
-        /// Payload bytes received.
-        got: usize,
-    },
-}
-
-impl core::fmt::Display for ReplyError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match self {
-            Self::Empty => f.write_str("empty reply"),
-            Self::Length {
-                code,
-                expected,
-                got,
-            } => write!(
-                f,
-                "reply {code:#04x}: {got} payload bytes, layout needs {expected}"
-            ),
-        }
-    }
-}
-
-impl core::error::Error for ReplyError {}
 
 /// A parsed reply and its status byte.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,8 +1,8 @@
 //! Host→LMS command encoders, writing complete telegrams into a caller buffer.
 
-use crate::lms::frame::{encode_parts, FrameError, HOST_ADDRESS};
-use crate::lms::reply::ConfigBlock;
-use crate::lms::types::{Baud, Variant};
+use super::frame::{encode_parts, FrameError, HOST_ADDRESS};
+use super::reply::ConfigBlock;
+use super::types::{Baud, Variant};
 
 /// Installation-mode password of the LMS2xx.
 pub const PASSWORD: [u8; 8] = *b"SICK_LMS";

@@ -1,9 +1,13 @@
-//! The application loop: scans from the driver → pfe-core → framed output.
+//! The application loop, and the only place where LMS scans meet pfe-core: scans from the
+//! driver → pfe-core → framed output.
 //!
 //! [`App`] owns a statically sized [`Extractor`] (put the `App` in a `static`: about
 //! `9·N + 64·M` bytes) and turns each [`RawScan`] into one output frame
 //! ([`crate::output::write_scan`]). Where the scans come from is a [`ScanSource`]: the LMS200
 //! driver on a board, a test double on the host.
+//!
+//! - `scan`: [`RawScan`], the driver's scan as pfe-core input (the one adapter).
+//! - `source`: [`ScanSource`], implemented by the driver; its counters as the output's.
 //!
 //! ```
 //! use firmware::app::{App, ConfigChoice, RawScan};
@@ -31,61 +35,17 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use embedded_hal::delay::DelayNs;
 use embedded_io::Write;
-use embedded_io::{Read, ReadReady};
-use pfe_core::{Config, ExtractError, Extractor, Ranges, Scan, ScanGeometry};
+use pfe_core::{Config, ExtractError, Extractor};
 
-use crate::lms::driver::{Clock, Driver, SetBaud};
-
+use crate::lms::types::Variant;
 use crate::output::{self, Counters, EncodeError, ScanHeader, ScanStatus};
 
-/// One scan as the driver delivers it: raw range codes (measuring-mode flag bits removed).
-#[derive(Clone, Copy, Debug)]
-pub struct RawScan<'a> {
-    /// Beam geometry of the scanner's variant.
-    pub geometry: ScanGeometry,
-    /// Range codes; 0 and codes above 8182 are no return.
-    pub values: &'a [u16],
-    /// mm per code: 1.0 in mm mode, 10.0 in cm mode.
-    pub mm_per_unit: f32,
-    /// Largest valid code ([`pfe_core::LMS_MAX_VALID_8M`] in the 8 m / 80 m modes).
-    pub max_valid: u16,
-}
+mod scan;
+mod source;
 
-impl<'a> RawScan<'a> {
-    /// A scan in the 8 m / 80 m measuring modes (largest valid code 8182).
-    pub fn lms_8m(geometry: ScanGeometry, values: &'a [u16], mm_per_unit: f32) -> Self {
-        Self {
-            geometry,
-            values,
-            mm_per_unit,
-            max_valid: pfe_core::LMS_MAX_VALID_8M,
-        }
-    }
-
-    /// The pfe-core input for this scan.
-    pub fn to_pfe(&self) -> Scan<'a> {
-        Scan {
-            geometry: self.geometry,
-            ranges: Ranges::Raw {
-                values: self.values,
-                mm_per_unit: self.mm_per_unit,
-                max_valid: self.max_valid,
-            },
-            motion: None,
-        }
-    }
-}
-
-/// Where scans come from (the LMS200 driver through a small adapter, or a test double).
-pub trait ScanSource {
-    /// Why no scan could be delivered.
-    type Error: core::fmt::Debug;
-    /// Blocks (with a timeout) until the next complete scan; returns it with the link
-    /// counters after it.
-    fn next_scan(&mut self) -> Result<(RawScan<'_>, Counters), Self::Error>;
-}
+pub use scan::RawScan;
+pub use source::ScanSource;
 
 /// The named pfe-core configurations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -129,9 +89,14 @@ impl<S: core::fmt::Debug, W: core::fmt::Debug> core::fmt::Display for AppError<S
 
 impl<S: core::fmt::Debug, W: core::fmt::Debug> core::error::Error for AppError<S, W> {}
 
-/// The application the firmware runs: room for every LMS2xx scan and [`pfe_core::LMS_FEATURES`]
-/// features, its extraction that of [`pfe_core::LmsExtractor`] (compiled in pfe-core).
-pub type LmsApp = App<{ pfe_core::LMS_READINGS }, { pfe_core::LMS_FEATURES }>;
+/// Readings the firmware's extractor has room for: every LMS2xx scan (100° at 0.25°: 401).
+pub const LMS_READINGS: usize = Variant::MAX_VALUES;
+/// Features the firmware's extractor has room for.
+pub const LMS_FEATURES: usize = 48;
+/// The firmware's extractor: room for every LMS2xx scan and [`LMS_FEATURES`] features.
+pub type LmsExtractor = Extractor<LMS_READINGS, LMS_FEATURES>;
+/// The application the firmware runs (its extractor an [`LmsExtractor`]).
+pub type LmsApp = App<LMS_READINGS, LMS_FEATURES>;
 
 /// The application: extractor with room for `N` readings and `M` features, a configuration
 /// and the scan sequence number.
@@ -257,36 +222,5 @@ impl<const N: usize, const M: usize> App<N, M> {
     ) -> Result<ScanHeader, AppError<S::Error, W::Error>> {
         let (scan, counters) = source.next_scan().map_err(AppError::Source)?;
         self.process(&scan, counters, out).map_err(AppError::Output)
-    }
-}
-
-/// The LMS200 driver as a scan source: geometry, unit and measuring mode from the driver,
-/// counters mapped to the output's (`crc_dropped` = CRC errors + bad lengths/overflows).
-impl<U, D, C> ScanSource for Driver<U, D, C>
-where
-    U: Read + Write + ReadReady + SetBaud,
-    U::Error: core::fmt::Debug,
-    D: DelayNs,
-    C: Clock,
-{
-    type Error = crate::lms::Error<U::Error>;
-
-    fn next_scan(&mut self) -> Result<(RawScan<'_>, Counters), Self::Error> {
-        Driver::next_scan(self)?;
-        let c = self.counters();
-        let counters = Counters {
-            telegrams_ok: c.telegrams_ok,
-            crc_dropped: c.crc_errors.saturating_add(c.bad_length),
-            bytes_skipped: c.bytes_skipped,
-            reinits: c.reinits,
-        };
-        let scan = self.last_scan();
-        let raw = RawScan {
-            geometry: scan.geometry(),
-            values: scan.codes(),
-            mm_per_unit: scan.mm_per_unit(),
-            max_valid: scan.max_valid(),
-        };
-        Ok((raw, counters))
     }
 }
