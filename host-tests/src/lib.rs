@@ -7,6 +7,7 @@ pub mod docs;
 pub mod emulator;
 pub mod eval;
 pub mod formats;
+pub mod foxglove;
 pub mod method;
 pub mod plot;
 pub mod record;

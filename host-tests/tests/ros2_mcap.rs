@@ -456,7 +456,10 @@ fn corrupted_bag_keeps_earlier_scans() {
         let (ok, err) = split(items);
         // Every scan read is as in the intact bag: damage inside a chunk fails its CRC before
         // any of its messages is used.
-        assert!(is_prefix(&ok, &full), "at {at}: a damaged scan was read as good");
+        assert!(
+            is_prefix(&ok, &full),
+            "at {at}: a damaged scan was read as good"
+        );
         errors += usize::from(err.is_some());
     }
     assert!(errors > 0);
