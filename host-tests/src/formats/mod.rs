@@ -20,6 +20,7 @@ pub mod carmen;
 pub mod csv;
 pub mod hokuyo;
 pub mod lms200;
+pub mod ros2;
 
 use std::fmt;
 use std::fs::File;
