@@ -15,7 +15,9 @@ const USAGE: &str = "pfe emulate (--pty PATH | --tcp ADDR) [--scans N] [--second
     [--baud 9600|19200|38400|500000] [--variant 180/0.5] [--unit mm|cm] [--source room|tagged] [--trace]
 
 Emulates a SICK LMS200 on a pseudo-terminal (symlink PATH to the slave) or on a TCP socket
-(listens on ADDR and serves one connection). Prints a JSON summary on exit.";
+(listens on ADDR and serves one connection). Prints a JSON summary on exit, Ctrl-C included.
+PATH must be free or a stale link of a previous run (a symlink to a /dev/pts/N that is gone):
+anything else there is refused. The link is removed on exit.";
 
 /// Arguments of `pfe emulate`.
 #[derive(clap::Args, Debug)]
@@ -62,7 +64,7 @@ pub fn run(a: Args) -> Result<()> {
         scans: a.scans,
         max_time: a.seconds.map(Duration::from_secs_f64),
         trace: a.trace,
-        ..RunLimits::default()
+        stop: Some(super::interrupt::flag()),
     };
     if let Some(seed) = a.seed {
         cfg.seed = seed;

@@ -18,6 +18,7 @@ pub mod emulate;
 pub mod eval;
 pub mod extract;
 mod input;
+pub mod interrupt;
 mod lms_args;
 pub mod plot;
 pub mod record;
@@ -102,6 +103,7 @@ pub fn main() -> ExitCode {
 /// Runs `pfe` with `args` (the first one is the program name).
 pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
     let args: Vec<OsString> = args.into_iter().collect();
+    interrupt::install();
     let cli = match Cli::try_parse_from(&args) {
         Ok(cli) => cli,
         Err(e) => {
