@@ -133,3 +133,124 @@ fn emulate_removes_its_link_on_ctrl_c() {
     assert!(summary["scans_sent"].is_u64());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn record_never_empties_an_existing_file() {
+    let dir = scratch("rec-exists");
+    let out = dir.join("take1.lms");
+    std::fs::write(&out, b"a user's recording").unwrap();
+    let o = out.to_str().unwrap();
+    // Without --force: refused as bad input before the port is touched.
+    let r = pfe(&["record", "--port", "/nonexistent/tty", "-o", o]);
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
+    assert!(stderr(&r).contains("--force"), "{}", stderr(&r));
+    // With --force but a port that cannot be opened: the file is untouched.
+    let r = pfe(&["record", "--port", "/nonexistent/tty", "-o", o, "--force"]);
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert!(stderr(&r).contains("/nonexistent/tty"), "{}", stderr(&r));
+    assert_eq!(std::fs::read(&out).unwrap(), b"a user's recording");
+    // A port that is not a tty: the same.
+    let r = pfe(&["record", "--port", "/dev/null", "-o", o, "--force"]);
+    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert_eq!(std::fs::read(&out).unwrap(), b"a user's recording");
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "no temporary left"
+    );
+    let r = pfe(&["record", "--help"]);
+    assert!(String::from_utf8_lossy(&r.stdout).contains("--force"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// B0 telegrams in a raw capture.
+fn b0_count(bytes: &[u8]) -> usize {
+    use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
+    let mut dec = Decoder::<MAX_TELEGRAM>::new();
+    let (mut rest, mut n) = (bytes, 0);
+    loop {
+        let (u, ev) = dec.feed(rest);
+        rest = &rest[u..];
+        match ev {
+            Some(Event::Telegram(t)) if t.payload().first() == Some(&0xB0) => n += 1,
+            Some(_) => {}
+            None => return n,
+        }
+    }
+}
+
+#[test]
+fn record_interrupted_keeps_what_it_had() {
+    use host_tests::device::emulator::serve::{serve_on, Pty};
+    use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let dir = scratch("rec-int");
+    let link = dir.join("lms");
+    let out = dir.join("capture.lms");
+    let mut pty = Pty::open(&link).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let limits = RunLimits {
+        max_time: Some(Duration::from_secs(60)),
+        stop: Some(stop.clone()),
+        ..Default::default()
+    };
+    let emu = std::thread::spawn(move || {
+        serve_on(
+            &mut pty,
+            Emulator::from_config(EmulatorConfig::default()),
+            limits,
+        )
+        .map(|r| (r, pty))
+    });
+    let child = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args([
+            "record",
+            "--port",
+            link.to_str().unwrap(),
+            "--baud",
+            "38400",
+        ])
+        .args(["--scans", "1000000", "-o", out.to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the temporary capture holds a few scans (361 words each: ~730 bytes).
+    let t0 = Instant::now();
+    loop {
+        let part: u64 = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains(".part-"))
+            .filter_map(|e| e.metadata().ok())
+            .map(|m| m.len())
+            .sum();
+        if part > 4000 {
+            break;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(30), "no capture growing");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert!(!out.exists(), "the output appears only at the end");
+    interrupt(&child);
+    let r = child.wait_with_output().unwrap();
+    stop.store(true, Ordering::Relaxed);
+    let _ = emu.join().unwrap().unwrap();
+    assert_eq!(r.status.code(), Some(130), "{}", stderr(&r));
+    assert!(stderr(&r).contains("interrupted"), "{}", stderr(&r));
+    let bytes = std::fs::read(&out).expect("the capture is kept");
+    assert!(b0_count(&bytes) >= 2, "{} scans kept", b0_count(&bytes));
+    let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+    assert_eq!(summary["bytes"].as_u64(), Some(bytes.len() as u64));
+    assert_eq!(summary["interrupted"], true);
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name())
+        .filter(|n| n.to_string_lossy().contains(".part-"))
+        .collect();
+    assert!(left.is_empty(), "temporary left: {left:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -84,13 +84,51 @@ impl Failure {
         }
     }
 
-    /// A subcommand's error, named after it: exit code 1.
+    /// A subcommand's error, named after it: exit code 2 for bad input ([`BadInput`],
+    /// an existing output file, a bad argument), 130 for [`Interrupted`], 1 otherwise.
     fn of(name: &str, e: &anyhow::Error) -> Self {
         let text = format!("{e:#}");
         let text = text.strip_prefix("error: ").unwrap_or(&text);
-        Failure::other(format!("{name}: {text}"))
+        let code = if e.is::<BadInput>()
+            || e.is::<crate::device::record::OutputExists>()
+            || e.is::<clap::Error>()
+        {
+            2
+        } else if e.is::<Interrupted>() {
+            130
+        } else {
+            1
+        };
+        Failure {
+            code,
+            message: format!("{name}: {text}"),
+        }
     }
 }
+
+/// A bad-input error from a subcommand returning `anyhow` (exit code 2).
+#[derive(Debug)]
+pub struct BadInput(pub String);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadInput {}
+
+/// A run stopped by Ctrl-C or SIGTERM after keeping what it had (exit code 130).
+#[derive(Debug)]
+pub struct Interrupted(pub String);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Interrupted {}
 
 /// The subcommands whose argument errors exit with code 1 (not clap's 2).
 const EXIT_1_ON_BAD_ARGUMENTS: [&str; 4] = ["eval", "bench", "emulate", "record"];
