@@ -254,3 +254,65 @@ fn record_interrupted_keeps_what_it_had() {
     assert!(left.is_empty(), "temporary left: {left:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name)
+}
+
+#[test]
+fn sigma_r_must_be_a_positive_finite_noise() {
+    let room = fixture("room.csv");
+    let file = room.to_str().unwrap();
+    let dir = scratch("sigma");
+    let svg = dir.join("p.svg");
+    for bad in ["0", "-5", "NaN", "inf", "-inf", "5mm"] {
+        let sigma = format!("--sigma-r={bad}");
+        let plot = ["plot", "--format", "csv", &sigma, file, "--scan", "1", "-o"];
+        for args in [
+            vec!["extract", "--format", "csv", &sigma, file],
+            [&plot[..], &[svg.to_str().unwrap()]].concat(),
+        ] {
+            let out = pfe(&args);
+            assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+            assert!(stderr(&out).contains("--sigma-r"), "{}", stderr(&out));
+            assert!(out.stdout.is_empty());
+            assert!(!svg.exists());
+        }
+    }
+    // The same arguments with a good σ_r work (so the failures above are σ_r's).
+    let out = pfe(&[
+        "plot",
+        "--format",
+        "csv",
+        "--sigma-r=0.5",
+        file,
+        "--scan",
+        "1",
+        "-o",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "-o needs a value");
+    let out = pfe(&[
+        "plot",
+        "--format",
+        "csv",
+        "--sigma-r=0.5",
+        file,
+        "--scan",
+        "1",
+        "-o",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::remove_dir_all(&dir).unwrap();
+    let out = pfe(&[
+        "extract",
+        "--format",
+        "csv",
+        "--sigma-r",
+        "0.5",
+        room.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}

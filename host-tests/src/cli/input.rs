@@ -43,9 +43,23 @@ pub struct MethodArgs {
     /// Extractor configuration.
     #[arg(long, short, default_value = "default")]
     pub config: ConfigName,
-    /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
-    #[arg(long)]
+    /// Range noise of the scanner, mm, finite and > 0 (default: 5 for csv/lms200, 10 for
+    /// carmen/hokuyo).
+    #[arg(long, value_parser = sigma_mm)]
     pub sigma_r: Option<f32>,
+}
+
+/// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).
+pub fn sigma_mm(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("not a number of mm: {s:?}"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite range noise > 0 mm, got {s}"))
+    }
 }
 
 impl MethodArgs {
