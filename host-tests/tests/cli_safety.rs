@@ -316,3 +316,107 @@ fn sigma_r_must_be_a_positive_finite_noise() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+#[test]
+fn input_with_no_scan_is_an_error_with_a_hint() {
+    let room = fixture("room.csv");
+    let capture = fixture("lms200-good.bin");
+    let (room, capture) = (room.to_str().unwrap(), capture.to_str().unwrap());
+    for (args, hint) in [
+        (
+            vec!["extract", "--format", "carmen", room],
+            "try --format csv",
+        ),
+        (
+            vec!["extract", "--format", "lms200", room],
+            "try --format csv",
+        ),
+        (
+            vec!["extract", "--format", "hokuyo", room],
+            "try --format csv",
+        ),
+        (
+            vec!["extract", "--format", "csv", capture],
+            "try --format lms200",
+        ),
+        (
+            vec![
+                "plot",
+                "--format",
+                "lms200",
+                room,
+                "--scan",
+                "1",
+                "-o",
+                "/dev/null",
+            ],
+            "csv",
+        ),
+        (
+            vec!["decode", "--format", "lms200", room],
+            "pfe extract --format csv",
+        ),
+    ] {
+        let out = pfe(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(hint), "{args:?}: {}", stderr(&out));
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+    // Garbage that no format reads: still an error, with the list of formats.
+    let dir = scratch("noscan");
+    let junk = dir.join("junk.bin");
+    std::fs::write(
+        &junk,
+        (0..4000u32)
+            .map(|i| (i * 7 % 251) as u8 | 0x80)
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let out = pfe(&["extract", "--format", "lms200", junk.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("no scan found"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--format"), "{}", stderr(&out));
+    // Empty input is not an error (nothing to find).
+    let empty = dir.join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    let out = pfe(&["extract", "--format", "csv", empty.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn an_error_quotes_at_most_80_characters_of_the_bad_field() {
+    let dir = scratch("quote");
+    let long = "x".repeat(100_000);
+    for (format, text) in [
+        ("csv", format!("1,-90,1,1000,{long}\n")),
+        ("csv", format!("1,-90,{long},1000\n")),
+        (
+            "hokuyo",
+            format!("/scan 0 -1.5 0.01 0.02 5.0 2 1.0 -{long}\n"),
+        ),
+        (
+            "hokuyo",
+            format!("/scan 0 -1.5 0.01 0.02 5.0 1 1.0 {long}\n"),
+        ),
+        (
+            "carmen",
+            format!("FLASER 3 1.0 {long} 1.0 0 0 0 0 0 0 0 h 0\n"),
+        ),
+    ] {
+        let path = dir.join("long.txt");
+        std::fs::write(&path, text).unwrap();
+        let out = pfe(&["extract", "--format", format, path.to_str().unwrap()]);
+        assert_eq!(out.status.code(), Some(2), "{format}: {}", stderr(&out));
+        let e = stderr(&out);
+        assert!(
+            e.len() < 300,
+            "{format}: {} characters: {}",
+            e.len(),
+            &e[..300]
+        );
+        assert!(e.contains(&format!("{}…", "x".repeat(79))), "{format}: {e}");
+        assert!(!e.contains(&"x".repeat(81)), "{format}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

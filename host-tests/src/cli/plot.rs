@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use super::input::{open, MethodArgs};
+use super::input::{bad_input, nothing_found, open, MethodArgs};
 use super::Failure;
 use crate::formats::{self, Record};
 use crate::methods::Method;
@@ -31,11 +31,12 @@ pub fn run(a: Args) -> Result<(), Failure> {
         a.output.as_path(),
     );
     let mut method = a.method.method();
-    let (input, bar) = open(file, format)?;
+    let input = open(file, format)?;
+    let bar = input.bar.clone();
     let mut found: Option<Record> = None;
     let mut count = 0u64;
-    for record in formats::scans(format, input) {
-        let record = record.map_err(|e| Failure::input(format!("{}: {e}", file.display())))?;
+    for record in formats::scans(format, input.reader) {
+        let record = record.map_err(|e| bad_input(file, format, count, &e))?;
         count += 1;
         if record.id == scan {
             found = Some(record);
@@ -43,6 +44,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
         }
     }
     bar.finish_and_clear();
+    if count == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        return Err(nothing_found(file, format, "scan"));
+    }
     let record = found.ok_or_else(|| {
         Failure::input(format!(
             "{}: no scan with ID {scan} ({count} scans read)",

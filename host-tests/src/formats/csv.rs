@@ -17,7 +17,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, checked_record, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, quote, InputError, Lines, Record};
 
 /// Largest valid range, mm (8183 and above are the LMS "no return" codes).
 pub const MAX_RANGE_MM: f32 = 8182.0;
@@ -49,7 +49,7 @@ pub fn parse_line(line: u64, text: &str) -> Result<Record, InputError> {
         if !(r.is_finite() && r >= 0.0) {
             return Err(InputError::line(
                 line,
-                format!("{what} is not a range in mm: {token:?}"),
+                format!("{what} is not a range in mm: {}", quote(token)),
             ));
         }
         ranges.push(if r == 0.0 || r > MAX_RANGE_MM {
