@@ -420,3 +420,152 @@ fn an_error_quotes_at_most_80_characters_of_the_bad_field() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn every_subcommand_exits_2_on_bad_arguments() {
+    for args in [
+        vec!["extract", "--bogus"],
+        vec!["decode"],
+        vec!["plot", "--format", "csv"],
+        vec!["eval", "--scans", "x"],
+        vec!["eval", "--kind", "nowhere"],
+        vec!["eval", "--sweep", "1,x", "--no-write"],
+        vec!["eval", "--scans", "0", "--no-write"],
+        vec!["bench", "--reps", "-1"],
+        vec!["emulate", "--baud", "1234", "--tcp", "127.0.0.1:0"],
+        vec!["emulate", "--seconds", "0.1"],
+        vec!["record", "--scans", "x"],
+        vec!["record", "--port", "/dev/null"],
+        vec!["nonsense"],
+    ] {
+        let out = pfe(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+        assert!(!stderr(&out).is_empty(), "{args:?}");
+    }
+    let help = pfe(&["--help"]);
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(text.contains("Exit codes (every subcommand)"), "{text}");
+    assert!(
+        text.contains("2 bad input") && text.contains("1 any other"),
+        "{text}"
+    );
+}
+
+#[test]
+fn bench_carmen_must_be_a_directory() {
+    let room = fixture("room.log");
+    let out = pfe(&[
+        "bench",
+        "--carmen",
+        room.to_str().unwrap(),
+        "--sim-scans",
+        "1",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("not a directory"), "{}", stderr(&out));
+}
+
+#[test]
+fn plot_to_stdout() {
+    let room = fixture("room.csv");
+    let out = pfe(&[
+        "plot",
+        "--format",
+        "csv",
+        room.to_str().unwrap(),
+        "--scan",
+        "1",
+        "-o",
+        "-",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let svg = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        svg.starts_with("<svg") || svg.starts_with("<?xml"),
+        "{}",
+        &svg[..40]
+    );
+    assert!(svg.trim_end().ends_with("</svg>"));
+    assert!(!Path::new("-").exists(), "wrote a file named -");
+}
+
+#[test]
+fn decode_needs_no_format() {
+    let path = fixture("lms200-good.bin");
+    let implicit = pfe(&["decode", path.to_str().unwrap()]);
+    assert!(implicit.status.success(), "{}", stderr(&implicit));
+    let explicit = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
+    assert_eq!(implicit.stdout, explicit.stdout);
+    assert_eq!(String::from_utf8_lossy(&implicit.stdout).lines().count(), 3);
+    let out = pfe(&["decode", fixture("room.csv").to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        stderr(&out).contains("pfe extract --format csv"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
+fn csv_nan_ranges_are_discontinuities() {
+    let dir = scratch("csv-nan");
+    // A wall at x = 2000 mm seen from −30° to +30° in 1° steps, broken by NaN at beam 30.
+    let ranges = |gap: &str| -> String {
+        (0..61)
+            .map(|i| {
+                if i == 30 {
+                    gap.to_string()
+                } else {
+                    let b = f64::from(i - 30).to_radians();
+                    format!("{:.1}", 2000.0 / b.cos())
+                }
+            })
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let nan = dir.join("nan.csv");
+    std::fs::write(
+        &nan,
+        format!("1,-30,1,{}\n2,-30,1,{}\n", ranges("NaN"), ranges("nan")),
+    )
+    .unwrap();
+    let zero = dir.join("zero.csv");
+    std::fs::write(
+        &zero,
+        format!("1,-30,1,{}\n2,-30,1,{}\n", ranges("0"), ranges("0")),
+    )
+    .unwrap();
+    let a = pfe(&["extract", "--format", "csv", nan.to_str().unwrap()]);
+    assert!(a.status.success(), "{}", stderr(&a));
+    let b = pfe(&["extract", "--format", "csv", zero.to_str().unwrap()]);
+    assert!(b.status.success(), "{}", stderr(&b));
+    assert_eq!(a.stdout, b.stdout, "NaN reads as no return (like 0)");
+    let first: serde_json::Value =
+        serde_json::from_str(String::from_utf8_lossy(&a.stdout).lines().next().unwrap()).unwrap();
+    let marks: Vec<u64> = first["marks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m.as_u64().unwrap())
+        .collect();
+    assert!(
+        marks.contains(&29) && marks.contains(&31),
+        "the gap splits the wall: {marks:?}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn csv_beams_over_a_full_turn_are_rejected() {
+    let dir = scratch("csv-turn");
+    let path = dir.join("turn.csv");
+    let ok = format!("1,-180,1{}\n", ",1000".repeat(361));
+    let bad = format!("2,-180,1{}\n", ",1000".repeat(362));
+    std::fs::write(&path, format!("{ok}{bad}")).unwrap();
+    let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("line 2"), "{}", stderr(&out));
+    assert!(stderr(&out).contains("full turn"), "{}", stderr(&out));
+    assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -11,8 +11,8 @@ use crate::formats::{lms200, Format};
 /// Arguments of `pfe decode`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input format (only `lms200`).
-    #[arg(long, short)]
+    /// Input format: only `lms200`, the default (decode reads raw LMS200 captures).
+    #[arg(long, short, default_value = "lms200")]
     format: Format,
     /// Input file (`-` = stdin).
     file: PathBuf,

@@ -4,9 +4,11 @@ use std::net::TcpListener;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 
 use super::lms_args::LmsArgs;
+use super::BadInput;
+use crate::device::emulator::serve::clear_stale_link;
 use crate::device::emulator::{
     serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind,
 };
@@ -83,6 +85,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let report = match (a.pty, a.tcp) {
         (Some(p), None) => {
+            clear_stale_link(&p).map_err(|e| BadInput(format!("--pty: {e:#}")))?;
             eprintln!("emulating an LMS200 on {}", p.display());
             serve_pty(&p, Emulator::from_config(cfg), limits)?
         }
@@ -91,7 +94,12 @@ pub fn run(a: Args) -> Result<()> {
             eprintln!("emulating an LMS200 on tcp {}", l.local_addr()?);
             serve_tcp(l, cfg, limits)?
         }
-        _ => bail!("give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"),
+        _ => {
+            return Err(BadInput(format!(
+                "give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"
+            ))
+            .into())
+        }
     };
     println!(
         "{}",

@@ -1,5 +1,6 @@
 //! `pfe plot`: one scan with its mark points and features as SVG (like Fig. 7 of the paper).
 
+use std::io::Write;
 use std::path::PathBuf;
 
 use super::input::{bad_input, nothing_found, open, MethodArgs};
@@ -17,7 +18,7 @@ pub struct Args {
     /// Scan ID to plot (the csv ID, else the 0-based ordinal).
     #[arg(long, short)]
     scan: u64,
-    /// Output SVG file.
+    /// Output SVG file (`-` = stdout).
     #[arg(short, long)]
     output: PathBuf,
 }
@@ -60,11 +61,25 @@ pub fn run(a: Args) -> Result<(), Failure> {
         .unwrap_or_default();
     let title = format!("{name} — scan {scan} — {}", method.name());
     let svg = crate::plot::svg(&record, &ex, &title);
-    std::fs::write(output, svg)
-        .map_err(|e| Failure::other(format!("{}: cannot write: {e}", output.display())))?;
+    if output.as_os_str() == "-" {
+        let mut out = std::io::stdout().lock();
+        match out.write_all(svg.as_bytes()).and_then(|()| out.flush()) {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                return Err(Failure::other(format!("cannot write output: {e}")));
+            }
+            _ => {}
+        }
+    } else {
+        std::fs::write(output, svg)
+            .map_err(|e| Failure::other(format!("{}: cannot write: {e}", output.display())))?;
+    }
     eprintln!(
         "pfe: wrote {} ({} marks, {} features)",
-        output.display(),
+        if output.as_os_str() == "-" {
+            "the SVG to stdout".to_string()
+        } else {
+            output.display().to_string()
+        },
         ex.marks.len(),
         ex.features.len()
     );

@@ -2,10 +2,11 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use firmware::lms::driver::Config;
 
 use super::lms_args::LmsArgs;
+use super::BadInput;
 use crate::device::record::{record, RecordOptions};
 
 const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE [--force]
@@ -55,7 +56,7 @@ pub fn run(a: Args) -> Result<()> {
         cfg.unit = u;
     }
     let (Some(port), Some(out)) = (a.port, a.output) else {
-        bail!("--port and -o are required\n\n{USAGE}");
+        return Err(BadInput(format!("--port and -o are required\n\n{USAGE}")).into());
     };
     let opts = RecordOptions {
         overwrite: a.force,
