@@ -569,3 +569,52 @@ fn csv_beams_over_a_full_turn_are_rejected() {
     assert_eq!(String::from_utf8_lossy(&out.stdout).lines().count(), 1);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn a_skip_is_listed_and_fails_in_ci() {
+    let dir = scratch("skips");
+    let file = dir.join("skips.txt");
+    // The helper run in a child process (this test binary, one test), with its own skips file.
+    let run = |ci: &str| {
+        Command::new(std::env::current_exe().unwrap())
+            .args([
+                "--exact",
+                "skip_helper_child",
+                "--nocapture",
+                "--include-ignored",
+            ])
+            .env("PFE_SKIPS_FILE", &file)
+            .env("CI", ci)
+            .output()
+            .unwrap()
+    };
+    let out = run("false");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("SKIPPED: demo_test: no widget"),
+        "{}",
+        stderr(&out)
+    );
+    let listed = std::fs::read_to_string(&file).unwrap();
+    assert_eq!(
+        listed,
+        "optional_test: local choice\ndemo_test: no widget\n"
+    );
+    let out = run("true");
+    assert!(
+        !out.status.success(),
+        "a CI skip of what CI installs must fail"
+    );
+    let all = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert!(all.contains("CI provides this"), "{all}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Run only by `a_skip_is_listed_and_fails_in_ci`.
+#[test]
+#[ignore = "a child of a_skip_is_listed_and_fails_in_ci"]
+fn skip_helper_child() {
+    use host_tests::skip::{skip, Need};
+    skip("optional_test", "local choice", Need::Optional);
+    skip("demo_test", "no widget", Need::InCi);
+}
