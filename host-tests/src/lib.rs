@@ -12,6 +12,7 @@
 //! | [`plot`] | one scan with its marks and features as SVG (Fig. 7 of the paper) |
 //! | [`qemu`] | running the firmware under QEMU and reading its frames (demo, bench-mcu, size, end-to-end tests) |
 //! | [`soak`] | long runs with damage through emulator, driver, pfe-core and frames (in-process, pty, QEMU) |
+//! | [`skip`] | reporting tests that cannot run (listed by `cargo xtask test`, failures in CI) |
 //! | [`docs`] | sections of generated Markdown documents (shared with xtask) |
 
 pub mod cli;
@@ -24,4 +25,5 @@ pub mod methods;
 pub mod plot;
 pub mod qemu;
 pub mod scene;
+pub mod skip;
 pub mod soak;

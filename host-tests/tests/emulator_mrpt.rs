@@ -19,7 +19,11 @@ fn missing(what: &str) {
     if std::env::var_os("PFE_CONFORMANCE_REQUIRED").is_some() {
         panic!("MRPT conformance needs {what}");
     }
-    eprintln!("SKIPPED: MRPT conformance needs {what} (apt-get install g++ libmrpt-hwdrivers-dev)");
+    host_tests::skip::skip(
+        "emulator_mrpt",
+        &format!("MRPT conformance needs {what} (apt-get install g++ libmrpt-hwdrivers-dev)"),
+        host_tests::skip::Need::InCi,
+    );
 }
 
 fn compile(dir: &Path) -> Option<PathBuf> {

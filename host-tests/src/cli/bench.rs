@@ -46,6 +46,13 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
 
 /// Runs `pfe bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if args.carmen.exists() && !args.carmen.is_dir() {
+        return Err(super::BadInput(format!(
+            "--carmen {}: not a directory (give the folder of CARMEN logs)",
+            args.carmen.display()
+        ))
+        .into());
+    }
     let report = crate::eval::bench::run(&BenchOptions {
         sim_scans: args.sim_scans,
         seed: args.seed,

@@ -4,15 +4,15 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use super::input::{flush, open, stdout, write_json};
+use super::input::{flush, guess, open, stdout, write_json};
 use super::Failure;
 use crate::formats::{lms200, Format};
 
 /// Arguments of `pfe decode`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input format (only `lms200`).
-    #[arg(long, short)]
+    /// Input format: only `lms200`, the default (decode reads raw LMS200 captures).
+    #[arg(long, short, default_value = "lms200")]
     format: Format,
     /// Input file (`-` = stdin).
     file: PathBuf,
@@ -35,9 +35,10 @@ pub fn run(a: Args) -> Result<(), Failure> {
             "decode reads only --format lms200 (got {format})"
         )));
     }
-    let (input, bar) = open(file, format)?;
+    let input = open(file, format)?;
+    let bar = input.bar.clone();
     let mut out = stdout();
-    let mut reader = lms200::Reader::new(input);
+    let mut reader = lms200::Reader::new(input.reader);
     let mut error = None;
     for t in reader.by_ref() {
         let t = match t {
@@ -65,5 +66,18 @@ pub fn run(a: Args) -> Result<(), Failure> {
          ({} dropped for length, {} malformed B0, {} other telegrams)",
         s.bytes, s.good, s.crc_errors, s.skipped, s.bad_length, s.malformed, s.other_telegrams
     );
-    error.map_or(Ok(()), Err)
+    if let Some(e) = error {
+        return Err(e);
+    }
+    if s.good == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        let hint = match guess(file, format) {
+            Some(g) => format!("; is it {g}? try pfe extract --format {g}"),
+            None => String::new(),
+        };
+        return Err(Failure::input(format!(
+            "{}: no LMS200 telegram found in it{hint}",
+            file.display()
+        )));
+    }
+    Ok(())
 }

@@ -4,9 +4,11 @@ use std::net::TcpListener;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 
 use super::lms_args::LmsArgs;
+use super::BadInput;
+use crate::device::emulator::serve::clear_stale_link;
 use crate::device::emulator::{
     serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind,
 };
@@ -15,7 +17,9 @@ const USAGE: &str = "pfe emulate (--pty PATH | --tcp ADDR) [--scans N] [--second
     [--baud 9600|19200|38400|500000] [--variant 180/0.5] [--unit mm|cm] [--source room|tagged] [--trace]
 
 Emulates a SICK LMS200 on a pseudo-terminal (symlink PATH to the slave) or on a TCP socket
-(listens on ADDR and serves one connection). Prints a JSON summary on exit.";
+(listens on ADDR and serves one connection). Prints a JSON summary on exit, Ctrl-C included.
+PATH must be free or a stale link of a previous run (a symlink to a /dev/pts/N that is gone):
+anything else there is refused. The link is removed on exit.";
 
 /// Arguments of `pfe emulate`.
 #[derive(clap::Args, Debug)]
@@ -62,7 +66,7 @@ pub fn run(a: Args) -> Result<()> {
         scans: a.scans,
         max_time: a.seconds.map(Duration::from_secs_f64),
         trace: a.trace,
-        ..RunLimits::default()
+        stop: Some(super::interrupt::flag()),
     };
     if let Some(seed) = a.seed {
         cfg.seed = seed;
@@ -81,6 +85,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let report = match (a.pty, a.tcp) {
         (Some(p), None) => {
+            clear_stale_link(&p).map_err(|e| BadInput(format!("--pty: {e:#}")))?;
             eprintln!("emulating an LMS200 on {}", p.display());
             serve_pty(&p, Emulator::from_config(cfg), limits)?
         }
@@ -89,7 +94,12 @@ pub fn run(a: Args) -> Result<()> {
             eprintln!("emulating an LMS200 on tcp {}", l.local_addr()?);
             serve_tcp(l, cfg, limits)?
         }
-        _ => bail!("give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"),
+        _ => {
+            return Err(BadInput(format!(
+                "give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"
+            ))
+            .into())
+        }
     };
     println!(
         "{}",

@@ -48,7 +48,8 @@ impl Args {
             Some(s) => s
                 .split(',')
                 .map(|s| s.trim().parse::<f32>())
-                .collect::<Result<_, _>>()?,
+                .collect::<Result<_, _>>()
+                .map_err(|e| super::BadInput(format!("--sweep: {e}")))?,
             None => d.sweep,
         };
         let o = EvalOptions {
@@ -67,7 +68,7 @@ impl Args {
         };
         let bad = |s: f32| s.is_nan() || s < 0.0;
         if o.scans == 0 || bad(o.sigma) || o.sweep.iter().any(|s| bad(*s)) {
-            anyhow::bail!("--scans must be > 0 and every σ ≥ 0");
+            return Err(super::BadInput("--scans must be > 0 and every σ ≥ 0".into()).into());
         }
         Ok(o)
     }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::input::{flush, open, stdout, write_json, MethodArgs};
+use super::input::{bad_input, flush, nothing_found, open, stdout, write_json, MethodArgs};
 use super::Failure;
 use crate::formats::{self, ScanJson};
 use crate::methods::Method;
@@ -21,16 +21,17 @@ pub struct Args {
 pub fn run(a: Args) -> Result<(), Failure> {
     let (format, file) = (a.method.format, a.file.as_path());
     let mut method = a.method.method();
-    let (input, bar) = open(file, format)?;
+    let input = open(file, format)?;
+    let bar = input.bar.clone();
     let mut out = stdout();
     let t0 = Instant::now();
     let (mut scans, mut features) = (0u64, 0u64);
     let mut error = None;
-    for record in formats::scans(format, input) {
+    for record in formats::scans(format, input.reader) {
         let record = match record {
             Ok(r) => r,
             Err(e) => {
-                error = Some(Failure::input(format!("{}: {e}", file.display())));
+                error = Some(bad_input(file, format, scans, &e));
                 break;
             }
         };
@@ -48,6 +49,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
     bar.finish_and_clear();
     if let Some(e) = error {
         return Err(e);
+    }
+    if scans == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        return Err(nothing_found(file, format, "scan"));
     }
     let s = t0.elapsed().as_secs_f64();
     eprintln!(

@@ -3,6 +3,8 @@
 
 use std::io::{self, IsTerminal, Read, Write};
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 use clap::ValueEnum;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -43,9 +45,23 @@ pub struct MethodArgs {
     /// Extractor configuration.
     #[arg(long, short, default_value = "default")]
     pub config: ConfigName,
-    /// Range noise of the scanner, mm (default: 5 for csv/lms200, 10 for carmen/hokuyo).
-    #[arg(long)]
+    /// Range noise of the scanner, mm, finite and > 0 (default: 5 for csv/lms200, 10 for
+    /// carmen/hokuyo).
+    #[arg(long, value_parser = sigma_mm)]
     pub sigma_r: Option<f32>,
+}
+
+/// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).
+pub fn sigma_mm(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("not a number of mm: {s:?}"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite range noise > 0 mm, got {s}"))
+    }
 }
 
 impl MethodArgs {
@@ -55,9 +71,33 @@ impl MethodArgs {
     }
 }
 
+/// An opened input: the reader, its progress bar and the bytes read so far.
+pub struct Input {
+    /// The (decompressed) input.
+    pub reader: Box<dyn io::BufRead>,
+    /// Progress on stderr (hidden when stderr is not a terminal).
+    pub bar: ProgressBar,
+    /// Raw bytes read from the file so far.
+    pub bytes: Arc<AtomicU64>,
+}
+
+/// Counts the bytes read through it.
+struct Counting<R> {
+    inner: R,
+    bytes: Arc<AtomicU64>,
+}
+
+impl<R: Read> Read for Counting<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.bytes.fetch_add(n as u64, Ordering::Relaxed);
+        Ok(n)
+    }
+}
+
 /// Opens `file` with a byte-counting progress bar on stderr (hidden when stderr is not a
 /// terminal).
-pub fn open(file: &Path, format: Format) -> Result<(Box<dyn io::BufRead>, ProgressBar), Failure> {
+pub fn open(file: &Path, format: Format) -> Result<Input, Failure> {
     let len = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
     let bar = if io::stderr().is_terminal() && len > 0 {
         let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::stderr());
@@ -71,11 +111,56 @@ pub fn open(file: &Path, format: Format) -> Result<(Box<dyn io::BufRead>, Progre
         ProgressBar::hidden()
     };
     let b = bar.clone();
-    let input = formats::open_for(file, format, move |r| {
-        Box::new(b.wrap_read(r)) as Box<dyn Read>
+    let bytes = Arc::new(AtomicU64::new(0));
+    let counter = bytes.clone();
+    let reader = formats::open_for(file, format, move |r| {
+        Box::new(b.wrap_read(Counting {
+            inner: r,
+            bytes: counter,
+        })) as Box<dyn Read>
     })
     .map_err(|e| Failure::input(format!("{}: cannot open: {e}", file.display())))?;
-    Ok((input, bar))
+    Ok(Input { reader, bar, bytes })
+}
+
+/// Another format in which `file` starts with a good scan (`None` for stdin).
+pub fn guess(file: &Path, format: Format) -> Option<Format> {
+    if file.as_os_str() == "-" {
+        return None;
+    }
+    Format::value_variants()
+        .iter()
+        .copied()
+        .filter(|&f| f != format)
+        .find(|&f| {
+            formats::open_for(file, f, |r| r)
+                .ok()
+                .and_then(|input| formats::scans(f, input).next())
+                .is_some_and(|r| r.is_ok())
+        })
+}
+
+/// Bad input for non-empty input in which `format` found nothing (`what`: "scan",
+/// "telegram"), with a guess at the right format when another one reads a scan from it.
+pub fn nothing_found(file: &Path, format: Format, what: &str) -> Failure {
+    let hint = match guess(file, format) {
+        Some(g) => format!("is it {g}? try --format {g}"),
+        None => "is --format right? (csv, carmen, hokuyo, lms200)".to_string(),
+    };
+    Failure::input(format!(
+        "{}: no {what} found in it as {format}; {hint}",
+        file.display()
+    ))
+}
+
+/// Bad input for an error `e` in `file`; when no scan was read before it (`scans`) and
+/// another format reads one, the message suggests that format.
+pub fn bad_input(file: &Path, format: Format, scans: u64, e: &dyn std::fmt::Display) -> Failure {
+    let hint = match (scans == 0).then(|| guess(file, format)).flatten() {
+        Some(g) => format!(" (as {format}; is it {g}? try --format {g})"),
+        None => String::new(),
+    };
+    Failure::input(format!("{}: {e}{hint}", file.display()))
 }
 
 /// Buffered stdout for JSON lines.

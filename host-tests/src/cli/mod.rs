@@ -2,15 +2,15 @@
 //!
 //! ```text
 //! pfe extract --format csv|carmen|lms200|hokuyo [--config paper|default] FILE   # JSON lines
-//! pfe decode  --format lms200 FILE                                              # raw telegrams
+//! pfe decode  FILE                                                              # raw LMS200 telegrams
 //! pfe plot FILE --format F [--config C] --scan K -o out.svg                     # Fig. 7-style SVG
 //! pfe eval|bench|emulate|record ...                                             # see their --help
 //! ```
 //!
-//! FILE may be gzipped (detected from its content) or `-` for stdin. Bad input (a malformed
-//! line, an unknown format, an unreadable file) gives a one-line error on stderr with the
-//! line number and exit code 2; the scans before it are still written. `eval`, `bench`,
-//! `emulate` and `record` fail with exit code 1, bad arguments included.
+//! FILE may be gzipped (detected from its content) or `-` for stdin. Every subcommand exits
+//! with the codes of [`EXIT_CODES`]: 2 for bad input (a bad argument, a malformed line, an
+//! unknown format, an unreadable file, input with no scan), with a one-line error on stderr
+//! (the scans before it are still written); 1 for any other failure; 130 when interrupted.
 
 pub mod bench;
 pub mod decode;
@@ -18,6 +18,7 @@ pub mod emulate;
 pub mod eval;
 pub mod extract;
 mod input;
+pub mod interrupt;
 mod lms_args;
 pub mod plot;
 pub mod record;
@@ -33,9 +34,7 @@ use clap::{Parser, Subcommand};
     name = "pfe",
     version,
     about = "Prediction-based feature extraction (Zhao & Chen 2011) on recorded 2D laser scans",
-    after_help = "FILE may be gzipped (detected from its content) or - for stdin. Bad input gives a \
-                  one-line error with the line number and exit code 2; the scans before it are \
-                  still written."
+    after_help = EXIT_CODES
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -46,7 +45,7 @@ pub struct Cli {
 enum Command {
     /// Extract features: one JSON object per scan on stdout, one line each.
     Extract(extract::Args),
-    /// Decode an LMS200 capture: one JSON object per good 0xB0 telegram, summary on stderr.
+    /// Decode a raw LMS200 capture: one JSON object per good 0xB0 telegram, summary on stderr.
     Decode(decode::Args),
     /// Plot one scan with its mark points and features as SVG (like Fig. 7 of the paper).
     Plot(plot::Args),
@@ -59,6 +58,14 @@ enum Command {
     /// Record from a scanner.
     Record(record::Args),
 }
+
+/// The exit codes of every subcommand, as `pfe --help` prints them.
+pub const EXIT_CODES: &str = "FILE may be gzipped (detected from its content) or - for stdin.
+
+Exit codes (every subcommand): 0 success; 2 bad input: a bad argument, an unreadable or \
+malformed file (one-line error with the line number; the scans before it are still written), \
+input with no scan, an output that would overwrite a file; 1 any other failure (device, I/O, \
+a broken budget); 130 interrupted by Ctrl-C (what was recorded is kept).";
 
 /// A failure and its exit code.
 pub struct Failure {
@@ -83,16 +90,51 @@ impl Failure {
         }
     }
 
-    /// A subcommand's error, named after it: exit code 1.
+    /// A subcommand's error, named after it: exit code 2 for bad input ([`BadInput`],
+    /// an existing output file, a bad argument), 130 for [`Interrupted`], 1 otherwise.
     fn of(name: &str, e: &anyhow::Error) -> Self {
         let text = format!("{e:#}");
         let text = text.strip_prefix("error: ").unwrap_or(&text);
-        Failure::other(format!("{name}: {text}"))
+        let code = if e.is::<BadInput>()
+            || e.is::<crate::device::record::OutputExists>()
+            || e.is::<clap::Error>()
+        {
+            2
+        } else if e.is::<Interrupted>() {
+            130
+        } else {
+            1
+        };
+        Failure {
+            code,
+            message: format!("{name}: {text}"),
+        }
     }
 }
 
-/// The subcommands whose argument errors exit with code 1 (not clap's 2).
-const EXIT_1_ON_BAD_ARGUMENTS: [&str; 4] = ["eval", "bench", "emulate", "record"];
+/// A bad-input error from a subcommand returning `anyhow` (exit code 2).
+#[derive(Debug)]
+pub struct BadInput(pub String);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadInput {}
+
+/// A run stopped by Ctrl-C or SIGTERM after keeping what it had (exit code 130).
+#[derive(Debug)]
+pub struct Interrupted(pub String);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Interrupted {}
 
 /// Runs `pfe` with the process's arguments.
 pub fn main() -> ExitCode {
@@ -102,18 +144,11 @@ pub fn main() -> ExitCode {
 /// Runs `pfe` with `args` (the first one is the program name).
 pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
     let args: Vec<OsString> = args.into_iter().collect();
+    interrupt::install();
     let cli = match Cli::try_parse_from(&args) {
         Ok(cli) => cli,
-        Err(e) => {
-            let sub = args.get(1).and_then(|a| a.to_str()).unwrap_or("");
-            if e.use_stderr() && EXIT_1_ON_BAD_ARGUMENTS.contains(&sub) {
-                let text = e.to_string();
-                let text = text.strip_prefix("error: ").unwrap_or(&text);
-                eprintln!("pfe: error: {sub}: {}", text.trim_end());
-                return ExitCode::from(1);
-            }
-            e.exit()
-        }
+        // Clap prints the error and exits 2 (0 for --help and --version).
+        Err(e) => e.exit(),
     };
     let result = match cli.command {
         Command::Extract(a) => extract::run(a),

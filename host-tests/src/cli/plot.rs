@@ -1,8 +1,9 @@
 //! `pfe plot`: one scan with its mark points and features as SVG (like Fig. 7 of the paper).
 
+use std::io::Write;
 use std::path::PathBuf;
 
-use super::input::{open, MethodArgs};
+use super::input::{bad_input, nothing_found, open, MethodArgs};
 use super::Failure;
 use crate::formats::{self, Record};
 use crate::methods::Method;
@@ -17,7 +18,7 @@ pub struct Args {
     /// Scan ID to plot (the csv ID, else the 0-based ordinal).
     #[arg(long, short)]
     scan: u64,
-    /// Output SVG file.
+    /// Output SVG file (`-` = stdout).
     #[arg(short, long)]
     output: PathBuf,
 }
@@ -31,11 +32,12 @@ pub fn run(a: Args) -> Result<(), Failure> {
         a.output.as_path(),
     );
     let mut method = a.method.method();
-    let (input, bar) = open(file, format)?;
+    let input = open(file, format)?;
+    let bar = input.bar.clone();
     let mut found: Option<Record> = None;
     let mut count = 0u64;
-    for record in formats::scans(format, input) {
-        let record = record.map_err(|e| Failure::input(format!("{}: {e}", file.display())))?;
+    for record in formats::scans(format, input.reader) {
+        let record = record.map_err(|e| bad_input(file, format, count, &e))?;
         count += 1;
         if record.id == scan {
             found = Some(record);
@@ -43,6 +45,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
         }
     }
     bar.finish_and_clear();
+    if count == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        return Err(nothing_found(file, format, "scan"));
+    }
     let record = found.ok_or_else(|| {
         Failure::input(format!(
             "{}: no scan with ID {scan} ({count} scans read)",
@@ -56,11 +61,25 @@ pub fn run(a: Args) -> Result<(), Failure> {
         .unwrap_or_default();
     let title = format!("{name} — scan {scan} — {}", method.name());
     let svg = crate::plot::svg(&record, &ex, &title);
-    std::fs::write(output, svg)
-        .map_err(|e| Failure::other(format!("{}: cannot write: {e}", output.display())))?;
+    if output.as_os_str() == "-" {
+        let mut out = std::io::stdout().lock();
+        match out.write_all(svg.as_bytes()).and_then(|()| out.flush()) {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                return Err(Failure::other(format!("cannot write output: {e}")));
+            }
+            _ => {}
+        }
+    } else {
+        std::fs::write(output, svg)
+            .map_err(|e| Failure::other(format!("{}: cannot write: {e}", output.display())))?;
+    }
     eprintln!(
         "pfe: wrote {} ({} marks, {} features)",
-        output.display(),
+        if output.as_os_str() == "-" {
+            "the SVG to stdout".to_string()
+        } else {
+            output.display().to_string()
+        },
         ex.marks.len(),
         ex.features.len()
     );

@@ -2,17 +2,22 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use firmware::lms::driver::Config;
 
 use super::lms_args::LmsArgs;
-use crate::device::record::record;
+use super::BadInput;
+use crate::device::record::{record, RecordOptions};
 
-const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE
+const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE [--force]
     [--variant 180/0.5] [--unit mm|cm]
 
 Initialises the LMS200 on PATH with the firmware driver, streams N scans (default 10) and writes
-every raw byte received to FILE. Prints a JSON summary (driver counters).";
+every raw byte received to FILE. Prints a JSON summary (driver counters).
+
+An existing FILE is refused (exit 2) unless --force. The port is opened first and the bytes go
+to a temporary file beside FILE, renamed to FILE at the end: a port that cannot be opened leaves
+FILE untouched, and Ctrl-C (exit 130) or a device failure halfway keeps what was received.";
 
 /// Arguments of `pfe record`.
 #[derive(clap::Args, Debug)]
@@ -24,6 +29,8 @@ pub struct Args {
     output: Option<PathBuf>,
     #[arg(long, default_value_t = 10)]
     scans: u32,
+    #[arg(long)]
+    force: bool,
     #[command(flatten)]
     lms: LmsArgs,
 }
@@ -49,9 +56,22 @@ pub fn run(a: Args) -> Result<()> {
         cfg.unit = u;
     }
     let (Some(port), Some(out)) = (a.port, a.output) else {
-        bail!("--port and -o are required\n\n{USAGE}");
+        return Err(BadInput(format!("--port and -o are required\n\n{USAGE}")).into());
     };
-    let s = record(&port, cfg, a.scans, &out)?;
+    let opts = RecordOptions {
+        overwrite: a.force,
+        stop: Some(super::interrupt::flag()),
+    };
+    let s = record(&port, cfg, a.scans, &out, &opts)?;
     println!("{}", serde_json::to_string(&s)?);
+    if s.interrupted {
+        return Err(super::Interrupted(format!(
+            "interrupted after {} scans; the {} bytes received are in {}",
+            s.scans,
+            s.bytes,
+            out.display()
+        ))
+        .into());
+    }
     Ok(())
 }

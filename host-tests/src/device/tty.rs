@@ -6,6 +6,8 @@ use std::io::{ErrorKind, Read, Write};
 use std::os::fd::AsFd;
 use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -19,6 +21,7 @@ pub struct TtyPort {
     buf: Vec<u8>,
     capture: Option<Box<dyn Write + Send>>,
     captured: u64,
+    stop: Option<Arc<AtomicBool>>,
 }
 
 fn baud_rate(bps: u32) -> Option<BaudRate> {
@@ -52,6 +55,7 @@ impl TtyPort {
             buf: Vec::new(),
             capture: None,
             captured: 0,
+            stop: None,
         })
     }
 
@@ -61,12 +65,25 @@ impl TtyPort {
         self
     }
 
+    /// Fails every read once `stop` is set (so a blocked driver returns, e.g. on Ctrl-C).
+    pub fn with_stop(mut self, stop: Arc<AtomicBool>) -> Self {
+        self.stop = Some(stop);
+        self
+    }
+
     /// Bytes captured so far.
     pub fn captured(&self) -> u64 {
         self.captured
     }
 
     fn fill(&mut self) -> std::io::Result<()> {
+        if self
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Relaxed))
+        {
+            return Err(std::io::Error::other("interrupted"));
+        }
         let mut tmp = [0u8; 1024];
         match self.file.read(&mut tmp) {
             Ok(n) => {

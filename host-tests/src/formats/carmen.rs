@@ -141,7 +141,10 @@ impl Reader {
             if !(r.is_finite() && r >= 0.0) {
                 return Err(InputError::line(
                     line,
-                    format!("range {k} is not a range in metres: {token:?}"),
+                    format!(
+                        "range {k} is not a range in metres: {}",
+                        super::quote(token)
+                    ),
                 ));
             }
             let mm = r * 1000.0;

@@ -267,6 +267,23 @@ fn is_blank_or_comment(text: &str) -> bool {
     t.is_empty() || t.starts_with('#')
 }
 
+/// Most characters of a bad field quoted in an error message.
+pub const MAX_QUOTE: usize = 80;
+
+/// `token` quoted for an error message: escaped like `{:?}`, cut after [`MAX_QUOTE`]
+/// characters with "…" (a garbage "field" may be a megabyte long).
+///
+/// ```
+/// use host_tests::formats::quote;
+/// assert_eq!(quote("x1000"), r#""x1000""#);
+/// assert_eq!(quote(&"a".repeat(500)).chars().count(), 80 + 3);
+/// ```
+pub fn quote(token: &str) -> String {
+    let head: String = token.chars().take(MAX_QUOTE).collect();
+    let more = if head.len() < token.len() { "…" } else { "" };
+    format!("\"{}{more}\"", head.escape_debug())
+}
+
 /// Parses a number field, naming it in the error.
 pub(crate) fn number<T: std::str::FromStr>(
     line: u64,
@@ -277,7 +294,7 @@ pub(crate) fn number<T: std::str::FromStr>(
     token
         .trim()
         .parse()
-        .map_err(|_| InputError::line(line, format!("{what} is not a number: {token:?}")))
+        .map_err(|_| InputError::line(line, format!("{what} is not a number: {}", quote(token))))
 }
 
 /// Checks a beam count against the extractor's capacity.

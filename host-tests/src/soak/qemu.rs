@@ -249,8 +249,10 @@ fn account(r: &QemuRun) -> Result<Account> {
 /// Runs the QEMU soak for `scans` scans (and the warm-up run); `Ok(true)` when it balances.
 pub fn run(a: &super::Args) -> Result<bool> {
     if !qemu::have("qemu-system-arm") || !qemu::have_target() {
-        println!(
-            "\nsoak (QEMU): SKIPPED — needs qemu-system-arm and the thumbv7em-none-eabihf target"
+        crate::skip::skip(
+            "soak (QEMU)",
+            "needs qemu-system-arm and the thumbv7em-none-eabihf target",
+            crate::skip::Need::InCi,
         );
         return Ok(true);
     }

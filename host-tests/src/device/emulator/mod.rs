@@ -450,11 +450,29 @@ impl Emulator {
         self.reboot_at_us = Some(t + self.cfg.reset_time_us);
     }
 
+    /// The operating mode B1 reports (payload index 8): `00` in installation mode, `24` while
+    /// streaming, `25` (values on request, the power-on mode) otherwise.
+    pub fn operating_mode(&self) -> u8 {
+        if self.install {
+            cmode::INSTALL
+        } else if self.streaming {
+            cmode::CONTINUOUS
+        } else {
+            cmode::ON_REQUEST
+        }
+    }
+
+    /// The B1 payload (code + 152 data bytes) at S1's offsets (protocol notes §6).
     fn b1(&self) -> Vec<u8> {
         let mut p = vec![0u8; status_offset::PAYLOAD_LEN - 1];
         p[0] = rcode::STATUS;
         p[1..8].copy_from_slice(b"V02.10 ");
+        p[status_offset::OPERATING_MODE] = self.operating_mode();
+        p[status_offset::DEVICE_STATUS] = 0;
         p[10..18].copy_from_slice(b"07380000");
+        // 18: variant type (0 = standard type 6); 124–130: PROM software version.
+        p[18] = 0;
+        p[124..131].copy_from_slice(b"V02.10 ");
         p[status_offset::MEASURING_MODE] = self.block.measuring_mode().0;
         p[status_offset::SCAN_ANGLE..status_offset::SCAN_ANGLE + 2]
             .copy_from_slice(&self.variant.angle_deg.to_le_bytes());

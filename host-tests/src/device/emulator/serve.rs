@@ -223,10 +223,7 @@ impl Pty {
             r.master.as_fd(),
             FcntlArg::F_SETFL(flags | OFlag::O_NONBLOCK),
         )?;
-        if link.symlink_metadata().is_ok() {
-            std::fs::remove_file(link)
-                .with_context(|| format!("removing old {}", link.display()))?;
-        }
+        clear_stale_link(link)?;
         std::os::unix::fs::symlink(&slave_path, link)
             .with_context(|| format!("symlink {} -> {}", link.display(), slave_path.display()))?;
         Ok(Self {
@@ -246,8 +243,41 @@ impl Pty {
 }
 
 impl Drop for Pty {
+    /// Removes the link, unless something else has replaced it since.
     fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.link);
+        if std::fs::read_link(&self.link).is_ok_and(|t| t == self.slave_path) {
+            let _ = std::fs::remove_file(&self.link);
+        }
+    }
+}
+
+/// Makes room for a pty link at `link`: nothing there is fine, a stale link of ours (a symlink
+/// to a `/dev/pts/N` that no longer exists) is removed, anything else is refused (a user's
+/// file, a directory, a link to a live pty that another emulator may be serving).
+pub fn clear_stale_link(link: &Path) -> Result<()> {
+    let Ok(meta) = link.symlink_metadata() else {
+        return Ok(());
+    };
+    let target = meta
+        .file_type()
+        .is_symlink()
+        .then(|| std::fs::read_link(link).ok())
+        .flatten();
+    match target {
+        Some(t) if t.starts_with("/dev/pts/") && t.symlink_metadata().is_err() => {
+            std::fs::remove_file(link)
+                .with_context(|| format!("removing the stale link {}", link.display()))
+        }
+        Some(t) if t.starts_with("/dev/pts/") => anyhow::bail!(
+            "{} links to {}, a pty that exists (another emulator?); not replacing it",
+            link.display(),
+            t.display()
+        ),
+        _ => anyhow::bail!(
+            "{} exists and is not a stale pty link; not replacing it (remove it or pick \
+             another path)",
+            link.display()
+        ),
     }
 }
 
