@@ -20,6 +20,7 @@ pub mod extract;
 mod input;
 mod lms_args;
 pub mod plot;
+pub mod realdata;
 pub mod record;
 
 use std::ffi::OsString;
@@ -58,6 +59,8 @@ enum Command {
     Emulate(emulate::Args),
     /// Record from a scanner.
     Record(record::Args),
+    /// Real-data benchmark without ground truth: features re-found in the next scan via the poses.
+    Realdata(realdata::Args),
 }
 
 /// A failure and its exit code.
@@ -123,6 +126,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Bench(a) => bench::run(a).map_err(|e| Failure::of("bench", &e)),
         Command::Emulate(a) => emulate::run(a).map_err(|e| Failure::of("emulate", &e)),
         Command::Record(a) => record::run(a).map_err(|e| Failure::of("record", &e)),
+        Command::Realdata(a) => realdata::run(a).map_err(|e| Failure::of("realdata", &e)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
