@@ -270,7 +270,7 @@ mod tests {
     fn the_world_route_agrees_with_the_relative_one() {
         // α_w = α + θ_k, ρ_w = ρ + t_k·n(α_w), then into frame k+1.
         let (k, k1) = ([1200.0, -300.0, 0.3], [1500.0, 100.0, 0.45]);
-        let (a, r) = (-0.2, 3000.0);
+        let (a, r): (f64, f64) = (-0.2, 3000.0);
         let aw = a + k[2];
         let rw = r + k[0] * aw.cos() + k[1] * aw.sin();
         let a1 = wrap(aw - k1[2]);
