@@ -20,6 +20,8 @@ pub mod frame;
 pub mod refit;
 pub mod report;
 mod svg;
+#[cfg(test)]
+mod tests;
 
 use std::path::Path;
 
