@@ -159,7 +159,7 @@ const PLOTS: [(&str, &str); 4] = [
     ("realdata-circles.svg", "circle centre NIS median"),
 ];
 
-/// The four plots, in the order of [`PLOTS`].
+/// The four plots: lines re-appearing, bare beams, line NIS after the refit, circle NIS.
 pub fn plots(reports: &[LogReport]) -> Vec<String> {
     let groups: Vec<String> = reports.iter().map(|r| r.log.clone()).collect();
     let names: Vec<String> = reports
