@@ -225,6 +225,8 @@ fn step_error_estimator_on_synthetic_rooms() {
                     r_max: 50_000.0,
                 },
                 ranges_mm: ranges.clone(),
+                time: None,
+                pose: None,
             });
         }
     }

@@ -9,6 +9,7 @@ mod demo;
 mod eval;
 mod fuzz;
 mod no_panic;
+mod realdata;
 mod size;
 mod soak;
 mod test;
@@ -29,6 +30,7 @@ const HELP: &str = "cargo xtask <command> [args]
   fuzz          every cargo-fuzz target for --seconds S
   no-panic      firmware build whose link fails if a panic path survives
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
+  realdata      features re-found in the next scan on the shared CARMEN logs -> docs/REALDATA.md
 ";
 
 fn main() -> Result<()> {
@@ -52,6 +54,7 @@ fn main() -> Result<()> {
         "fuzz" => fuzz::run(rest),
         "no-panic" => no_panic::run(rest),
         "soak" => soak::run(rest),
+        "realdata" => realdata::run(rest),
         other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
     }
 }

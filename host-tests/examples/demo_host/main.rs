@@ -339,6 +339,8 @@ fn demo(o: &Opts) -> Result<()> {
                                 id: 0,
                                 geometry: sim.geometry,
                                 ranges_mm: sim.ranges_mm.clone(),
+                                time: None,
+                                pose: None,
                             };
                             let title = format!(
                                 "pfe-qemu scan 0 ({config}): {} features from the firmware",

@@ -21,6 +21,7 @@ mod input;
 pub mod interrupt;
 mod lms_args;
 pub mod plot;
+pub mod realdata;
 pub mod record;
 
 use std::ffi::OsString;
@@ -57,6 +58,8 @@ enum Command {
     Emulate(emulate::Args),
     /// Record from a scanner.
     Record(record::Args),
+    /// Real-data benchmark without ground truth: features re-found in the next scan via the poses.
+    Realdata(realdata::Args),
 }
 
 /// The exit codes of every subcommand, as `pfe --help` prints them.
@@ -158,6 +161,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Bench(a) => bench::run(a).map_err(|e| Failure::of("bench", &e)),
         Command::Emulate(a) => emulate::run(a).map_err(|e| Failure::of("emulate", &e)),
         Command::Record(a) => record::run(a).map_err(|e| Failure::of("record", &e)),
+        Command::Realdata(a) => realdata::run(a).map_err(|e| Failure::of("realdata", &e)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

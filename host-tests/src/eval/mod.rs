@@ -4,6 +4,7 @@
 //! `pfe eval` ([`crate::cli::eval`]) writes to `docs/EVALUATION.md` with its plots.
 
 pub mod bench;
+pub mod realdata;
 pub mod report;
 pub mod score;
 pub mod svg;

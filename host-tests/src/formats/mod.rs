@@ -78,6 +78,10 @@ pub struct Record {
     pub geometry: ScanGeometry,
     /// One range per beam, mm; `NaN` = no return.
     pub ranges_mm: Vec<f32>,
+    /// Time of the scan, s, when the format gives one (CARMEN).
+    pub time: Option<f64>,
+    /// Pose of the scanner (x m, y m, θ rad) when the format gives one (CARMEN).
+    pub pose: Option<[f64; 3]>,
 }
 
 impl Record {
@@ -323,6 +327,8 @@ pub(crate) fn checked_record(
         id,
         geometry,
         ranges_mm,
+        time: None,
+        pose: None,
     })
 }
 
