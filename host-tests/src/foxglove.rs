@@ -596,6 +596,8 @@ mod tests {
             id: 0,
             geometry: ScanGeometry::LMS200_180_050,
             ranges_mm: vec![1000.0; 361],
+            time: None,
+            pose: None,
         }
     }
 

@@ -664,6 +664,8 @@ mod tests {
             id: 0,
             geometry,
             ranges_mm: ranges,
+            time: None,
+            pose: None,
         };
         let mut m = Pfe::new("pfe", pfe_core::Config::default().with_sigma_r(5.0));
         let ex = m.extract(&record.geometry, &record.ranges_mm);

@@ -139,6 +139,9 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     step("fuzzing", || {
         crate::fuzz::run(&["--seconds".into(), seconds.into()])
     })?;
+    step("real-data benchmark (shortened)", || {
+        crate::realdata::run(&["--check".into()])
+    })?;
     step("soak (short)", || {
         crate::soak::run(&["--scans".into(), "2000".into()])
     })?;

@@ -645,6 +645,8 @@ impl LaserScanMsg {
             id,
             geometry,
             ranges_mm,
+            time: Some(f64::from(self.sec) + f64::from(self.nanosec) * 1e-9),
+            pose: None,
         })
     }
 }
