@@ -3,9 +3,8 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use super::input::{bad_input, nothing_found, open, MethodArgs};
+use super::input::{bad_input, nothing_found, open_scans, MethodArgs, Scan};
 use super::Failure;
-use crate::formats::{self, Record};
 use crate::methods::Method;
 
 /// Arguments of `pfe plot`.
@@ -32,15 +31,15 @@ pub fn run(a: Args) -> Result<(), Failure> {
         a.output.as_path(),
     );
     let mut method = a.method.method();
-    let input = open(file, format)?;
+    let input = open_scans(file, format, a.method.topic.as_deref())?;
     let bar = input.bar.clone();
-    let mut found: Option<Record> = None;
+    let mut found: Option<Scan> = None;
     let mut count = 0u64;
-    for record in formats::scans(format, input.reader) {
-        let record = record.map_err(|e| bad_input(file, format, count, &e))?;
+    for s in input.scans {
+        let s = s.map_err(|e| bad_input(file, format, count, &e))?;
         count += 1;
-        if record.id == scan {
-            found = Some(record);
+        if s.record.id == scan {
+            found = Some(s);
             break;
         }
     }
@@ -48,19 +47,28 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if count == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
         return Err(nothing_found(file, format, "scan"));
     }
-    let record = found.ok_or_else(|| {
+    let found = found.ok_or_else(|| {
         Failure::input(format!(
             "{}: no scan with ID {scan} ({count} scans read)",
             file.display()
         ))
     })?;
+    let record = &found.record;
     let ex = method.extract(&record.geometry, &record.ranges_mm);
     let name = file
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let title = format!("{name} — scan {scan} — {}", method.name());
-    let svg = crate::plot::svg(&record, &ex, &title);
+    let title = match (&found.frame_id, found.stamp_ns) {
+        (Some(frame), Some(t)) => format!(
+            "{name} — scan {scan} ({frame}, {}.{:09} s) — {}",
+            t / 1_000_000_000,
+            t % 1_000_000_000,
+            method.name()
+        ),
+        _ => format!("{name} — scan {scan} — {}", method.name()),
+    };
+    let svg = crate::plot::svg(record, &ex, &title);
     if output.as_os_str() == "-" {
         let mut out = std::io::stdout().lock();
         match out.write_all(svg.as_bytes()).and_then(|()| out.flush()) {
