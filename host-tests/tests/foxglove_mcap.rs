@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use host_tests::formats::{self, Format, Record};
-use host_tests::foxglove::{FoxgloveWriter, FEATURES_TOPIC, SCAN_TOPIC};
+use host_tests::foxglove::{FoxgloveWriter, FEATURES_TOPIC, NO_RETURN_M, SCAN_TOPIC};
 use host_tests::methods::{Method, Pfe};
 use pfe_core::{Config, Feature};
 use serde_json::Value;
@@ -109,6 +109,7 @@ fn foxglove_file_reads_back_message_for_message() {
     assert_eq!(messages.len(), 2 * scans.len());
     assert_eq!(back["statistics"]["message_count"], 2 * scans.len());
 
+    let mut no_returns = 0;
     for (k, (r, fs)) in scans.iter().zip(&features).enumerate() {
         let (scan, scene) = (&messages[2 * k], &messages[2 * k + 1]);
         let t = stamps[k];
@@ -133,12 +134,17 @@ fn foxglove_file_reads_back_message_for_message() {
         let ranges = d["ranges"].as_array().unwrap();
         assert_eq!(ranges.len(), n);
         for (i, v) in ranges.iter().enumerate() {
+            // Every range is a number (the schema's float64[]; never null).
+            assert!(v.is_number(), "scan {k} beam {i}: {v}");
             match r.point(i) {
                 Some(_) => assert!(
                     near(v, f64::from(r.ranges_mm[i]) * 1e-3),
                     "scan {k} beam {i}"
                 ),
-                None => assert!(v.is_null(), "scan {k} beam {i}: {v}"),
+                None => {
+                    assert_eq!(f(v), NO_RETURN_M, "scan {k} beam {i}: {v}");
+                    no_returns += 1;
+                }
             }
         }
 
@@ -208,4 +214,6 @@ fn foxglove_file_reads_back_message_for_message() {
             }
         }
     }
+    // The no-return check above ran (the fixtures have beams with no return).
+    assert!(no_returns > 0, "no no-return beam in the fixtures");
 }
