@@ -1,7 +1,7 @@
 //! The Foxglove MCAP file of `host_tests::foxglove`, read back by an independent reader
 //! (`fixtures/foxglove/read_foxglove.py`: the PyPI `mcap` package and `json`) and compared field
-//! by field with what was written. Without python3 or `mcap` it prints `SKIPPED: …` and passes,
-//! except under `CI=true`, where it fails.
+//! by field with what was written. Without python3 or `mcap` it reports a skip through
+//! `host_tests::skip` and passes, except under `CI=true`, where it fails.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -26,10 +26,11 @@ fn records(name: &str, format: Format) -> Vec<Record> {
 fn read_back(path: &Path) -> Option<Value> {
     let script = fixture("foxglove/read_foxglove.py");
     let skip = |why: String| {
-        if std::env::var("CI").is_ok_and(|v| v == "true") {
-            panic!("{why} (CI=true: install python3 and `pip install mcap`)");
-        }
-        eprintln!("\n*** SKIPPED: {why} ***\n");
+        host_tests::skip::skip(
+            "foxglove_mcap::foxglove_file_reads_back_message_for_message",
+            &format!("{why} (install python3 and `pip install mcap`)"),
+            host_tests::skip::Need::InCi,
+        );
         None
     };
     let out = match Command::new("python3").arg(&script).arg(path).output() {
