@@ -13,7 +13,12 @@
 //!   r ± σ_r rings (`lines[1]`, `lines[2]`) and the centre's 1σ ellipse (`lines[3]`);
 //! - a text label (`texts[0]`).
 //!
-//! No-return beams are `null` in the LaserScan's `ranges` (JSON has no NaN).
+//! No-return beams are [`NO_RETURN_M`] (0 m) in the LaserScan's `ranges`: JSON has no NaN or
+//! ±inf, `null` breaks the schema's `float64[]`, and `foxglove.LaserScan` carries no
+//! `range_min`/`range_max` (Foxglove's 3D panel takes them as ±∞ for this schema and draws every
+//! finite range), so no value hides a beam; 0 puts it at the sensor's origin, under its frame
+//! axes, rather than on a phantom arc beyond the maximum range, and 0 is "no return" in LMS and
+//! URG data alike.
 //!
 //! The file is written under a temporary name beside `path` and renamed at [`FoxgloveWriter::finish`],
 //! so an interrupted run leaves no half-written file under the name asked for; an existing
@@ -214,14 +219,17 @@ fn color(r: f64, g: f64, b: f64, a: f64) -> Value {
     json!({ "r": r, "g": g, "b": b, "a": a })
 }
 
-/// A `foxglove.LaserScan` (ranges in m, `null` = no return).
+/// Range written for a beam with no return, m (see the module's documentation).
+pub const NO_RETURN_M: f64 = 0.0;
+
+/// A `foxglove.LaserScan` (ranges in m, [`NO_RETURN_M`] = no return).
 pub fn laser_scan(stamp_ns: u64, frame_id: &str, record: &Record) -> Value {
     let g = &record.geometry;
     let n = record.ranges_mm.len();
-    let ranges: Vec<Value> = (0..n)
-        .map(|i| match record.point(i) {
-            Some(_) => json!(f64::from(record.ranges_mm[i]) * MM),
-            None => Value::Null,
+    let ranges: Vec<f64> = (0..n)
+        .map(|i| match (record.point(i), record.ranges_mm.get(i)) {
+            (Some(_), Some(&r)) => f64::from(r) * MM,
+            _ => NO_RETURN_M,
         })
         .collect();
     json!({
@@ -498,7 +506,7 @@ fn laser_scan_schema() -> Vec<u8> {
             "pose": pose_schema(),
             "start_angle": number(),
             "end_angle": number(),
-            "ranges": array(json!({ "type": ["number", "null"] })),
+            "ranges": array(number()),
             "intensities": array(number()),
         }),
     );

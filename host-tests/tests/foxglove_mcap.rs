@@ -1,13 +1,13 @@
 //! The Foxglove MCAP file of `host_tests::foxglove`, read back by an independent reader
 //! (`fixtures/foxglove/read_foxglove.py`: the PyPI `mcap` package and `json`) and compared field
-//! by field with what was written. Without python3 or `mcap` it prints `SKIPPED: …` and passes,
-//! except under `CI=true`, where it fails.
+//! by field with what was written. Without python3 or `mcap` it reports a skip through
+//! `host_tests::skip` and passes, except under `CI=true`, where it fails.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use host_tests::formats::{self, Format, Record};
-use host_tests::foxglove::{FoxgloveWriter, FEATURES_TOPIC, SCAN_TOPIC};
+use host_tests::foxglove::{FoxgloveWriter, FEATURES_TOPIC, NO_RETURN_M, SCAN_TOPIC};
 use host_tests::methods::{Method, Pfe};
 use pfe_core::{Config, Feature};
 use serde_json::Value;
@@ -26,10 +26,11 @@ fn records(name: &str, format: Format) -> Vec<Record> {
 fn read_back(path: &Path) -> Option<Value> {
     let script = fixture("foxglove/read_foxglove.py");
     let skip = |why: String| {
-        if std::env::var("CI").is_ok_and(|v| v == "true") {
-            panic!("{why} (CI=true: install python3 and `pip install mcap`)");
-        }
-        eprintln!("\n*** SKIPPED: {why} ***\n");
+        host_tests::skip::skip(
+            "foxglove_mcap::foxglove_file_reads_back_message_for_message",
+            &format!("{why} (install python3 and `pip install mcap`)"),
+            host_tests::skip::Need::InCi,
+        );
         None
     };
     let out = match Command::new("python3").arg(&script).arg(path).output() {
@@ -109,6 +110,7 @@ fn foxglove_file_reads_back_message_for_message() {
     assert_eq!(messages.len(), 2 * scans.len());
     assert_eq!(back["statistics"]["message_count"], 2 * scans.len());
 
+    let mut no_returns = 0;
     for (k, (r, fs)) in scans.iter().zip(&features).enumerate() {
         let (scan, scene) = (&messages[2 * k], &messages[2 * k + 1]);
         let t = stamps[k];
@@ -133,12 +135,17 @@ fn foxglove_file_reads_back_message_for_message() {
         let ranges = d["ranges"].as_array().unwrap();
         assert_eq!(ranges.len(), n);
         for (i, v) in ranges.iter().enumerate() {
+            // Every range is a number (the schema's float64[]; never null).
+            assert!(v.is_number(), "scan {k} beam {i}: {v}");
             match r.point(i) {
                 Some(_) => assert!(
                     near(v, f64::from(r.ranges_mm[i]) * 1e-3),
                     "scan {k} beam {i}"
                 ),
-                None => assert!(v.is_null(), "scan {k} beam {i}: {v}"),
+                None => {
+                    assert_eq!(f(v), NO_RETURN_M, "scan {k} beam {i}: {v}");
+                    no_returns += 1;
+                }
             }
         }
 
@@ -208,4 +215,6 @@ fn foxglove_file_reads_back_message_for_message() {
             }
         }
     }
+    // The no-return check above ran (the fixtures have beams with no return).
+    assert!(no_returns > 0, "no no-return beam in the fixtures");
 }

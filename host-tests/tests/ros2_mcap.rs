@@ -3,8 +3,8 @@
 //! Bags written independently of this code (`fixtures/ros2/make_bags.py`: the Python `mcap` and
 //! `mcap-ros2-support` packages, from the first 50 scans of two shared CARMEN logs) must give
 //! the CARMEN reader's scans and, through pfe-core, its features. Without python3 or those
-//! packages the Python-backed tests print `SKIPPED: …` and pass, except under `CI=true`, where
-//! they fail. Bags written here with the `mcap` crate check the error paths (no LaserScan
+//! packages the Python-backed tests report a skip through `host_tests::skip` and pass, except
+//! under `CI=true`, where they fail. Bags written here with the `mcap` crate check the error paths (no LaserScan
 //! topic, truncation, damage) everywhere.
 
 use std::borrow::Cow;
@@ -45,12 +45,14 @@ fn shared_carmen() -> Option<PathBuf> {
     d.is_dir().then_some(d)
 }
 
-/// Skips (outside CI) or fails (CI=true) with `why`.
+/// Reports the skip of the Python-backed test (listed by `cargo xtask test`; a failure under
+/// `CI=true`, where python3, the packages and the shared logs are installed).
 fn skip(why: &str) -> Option<Value> {
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("{why} (CI=true: install python3 and `pip install mcap mcap-ros2-support`)");
-    }
-    eprintln!("\n*** SKIPPED: {why} ***\n");
+    host_tests::skip::skip(
+        "ros2_mcap::independent_bags_read_as_the_carmen_logs",
+        &format!("{why} (install python3 and `pip install mcap mcap-ros2-support`)"),
+        host_tests::skip::Need::InCi,
+    );
     None
 }
 

@@ -12,7 +12,8 @@ use pfe_core::Config;
 use serde::Serialize;
 
 use super::Failure;
-use crate::formats::{self, Format};
+use crate::formats::ros2::{self, Ros2Scan, TopicError};
+use crate::formats::{self, Format, InputError, Record};
 use crate::methods::Pfe;
 
 /// Named extractor configurations.
@@ -45,10 +46,14 @@ pub struct MethodArgs {
     /// Extractor configuration.
     #[arg(long, short, default_value = "default")]
     pub config: ConfigName,
-    /// Range noise of the scanner, mm, finite and > 0 (default: 5 for csv/lms200, 10 for
-    /// carmen/hokuyo).
+    /// Range noise of the scanner, mm, finite and > 0 (default: 5 for csv/lms200; 10 for
+    /// carmen/hokuyo, and for mcap: ROS 2 bags mostly hold Hokuyo URG or SICK LMS/TiM scans,
+    /// whose range noise is of that order).
     #[arg(long, value_parser = sigma_mm)]
     pub sigma_r: Option<f32>,
+    /// LaserScan topic of a ROS 2 bag (--format mcap); default: the bag's only LaserScan topic.
+    #[arg(long)]
+    pub topic: Option<String>,
 }
 
 /// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).
@@ -123,10 +128,14 @@ pub fn open(file: &Path, format: Format) -> Result<Input, Failure> {
     Ok(Input { reader, bar, bytes })
 }
 
-/// Another format in which `file` starts with a good scan (`None` for stdin).
+/// Another format in which `file` starts with a good scan (`None` for stdin); `mcap` when it
+/// starts with the MCAP magic bytes.
 pub fn guess(file: &Path, format: Format) -> Option<Format> {
     if file.as_os_str() == "-" {
         return None;
+    }
+    if format != Format::Mcap && starts_as_mcap(file) {
+        return Some(Format::Mcap);
     }
     Format::value_variants()
         .iter()
@@ -145,7 +154,7 @@ pub fn guess(file: &Path, format: Format) -> Option<Format> {
 pub fn nothing_found(file: &Path, format: Format, what: &str) -> Failure {
     let hint = match guess(file, format) {
         Some(g) => format!("is it {g}? try --format {g}"),
-        None => "is --format right? (csv, carmen, hokuyo, lms200)".to_string(),
+        None => "is --format right? (csv, carmen, hokuyo, lms200, mcap)".to_string(),
     };
     Failure::input(format!(
         "{}: no {what} found in it as {format}; {hint}",
@@ -188,4 +197,100 @@ pub fn flush<W: Write>(out: &mut W) -> Result<(), Failure> {
         }
         _ => Ok(()),
     }
+}
+
+/// True when `file` starts with the MCAP magic bytes.
+fn starts_as_mcap(file: &Path) -> bool {
+    let mut head = [0u8; 8];
+    std::fs::File::open(file)
+        .and_then(|mut f| f.read_exact(&mut head))
+        .is_ok_and(|()| formats::ros2_stream::is_mcap(&head))
+}
+
+/// One scan of any input, with the stamp and frame a ROS 2 bag gives it.
+pub struct Scan {
+    /// The scan.
+    pub record: Record,
+    /// `header.stamp` of a bag's scan, ns since the epoch.
+    pub stamp_ns: Option<u64>,
+    /// `header.frame_id` of a bag's scan.
+    pub frame_id: Option<String>,
+}
+
+/// The scans of an opened input, its progress bar and the bytes read so far.
+pub struct Source {
+    /// Scans, stopping after the first error.
+    pub scans: Box<dyn Iterator<Item = Result<Scan, InputError>>>,
+    /// Progress on stderr (hidden when stderr is not a terminal).
+    pub bar: ProgressBar,
+    /// Raw bytes read so far (for a bag: its size once opened).
+    pub bytes: Arc<AtomicU64>,
+}
+
+/// Opens `file` as `format`; a ROS 2 bag (`mcap`) is read by path from `topic` (or its only
+/// LaserScan topic), stdin is buffered in memory first. `--topic` with another format is bad
+/// input.
+pub fn open_scans(file: &Path, format: Format, topic: Option<&str>) -> Result<Source, Failure> {
+    if format != Format::Mcap {
+        if topic.is_some() {
+            return Err(Failure::input(format!(
+                "--topic is for ROS 2 bags (--format mcap), not {format}"
+            )));
+        }
+        let input = open(file, format)?;
+        return Ok(Source {
+            scans: Box::new(formats::scans(format, input.reader).map(|r| {
+                r.map(|record| Scan {
+                    record,
+                    stamp_ns: None,
+                    frame_id: None,
+                })
+            })),
+            bar: input.bar,
+            bytes: input.bytes,
+        });
+    }
+    let opened = if file.as_os_str() == "-" {
+        let mut bytes = Vec::new();
+        io::stdin()
+            .read_to_end(&mut bytes)
+            .map_err(|e| Failure::input(format!("-: cannot read: {e}")))?;
+        let len = bytes.len() as u64;
+        ros2::open_laser_scans(io::Cursor::new(bytes), topic).map(|s| {
+            (
+                Box::new(s.map(from_bag)) as Box<dyn Iterator<Item = _>>,
+                len,
+            )
+        })
+    } else {
+        let len = std::fs::metadata(file).map(|m| m.len()).unwrap_or(0);
+        ros2::read_laser_scans(file, topic).map(|s| {
+            (
+                Box::new(s.map(from_bag)) as Box<dyn Iterator<Item = _>>,
+                len,
+            )
+        })
+    };
+    let (scans, len) = opened.map_err(|e| match e {
+        TopicError::Input(e) => bad_input(file, format, 0, &e),
+        e => Failure::input(format!("{}: {e}", file.display())),
+    })?;
+    let bar = if io::stderr().is_terminal() {
+        ProgressBar::new_spinner()
+    } else {
+        ProgressBar::hidden()
+    };
+    Ok(Source {
+        scans,
+        bar,
+        bytes: Arc::new(AtomicU64::new(len)),
+    })
+}
+
+fn from_bag(s: Result<Ros2Scan, InputError>) -> Result<Scan, InputError> {
+    s.map(|s| Scan {
+        record: s.record,
+        stamp_ns: Some(s.stamp_ns),
+        frame_id: Some(s.frame_id),
+    })
 }
