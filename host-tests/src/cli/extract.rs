@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use super::input::{flush, open, stdout, write_json, MethodArgs};
 use super::Failure;
-use crate::formats::{self, ScanJson};
+use crate::formats::{self, ScanJson, StatusJson};
 use crate::methods::Method;
 
 /// Arguments of `pfe extract`.
@@ -40,7 +40,10 @@ pub fn run(a: Args) -> Result<(), Failure> {
         if scans % 256 == 0 {
             bar.set_message(format!("{scans} scans"));
         }
-        if !write_json(&mut out, &ScanJson::new(record.id, &ex))? {
+        if !write_json(
+            &mut out,
+            &ScanJson::new(record.id, &ex).with_status(StatusJson::of(&method.last_result())),
+        )? {
             break;
         }
     }
