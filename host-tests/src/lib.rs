@@ -18,6 +18,7 @@ pub mod device;
 pub mod docs;
 pub mod eval;
 pub mod formats;
+pub mod link;
 pub mod methods;
 pub mod plot;
 pub mod qemu;

@@ -18,6 +18,7 @@ pub mod emulate;
 pub mod eval;
 pub mod extract;
 mod input;
+pub mod listen;
 mod lms_args;
 pub mod plot;
 pub mod record;
@@ -58,6 +59,8 @@ enum Command {
     Emulate(emulate::Args),
     /// Record from a scanner.
     Record(record::Args),
+    /// Read the firmware's feature frames: one JSON object per scan on stdout.
+    Listen(listen::Args),
 }
 
 /// A failure and its exit code.
@@ -123,6 +126,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Bench(a) => bench::run(a).map_err(|e| Failure::of("bench", &e)),
         Command::Emulate(a) => emulate::run(a).map_err(|e| Failure::of("emulate", &e)),
         Command::Record(a) => record::run(a).map_err(|e| Failure::of("record", &e)),
+        Command::Listen(a) => listen::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
