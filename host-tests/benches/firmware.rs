@@ -79,6 +79,7 @@ fn benches(c: &mut Criterion) {
     );
     let header = ScanHeader {
         seq: 1,
+        time_ms: 0,
         counters: Counters::default(),
         valid: 350,
         segments: 12,

@@ -21,6 +21,7 @@ pub mod docs;
 pub mod eval;
 pub mod formats;
 pub mod foxglove;
+pub mod link;
 pub mod methods;
 pub mod plot;
 pub mod qemu;

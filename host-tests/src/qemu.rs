@@ -357,7 +357,7 @@ pub fn session(
 pub fn host_features(
     words: &[u16],
     choice: firmware::app::ConfigChoice,
-) -> Result<Vec<firmware::output::WireFeature>> {
+) -> Result<Vec<pfe_core::Feature>> {
     use firmware::app::{App, RawScan};
     use firmware::lms::Variant;
     let v = Variant::A180_R050;
@@ -402,53 +402,12 @@ impl embedded_io::Write for VecWriter {
 
 /// Bit-level comparison of two features: `None` when identical, else the largest difference
 /// in units in the last place over all f32 fields (and `u32::MAX` for a different kind/range).
-pub fn ulps_apart(
-    a: &firmware::output::WireFeature,
-    b: &firmware::output::WireFeature,
-) -> Option<u32> {
-    use firmware::output::WireFeature as W;
-    let fields = |f: &W| -> (u8, [u16; 3], Vec<f32>) {
-        match *f {
-            W::Line {
-                first,
-                last,
-                points,
-                alpha,
-                rho,
-                var_alpha,
-                var_rho,
-                cov_alpha_rho,
-                start,
-                end,
-            } => (
-                0,
-                [first, last, points],
-                vec![
-                    alpha,
-                    rho,
-                    var_alpha,
-                    var_rho,
-                    cov_alpha_rho,
-                    start[0],
-                    start[1],
-                    end[0],
-                    end[1],
-                ],
-            ),
-            W::Circle {
-                first,
-                last,
-                points,
-                center,
-                radius,
-                cov,
-                start_angle,
-                end_angle,
-            } => {
-                let mut v = vec![center[0], center[1], radius, start_angle, end_angle];
-                v.extend(cov.iter().flatten());
-                (1, [first, last, points], v)
-            }
+pub fn ulps_apart(a: &pfe_core::Feature, b: &pfe_core::Feature) -> Option<u32> {
+    use pfe_core::Feature;
+    let fields = |f: &Feature| -> (u8, [u16; 3], Vec<f32>) {
+        match f {
+            Feature::Line(l) => (0, [l.first, l.last, l.points], l.values().to_vec()),
+            Feature::Circle(c) => (1, [c.first, c.last, c.points], c.values().to_vec()),
         }
     };
     let (ka, ia, va) = fields(a);

@@ -71,7 +71,7 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
         assert_eq!(host.as_slice(), f.features.as_slice(), "scan {k}");
         let ex = Extraction {
             marks: Vec::new(),
-            features: f.features.iter().map(|w| w.to_feature()).collect(),
+            features: f.features.to_vec(),
         };
         total.add(&host_tests::eval::score::score_sim(&ex, &sims[k]));
     }

@@ -10,6 +10,7 @@ mod eval;
 mod fuzz;
 mod no_panic;
 mod realdata;
+mod run_qemu;
 mod size;
 mod soak;
 mod test;
@@ -29,6 +30,7 @@ const HELP: &str = "cargo xtask <command> [args]
   size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
   fuzz          every cargo-fuzz target for --seconds S
   no-panic      firmware build whose link fails if a panic path survives
+  run-qemu      firmware in QEMU between a scanner tty/pty and a feature pty (--scanner, --output)
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
   realdata      features re-found in the next scan on the shared CARMEN logs -> docs/REALDATA.md
 ";
@@ -55,6 +57,7 @@ fn main() -> Result<()> {
         "no-panic" => no_panic::run(rest),
         "soak" => soak::run(rest),
         "realdata" => realdata::run(rest),
+        "run-qemu" => run_qemu::run(rest),
         other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
     }
 }

@@ -32,6 +32,7 @@
 //!     return Err("no frame".into());
 //! };
 //! assert!(frame.features[0].is_line());
+//! assert_eq!(frame.scan().map(|h| h.time_ms), Some(0)); // lms_8m: time unknown
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -202,6 +203,7 @@ impl<const N: usize, const M: usize> App<N, M> {
         let features = self.extractor.features();
         let header = ScanHeader {
             seq: self.seq,
+            time_ms: scan.time_ms,
             counters,
             valid: sat(stats.valid),
             segments: sat(stats.segments),

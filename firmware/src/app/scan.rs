@@ -17,6 +17,8 @@ pub struct RawScan<'a> {
     pub mm_per_unit: f32,
     /// Largest valid code (8182 in the 8 m / 80 m measuring modes).
     pub max_valid: u16,
+    /// Firmware time when the telegram was complete, ms (the driver's clock; 0 if unknown).
+    pub time_ms: u32,
 }
 
 impl<'a> RawScan<'a> {
@@ -27,6 +29,7 @@ impl<'a> RawScan<'a> {
             values,
             mm_per_unit,
             max_valid: MeasuringMode::M8_FIELDS_AB_DAZZLE.max_valid(),
+            time_ms: 0,
         }
     }
 
@@ -64,6 +67,7 @@ impl ScanData {
             values: self.codes(),
             mm_per_unit: self.mm_per_unit(),
             max_valid: self.max_valid(),
+            time_ms: self.time_ms,
         }
     }
 

@@ -1,18 +1,19 @@
 //! The host-side frame reader: sans-IO, byte chunks in, frames out.
 
 use heapless::Vec;
+use pfe_core::{CircleFeature, Feature, LineFeature, Point};
 
 use super::cobs::cobs_decode_in_place;
 use super::crc::crc32;
-use super::wire::{Header, ScanHeader, WireFeature, MAX_FEATURES};
+use super::wire::{Header, ScanHeader, MAX_FEATURES, WIRE_VERSION};
 
 /// A decoded frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// What the frame is.
     pub header: Header,
-    /// The features of a scan frame (empty for reports).
-    pub features: Vec<WireFeature, MAX_FEATURES>,
+    /// The features of a scan frame (empty for reports), bit for bit as the firmware had them.
+    pub features: Vec<Feature, MAX_FEATURES>,
 }
 
 impl Frame {
@@ -43,6 +44,11 @@ pub enum DecodeError {
         /// CRC found in the frame.
         got: u32,
     },
+    /// The frame is intact (its CRC matches) but of another [`WIRE_VERSION`]: not decoded.
+    UnknownVersion {
+        /// The version byte found.
+        version: u8,
+    },
     /// The payload is not a valid header followed by features.
     Payload,
     /// More features than [`MAX_FEATURES`].
@@ -66,6 +72,10 @@ impl core::fmt::Display for DecodeError {
                     "CRC mismatch: computed {expected:#010x}, frame has {got:#010x}"
                 )
             }
+            DecodeError::UnknownVersion { version } => write!(
+                f,
+                "frame version {version}, this decoder reads version {WIRE_VERSION}"
+            ),
             DecodeError::Payload => f.write_str("payload is not a valid header and features"),
             DecodeError::TooManyFeatures { n } => write!(f, "{n} features announced, too many"),
             DecodeError::TrailingBytes => f.write_str("bytes after the last feature"),
@@ -173,6 +183,10 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
     if expected != got {
         return Err(DecodeError::Crc { expected, got });
     }
+    let (&version, payload) = payload.split_first().ok_or(DecodeError::TooShort)?;
+    if version != WIRE_VERSION {
+        return Err(DecodeError::UnknownVersion { version });
+    }
     let (header, mut rest): (Header, &[u8]) =
         postcard::take_from_bytes(payload).map_err(|_| DecodeError::Payload)?;
     let mut features = Vec::new();
@@ -181,8 +195,7 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
             return Err(DecodeError::TooManyFeatures { n: h.n_features });
         }
         for _ in 0..h.n_features {
-            let (f, r): (WireFeature, &[u8]) =
-                postcard::take_from_bytes(rest).map_err(|_| DecodeError::Payload)?;
+            let (f, r) = take_feature(rest).ok_or(DecodeError::Payload)?;
             features
                 .push(f)
                 .map_err(|_| DecodeError::TooManyFeatures { n: h.n_features })?;
@@ -193,4 +206,79 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
         return Err(DecodeError::TrailingBytes);
     }
     Ok(Frame { header, features })
+}
+
+/// One feature off the front of `data` (the layout the encoder writes: variant index, first,
+/// last, points as varints, then the `f32`s little-endian), and the bytes after it.
+fn take_feature(data: &[u8]) -> Option<(Feature, &[u8])> {
+    let mut r = Reader(data);
+    let tag = r.varint()?;
+    let (first, last, points) = (r.varint()?, r.varint()?, r.varint()?);
+    let f = match tag {
+        0 => {
+            let [alpha, rho, var_alpha, var_rho, cov_alpha_rho, sx, sy, ex, ey] = r.floats()?;
+            Feature::Line(LineFeature {
+                first,
+                last,
+                points,
+                alpha,
+                rho,
+                var_alpha,
+                var_rho,
+                cov_alpha_rho,
+                start: Point::new(sx, sy),
+                end: Point::new(ex, ey),
+            })
+        }
+        1 => {
+            let [cx, cy, radius, a, b, c, d, e, g, h, i, j, start_angle, end_angle] = r.floats()?;
+            Feature::Circle(CircleFeature {
+                first,
+                last,
+                points,
+                center: Point::new(cx, cy),
+                radius,
+                cov: [[a, b, c], [d, e, g], [h, i, j]],
+                start_angle,
+                end_angle,
+            })
+        }
+        _ => return None,
+    };
+    Some((f, r.0))
+}
+
+/// Reads postcard's encodings off the front of a slice.
+struct Reader<'a>(&'a [u8]);
+
+impl Reader<'_> {
+    fn byte(&mut self) -> Option<u8> {
+        let (&b, rest) = self.0.split_first()?;
+        self.0 = rest;
+        Some(b)
+    }
+
+    /// A `u16` as an LEB128 varint (at most 3 bytes, no bits above 16, as postcard accepts).
+    fn varint(&mut self) -> Option<u16> {
+        let mut v = 0u32;
+        for shift in [0u32, 7, 14] {
+            let b = self.byte()?;
+            v |= u32::from(b & 0x7F) << shift;
+            if b & 0x80 == 0 {
+                return u16::try_from(v).ok();
+            }
+        }
+        None
+    }
+
+    /// `K` little-endian `f32`s.
+    fn floats<const K: usize>(&mut self) -> Option<[f32; K]> {
+        let mut out = [0.0f32; K];
+        for v in &mut out {
+            let (b, rest) = self.0.split_first_chunk::<4>()?;
+            *v = f32::from_le_bytes(*b);
+            self.0 = rest;
+        }
+        Some(out)
+    }
 }

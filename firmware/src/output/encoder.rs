@@ -4,7 +4,7 @@
 use pfe_core::Feature;
 
 use super::cobs::CobsWriter;
-use super::wire::{Header, Report, ScanHeader, MAX_FEATURE_LEN};
+use super::wire::{Header, Report, ScanHeader, MAX_FEATURE_LEN, WIRE_VERSION};
 
 /// Bytes of features [`write_scan`] encodes at a time.
 const FEATURE_CHUNK: usize = 6 * MAX_FEATURE_LEN;
@@ -31,10 +31,9 @@ impl<E: core::fmt::Debug> core::fmt::Display for EncodeError<E> {
 
 impl<E: core::fmt::Debug> core::error::Error for EncodeError<E> {}
 
-/// The postcard bytes of `WireFeature::from(f)` in `out`, written directly (variant index and
-/// beam indices as varints, the `f32`s as 4 little-endian bytes each, fields in declaration
-/// order): the same bytes as `postcard::to_slice`, with fewer instructions. Returns their
-/// length.
+/// The postcard bytes of `f` in `out` as postcard writes them, by hand (variant index and beam
+/// indices as varints, then the `f32`s as 4 little-endian bytes each in declaration order,
+/// points as `[x, y]`; see `docs/FRAME.md`). Returns their length.
 fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
     let mut w = Cursor { out, at: 0 };
     match f {
@@ -105,7 +104,7 @@ pub fn write_scan<W: embedded_io::Write>(
     let mut h = *header;
     h.n_features = u16::try_from(features.len()).unwrap_or(u16::MAX);
     let mut enc = CobsWriter::new(w);
-    enc.put_item(&Header::Scan(h))?;
+    enc.put_item(&(WIRE_VERSION, Header::Scan(h)))?;
     // Features gathered into a chunk, encoded a chunk at a time (fewer calls, and fewer
     // bytes left over from the encoder's words).
     let mut chunk = [0u8; FEATURE_CHUNK];
@@ -131,7 +130,7 @@ pub fn write_report<W: embedded_io::Write>(
     report: &Report,
 ) -> Result<(), EncodeError<W::Error>> {
     let mut enc = CobsWriter::new(w);
-    enc.put_item(&Header::Report(*report))?;
+    enc.put_item(&(WIRE_VERSION, Header::Report(*report)))?;
     enc.finish().map_err(EncodeError::Write)
 }
 
@@ -139,8 +138,41 @@ pub fn write_report<W: embedded_io::Write>(
 mod tests {
     #![allow(clippy::indexing_slicing)]
     use super::*;
-    use crate::output::wire::WireFeature;
     use pfe_core::{CircleFeature, LineFeature, Point};
+    use serde::Serialize;
+
+    /// The feature layout of `docs/FRAME.md` as a serde type: what postcard writes for it is
+    /// what `feature_bytes` must write.
+    #[derive(Serialize)]
+    enum Spec {
+        Line(u16, u16, u16, [f32; 5], [f32; 2], [f32; 2]),
+        Circle(u16, u16, u16, [f32; 2], f32, [[f32; 3]; 3], f32, f32),
+    }
+
+    impl From<&Feature> for Spec {
+        fn from(f: &Feature) -> Self {
+            match *f {
+                Feature::Line(l) => Spec::Line(
+                    l.first,
+                    l.last,
+                    l.points,
+                    [l.alpha, l.rho, l.var_alpha, l.var_rho, l.cov_alpha_rho],
+                    [l.start.x, l.start.y],
+                    [l.end.x, l.end.y],
+                ),
+                Feature::Circle(c) => Spec::Circle(
+                    c.first,
+                    c.last,
+                    c.points,
+                    [c.center.x, c.center.y],
+                    c.radius,
+                    c.cov,
+                    c.start_angle,
+                    c.end_angle,
+                ),
+            }
+        }
+    }
 
     /// The hand-written feature bytes are postcard's, for lines and circles with fields of
     /// every bit pattern and beam indices at every varint length.
@@ -188,7 +220,7 @@ mod tests {
                 })
             };
             let mut want = [0u8; MAX_FEATURE_LEN];
-            let want = postcard::to_slice(&WireFeature::from(&f), &mut want)?;
+            let want = postcard::to_slice(&Spec::from(&f), &mut want)?;
             let mut got = [0u8; MAX_FEATURE_LEN];
             let n = feature_bytes(&f, &mut got);
             assert_eq!(&got[..n], &want[..], "{f:?}");

@@ -1,20 +1,22 @@
 //! Features on the wire: postcard + COBS frames with a CRC-32.
 //!
-//! # Frame format (version [`WIRE_VERSION`])
+//! # Frame format (version [`WIRE_VERSION`]; the specification is `docs/FRAME.md`)
 //!
 //! ```text
-//! COBS( postcard(Header) ‖ postcard(WireFeature) × n ‖ CRC-32 (4 bytes, little-endian) ) ‖ 0x00
+//! COBS( WIRE_VERSION ‖ postcard(Header) ‖ feature × n ‖ CRC-32 (4 bytes, little-endian) ) ‖ 0x00
 //! ```
 //!
 //! - Every frame ends with a single `0x00`; COBS guarantees there is no other zero in it, so a
 //!   receiver that joins mid-stream or loses bytes resynchronises at the next `0x00`.
-//! - The payload is [postcard](https://docs.rs/postcard) (integers as LEB128 varints, `f32` as
+//! - The payload starts with the version byte; a receiver drops a frame of another version.
+//! - The rest is [postcard](https://docs.rs/postcard) (integers as LEB128 varints, `f32` as
 //!   4 little-endian bytes — bit-exact, enums as a varint variant index).
 //! - The CRC is CRC-32/ISO-HDLC (the zlib / Ethernet CRC: reflected polynomial `0xEDB88320`,
-//!   init and final XOR `0xFFFFFFFF`; `crc32(b"123456789") = 0xCBF43926`) over the postcard
-//!   bytes, appended little-endian before COBS encoding.
+//!   init and final XOR `0xFFFFFFFF`; `crc32(b"123456789") = 0xCBF43926`) over the payload
+//!   bytes (version included), appended little-endian before COBS encoding.
 //! - The [`Header`] says what follows: [`Header::Scan`] is followed by exactly `n_features`
-//!   [`WireFeature`]s; [`Header::Report`] (stack high-water mark, timing) by nothing.
+//!   pfe-core [`Feature`](pfe_core::Feature)s (points as `[x, y]`); [`Header::Report`] (stack
+//!   high-water mark, timing) by nothing.
 //!
 //! The encoder ([`write_scan`], [`write_report`]) streams to any [`embedded_io::Write`] with a
 //! fixed 255-byte COBS block, a 96-byte scratch buffer for the header and a 420-byte chunk of
@@ -29,7 +31,7 @@
 //!     first: 10, last: 40, points: 31, alpha: 0.1, rho: 2000.0, var_alpha: 1e-6,
 //!     var_rho: 4.0, cov_alpha_rho: 1e-4, start: Point::new(1.0, 2.0), end: Point::new(3.0, 4.0),
 //! });
-//! let header = ScanHeader { seq: 7, counters: Counters::default(), valid: 300, segments: 5,
+//! let header = ScanHeader { seq: 7, time_ms: 1234, counters: Counters::default(), valid: 300, segments: 5,
 //!     dropped: 0, n_features: 1, status: Default::default() };
 //! let mut buf = [0u8; 512];
 //! let mut w = &mut buf[..];
@@ -41,7 +43,7 @@
 //! };
 //! assert!(remaining.is_empty());
 //! assert_eq!(frame.header, Header::Scan(header));
-//! assert_eq!(frame.features[0].to_feature(), f);
+//! assert_eq!(frame.features[0], f);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
@@ -55,6 +57,6 @@ pub use crc::crc32;
 pub use decoder::{decode_frame, DecodeError, Feed, Frame, FrameDecoder};
 pub use encoder::{write_report, write_scan, EncodeError};
 pub use wire::{
-    max_frame_len, Counters, Header, Report, ScanHeader, ScanStatus, Stage, WireFeature,
-    MAX_FEATURES, MAX_FEATURE_LEN, WIRE_VERSION,
+    max_frame_len, Counters, Header, Report, ScanHeader, ScanStatus, Stage, MAX_FEATURES,
+    MAX_FEATURE_LEN, WIRE_VERSION,
 };

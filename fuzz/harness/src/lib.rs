@@ -582,7 +582,7 @@ fn reencode(frame: &Frame) -> Vec<u8> {
     let mut out = Vec::new();
     let r = match &frame.header {
         Header::Scan(h) => {
-            let feats: Vec<Feature> = frame.features.iter().map(|f| f.to_feature()).collect();
+            let feats: Vec<Feature> = frame.features.to_vec();
             write_scan(&mut out, h, &feats)
         }
         Header::Report(r) => write_report(&mut out, r),

@@ -330,7 +330,7 @@ fn demo(o: &Opts) -> Result<()> {
                 if let Some(sim) = s.sims.get(k % s.sims.len().max(1)) {
                     let ex = Extraction {
                         marks: Vec::new(),
-                        features: f.features.iter().map(|w| w.to_feature()).collect(),
+                        features: f.features.to_vec(),
                     };
                     total.add(&host_tests::eval::score::score_sim(&ex, sim));
                     if k == 0 {

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::input::{bad_input, flush, nothing_found, open_scans, stdout, write_json, MethodArgs};
 use super::{interrupt, Failure};
-use crate::formats::ScanJson;
+use crate::formats::{ScanJson, StatusJson};
 use crate::foxglove::FoxgloveWriter;
 use crate::methods::Method;
 
@@ -94,7 +94,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
             }
         }
         let line = Line {
-            scan: ScanJson::new(record.id, &ex),
+            scan: ScanJson::new(record.id, &ex)
+                .with_status(StatusJson::of(&method.last_result()))
+                .with_input(record),
             stamp_ns: scan.stamp_ns,
             frame_id: scan.frame_id.as_deref(),
         };

@@ -19,6 +19,7 @@ pub mod eval;
 pub mod extract;
 mod input;
 pub mod interrupt;
+pub mod listen;
 mod lms_args;
 pub mod plot;
 pub mod realdata;
@@ -60,6 +61,8 @@ enum Command {
     Record(record::Args),
     /// Real-data benchmark without ground truth: features re-found in the next scan via the poses.
     Realdata(realdata::Args),
+    /// Read the firmware's feature frames: one JSON object per scan on stdout.
+    Listen(listen::Args),
 }
 
 /// The exit codes of every subcommand, as `pfe --help` prints them.
@@ -162,6 +165,7 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Emulate(a) => emulate::run(a).map_err(|e| Failure::of("emulate", &e)),
         Command::Record(a) => record::run(a).map_err(|e| Failure::of("record", &e)),
         Command::Realdata(a) => realdata::run(a).map_err(|e| Failure::of("realdata", &e)),
+        Command::Listen(a) => listen::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,6 @@
 //! pfe-core behind the [`Method`] interface.
 
-use pfe_core::{Config, Extractor, Scan, ScanGeometry};
+use pfe_core::{Config, ExtractError, Extractor, Scan, ScanGeometry};
 
 use super::{Extraction, Method, MAX_BEAMS, MAX_FEATURES};
 
@@ -9,6 +9,7 @@ pub struct Pfe {
     name: String,
     config: Config,
     extractor: Box<Extractor<MAX_BEAMS, MAX_FEATURES>>,
+    last: Result<(), ExtractError>,
 }
 
 impl Pfe {
@@ -18,6 +19,7 @@ impl Pfe {
             name: name.to_string(),
             config,
             extractor: Box::new(Extractor::new()),
+            last: Ok(()),
         }
     }
 
@@ -35,6 +37,12 @@ impl Pfe {
     pub fn config(&self) -> &Config {
         &self.config
     }
+
+    /// How the last [`Method::extract`] went (an error value means no features or, for
+    /// `FeatureCapacity`, the first ones only).
+    pub fn last_result(&self) -> Result<(), ExtractError> {
+        self.last
+    }
 }
 
 impl Method for Pfe {
@@ -43,10 +51,12 @@ impl Method for Pfe {
     }
 
     fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
-        // Scans longer than the capacity are an error value: reported as no features.
-        let _ = self
+        // Scans longer than the capacity are an error value: no features, kept for
+        // `last_result`.
+        self.last = self
             .extractor
-            .extract(&Scan::from_mm(*geometry, ranges_mm), &self.config);
+            .extract(&Scan::from_mm(*geometry, ranges_mm), &self.config)
+            .map(|_| ());
         Extraction {
             marks: self.extractor.marks().collect(),
             features: self.extractor.features().to_vec(),

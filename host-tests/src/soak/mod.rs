@@ -28,7 +28,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use firmware::app::{App, ConfigChoice, RawScan};
+use firmware::app::{App, ConfigChoice};
 use firmware::lms::driver::{Config, Driver, ScanData};
 use firmware::lms::types::Baud;
 use firmware::output::{self, Feed, FrameDecoder};
@@ -127,12 +127,7 @@ impl Pipeline {
     }
 
     fn run(&mut self, s: &ScanData, counters: output::Counters) -> Result<()> {
-        let raw = RawScan {
-            geometry: s.geometry(),
-            values: s.codes(),
-            mm_per_unit: s.mm_per_unit(),
-            max_valid: s.max_valid(),
-        };
+        let raw = s.raw();
         for (k, app) in [&mut self.paper, &mut self.default].into_iter().enumerate() {
             self.buf.clear();
             let header = app

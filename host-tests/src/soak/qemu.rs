@@ -21,7 +21,8 @@ use crate::device::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimit
 use crate::scene::{Scenario, SceneKind};
 use anyhow::{Context, Result};
 use firmware::app::ConfigChoice;
-use firmware::output::{Counters, Frame, Header, Report, WireFeature};
+use firmware::output::{Counters, Frame, Header, Report};
+use pfe_core::Feature;
 
 use crate::qemu;
 
@@ -153,7 +154,7 @@ struct Account {
     last: Counters,
 }
 
-fn same_features(a: &[WireFeature], b: &[WireFeature]) -> bool {
+fn same_features(a: &[Feature], b: &[Feature]) -> bool {
     a.len() == b.len()
         && a.iter()
             .zip(b)
@@ -169,8 +170,8 @@ fn account(r: &QemuRun) -> Result<Account> {
         sent_damaged: sent.iter().filter(|s| s.damaged).count(),
         ..Default::default()
     };
-    let mut cache: Vec<Option<Vec<WireFeature>>> = vec![None; sent.len()];
-    let mut host = |j: usize| -> Result<Vec<WireFeature>> {
+    let mut cache: Vec<Option<Vec<Feature>>> = vec![None; sent.len()];
+    let mut host = |j: usize| -> Result<Vec<Feature>> {
         if let Some(Some(f)) = cache.get(j) {
             return Ok(f.clone());
         }

@@ -23,6 +23,8 @@ pub struct ScanData {
     pub variant: Variant,
     /// Sequence number of this scan in the driver (1 = first).
     pub seq: u32,
+    /// The driver's clock when the scan was accepted (its telegram complete), ms.
+    pub time_ms: u32,
 }
 
 impl Default for ScanData {
@@ -37,6 +39,7 @@ impl Default for ScanData {
             mode: MeasuringMode::default(),
             variant: Variant::default(),
             seq: 0,
+            time_ms: 0,
         }
     }
 }

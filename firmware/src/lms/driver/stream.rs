@@ -69,6 +69,7 @@ where
         self.scan.variant = self.device.variant;
         self.scan_ok = true;
         self.last_scan_ms = self.clock.now_ms();
+        self.scan.time_ms = self.last_scan_ms;
         true
     }
 
