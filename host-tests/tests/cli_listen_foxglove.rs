@@ -364,3 +364,54 @@ fn listen_foxglove_serves_the_scans_it_was_fed() {
         check_scene(&d, k as u32, stamp);
     }
 }
+
+/// Feeds 3 scans on stdin and keeps it open; `stop` ends `pfe listen` (a signal, or nothing
+/// when --seconds does it); returns the messages of the file.
+fn mcap_after(tag: &str, extra: &[&str], stop: impl FnOnce(u32)) -> Option<Vec<Value>> {
+    let d = scratch(tag);
+    let out = d.join("out.mcap");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args(["listen", "--input", "-", "--mcap"])
+        .arg(&out)
+        .args(extra)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdin = child.stdin.take().unwrap();
+    stdin.write_all(&frames(3)).unwrap();
+    stdin.flush().unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    for _ in 0..3 {
+        let mut line = String::new();
+        assert!(stdout.read_line(&mut line).unwrap() > 0);
+    }
+    stop(child.id());
+    let status = child.wait().unwrap();
+    drop(stdin);
+    let mut err = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut err).unwrap();
+    assert!(status.success(), "{err}");
+    let back = read_back(&out);
+    std::fs::remove_dir_all(&d).unwrap();
+    back.map(|b| b["messages"].as_array().unwrap().clone())
+}
+
+#[test]
+fn listen_mcap_is_complete_after_ctrl_c_and_seconds() {
+    let interrupt = |pid: u32| {
+        let ok = Command::new("kill")
+            .args(["-INT", &pid.to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+    };
+    let Some(m) = mcap_after("sigint", &[], interrupt) else {
+        return;
+    };
+    assert_eq!(m.len(), 3);
+    let m = mcap_after("seconds", &["--seconds", "2"], |_| {}).unwrap();
+    assert_eq!(m.len(), 3);
+    check_scene(&m[2]["data"], 2, m[2]["publish_time"].as_u64().unwrap());
+}

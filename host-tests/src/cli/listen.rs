@@ -4,8 +4,8 @@
 use std::collections::HashSet;
 use std::io::{self, Write};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
+use std::sync::atomic::Ordering;
+use std::sync::mpsc;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use super::input::write_json;
@@ -60,7 +60,8 @@ pub struct Args {
     /// With --mcap: replace an existing file.
     #[arg(long, requires = "mcap")]
     force: bool,
-    /// Also serve the features live over Foxglove's WebSocket protocol (ws://BIND).
+    /// Also serve the features live over Foxglove's WebSocket protocol (ws://BIND) while
+    /// listening (clients are disconnected when the input ends).
     #[arg(long)]
     foxglove: bool,
     /// With --foxglove: the address to listen on (port 0 = any free port; the address is
@@ -232,12 +233,8 @@ pub fn run(a: Args) -> Result<(), Failure> {
     let mut reader = source
         .open(a.baud)
         .map_err(|e| Failure::input(format!("{e:#}")))?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second handler cannot be set (e.g. when run in-process twice): Ctrl-C then kills.
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-    }
+    // `pfe`'s own handler (cli::interrupt): a handler set here would fail, being the second.
+    let stop = super::interrupt::flag();
     // The reader runs on its own thread so that --seconds and Ctrl-C end a blocked read.
     let (tx, rx) = mpsc::sync_channel::<io::Result<Vec<u8>>>(64);
     std::thread::spawn(move || {
@@ -287,11 +284,22 @@ pub fn run(a: Args) -> Result<(), Failure> {
         listener.feed(&chunk, |f| frames.push(f.clone()));
         for f in frames {
             let j = ListenJson::from_frame(&f, Some(received));
-            if let Some(p) = plots.as_mut() {
-                p.write(&j, &f.features)?;
+            // On a failure the Foxglove file still gets what came before.
+            let written = match plots.as_mut() {
+                Some(p) => p.write(&j, &f.features),
+                None => Ok(()),
             }
-            fox.scan(j.time_ms, received_ns, &f.features)?;
-            if !write_json(&mut out, &j)? {
+            .and_then(|()| fox.scan(j.time_ms, received_ns, &f.features))
+            .and_then(|()| write_json(&mut out, &j));
+            let printed_ok = match written {
+                Ok(ok) => ok,
+                Err(e) => {
+                    why = "error";
+                    failure = Some(e);
+                    break 'outer;
+                }
+            };
+            if !printed_ok {
                 why = "output closed";
                 break 'outer;
             }
