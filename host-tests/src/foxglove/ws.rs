@@ -7,6 +7,10 @@
 //! published on a channel goes to each subscription of it as a binary `messageData`: opcode
 //! 0x01, subscription id (u32 LE), log time (u64 LE, ns), payload. A client that falls
 //! [`QUEUE`] messages behind loses messages (counted) rather than stalling the publisher.
+//!
+//! Hand-written over sync `tungstenite` rather than the `foxglove` SDK crate: `pfe` has no
+//! async runtime, and the SDK's server brings tokio and about 80 more crates for the few
+//! messages used here.
 
 use std::collections::HashMap;
 use std::io;
