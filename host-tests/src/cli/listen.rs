@@ -4,13 +4,15 @@
 use std::collections::HashSet;
 use std::io::{self, Write};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
+use std::sync::atomic::Ordering;
+use std::sync::mpsc;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use super::input::write_json;
 use super::Failure;
 use crate::formats::Record;
+use crate::foxglove::{self, FoxgloveServer, FoxgloveWriter};
+use crate::link::clock::FirmwareClock;
 use crate::link::listen::{ListenJson, ListenStats, Listener, Source};
 use crate::methods::Extraction;
 
@@ -51,12 +53,109 @@ pub struct Args {
     /// With --svg: plot every Nth scan only.
     #[arg(long, default_value_t = 1, requires = "svg")]
     svg_every: u64,
+    /// Also write the features to a Foxglove MCAP file (`foxglove.SceneUpdate` on /features,
+    /// stamped with the firmware's time; log time = receive time), completed at the end.
+    #[arg(long)]
+    mcap: Option<PathBuf>,
+    /// With --mcap: replace an existing file.
+    #[arg(long, requires = "mcap")]
+    force: bool,
+    /// Also serve the features live over Foxglove's WebSocket protocol (ws://BIND) while
+    /// listening (clients are disconnected when the input ends).
+    #[arg(long)]
+    foxglove: bool,
+    /// With --foxglove: the address to listen on (port 0 = any free port; the address is
+    /// printed on stderr). Other hosts can connect only if this says so.
+    #[arg(long, default_value = "127.0.0.1:8765", requires = "foxglove")]
+    bind: String,
 }
 
-fn unix_now() -> f64 {
+/// Frame of reference of the features in Foxglove.
+const FRAME_ID: &str = "laser";
+
+/// Where the scans go besides stdout: a Foxglove file and a Foxglove server.
+struct Foxglove {
+    file: Option<FoxgloveWriter>,
+    server: Option<FoxgloveServer>,
+    clock: FirmwareClock,
+}
+
+impl Foxglove {
+    fn start(a: &Args) -> Result<Self, Failure> {
+        let file = match &a.mcap {
+            Some(p) => Some(
+                FoxgloveWriter::create_features_only(p, a.force).map_err(|e| {
+                    if e.kind() == io::ErrorKind::AlreadyExists {
+                        Failure::input(format!("--mcap: {e}; --force replaces it"))
+                    } else {
+                        Failure::input(format!("--mcap {}: {e}", p.display()))
+                    }
+                })?,
+            ),
+            None => None,
+        };
+        let server = if a.foxglove {
+            let s = FoxgloveServer::bind(a.bind.as_str(), "pfe listen", &[foxglove::FEATURES])
+                .map_err(|e| Failure::input(format!("--bind {}: {e}", a.bind)))?;
+            eprintln!("pfe listen: Foxglove WebSocket on ws://{}", s.local_addr());
+            Some(s)
+        } else {
+            None
+        };
+        Ok(Self {
+            file,
+            server,
+            clock: FirmwareClock::new(),
+        })
+    }
+
+    fn scan(
+        &mut self,
+        time_ms: u32,
+        received_ns: u64,
+        features: &[pfe_core::Feature],
+    ) -> Result<(), Failure> {
+        if self.file.is_none() && self.server.is_none() {
+            return Ok(());
+        }
+        let stamp = self.clock.stamp_ns(time_ms, received_ns);
+        if let Some(f) = self.file.as_mut() {
+            f.write_features(received_ns, stamp, FRAME_ID, features)
+                .map_err(|e| Failure::other(format!("writing --mcap: {e}")))?;
+        }
+        if let Some(s) = &self.server {
+            let scene = foxglove::scene_update(stamp, FRAME_ID, features);
+            s.publish(0, received_ns, scene.to_string().into_bytes());
+        }
+        Ok(())
+    }
+
+    /// Completes the file (kept only if a scan arrived) and closes the clients' connections.
+    fn finish(self, keep: bool) -> Result<(), Failure> {
+        if let Some(s) = self.server {
+            let dropped = s.dropped();
+            s.finish();
+            if dropped > 0 {
+                eprintln!("pfe listen: {dropped} messages not sent to slow Foxglove clients");
+            }
+        }
+        match self.file {
+            Some(f) if keep => {
+                let p = f
+                    .finish()
+                    .map_err(|e| Failure::other(format!("finishing --mcap: {e}")))?;
+                eprintln!("pfe listen: wrote {}", p.display());
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+fn unix_now_ns() -> u64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
-        .map_or(0.0, |d| d.as_secs_f64())
+        .map_or(0, |d| u64::try_from(d.as_nanos()).unwrap_or(u64::MAX))
 }
 
 fn summary(s: &ListenStats, why: &str) {
@@ -130,15 +229,12 @@ pub fn run(a: Args) -> Result<(), Failure> {
         }
         None => None,
     };
+    let mut fox = Foxglove::start(&a)?;
     let mut reader = source
         .open(a.baud)
         .map_err(|e| Failure::input(format!("{e:#}")))?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second handler cannot be set (e.g. when run in-process twice): Ctrl-C then kills.
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-    }
+    // `pfe`'s own handler (cli::interrupt): a handler set here would fail, being the second.
+    let stop = super::interrupt::flag();
     // The reader runs on its own thread so that --seconds and Ctrl-C end a blocked read.
     let (tx, rx) = mpsc::sync_channel::<io::Result<Vec<u8>>>(64);
     std::thread::spawn(move || {
@@ -182,15 +278,28 @@ pub fn run(a: Args) -> Result<(), Failure> {
             Err(mpsc::RecvTimeoutError::Timeout) => continue,
             Err(mpsc::RecvTimeoutError::Disconnected) => break,
         };
-        let received = unix_now();
+        let received_ns = unix_now_ns();
+        let received = received_ns as f64 * 1e-9;
         let mut frames = Vec::new();
         listener.feed(&chunk, |f| frames.push(f.clone()));
         for f in frames {
             let j = ListenJson::from_frame(&f, Some(received));
-            if let Some(p) = plots.as_mut() {
-                p.write(&j, &f.features)?;
+            // On a failure the Foxglove file still gets what came before.
+            let written = match plots.as_mut() {
+                Some(p) => p.write(&j, &f.features),
+                None => Ok(()),
             }
-            if !write_json(&mut out, &j)? {
+            .and_then(|()| fox.scan(j.time_ms, received_ns, &f.features))
+            .and_then(|()| write_json(&mut out, &j));
+            let printed_ok = match written {
+                Ok(ok) => ok,
+                Err(e) => {
+                    why = "error";
+                    failure = Some(e);
+                    break 'outer;
+                }
+            };
+            if !printed_ok {
                 why = "output closed";
                 break 'outer;
             }
@@ -208,6 +317,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
         listener.stats()
     };
     summary(&stats, why);
+    fox.finish(!stats.nothing_valid())?;
     if let Some(f) = failure {
         return Err(f);
     }
