@@ -71,7 +71,8 @@ pub const EXIT_CODES: &str = "FILE may be gzipped (detected from its content) or
 Exit codes (every subcommand): 0 success; 2 bad input: a bad argument, an unreadable or \
 malformed file (one-line error with the line number; the scans before it are still written), \
 input with no scan, an output that would overwrite a file; 1 any other failure (device, I/O, \
-a broken budget); 130 interrupted by Ctrl-C (what was recorded is kept).";
+a broken budget); 130 interrupted by Ctrl-C (what was recorded is kept), except `pfe listen`, \
+whose normal stop is Ctrl-C (exit 0 after its summary).";
 
 /// A failure and its exit code.
 pub struct Failure {
