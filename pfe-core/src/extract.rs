@@ -4,16 +4,18 @@
 
 use heapless::Vec;
 
-use crate::circle::{fit_circle, refine_circle, refine_from, ArcSums, Circle, NormalEquations};
 use crate::config::{Config, NoiseModel, Threshold, Typing, NP};
 use crate::error::ExtractError;
 use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
+use crate::fit::circle::{
+    fit_circle, refine_circle, refine_from, ArcSums, Circle, NormalEquations,
+};
+use crate::fit::line::{fill_spreads, fit_axis, fit_line, BeamSpan};
 use crate::geometry::{ray_circle_intersection, Point};
-use crate::line::{fill_spreads, fit_axis, fit_line, BeamSpan};
 use crate::math;
 use crate::predict::{paper_threshold, Prediction, WindowLine};
+use crate::preprocess::deskew::Motion;
 use crate::scan::{max_code, valid_mm, Ranges, Scan, ScanGeometry};
-use crate::Motion;
 
 const VALID: u8 = 1;
 /// First point of a segment (a mark point in the paper's sense).

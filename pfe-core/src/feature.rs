@@ -1,8 +1,8 @@
 //! The extractor's output: lines and circles with their uncertainty and point range.
 
-use crate::circle::{circle_covariance_range, Circle};
+use crate::fit::circle::{circle_covariance_range, Circle};
+use crate::fit::line::{LineCovariance, LineFit};
 use crate::geometry::Point;
-use crate::line::{LineCovariance, LineFit};
 use crate::math;
 
 /// A line feature `x cos α + y sin α = ρ`.

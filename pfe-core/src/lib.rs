@@ -23,28 +23,26 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod circle;
 pub mod config;
-pub mod correction;
-pub mod deskew;
 pub mod error;
 pub mod extract;
 pub mod feature;
+pub mod fit;
 pub mod geometry;
-pub mod line;
 mod math;
 pub mod predict;
+pub mod preprocess;
 pub mod scan;
 
-pub use circle::{
-    circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
-};
 pub use config::{Config, NoiseModel, Threshold, Typing, NP};
-pub use correction::RangeCorrection;
-pub use deskew::Motion;
 pub use error::{ExtractError, FitError};
 pub use extract::{Extractor, LmsExtractor, Stats, LMS_FEATURES, LMS_READINGS};
 pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
+pub use fit::circle::{
+    circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
+};
+pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
-pub use line::{fit_line, LineCovariance, LineFit};
+pub use preprocess::correction::RangeCorrection;
+pub use preprocess::deskew::Motion;
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

@@ -1,0 +1,4 @@
+//! Pre-processing (§2): the systematic range [`correction`] and motion de-skewing ([`deskew`]).
+
+pub mod correction;
+pub mod deskew;
