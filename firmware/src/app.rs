@@ -129,9 +129,12 @@ impl<S: core::fmt::Debug, W: core::fmt::Debug> core::fmt::Display for AppError<S
 
 impl<S: core::fmt::Debug, W: core::fmt::Debug> core::error::Error for AppError<S, W> {}
 
-/// The application the firmware runs: room for every LMS2xx scan and [`pfe_core::LMS_FEATURES`]
-/// features, its extraction that of [`pfe_core::LmsExtractor`] (compiled in pfe-core).
-pub type LmsApp = App<{ pfe_core::LMS_READINGS }, { pfe_core::LMS_FEATURES }>;
+/// Most features of one scan the firmware keeps.
+pub const MAX_FEATURES: usize = 48;
+
+/// The application the firmware runs: room for every LMS2xx scan
+/// ([`crate::lms::driver::MAX_VALUES`]) and [`MAX_FEATURES`] features.
+pub type LmsApp = App<{ crate::lms::driver::MAX_VALUES }, MAX_FEATURES>;
 
 /// The application: extractor with room for `N` readings and `M` features, a configuration
 /// and the scan sequence number.

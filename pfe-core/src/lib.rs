@@ -23,20 +23,27 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod beams;
+mod check;
+mod classify;
 pub mod config;
 pub mod error;
-pub mod extract;
+mod extractor;
 pub mod feature;
 pub mod fit;
+mod flags;
 pub mod geometry;
+mod mark;
 mod math;
+mod pass;
 pub mod predict;
 pub mod preprocess;
 pub mod scan;
+mod segment;
 
 pub use config::{Config, NoiseModel, Threshold, Typing, NP};
 pub use error::{ExtractError, FitError};
-pub use extract::{Extractor, LmsExtractor, Stats, LMS_FEATURES, LMS_READINGS};
+pub use extractor::{Extractor, Stats};
 pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
 pub use fit::circle::{
     circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,

@@ -22,7 +22,7 @@ use crate::lms::reply::{
 use crate::lms::types::{Baud, MeasuringMode, Unit, Variant};
 
 /// Most values in one B0 telegram (100° at 0.25°).
-pub const MAX_VALUES: usize = pfe_core::LMS_READINGS;
+pub const MAX_VALUES: usize = 401;
 
 /// A millisecond time source (wrapping `u32`).
 pub trait Clock {

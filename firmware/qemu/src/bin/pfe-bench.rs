@@ -24,11 +24,13 @@ mod fw {
         sys, time,
         uart::{Uart, UART1},
     };
-    use pfe_core::{Config, LmsExtractor, Scan, ScanGeometry};
+    use pfe_core::{Config, Extractor, Scan, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
     /// Values a telegram may hold (the bench's scans have 361).
-    const N: usize = pfe_core::LMS_READINGS;
+    const N: usize = firmware::lms::driver::MAX_VALUES;
+    /// The firmware's extractor (the capacity of `firmware::app::LmsApp`).
+    type LmsExtractor = Extractor<N, { firmware::app::MAX_FEATURES }>;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
     struct Sink;
