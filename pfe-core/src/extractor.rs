@@ -19,6 +19,7 @@ use crate::segment;
 /// What one extraction did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Stats {
     /// Readings in the scan.
     pub readings: usize,

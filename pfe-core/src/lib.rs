@@ -4,9 +4,27 @@
 //! for 2D laser scanner", *Robotics and Autonomous Systems* 59 (2011) 402–409, for
 //! microcontrollers: `no_std`, no allocator, `f32`, fixed capacities, no panics.
 //!
-//! Data path (one module per step): [`scan`] (readings, [`correction`], [`deskew`]) →
-//! [`predict`] (prediction point and threshold) → [`extract`] (mark, check step, segments,
-//! typing) → [`mod@line`] and [`circle`] fits with covariance → [`feature`].
+//! The paper's steps, in the order [`Extractor::extract`] runs them, and where each lives:
+//!
+//! | step | paper | module |
+//! |---|---|---|
+//! | readings and beam geometry | | [`scan`] |
+//! | readings to points: range correction, de-skew | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`]) |
+//! | prediction point and its error | §3.1 | [`predict`] |
+//! | mark points: the paper's threshold, or the default mode's walk with boundary refinement | §3.2, §3.6 | `mark` (`paper`, `noise`, `refine`) |
+//! | check step and pairing | §3.3 | `check` |
+//! | segments (and arc merges) | §3.4 | `segment` |
+//! | type of a segment (and the arc tests) | §3.5 | `classify` (`arc`) |
+//! | line and circle fits with covariance | §3.5 | [`fit::line`], [`fit::circle`] |
+//! | output | | [`feature`] |
+//!
+//! [`Extractor`] owns the beam table (what depends on the geometry only), the work buffers of
+//! one scan and the output; every step is a function of slices, not generic over the
+//! capacities, so it is compiled once, in this crate. [`config`] holds the two named
+//! configurations, [`error`] the errors, [`geometry`] the shared plane geometry.
+//!
+//! Features: `libm` (default) or `micromath` maths; `defmt` for `defmt::Format`; `serde` for
+//! `Serialize`/`Deserialize` of the output ([`Feature`], [`Stats`], [`Point`] as `[x, y]`).
 //!
 //! ```
 //! use pfe_core::{Config, Extractor, Scan, ScanGeometry};
