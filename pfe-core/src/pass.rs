@@ -110,10 +110,13 @@ impl<'a> Pass<'a> {
 
     /// Predicts point `k` from a window's line.
     pub(crate) fn predict_with(&self, line: &WindowLine, k: usize) -> Option<Prediction> {
-        let (p, o, r) = (self.point(k), self.origin(k), self.range(k));
+        let (Some(p), Some(&r)) = (self.points.get(k), self.ranges.get(k)) else {
+            return None;
+        };
         if !(r > 0.0) {
             return None;
         }
+        let o = self.origin(k);
         Some(line.predict(o, p.x - o.x, p.y - o.y, r))
     }
 

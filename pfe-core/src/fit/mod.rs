@@ -1,4 +1,4 @@
-//! Least-squares fits of a segment's points (§3.5): a [`line`] in polar form and a [`circle`],
+//! Least-squares fits of a segment's points (§3.5): a [`mod@line`] in polar form and a [`circle`],
 //! each with its covariance.
 
 pub mod circle;

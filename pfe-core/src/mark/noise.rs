@@ -89,8 +89,12 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
         return;
     };
     let c = k - s;
-    let (p, prev) = (pass.point(k), pass.point(k - 1));
-    let limit = rule.jump_limit(pass.range(k - 1));
+    // Point `k` (valid, so in the scan) and its predecessor, with one bounds check each side.
+    let (Some(&[prev, p]), Some(&prev_r)) = (pass.points.get(k - 1..k + 1), pass.ranges.get(k - 1))
+    else {
+        return;
+    };
+    let limit = rule.jump_limit(prev_r);
     let (ex, ey) = (p.x - prev.x, p.y - prev.y);
     let jump = ex * ex + ey * ey > limit * limit;
     let boundary = if jump {
@@ -168,6 +172,7 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
 
 /// Whether `line` accepts point `k` (the inverse of [`NoiseRule::marks`], without building the
 /// prediction when not de-skewing).
+#[inline(always)]
 fn line_accepts(pass: &Pass<'_>, line: &WindowLine, k: usize, rule: &NoiseRule) -> bool {
     match pass.motion {
         None => {
