@@ -45,7 +45,7 @@ fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule) -> usize {
     let e = next - 1;
     if e > j && next < len && pass.valid(next) {
         let from = (e + 1).saturating_sub(NP).max(j);
-        let pred = pass.predict(from, next, next);
+        let pred = pass.predict_next(from, next);
         if !rule.marks(pred, pass.range(next)) {
             for i in from + 1..next {
                 pass.clear(i, START);

@@ -87,7 +87,7 @@ impl<'a> Pass<'a> {
     /// Scanner position when beam `i` was taken (origin unless de-skewing).
     pub(crate) fn origin(&self, i: usize) -> Point {
         match self.motion {
-            Some(m) => m.pose(i).origin,
+            Some(m) => moved_origin(m, i),
             None => Point::new(0.0, 0.0),
         }
     }
@@ -102,6 +102,20 @@ impl<'a> Pass<'a> {
         self.predict_with(&line, k)
     }
 
+    /// Predicts point `k` from the points `from..k` right before it (all valid): the window
+    /// and the point with one bounds check.
+    #[inline(never)]
+    pub(crate) fn predict_next(&mut self, from: usize, k: usize) -> Option<Prediction> {
+        self.stats.predictions += 1;
+        let (p, window) = self.points.get(from..=k)?.split_last()?;
+        let r = *self.ranges.get(k)?;
+        let o = self.origin(k);
+        match &WindowLine::fit(window, o) {
+            Some(line) => predict_point(line, o, *p, r),
+            None => None,
+        }
+    }
+
     /// The line of points `from..to`, seen from the origin of beam `k` (one prediction).
     pub(crate) fn window_line(&mut self, from: usize, to: usize, k: usize) -> Option<WindowLine> {
         self.stats.predictions += 1;
@@ -109,15 +123,12 @@ impl<'a> Pass<'a> {
     }
 
     /// Predicts point `k` from a window's line.
+    #[inline(never)]
     pub(crate) fn predict_with(&self, line: &WindowLine, k: usize) -> Option<Prediction> {
-        let (Some(p), Some(&r)) = (self.points.get(k), self.ranges.get(k)) else {
+        let (Some(&p), Some(&r)) = (self.points.get(k), self.ranges.get(k)) else {
             return None;
         };
-        if !(r > 0.0) {
-            return None;
-        }
-        let o = self.origin(k);
-        Some(line.predict(o, p.x - o.x, p.y - o.y, r))
+        predict_point(line, self.origin(k), p, r)
     }
 
     /// Sets a segment start at `i` in increasing order, noting it when point `i − 1` starts
@@ -134,6 +145,22 @@ impl<'a> Pass<'a> {
             }
         }
     }
+}
+
+/// Predicts the point `p` at measured range `r` seen from `origin` by `line` (`None` unless
+/// `r > 0`).
+#[inline(never)]
+fn predict_point(line: &WindowLine, origin: Point, p: Point, r: f32) -> Option<Prediction> {
+    if !(r > 0.0) {
+        return None;
+    }
+    Some(line.predict(origin, p.x - origin.x, p.y - origin.y, r))
+}
+
+/// [`Pass::origin`] when de-skewing (not inlined: one copy for every caller).
+#[inline(never)]
+fn moved_origin(m: Motion, i: usize) -> Point {
+    m.pose(i).origin
 }
 
 /// Point `i` of `points` ([`Point::INVALID`] past their end).

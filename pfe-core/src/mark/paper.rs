@@ -17,7 +17,7 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &PaperRule) {
         if run == 0 {
             pass.set(k, START);
         } else if run >= NP {
-            let mark = match pass.predict(k - NP, k, k) {
+            let mark = match pass.predict_next(k - NP, k) {
                 None => true,
                 Some(p) => rule.marks(&p, pass.range(k)),
             };
