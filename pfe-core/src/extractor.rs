@@ -3,7 +3,7 @@
 
 use heapless::Vec;
 
-use crate::beams::BeamTable;
+use crate::beams::{BeamTable, Beams};
 use crate::check;
 use crate::config::Config;
 use crate::error::ExtractError;
@@ -12,7 +12,6 @@ use crate::flags::{END, START};
 use crate::geometry::Point;
 use crate::mark::{self, Rule};
 use crate::pass::Pass;
-use crate::preprocess;
 use crate::scan::Scan;
 use crate::segment;
 
@@ -137,8 +136,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         self.out.stats = Stats::default();
         self.work.len = accept(scan, config, N)?;
         let Self { beams, work, out } = self;
-        let pass = Pass::new(beams.of(scan.geometry), work.slots(), scan, &mut out.stats);
-        run(pass, scan, config, &mut out.features)
+        let beams = beams.of(scan.geometry);
+        run(beams, work.slots(), scan, config, &mut out.stats, &mut out.features)
     }
 
     /// Features of the last extraction, in scan order.
@@ -212,14 +211,16 @@ fn accept(scan: &Scan<'_>, config: &Config, capacity: usize) -> Result<usize, Ex
 /// The paper's steps in order, over an extractor's parts (not generic: compiled once, here).
 #[inline(never)]
 fn run(
-    mut pass: Pass<'_>,
+    beams: Beams<'_>,
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
     scan: &Scan<'_>,
     config: &Config,
+    stats: &mut Stats,
     out: &mut dyn FeatureSink,
 ) -> Result<Stats, ExtractError> {
-    let rule = Rule::new(config, scan.geometry.r_max, pass.beams.gap_factor);
     // §2: readings to points (range correction, de-skew).
-    preprocess::load(&mut pass, scan, config);
+    let mut pass = Pass::load(beams, slots, scan, config, stats);
+    let rule = Rule::new(config, scan.geometry.r_max, pass.beams.gap_factor);
     // §3.1–3.2, §3.6: mark points by prediction.
     mark::mark(&mut pass, &rule);
     // §3.3: the check step.
@@ -257,9 +258,8 @@ mod tests {
             for (ex, all) in [(&mut a, false), (&mut b, true)] {
                 ex.work.len = ranges.len();
                 let Extractor { beams, work, out } = ex;
-                let mut pass = Pass::new(beams.of(g), work.slots(), &scan, &mut out.stats);
+                let mut pass = Pass::load(beams.of(g), work.slots(), &scan, &config, &mut out.stats);
                 let rule = Rule::new(&config, g.r_max, pass.beams.gap_factor);
-                preprocess::load(&mut pass, &scan, &config);
                 mark::mark(&mut pass, &rule);
                 let mut before = [0u8; 361];
                 before.copy_from_slice(pass.flags);

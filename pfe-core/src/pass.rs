@@ -5,10 +5,12 @@
 use heapless::Vec;
 
 use crate::beams::Beams;
+use crate::config::Config;
 use crate::extractor::Stats;
 use crate::flags::{START, VALID};
 use crate::geometry::Point;
 use crate::predict::{Prediction, WindowLine};
+use crate::preprocess;
 use crate::preprocess::deskew::Motion;
 use crate::scan::Scan;
 
@@ -20,9 +22,9 @@ pub(crate) struct Pass<'a> {
     /// The beam table of the scan's geometry.
     pub beams: Beams<'a>,
     /// Points (after correction and de-skew); invalid readings are [`Point::INVALID`].
-    pub points: &'a mut [Point],
+    pub points: &'a [Point],
     /// Corrected measured range of each valid point, mm (its distance from the scanner).
-    pub ranges: &'a mut [f32],
+    pub ranges: &'a [f32],
     /// Flags of each point (see [`crate::flags`]).
     pub flags: &'a mut [u8],
     /// Motion during the scan, when de-skewing.
@@ -37,19 +39,23 @@ pub(crate) struct Pass<'a> {
 
 impl<'a> Pass<'a> {
     /// The work state of `scan` over the beam table `beams` and the slots (points, ranges,
-    /// flags) of its readings.
-    pub(crate) fn new(
+    /// flags) of its readings, which it fills (§2: range correction, de-skew).
+    pub(crate) fn load(
         beams: Beams<'a>,
         (points, ranges, flags): (&'a mut [Point], &'a mut [f32], &'a mut [u8]),
         scan: &Scan<'_>,
+        config: &Config,
         stats: &'a mut Stats,
     ) -> Self {
+        let motion = scan.motion.filter(|m| m.is_valid());
+        let slots = (&mut *points, &mut *ranges, &mut *flags);
+        preprocess::load(slots, &beams, motion, scan, config, stats);
         Self {
             beams,
             points,
             ranges,
             flags,
-            motion: scan.motion.filter(|m| m.is_valid()),
+            motion,
             neighbours: None,
             stats,
         }

@@ -10,7 +10,7 @@ use super::NoiseRule;
 use crate::classify::arc::{arc_fit, continues_arc};
 use crate::flags::{JUMP, START};
 use crate::geometry::Point;
-use crate::pass::Pass;
+use crate::pass::{point_at, Pass};
 use crate::predict::WindowLine;
 
 /// Size of a new segment at which it is tested for being the same arc as the one before.
@@ -44,6 +44,13 @@ impl Walk {
     }
 }
 
+/// The walk's points and their ranges, of one length.
+#[derive(Clone, Copy)]
+struct Cloud<'a> {
+    points: &'a [Point],
+    ranges: &'a [f32],
+}
+
 /// Marks the points of `pass` in the default mode.
 pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
     // The fast path: no de-skewing (the scanner at the origin) and a floor small enough for
@@ -52,24 +59,30 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
     let floor = rule.model.floor;
     let fast = pass.motion.is_none() && floor * floor <= WindowLine::FLOOR2_WITHIN * rule.k_sigma2;
     pass.neighbours = Some(Vec::new());
+    // Points and ranges cut to the number of readings once: one bounds check for both.
+    let n = pass.len();
+    let (Some(points), Some(ranges)) = (pass.points.get(..n), pass.ranges.get(..n)) else {
+        return;
+    };
+    let cloud = Cloud { points, ranges };
     let mut walk = Walk::default();
     let mut k = 0usize;
-    while k < pass.len() {
+    while k < n {
         let mut stale_failed = false;
         // Fast path: the points the cached line accepts, up to the next point where a
         // boundary awaits refinement or a merge test is due.
         let cached = walk.cache.as_ref().filter(|_| walk.seg.is_some());
         if let (Some((line, until)), true) = (cached, fast) {
-            let stop = walk.next_check(k, until + 1).min(pass.len());
-            let next = accepted_run(pass.points, pass.ranges, k, stop, line, rule);
+            let stop = walk.next_check(k, until + 1).min(n);
+            let next = accepted_run(points, ranges, k, stop, line, rule);
             pass.stats.predictions += next - k;
             stale_failed = next < stop;
             k = next;
-            if k >= pass.len() {
+            if k >= n {
                 break;
             }
         }
-        step(pass, k, &mut walk, stale_failed, rule);
+        step(pass, cloud, k, &mut walk, stale_failed, rule);
         k += 1;
     }
 }
@@ -77,7 +90,15 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
 /// The walk at point `k`, with everything the fast path does not do: segment starts, jumps,
 /// fresh windows, arc continuation, boundary placement, refinement and merges.
 /// `stale_failed`: the fast path just saw the cached line reject `k`.
-fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule: &NoiseRule) {
+fn step(
+    pass: &mut Pass<'_>,
+    cloud: Cloud<'_>,
+    k: usize,
+    walk: &mut Walk,
+    stale_failed: bool,
+    rule: &NoiseRule,
+) {
+    let Cloud { points, ranges } = cloud;
     if !pass.valid(k) {
         *walk = Walk::default();
         return;
@@ -90,8 +111,7 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
     };
     let c = k - s;
     // Point `k` (valid, so in the scan) and its predecessor, with one bounds check each side.
-    let (Some(&[prev, p]), Some(&prev_r)) = (pass.points.get(k - 1..k + 1), pass.ranges.get(k - 1))
-    else {
+    let (Some(&[prev, p]), Some(&prev_r)) = (points.get(k - 1..k + 1), ranges.get(k - 1)) else {
         return;
     };
     let limit = rule.jump_limit(prev_r);
@@ -109,19 +129,19 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
             && walk
                 .cache
                 .as_ref()
-                .is_some_and(|(line, until)| k <= *until && line_accepts(pass, line, k, rule));
+                .is_some_and(|(line, until)| k <= *until && line_accepts(pass, cloud, line, k, rule));
         if stale_ok {
             None
         } else {
-            let w = window(pass, k, c, rule);
-            let (first, last) = (pass.point(k - w), pass.point(k - 1));
+            let w = window(points, k, c, rule);
+            let (first, last) = (point_at(points, k - w), prev);
             // It may test the next 8w points while they fit it, no more loosely than a fresh
             // line (`WindowLine::accepts`); a point it rejects gets a fresh window.
             walk.cache = pass
                 .window_line(k - w, k, k)
                 .map(|l| (l.capped(&first, &last, w), k + 8 * w));
             let line = walk.cache.as_ref().map(|(l, _)| l);
-            let over = !line.is_some_and(|l| line_accepts(pass, l, k, rule));
+            let over = !line.is_some_and(|l| line_accepts(pass, cloud, l, k, rule));
             (over && !continues_arc(pass, s, k, rule)).then(|| {
                 let pred = line.and_then(|l| pass.predict_with(l, k));
                 locate(pass, s, k, pred, rule)
@@ -142,7 +162,7 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
         // the two segments together are one arc, they are one segment.
         let m = &rule.model;
         let from = old.max(b.saturating_sub(m.arc_window));
-        let joined = pass.points.get(from..k + 1);
+        let joined = points.get(from..k + 1);
         if m.arc_window >= 5 && joined.and_then(|pts| arc_fit(pts, rule)).is_some() {
             pass.clear(b, START);
             *walk = Walk {
@@ -153,7 +173,7 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
     }
     if let (None, Some((b, old))) = (boundary, walk.pending) {
         if k == b + REFINE_AFTER {
-            let best = refine_boundary(pass.points, old, b, k + 1);
+            let best = refine_boundary(points, old, b, k + 1);
             if best != b {
                 pass.clear(b, START);
                 pass.set(best, START);
@@ -173,11 +193,18 @@ fn step(pass: &mut Pass<'_>, k: usize, walk: &mut Walk, stale_failed: bool, rule
 /// Whether `line` accepts point `k` (the inverse of [`NoiseRule::marks`], without building the
 /// prediction when not de-skewing).
 #[inline(always)]
-fn line_accepts(pass: &Pass<'_>, line: &WindowLine, k: usize, rule: &NoiseRule) -> bool {
+fn line_accepts(
+    pass: &Pass<'_>,
+    cloud: Cloud<'_>,
+    line: &WindowLine,
+    k: usize,
+    rule: &NoiseRule,
+) -> bool {
     match pass.motion {
         None => {
-            let p = pass.point(k);
-            line.accepts(p.x, p.y, pass.range(k), rule.k_sigma2, rule.model.floor)
+            let p = point_at(cloud.points, k);
+            let r = cloud.ranges.get(k).copied().unwrap_or(f32::NAN);
+            line.accepts(p.x, p.y, r, rule.k_sigma2, rule.model.floor)
         }
         Some(_) => pass.predict_with(line, k).is_some_and(|p| !rule.marks(&p)),
     }
@@ -186,14 +213,14 @@ fn line_accepts(pass: &Pass<'_>, line: &WindowLine, k: usize, rule: &NoiseRule) 
 /// Prediction window for point `k` with `c` points of its segment before it: `window` points,
 /// grown (up to `max_window`) until it spans `min_span · σ_r`, so that close to the scanner,
 /// where beams are a few mm apart, the window still sees a line's direction above the noise.
-fn window(pass: &Pass<'_>, k: usize, c: usize, rule: &NoiseRule) -> usize {
+fn window(points: &[Point], k: usize, c: usize, rule: &NoiseRule) -> usize {
     let m = &rule.model;
     let mut w = c.min(m.window);
     let limit = c.min(m.max_window.max(m.window));
     let span = m.min_span * rule.sigma_r;
-    let last = pass.point(k - 1);
+    let last = point_at(points, k - 1);
     while w < limit {
-        let p = pass.point(k - w);
+        let p = point_at(points, k - w);
         let (dx, dy) = (p.x - last.x, p.y - last.y);
         if dx * dx + dy * dy >= span * span {
             break;

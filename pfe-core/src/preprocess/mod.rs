@@ -9,23 +9,31 @@ use crate::config::Config;
 use crate::flags::VALID;
 use crate::geometry::Point;
 use crate::math;
-use crate::pass::Pass;
+use crate::beams::Beams;
+use crate::extractor::Stats;
+use deskew::Motion;
 use crate::scan::{max_code, valid_mm, Ranges, Scan};
 
-/// Converts the readings of `scan` to the points, ranges and flags of `pass` (one slot per
-/// reading).
-pub(crate) fn load(pass: &mut Pass<'_>, scan: &Scan<'_>, config: &Config) {
+/// Converts the readings of `scan` to points, ranges and flags (one slot per reading), with
+/// the beam directions of `beams` and the scanner's `motion` (when de-skewing).
+pub(crate) fn load(
+    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    beams: &Beams<'_>,
+    motion: Option<Motion>,
+    scan: &Scan<'_>,
+    config: &Config,
+    stats: &mut Stats,
+) {
     let g = scan.geometry;
-    let n = pass.len();
-    let (points, ranges, flags) = (&mut *pass.points, &mut *pass.ranges, &mut *pass.flags);
-    let Some(dirs) = pass.beams.dirs.get(..n) else {
+    let n = flags.len();
+    let Some(dirs) = beams.dirs.get(..n) else {
         // Not reached (the beam table has room for every reading): an empty scan rather than
         // stale points.
         flags.fill(0);
         return;
     };
     // One loop per kind of reading, without a correction or de-skewing.
-    let slots = (points, ranges, flags, dirs);
+    let slots = (&mut *points, &mut *ranges, &mut *flags, dirs);
     let invalid = match scan.ranges {
         Ranges::Raw {
             values,
@@ -39,23 +47,24 @@ pub(crate) fn load(pass: &mut Pass<'_>, scan: &Scan<'_>, config: &Config) {
         ),
         Ranges::Mm(mm) => place_mm(slots, mm, g.r_max),
     };
-    pass.stats.readings = n;
-    pass.stats.valid = n - invalid;
-    if config.correction.is_some() || pass.motion.is_some() {
-        adjust(pass, scan, config);
+    stats.readings = n;
+    stats.valid = n - invalid;
+    if config.correction.is_some() || motion.is_some() {
+        let slots = (points, ranges, flags, dirs);
+        stats.valid -= adjust(slots, motion, scan, config);
     }
 }
 
 /// Applies the range correction and de-skewing to the valid points; a point they make invalid
-/// is dropped.
-fn adjust(pass: &mut Pass<'_>, scan: &Scan<'_>, config: &Config) {
-    let (g, correction, motion) = (scan.geometry, config.correction, pass.motion);
-    let slots = pass
-        .points
+/// is dropped. Returns the number dropped.
+fn adjust(slots: Slots<'_>, motion: Option<Motion>, scan: &Scan<'_>, config: &Config) -> usize {
+    let (g, correction) = (scan.geometry, config.correction);
+    let (points, ranges, flags, dirs) = slots;
+    let slots = points
         .iter_mut()
-        .zip(pass.ranges.iter_mut())
-        .zip(pass.flags.iter_mut())
-        .zip(pass.beams.dirs.iter());
+        .zip(ranges.iter_mut())
+        .zip(flags.iter_mut())
+        .zip(dirs.iter());
     let mut dropped = 0usize;
     for (i, (((point, range), flag), d)) in slots.enumerate() {
         if *flag & VALID == 0 {
@@ -76,7 +85,7 @@ fn adjust(pass: &mut Pass<'_>, scan: &Scan<'_>, config: &Config) {
             (*point, *range, *flag) = (Point::INVALID, 0.0, 0);
         }
     }
-    pass.stats.valid -= dropped;
+    dropped
 }
 
 /// The slots of a scan's beams (points, ranges, flags) and their directions, all of one length.
