@@ -368,6 +368,8 @@ pub(crate) struct NormalEquations {
 }
 
 impl NormalEquations {
+    /// The equations of `points` at the circle `c` (not inlined: its sums stay in registers).
+    #[inline(never)]
     pub(crate) fn at(points: &[Point], c: &Circle) -> Self {
         let mut eq = NormalEquations {
             jtj: [[0.0; 3]; 3],
