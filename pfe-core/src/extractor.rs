@@ -137,7 +137,14 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         self.work.len = accept(scan, config, N)?;
         let Self { beams, work, out } = self;
         let beams = beams.of(scan.geometry);
-        run(beams, work.slots(), scan, config, &mut out.stats, &mut out.features)
+        run(
+            beams,
+            work.slots(),
+            scan,
+            config,
+            &mut out.stats,
+            &mut out.features,
+        )
     }
 
     /// Features of the last extraction, in scan order.
@@ -258,7 +265,8 @@ mod tests {
             for (ex, all) in [(&mut a, false), (&mut b, true)] {
                 ex.work.len = ranges.len();
                 let Extractor { beams, work, out } = ex;
-                let mut pass = Pass::load(beams.of(g), work.slots(), &scan, &config, &mut out.stats);
+                let mut pass =
+                    Pass::load(beams.of(g), work.slots(), &scan, &config, &mut out.stats);
                 let rule = Rule::new(&config, g.r_max, pass.beams.gap_factor);
                 mark::mark(&mut pass, &rule);
                 let mut before = [0u8; 361];

@@ -110,8 +110,10 @@ fn step(
         return;
     };
     let c = k - s;
-    // Point `k` (valid, so in the scan) and its predecessor, with one bounds check each side.
-    let (Some(&[prev, p]), Some(&prev_r)) = (points.get(k - 1..k + 1), ranges.get(k - 1)) else {
+    // Point `k` (in the scan: the walk's loop checked it) and its predecessor.
+    let (Some(&p), Some(&prev), Some(&prev_r)) =
+        (points.get(k), points.get(k - 1), ranges.get(k - 1))
+    else {
         return;
     };
     let limit = rule.jump_limit(prev_r);
@@ -126,10 +128,9 @@ fn step(
     } else {
         // A recent window's line first (unless the fast path just saw it fail here).
         let stale_ok = !stale_failed
-            && walk
-                .cache
-                .as_ref()
-                .is_some_and(|(line, until)| k <= *until && line_accepts(pass, cloud, line, k, rule));
+            && walk.cache.as_ref().is_some_and(|(line, until)| {
+                k <= *until && line_accepts(pass, cloud, line, k, rule)
+            });
         if stale_ok {
             None
         } else {

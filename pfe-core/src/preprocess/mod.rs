@@ -5,14 +5,14 @@
 pub mod correction;
 pub mod deskew;
 
+use crate::beams::Beams;
 use crate::config::Config;
+use crate::extractor::Stats;
 use crate::flags::VALID;
 use crate::geometry::Point;
 use crate::math;
-use crate::beams::Beams;
-use crate::extractor::Stats;
-use deskew::Motion;
 use crate::scan::{max_code, valid_mm, Ranges, Scan};
+use deskew::Motion;
 
 /// Converts the readings of `scan` to points, ranges and flags (one slot per reading), with
 /// the beam directions of `beams` and the scanner's `motion` (when de-skewing).
