@@ -124,7 +124,7 @@ fn loop_sends_one_frame_per_scan_equal_to_direct_extraction() {
             assert_eq!(h.counters.telegrams_ok, k as u32 + 1);
             assert_eq!(h.counters.crc_dropped, 2);
             assert_eq!(h.status, ScanStatus::Ok);
-            let sent: Vec<Feature> = f.features.iter().map(|w| w.to_feature()).collect();
+            let sent: Vec<Feature> = f.features.to_vec();
             assert_eq!(sent, direct(v, choice), "{choice:?} scan {k}");
         }
     }
@@ -138,7 +138,7 @@ fn default_config_finds_the_room_geometry() {
     let scan = RawScan::lms_8m(G, &values, 1.0);
     app.process(&scan, Counters::default(), &mut out).unwrap();
     let f = &frames(&out.0)[0];
-    let feats: Vec<Feature> = f.features.iter().map(|w| w.to_feature()).collect();
+    let feats: Vec<Feature> = f.features.to_vec();
     // Front wall: alpha 0, rho 2500; left wall: alpha pi/2, rho 1800 (within 1 % / 0.02 rad).
     let has_line = |alpha: f32, rho: f32| {
         feats.iter().any(|f| match f {
@@ -175,7 +175,7 @@ fn cm_mode_scales_ranges() {
     let scan = RawScan::lms_8m(G, &cm, 10.0);
     app.process(&scan, Counters::default(), &mut out).unwrap();
     let f = &frames(&out.0)[0];
-    assert!(f.features.iter().any(|w| match w.to_feature() {
+    assert!(f.features.iter().any(|w| match *w {
         Feature::Line(l) => l.alpha.abs() < 0.03 && (l.rho - 2500.0).abs() < 30.0,
         _ => false,
     }));

@@ -9,7 +9,7 @@
 
 use firmware::output::{
     crc32, max_frame_len, write_report, write_scan, Counters, DecodeError, Feed, Frame,
-    FrameDecoder, Header, Report, ScanHeader, ScanStatus, Stage, WireFeature, MAX_FEATURES,
+    FrameDecoder, Header, Report, ScanHeader, ScanStatus, Stage, MAX_FEATURES, WIRE_VERSION,
 };
 use pfe_core::{CircleFeature, Feature, LineFeature, Point};
 
@@ -44,6 +44,7 @@ fn circle(i: u16) -> Feature {
 fn header(seq: u32, n: u16) -> ScanHeader {
     ScanHeader {
         seq,
+        time_ms: 4_000_000_000 - seq,
         counters: Counters {
             telegrams_ok: 1000 + seq,
             crc_dropped: 3,
@@ -157,7 +158,7 @@ fn round_trip_is_bit_exact() {
     assert_eq!(got.len(), 1);
     let frame = got[0].as_ref().unwrap();
     assert_eq!(frame.header, Header::Scan(header(42, 12)));
-    let back: Vec<Feature> = frame.features.iter().map(WireFeature::to_feature).collect();
+    let back: Vec<Feature> = frame.features.to_vec();
     assert_eq!(back, feats);
     for (a, b) in back.iter().zip(&feats) {
         assert_eq!(bits(a), bits(b), "bit-exact, including -0.0");
@@ -205,8 +206,9 @@ fn format_matches_independent_cobs_and_crc32() {
         crc32fast::hash(payload)
     );
     assert_eq!(crc32(0, b"123456789"), 0xCBF4_3926);
-    // The payload starts with the postcard header: variant 0 (Scan), then seq 9 as a varint.
-    assert_eq!(&payload[..2], &[0, 9]);
+    // The payload starts with the version byte, then the postcard header: variant 0 (Scan),
+    // then seq 9 as a varint.
+    assert_eq!(&payload[..3], &[WIRE_VERSION, 0, 9]);
     // A frame built by the cobs crate from our payload decodes too (encoders agree).
     let mut other = cobs::encode_vec(&raw);
     other.push(0);
@@ -357,6 +359,77 @@ fn too_many_features_and_trailing_bytes_are_rejected() {
     assert!(got.iter().all(|r| r.is_err()), "{got:?}");
 }
 
+/// Re-frames `wire`'s payload after `edit` with a fresh CRC (an intact frame of other content).
+fn reframed(wire: &[u8], edit: impl FnOnce(&mut Vec<u8>)) -> Vec<u8> {
+    let mut raw = cobs::decode_vec(&wire[..wire.len() - 1]).unwrap();
+    raw.truncate(raw.len() - 4);
+    edit(&mut raw);
+    let crc = crc32fast::hash(&raw);
+    raw.extend_from_slice(&crc.to_le_bytes());
+    let mut out = cobs::encode_vec(&raw);
+    out.push(0);
+    out
+}
+
+#[test]
+fn version_is_the_first_payload_byte_and_time_travels() {
+    let wire = scan_frame(3, &[line(1)]);
+    let raw = cobs::decode_vec(&wire[..wire.len() - 1]).unwrap();
+    assert_eq!(raw[0], WIRE_VERSION);
+    assert_eq!(WIRE_VERSION, 2);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    assert_eq!(
+        got[0].as_ref().unwrap().scan().unwrap().time_ms,
+        4_000_000_000 - 3
+    );
+}
+
+#[test]
+fn an_intact_frame_of_another_version_is_dropped_not_misparsed() {
+    let good = scan_frame(1, &mixed());
+    let mut stream = Vec::new();
+    for v in [0u8, 1, 3, 0xFF] {
+        stream.extend(reframed(&good, |raw| raw[0] = v));
+    }
+    // Version 3 with a payload that would also parse as version 2.
+    stream.extend(reframed(&good, |raw| raw[0] = 3));
+    stream.extend_from_slice(&scan_frame(2, &[]));
+    let got = decode_chunks(&mut FrameDecoder::new(), [&stream[..]]);
+    let errs: Vec<_> = got
+        .iter()
+        .filter_map(|r| r.as_ref().err().copied())
+        .collect();
+    assert_eq!(
+        errs,
+        [0u8, 1, 3, 0xFF, 3].map(|version| DecodeError::UnknownVersion { version })
+    );
+    assert_eq!(got.last().unwrap().as_ref().unwrap().scan().unwrap().seq, 2);
+    // A damaged frame is a CRC error even when the damage is in the version byte.
+    let mut bad = good.clone();
+    bad[1] ^= 0x01;
+    let got = decode_chunks(&mut FrameDecoder::new(), [&bad[..]]);
+    assert!(matches!(got[..], [Err(DecodeError::Crc { .. })]), "{got:?}");
+}
+
+#[test]
+fn a_feature_with_an_unknown_variant_or_overlong_varint_is_rejected() {
+    let good = scan_frame(1, &[line(1)]);
+    let hdr_len = {
+        let raw = cobs::decode_vec(&good[..good.len() - 1]).unwrap();
+        raw.len() - 4 - (4 + 9 * 4) // line(1): tag 0, first 1, last 21, points 19: 1 byte each
+    };
+    let tag2 = reframed(&good, |raw| raw[hdr_len] = 2);
+    let long = reframed(&good, |raw| {
+        raw[hdr_len + 1] = 0x81;
+        raw.insert(hdr_len + 2, 0x80);
+        raw.insert(hdr_len + 3, 0x80);
+    });
+    for wire in [tag2, long] {
+        let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+        assert_eq!(got, [Err(DecodeError::Payload)]);
+    }
+}
+
 mod props {
     use super::*;
     use proptest::prelude::*;
@@ -435,7 +508,7 @@ mod props {
             let got = decode_chunks(&mut FrameDecoder::new(), [&bad[..]]);
             for f in got.iter().flatten() {
                 prop_assert_eq!(f.scan().unwrap().seq, 5);
-                let want: Vec<WireFeature> = mixed().iter().map(WireFeature::from).collect();
+                let want: Vec<Feature> = mixed();
                 prop_assert_eq!(f.features.as_slice(), want.as_slice());
             }
         }

@@ -10,7 +10,7 @@ use firmware::lms::crc::crc16;
 use firmware::lms::frame::{encode_telegram, Decoder, DEVICE_ADDRESS};
 use firmware::lms::{Event, MeasuredValues, MeasuringMode, ReplyOptions};
 use firmware::output::{write_scan, Counters, ScanHeader, ScanStatus};
-use host_tests::bench::simulated_scans;
+use host_tests::eval::bench::simulated_scans;
 use pfe_core::{Config, Extractor, Scan};
 use std::hint::black_box;
 
@@ -79,6 +79,7 @@ fn benches(c: &mut Criterion) {
     );
     let header = ScanHeader {
         seq: 1,
+        time_ms: 0,
         counters: Counters::default(),
         valid: 350,
         segments: 12,

@@ -3,5 +3,5 @@
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    host_tests::eval::cli(&args)
+    host_tests::cli::eval::cli(&args)
 }

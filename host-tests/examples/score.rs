@@ -4,8 +4,8 @@
 
 use anyhow::{bail, Context, Result};
 use host_tests::eval::quick_report;
-use host_tests::method::{Method, Pfe};
-use host_tests::sim::SceneKind;
+use host_tests::methods::{Method, Pfe};
+use host_tests::scene::SceneKind;
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -60,8 +60,14 @@ fn check_schema(v: &Value) {
     let o = v.as_object().unwrap();
     let mut keys: Vec<&str> = o.keys().map(|k| k.as_str()).collect();
     keys.sort();
-    assert_eq!(keys, ["features", "marks", "scan"]);
+    // docs/JSON.md: `time` and `pose` only when the input has them.
+    keys.retain(|k| !matches!(*k, "time" | "pose"));
+    assert_eq!(keys, ["features", "marks", "scan", "status"]);
     assert!(v["scan"].is_u64());
+    let status = v["status"].as_object().unwrap();
+    assert_eq!(status.len(), 2);
+    assert!(status["error"].is_null() || status["error"].is_string());
+    assert!(status["dropped"].is_u64());
     let marks: Vec<u64> = v["marks"]
         .as_array()
         .unwrap()
@@ -81,10 +87,12 @@ fn check_schema(v: &Value) {
                     keys,
                     [
                         "alpha",
+                        "cov_alpha_rho",
                         "end",
                         "first",
                         "kind",
                         "last",
+                        "points",
                         "rho",
                         "start",
                         "var_alpha",
@@ -98,7 +106,20 @@ fn check_schema(v: &Value) {
                 pair(&f["end"]);
             }
             "circle" => {
-                assert_eq!(keys, ["center", "cov", "first", "kind", "last", "radius"]);
+                assert_eq!(
+                    keys,
+                    [
+                        "center",
+                        "cov",
+                        "end_angle",
+                        "first",
+                        "kind",
+                        "last",
+                        "points",
+                        "radius",
+                        "start_angle"
+                    ]
+                );
                 pair(&f["center"]);
                 assert!(num(&f["radius"]) > 0.0);
                 let cov = f["cov"].as_array().unwrap();
@@ -107,6 +128,9 @@ fn check_schema(v: &Value) {
                     let row = row.as_array().unwrap();
                     assert_eq!(row.len(), 3);
                     assert!(num(&row[i]) >= 0.0, "variances are non-negative");
+                    for (j, c) in row.iter().enumerate() {
+                        assert_eq!(c, &cov[j][i], "covariance symmetric to the bit");
+                    }
                 }
             }
             k => panic!("unknown kind {k}"),

@@ -9,14 +9,18 @@ use host_tests::formats::carmen::{AngleConvention, Reader};
 use host_tests::formats::{self, Record};
 use pfe_core::{fit_line, Point};
 
-fn data_dir() -> Option<PathBuf> {
+fn data_dir(test: &str) -> Option<PathBuf> {
     let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
     if d.join("carmen").is_dir() {
         Some(d)
     } else {
-        eprintln!(
-            "SKIPPED: real data folder {} is absent (it sits beside the repository as shared/data)",
-            d.display()
+        host_tests::skip::skip(
+            test,
+            &format!(
+                "real data folder {} is absent (it sits beside the repository as shared/data)",
+                d.display()
+            ),
+            host_tests::skip::Need::InCi,
         );
         None
     }
@@ -34,7 +38,9 @@ fn carmen_logs(d: &std::path::Path) -> Vec<PathBuf> {
 
 #[test]
 fn extract_runs_over_every_real_log() {
-    let Some(d) = data_dir() else { return };
+    let Some(d) = data_dir("cli_real_data::extract_runs_over_every_real_log") else {
+        return;
+    };
     let mut inputs: Vec<(PathBuf, &str)> =
         carmen_logs(&d).into_iter().map(|p| (p, "carmen")).collect();
     inputs.push((d.join("hokuyo-cylinders/scans.txt.gz"), "hokuyo"));
@@ -219,6 +225,8 @@ fn step_error_estimator_on_synthetic_rooms() {
                     r_max: 50_000.0,
                 },
                 ranges_mm: ranges.clone(),
+                time: None,
+                pose: None,
             });
         }
     }
@@ -260,7 +268,9 @@ fn step_error_estimator_on_synthetic_rooms() {
 #[test]
 fn carmen_angle_convention() {
     const MIN_BEAMS: usize = 20;
-    let Some(d) = data_dir() else { return };
+    let Some(d) = data_dir("cli_real_data::carmen_angle_convention") else {
+        return;
+    };
     let logs = carmen_logs(&d);
     let (mut agree, mut decisive) = (0, 0);
     eprintln!(

@@ -3,15 +3,14 @@
 //! `firmware::app::App` → feature frames → decoder. The features must equal pfe-core run on
 //! the value words the emulator sent, also when the link damages telegrams.
 
-#[path = "../examples/demo_host/qemu.rs"]
-mod qemu;
+use host_tests::qemu;
 
 use firmware::app::{App, ConfigChoice};
 use firmware::lms::{Config, Driver};
 use firmware::output::{Frame, ScanStatus};
-use host_tests::emulator::{Emulator, EmulatorConfig, Faults, Link};
-use host_tests::method::Extraction;
-use host_tests::sim::{Scenario, SceneKind, SimScan};
+use host_tests::device::emulator::{Emulator, EmulatorConfig, Faults, Link};
+use host_tests::methods::Extraction;
+use host_tests::scene::{Scenario, SceneKind, SimScan};
 
 fn sims(seed: u64, n: u64) -> Vec<SimScan> {
     (seed..seed + n)
@@ -25,7 +24,7 @@ fn run(
     sims: &[SimScan],
     scans: usize,
     faults: Faults,
-) -> (Vec<Frame>, host_tests::emulator::EmulatorReport) {
+) -> (Vec<Frame>, host_tests::device::emulator::EmulatorReport) {
     let source = qemu::SimSource::new(sims.iter().map(|s| s.ranges_mm.clone()).collect());
     let cfg = EmulatorConfig {
         faults,
@@ -61,7 +60,7 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
     let sims = sims(500, 6);
     let (frames, report) = run(&sims, 6, Faults::default());
     assert_eq!(frames.len(), 6);
-    let mut total = host_tests::score::Score::default();
+    let mut total = host_tests::eval::score::Score::default();
     for (k, f) in frames.iter().enumerate() {
         let h = f.scan().unwrap();
         assert_eq!(h.seq, k as u32);
@@ -72,9 +71,9 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
         assert_eq!(host.as_slice(), f.features.as_slice(), "scan {k}");
         let ex = Extraction {
             marks: Vec::new(),
-            features: f.features.iter().map(|w| w.to_feature()).collect(),
+            features: f.features.to_vec(),
         };
-        total.add(&host_tests::score::score_sim(&ex, &sims[k]));
+        total.add(&host_tests::eval::score::score_sim(&ex, &sims[k]));
     }
     assert!(total.truth_features > 20);
     assert!(

@@ -5,8 +5,7 @@
 //! Skipped (with a message) when `qemu-system-arm` or the `thumbv7em-none-eabihf` target is
 //! missing; `cargo xtask test` installs both, so CI runs it.
 
-#[path = "../examples/demo_host/qemu.rs"]
-mod qemu;
+use host_tests::qemu;
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -15,18 +14,29 @@ use firmware::app::ConfigChoice;
 use firmware::output::{Header, Report, ScanStatus};
 
 fn firmware_elf() -> Option<PathBuf> {
+    use host_tests::skip::{skip, Need};
     if std::env::var_os("PFE_SKIP_QEMU").is_some() {
-        eprintln!("SKIPPED e2e_qemu: PFE_SKIP_QEMU is set (cargo xtask test --quick)");
+        skip(
+            "e2e_qemu",
+            "PFE_SKIP_QEMU is set (cargo xtask test --quick)",
+            Need::Optional,
+        );
         return None;
     }
     if !qemu::have("qemu-system-arm") {
-        eprintln!(
-            "SKIPPED e2e_qemu: qemu-system-arm is not installed (apt-get install qemu-system-arm)"
+        skip(
+            "e2e_qemu",
+            "qemu-system-arm is not installed (apt-get install qemu-system-arm)",
+            Need::InCi,
         );
         return None;
     }
     if !qemu::have_target() {
-        eprintln!("SKIPPED e2e_qemu: rustup target add thumbv7em-none-eabihf");
+        skip(
+            "e2e_qemu",
+            "the thumbv7em-none-eabihf target is missing (rustup target add thumbv7em-none-eabihf)",
+            Need::InCi,
+        );
         return None;
     }
     // Not the outer cargo's target dir: its lock is held while tests run.

@@ -10,8 +10,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use firmware::lms::types::{Baud, MeasuringMode, Unit};
-use host_tests::emulator::serve::{serve_on, Pty};
-use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind, TaggedSource};
+use host_tests::device::emulator::serve::{serve_on, Pty};
+use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind, TaggedSource};
 
 const SCANS: usize = 12;
 
@@ -19,7 +19,11 @@ fn missing(what: &str) {
     if std::env::var_os("PFE_CONFORMANCE_REQUIRED").is_some() {
         panic!("MRPT conformance needs {what}");
     }
-    eprintln!("SKIPPED: MRPT conformance needs {what} (apt-get install g++ libmrpt-hwdrivers-dev)");
+    host_tests::skip::skip(
+        "emulator_mrpt",
+        &format!("MRPT conformance needs {what} (apt-get install g++ libmrpt-hwdrivers-dev)"),
+        host_tests::skip::Need::InCi,
+    );
 }
 
 fn compile(dir: &Path) -> Option<PathBuf> {

@@ -7,8 +7,8 @@ use std::time::Duration;
 
 use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
-use host_tests::emulator::serve::{serve_on, Pty};
-use host_tests::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind};
+use host_tests::device::emulator::serve::{serve_on, Pty};
+use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind};
 
 #[test]
 fn record_over_pty_captures_sent_scans() {
@@ -43,7 +43,7 @@ fn record_over_pty_captures_sent_scans() {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let res = host_tests::record::cli(&args);
+    let res = host_tests::cli::record::cli(&args);
     stop.store(true, Ordering::Relaxed);
     let (report, _pty) = emu.join().unwrap().unwrap();
     res.unwrap();

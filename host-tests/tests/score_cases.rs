@@ -1,8 +1,10 @@
 //! Scorer on hand-made cases, and an oracle extraction on simulated scans.
 
-use host_tests::method::Extraction;
-use host_tests::score::{iou, line_error, match_features, score, score_sim, GroundTruth, Score};
-use host_tests::sim::{Crb, Scenario, SceneKind, TruthFeature, TruthKind};
+use host_tests::eval::score::{
+    iou, line_error, match_features, score, score_sim, GroundTruth, Score,
+};
+use host_tests::methods::Extraction;
+use host_tests::scene::{Crb, Scenario, SceneKind, TruthFeature, TruthKind};
 use pfe_core::{fit_line, CircleFeature, Feature, LineFeature, Point};
 use std::f64::consts::PI;
 

@@ -1,10 +1,9 @@
 //! The evaluation pipeline end to end on a few scans, with methods of known behaviour.
 
-use host_tests::eval::{
-    evaluate, parse_args, quick_report, report, run_methods, scenarios, svg, EvalOptions,
-};
-use host_tests::method::{Extraction, Method};
-use host_tests::sim::{Scenario, SceneKind, SimScan};
+use host_tests::cli::eval::parse_args;
+use host_tests::eval::{evaluate, quick_report, report, run_methods, scenarios, svg, EvalOptions};
+use host_tests::methods::{Extraction, Method};
+use host_tests::scene::{Scenario, SceneKind, SimScan};
 use pfe_core::ScanGeometry;
 
 /// Finds nothing.

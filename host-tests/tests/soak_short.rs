@@ -7,9 +7,7 @@
     clippy::indexing_slicing
 )]
 
-#[allow(dead_code)]
-#[path = "../examples/soak.rs"]
-mod soak;
+use host_tests::soak;
 
 #[test]
 fn short_soak_in_process_balances() {

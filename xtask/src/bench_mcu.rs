@@ -18,33 +18,30 @@ pub fn target_dir() -> std::path::PathBuf {
         .unwrap_or_else(|| util::root().join("target"))
 }
 
-/// The firmware's optimisation level: the workspace release profile (LTO, one codegen unit)
-/// with `opt-level = "s"` (pfe-core at 3, see the workspace Cargo.toml), what the flash
-/// budget is measured on.
-pub const FIRMWARE_OPT_LEVEL: &str = "s";
+/// The firmware's optimisation level (one value for xtask and the QEMU tests).
+pub use host_tests::qemu::FIRMWARE_OPT_LEVEL;
 
-/// Builds a firmware-qemu binary in release for thumbv7em into `dir`; returns the ELF.
+/// Builds a firmware-qemu binary in release for thumbv7em into `dir` at
+/// [`FIRMWARE_OPT_LEVEL`] with `DEFMT_LOG=info` (`env` may override both); returns the ELF.
 pub fn build_fw(
     bin: &str,
     features: &[&str],
     env: &[(&str, &std::ffi::OsStr)],
     dir: &std::path::Path,
 ) -> Result<std::path::PathBuf> {
-    let mut c = util::cargo();
-    c.args(["build", "--release", "-p", "firmware-qemu", "--bin", bin])
-        .args(["--target", "thumbv7em-none-eabihf"])
-        .env("CARGO_TARGET_DIR", dir)
-        .env("DEFMT_LOG", "info")
-        .env("CARGO_PROFILE_RELEASE_OPT_LEVEL", FIRMWARE_OPT_LEVEL)
-        .env_remove("RUSTFLAGS");
-    if !features.is_empty() {
-        c.args(["--features", &features.join(",")]);
-    }
-    for (k, v) in env {
-        c.env(k, v);
-    }
-    util::run(&mut c)?;
-    Ok(dir.join("thumbv7em-none-eabihf").join("release").join(bin))
+    let mut all: Vec<(&str, &std::ffi::OsStr)> = vec![
+        ("DEFMT_LOG", "info".as_ref()),
+        (
+            "CARGO_PROFILE_RELEASE_OPT_LEVEL",
+            FIRMWARE_OPT_LEVEL.as_ref(),
+        ),
+    ];
+    all.extend_from_slice(env);
+    eprintln!(
+        "$ cargo build --release -p firmware-qemu --bin {bin} (into {})",
+        dir.display()
+    );
+    host_tests::qemu::build_firmware(bin, features, &all, dir)
 }
 
 /// Runs `demo_host` (host-tests example) with `args`.

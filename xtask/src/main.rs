@@ -1,18 +1,16 @@
 //! `cargo xtask <command>`: the project's commands (see README.md).
 //!
-//! Each command lives in its own module; `util` holds what they share.
+//! Each command lives in its own module; `util` holds what they share; generated document
+//! sections are written by `host_tests::docs`, as `pfe bench` writes them.
 
 mod bench_mcu;
 mod conformance;
 mod demo;
-/// The generated-docs section writer host-tests uses, shared as source (xtask depends on
-/// anyhow only, not on host-tests).
-#[path = "../../host-tests/src/docs.rs"]
-#[allow(dead_code)]
-mod docs;
 mod eval;
 mod fuzz;
 mod no_panic;
+mod realdata;
+mod run_qemu;
 mod size;
 mod soak;
 mod test;
@@ -32,7 +30,9 @@ const HELP: &str = "cargo xtask <command> [args]
   size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
   fuzz          every cargo-fuzz target for --seconds S
   no-panic      firmware build whose link fails if a panic path survives
+  run-qemu      firmware in QEMU between a scanner tty/pty and a feature pty (--scanner, --output)
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
+  realdata      features re-found in the next scan on the shared CARMEN logs -> docs/REALDATA.md
 ";
 
 fn main() -> Result<()> {
@@ -56,6 +56,8 @@ fn main() -> Result<()> {
         "fuzz" => fuzz::run(rest),
         "no-panic" => no_panic::run(rest),
         "soak" => soak::run(rest),
+        "realdata" => realdata::run(rest),
+        "run-qemu" => run_qemu::run(rest),
         other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
     }
 }

@@ -91,7 +91,7 @@ pub fn write_section_titled(
     body: &str,
 ) -> Result<()> {
     let body = format!("Reproduce: `cargo xtask {command}`\n\n{body}");
-    crate::docs::write_section(path, name, heading, &body)
+    host_tests::docs::write_section(path, name, heading, &body)
 }
 
 /// Runs the command.

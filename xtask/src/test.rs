@@ -8,6 +8,8 @@
 //! bench --report-only`: timings depend on the machine, so they are printed, not asserted),
 //! MRPT conformance, the no-panic build, fuzzing (60 s per target under `CI`, 10 s otherwise)
 //! and a short soak. `--quick` stops after the host tests and skips the QEMU end-to-end test.
+//! It ends with the list of the tests that were skipped and why ([`host_tests::skip`]), or
+//! "skipped: none".
 
 use anyhow::Result;
 
@@ -15,8 +17,30 @@ use crate::util::{cargo, ensure_apt, ensure_target, run as sh};
 
 const THUMB: &str = "thumbv7em-none-eabihf";
 
-/// Runs every step.
+/// Runs every step, then lists what was skipped (also after a failure).
 pub fn run_all(quick: bool) -> Result<()> {
+    let skips = host_tests::skip::skips_file();
+    let _ = std::fs::remove_file(&skips);
+    let result = steps(quick, &skips);
+    eprintln!("\n{}", skipped_summary(&host_tests::skip::listed()));
+    result
+}
+
+/// The end-of-run list of skipped tests.
+fn skipped_summary(lines: &[String]) -> String {
+    if lines.is_empty() {
+        "skipped: none".to_string()
+    } else {
+        let mut s = format!("skipped: {}", lines.len());
+        for l in lines {
+            s.push_str("\n  ");
+            s.push_str(l);
+        }
+        s
+    }
+}
+
+fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     ensure_target()?;
     step("format", || {
         sh(cargo().args(["fmt", "--all", "--", "--check"]))
@@ -68,7 +92,7 @@ pub fn run_all(quick: bool) -> Result<()> {
     }
     step("host tests (unit, integration, doc, end to end)", || {
         let mut c = cargo();
-        c.args(["test", "--workspace"]);
+        c.args(["test", "--workspace"]).env("PFE_SKIPS_FILE", skips);
         if quick {
             c.env("PFE_SKIP_QEMU", "1");
         }
@@ -115,6 +139,9 @@ pub fn run_all(quick: bool) -> Result<()> {
     step("fuzzing", || {
         crate::fuzz::run(&["--seconds".into(), seconds.into()])
     })?;
+    step("real-data benchmark (shortened)", || {
+        crate::realdata::run(&["--check".into()])
+    })?;
     step("soak (short)", || {
         crate::soak::run(&["--scans".into(), "2000".into()])
     })?;
@@ -130,4 +157,19 @@ pub fn run(args: &[String]) -> Result<()> {
 fn step(name: &str, f: impl FnOnce() -> Result<()>) -> Result<()> {
     eprintln!("\n=== {name} ===");
     f().map_err(|e| e.context(format!("step `{name}` failed")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::skipped_summary;
+
+    #[test]
+    fn summary_lists_every_skip_or_says_none() {
+        assert_eq!(skipped_summary(&[]), "skipped: none");
+        let s = skipped_summary(&["e2e_qemu: no qemu".into(), "emulator_mrpt: no g++".into()]);
+        assert_eq!(
+            s,
+            "skipped: 2\n  e2e_qemu: no qemu\n  emulator_mrpt: no g++"
+        );
+    }
 }

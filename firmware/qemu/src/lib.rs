@@ -1,6 +1,7 @@
 //! Board support for QEMU's `mps2-an386` (Cortex-M4F) used by the pfe firmware binaries:
 //! CMSDK APB UARTs as polled `embedded-io` ports, a SysTick time base, semihosting exit and
-//! arguments, the stack high-water mark.
+//! arguments, the stack high-water mark, and the runtime glue the binaries share (exception
+//! and panic handlers, the statics in [`rt`]).
 //!
 //! Everything here only exists for `target_os = "none"`; on the host the crate is empty so
 //! `cargo test --workspace` and clippy still build it.
@@ -16,3 +17,6 @@ pub mod time;
 
 #[cfg(target_os = "none")]
 pub mod sys;
+
+#[cfg(target_os = "none")]
+pub mod rt;

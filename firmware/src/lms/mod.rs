@@ -1,20 +1,17 @@
-//! LMS200 serial protocol: telegram codec (sans-IO), commands, replies, driver.
+//! The LMS2xx serial protocol: [`codec`] (bytes ↔ telegrams, sans-IO) and [`driver`]
+//! (the device over a UART: initialisation, retries, re-initialisation, scans).
 //!
 //! Data path: bytes → [`frame::Decoder`] (framing, CRC, resync) → [`reply::parse_reply`] →
-//! [`driver::Driver`] (initialisation, retries, re-initialisation, scans).
+//! [`driver::Driver`] → [`driver::ScanData`].
 
-pub mod command;
-pub mod crc;
-pub mod frame;
-pub mod reply;
-pub mod types;
-
-pub use command::Command;
-pub use frame::{Decoder, DecoderStats, Event, Telegram, MAX_TELEGRAM};
-pub use reply::{parse_reply, MeasuredValues, ParsedReply, Reply, ReplyOptions, Status};
-pub use types::{Baud, MeasuringMode, Unit, Variant};
+pub mod codec;
 pub mod driver;
-pub mod error;
 
+pub use codec::{command, crc, frame, reply, types};
+
+pub use codec::command::Command;
+pub use codec::frame::{Decoder, DecoderStats, Event, Telegram, MAX_TELEGRAM};
+pub use codec::reply::{parse_reply, MeasuredValues, ParsedReply, Reply, ReplyOptions, Status};
+pub use codec::types::{Baud, MeasuringMode, Unit, Variant};
+pub use driver::error::{self, Error};
 pub use driver::{Clock, Config, Counters, DeviceState, Driver, ScanData, SetBaud};
-pub use error::Error;

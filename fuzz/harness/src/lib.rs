@@ -557,7 +557,7 @@ pub fn readers(data: &[u8]) -> usize {
             Some(Ok(r)) => {
                 records += 1;
                 assert!(
-                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= host_tests::method::MAX_BEAMS
+                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= host_tests::methods::MAX_BEAMS
                 );
                 assert!(
                     r.geometry.is_valid(),
@@ -582,7 +582,7 @@ fn reencode(frame: &Frame) -> Vec<u8> {
     let mut out = Vec::new();
     let r = match &frame.header {
         Header::Scan(h) => {
-            let feats: Vec<Feature> = frame.features.iter().map(|f| f.to_feature()).collect();
+            let feats: Vec<Feature> = frame.features.to_vec();
             write_scan(&mut out, h, &feats)
         }
         Header::Report(r) => write_report(&mut out, r),

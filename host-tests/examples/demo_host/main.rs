@@ -7,7 +7,7 @@
 //! demo_host demo --elf pfe-qemu [--scans 10] [--config default|paper] [--svg demo.svg]
 //! ```
 
-mod qemu;
+use host_tests::qemu;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -15,7 +15,7 @@ use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
 use firmware::output::{Header, Report, Stage};
-use host_tests::sim::{Scenario, SceneKind};
+use host_tests::scene::{Scenario, SceneKind};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -66,7 +66,7 @@ impl Opts {
 }
 
 /// Simulated scans (mixed scenes, σ_r 5 mm, 0.5°), seeds `seed..seed+n`.
-fn sim_scans(n: u64, seed: u64) -> Vec<host_tests::sim::SimScan> {
+fn sim_scans(n: u64, seed: u64) -> Vec<host_tests::scene::SimScan> {
     (seed..seed + n)
         .map(|s| Scenario::new(SceneKind::Mixed, s).simulate())
         .collect()
@@ -264,7 +264,7 @@ fn bench(o: &Opts) -> Result<()> {
 
 fn demo(o: &Opts) -> Result<()> {
     use firmware::app::ConfigChoice;
-    use host_tests::method::Extraction;
+    use host_tests::methods::Extraction;
     let elf = o.path("elf")?;
     let scans = u32::try_from(o.num("scans", 10)?).context("--scans too large")?;
     let config = o.get("config").unwrap_or("default");
@@ -280,7 +280,7 @@ fn demo(o: &Opts) -> Result<()> {
     if let Some(path) = o.get("defmt-log") {
         std::fs::write(path, &s.run.stdout)?;
     }
-    let mut total = host_tests::score::Score::default();
+    let mut total = host_tests::eval::score::Score::default();
     let (mut equal, mut compared, mut worst_ulps) = (0usize, 0usize, 0u32);
     let mut stack = None;
     let mut done = None;
@@ -330,15 +330,17 @@ fn demo(o: &Opts) -> Result<()> {
                 if let Some(sim) = s.sims.get(k % s.sims.len().max(1)) {
                     let ex = Extraction {
                         marks: Vec::new(),
-                        features: f.features.iter().map(|w| w.to_feature()).collect(),
+                        features: f.features.to_vec(),
                     };
-                    total.add(&host_tests::score::score_sim(&ex, sim));
+                    total.add(&host_tests::eval::score::score_sim(&ex, sim));
                     if k == 0 {
                         if let Some(path) = o.get("svg") {
                             let rec = host_tests::formats::Record {
                                 id: 0,
                                 geometry: sim.geometry,
                                 ranges_mm: sim.ranges_mm.clone(),
+                                time: None,
+                                pose: None,
                             };
                             let title = format!(
                                 "pfe-qemu scan 0 ({config}): {} features from the firmware",

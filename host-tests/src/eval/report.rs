@@ -1,7 +1,7 @@
 //! The evaluation as Markdown (docs/EVALUATION.md) and as plain text.
 
 use super::{Evaluation, Level, MethodResult};
-use crate::score::quantile;
+use crate::eval::score::quantile;
 use std::fmt::Write as _;
 
 /// Median |error| / CRB σ of an efficient unbiased Gaussian estimator (and 95th percentile).

@@ -337,9 +337,9 @@ pub fn line_chart(title: &str, xlabel: &str, xs: &[f64], curves: &[(String, Vec<
     out
 }
 
-/// One scan of each concrete scene kind side by side ([`crate::sim::SimScan::to_svg`]).
+/// One scan of each concrete scene kind side by side ([`crate::scene::SimScan::to_svg`]).
 pub fn scene_gallery(seed: u64, sigma: f32) -> String {
-    use crate::sim::{Scenario, SceneKind};
+    use crate::scene::{Scenario, SceneKind};
     let size = 420.0;
     let kinds = SceneKind::CONCRETE;
     let w = size * kinds.len() as f64;

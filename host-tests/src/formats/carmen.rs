@@ -3,7 +3,9 @@
 //! Ranges are in metres; the field of view is 180°, centred on x (x forward, y left, beams
 //! counter-clockwise from the right). Every other line (`ODOM`, `PARAM`, `NEFF`, `RLASER`,
 //! `TRUEPOS`, … — any upper-case message name — and `#` comments) is skipped; a line that is
-//! neither is an error.
+//! neither is an error. The first pose (`x y θ`, m and rad: in the shared `*-corrected` logs the
+//! corrected pose, taken as the laser's) and the timestamp (s) go to [`Record::pose`] and
+//! [`Record::time`] when they are numbers (`None` otherwise).
 //!
 //! # No return
 //! A reading is no return when it is at or beyond the maximum range `r_max`: 50 m by default,
@@ -53,6 +55,7 @@
 //! let scan = Reader::new(Box::new(log.as_bytes())).next().unwrap().unwrap();
 //! assert_eq!(scan.ranges_mm.len(), 5);
 //! assert!((scan.ranges_mm[0] - 1000.0).abs() < 1e-3 && scan.ranges_mm[1].is_nan());
+//! assert_eq!((scan.pose, scan.time), (Some([0.0, 0.0, 0.0]), Some(0.0)));
 //! ```
 
 use std::f32::consts::PI;
@@ -141,7 +144,10 @@ impl Reader {
             if !(r.is_finite() && r >= 0.0) {
                 return Err(InputError::line(
                     line,
-                    format!("range {k} is not a range in metres: {token:?}"),
+                    format!(
+                        "range {k} is not a range in metres: {}",
+                        super::quote(token)
+                    ),
                 ));
             }
             let mm = r * 1000.0;
@@ -152,14 +158,24 @@ impl Reader {
             });
         }
         // The laser pose, odometry pose and timestamp must follow the ranges.
-        if tokens.next().is_none() {
+        let Some(x) = tokens.next() else {
             return Err(InputError::line(
                 line,
                 "FLASER line truncated after the ranges (no pose)",
             ));
-        }
+        };
+        let rest: Vec<&str> = tokens.take(6).collect();
+        let field = |k: usize| rest.get(k).and_then(|t| t.parse::<f64>().ok());
+        let pose = match (x.parse::<f64>().ok(), field(0), field(1)) {
+            (Some(x), Some(y), Some(t)) if x.is_finite() && y.is_finite() && t.is_finite() => {
+                Some([x, y, t])
+            }
+            _ => None,
+        };
         let geometry = self.convention.geometry(n, self.r_max);
-        let record = checked_record(line, self.count, geometry, ranges)?;
+        let mut record = checked_record(line, self.count, geometry, ranges)?;
+        record.pose = pose;
+        record.time = field(5).filter(|t| t.is_finite());
         self.count += 1;
         Ok(record)
     }
@@ -217,4 +233,31 @@ fn is_message_name(s: &str) -> bool {
 
 fn truncate(s: &str) -> String {
     s.chars().take(20).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn first(log: &'static str) -> Record {
+        match Reader::new(Box::new(log.as_bytes())).next() {
+            Some(Ok(r)) => r,
+            other => panic!("no scan: {other:?}"),
+        }
+    }
+
+    #[test]
+    fn pose_and_time_are_the_first_pose_and_the_timestamp() {
+        let r = first("FLASER 5 1 2 3 4 5 1.5 -2.25 0.5 9 9 9 32.9068 host 33.5\n");
+        assert_eq!(r.pose, Some([1.5, -2.25, 0.5]));
+        assert_eq!(r.time, Some(32.9068));
+    }
+
+    #[test]
+    fn missing_or_bad_pose_fields_give_none() {
+        let r = first("FLASER 5 1 2 3 4 5 1.5 nan\n");
+        assert_eq!((r.pose, r.time), (None, None));
+        let r = first("FLASER 5 1 2 3 4 5 1.5 2 x 0 0 0 t host 0\n");
+        assert_eq!((r.pose, r.time), (None, None));
+    }
 }

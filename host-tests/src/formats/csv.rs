@@ -1,9 +1,10 @@
 //! `csv`: one scan a line, `ID,START_DEG,STEP_DEG,R_0,...,R_{N-1}`.
 //!
-//! Ranges in mm; 0 or ≥ 8183 (the LMS reserved codes) = no return, so the maximum range is
-//! 8182 mm. Blank lines and lines starting with `#` are skipped. Any other malformed line
-//! (missing field, a field that is not a number, a negative or non-finite range, more than
-//! [`MAX_BEAMS`](crate::method::MAX_BEAMS) ranges) is an error with its line number.
+//! Ranges in mm; 0, `NaN` or ≥ 8183 (the LMS reserved codes) = no return (a discontinuity),
+//! so the maximum range is 8182 mm. Blank lines and lines starting with `#` are skipped. Any
+//! other malformed line (missing field, a field that is not a number, a negative or infinite
+//! range, more than [`MAX_BEAMS`](crate::methods::MAX_BEAMS) ranges, beams spanning more than
+//! 360°) is an error with its line number.
 //!
 //! ```
 //! use host_tests::formats::csv::Reader;
@@ -17,7 +18,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, checked_record, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, quote, InputError, Lines, Record};
 
 /// Largest valid range, mm (8183 and above are the LMS "no return" codes).
 pub const MAX_RANGE_MM: f32 = 8182.0;
@@ -46,10 +47,14 @@ pub fn parse_line(line: u64, text: &str) -> Result<Record, InputError> {
     for (k, token) in fields.enumerate() {
         let what = format!("range {k} (field {})", k + 4);
         let r: f32 = number(line, &what, Some(token))?;
+        if r.is_nan() {
+            ranges.push(f32::NAN);
+            continue;
+        }
         if !(r.is_finite() && r >= 0.0) {
             return Err(InputError::line(
                 line,
-                format!("{what} is not a range in mm: {token:?}"),
+                format!("{what} is not a range in mm: {}", quote(token)),
             ));
         }
         ranges.push(if r == 0.0 || r > MAX_RANGE_MM {
@@ -59,6 +64,16 @@ pub fn parse_line(line: u64, text: &str) -> Result<Record, InputError> {
         });
     }
     check_beams(line, ranges.len())?;
+    let span = (ranges.len() as f64 - 1.0) * f64::from(step_deg).abs();
+    if span > 360.0 + 1e-9 {
+        return Err(InputError::line(
+            line,
+            format!(
+                "{} beams {step_deg}° apart span {span}°, more than a full turn",
+                ranges.len()
+            ),
+        ));
+    }
     let geometry = ScanGeometry {
         start_angle: start_deg.to_radians(),
         angle_step: step_deg.to_radians(),

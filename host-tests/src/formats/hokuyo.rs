@@ -57,7 +57,7 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
         if r < 0.0 {
             return Err(InputError::line(
                 line,
-                format!("range {k} is negative: {token:?}"),
+                format!("range {k} is negative: {}", super::quote(token)),
             ));
         }
         let mm = r * 1000.0;
@@ -71,7 +71,10 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
     if let Some(extra) = t.next() {
         return Err(InputError::line(
             line,
-            format!("more than the declared {n} ranges (extra {extra:?})"),
+            format!(
+                "more than the declared {n} ranges (extra {})",
+                super::quote(extra)
+            ),
         ));
     }
     let geometry = ScanGeometry {

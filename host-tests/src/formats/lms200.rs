@@ -104,6 +104,8 @@ impl Telegram {
                     }
                 })
                 .collect(),
+            time: None,
+            pose: None,
         }
     }
 }

@@ -20,6 +20,8 @@ pub mod carmen;
 pub mod csv;
 pub mod hokuyo;
 pub mod lms200;
+pub mod ros2;
+pub mod ros2_stream;
 
 use std::fmt;
 use std::fs::File;
@@ -29,7 +31,7 @@ use std::path::Path;
 use pfe_core::{Feature, ScanGeometry};
 use serde::Serialize;
 
-use crate::method::{Extraction, MAX_BEAMS};
+use crate::methods::{Extraction, MAX_BEAMS};
 
 /// Input file formats understood by `pfe`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -42,17 +44,20 @@ pub enum Format {
     Lms200,
     /// `topic stamp angle_min angle_increment range_min range_max n r_0 ... r_{n-1}`.
     Hokuyo,
+    /// ROS 2 bag (MCAP) with `sensor_msgs/msg/LaserScan` messages (see [`ros2`]).
+    Mcap,
 }
 
 impl Format {
     /// Range noise assumed for this format's data, mm: the LMS200 data sheet's 5 mm for
     /// mm-mode data (csv, lms200); 10 mm for CARMEN logs (cm-quantised LMS data) and for the
-    /// Hokuyo URG-04LX (±10 mm at short range). The `pfe` CLI's default for `--sigma-r`, and
+    /// Hokuyo URG-04LX (±10 mm at short range); 10 mm for ROS 2 bags, whose scanners are mostly
+    /// of the Hokuyo URG and SICK LMS/TiM class. The `pfe` CLI's default for `--sigma-r`, and
     /// `pfe bench`'s σ_r for the CARMEN logs.
     pub fn sigma_r(self) -> f32 {
         match self {
             Format::Csv | Format::Lms200 => 5.0,
-            Format::Carmen | Format::Hokuyo => 10.0,
+            Format::Carmen | Format::Hokuyo | Format::Mcap => 10.0,
         }
     }
 }
@@ -64,6 +69,7 @@ impl fmt::Display for Format {
             Format::Carmen => "carmen",
             Format::Lms200 => "lms200",
             Format::Hokuyo => "hokuyo",
+            Format::Mcap => "mcap",
         })
     }
 }
@@ -77,6 +83,10 @@ pub struct Record {
     pub geometry: ScanGeometry,
     /// One range per beam, mm; `NaN` = no return.
     pub ranges_mm: Vec<f32>,
+    /// Time of the scan, s, when the format gives one (CARMEN).
+    pub time: Option<f64>,
+    /// Pose of the scanner (x m, y m, θ rad) when the format gives one (CARMEN).
+    pub pose: Option<[f64; 3]>,
 }
 
 impl Record {
@@ -144,7 +154,7 @@ pub fn open(
 
 /// Opens `path` (`-` = stdin) for reading `format`, decompressing gzip when the data starts
 /// with the gzip magic bytes (for the binary `lms200` format only when the name ends in
-/// `.gz`, since a raw capture may start with any bytes). `wrap` may wrap the raw file reader
+/// `.gz`, since a raw capture may start with any bytes; the same for `mcap`). `wrap` may wrap the raw file reader
 /// (e.g. with a progress bar counting bytes).
 pub fn open_for(
     path: &Path,
@@ -157,7 +167,8 @@ pub fn open_for(
         Box::new(File::open(path)?)
     };
     let mut reader = BufReader::with_capacity(1 << 16, wrap(raw));
-    let sniff = format != Format::Lms200 || path.to_string_lossy().ends_with(".gz");
+    let sniff =
+        !matches!(format, Format::Lms200 | Format::Mcap) || path.to_string_lossy().ends_with(".gz");
     if sniff && reader.fill_buf()?.starts_with(&[0x1f, 0x8b]) {
         Ok(Box::new(BufReader::with_capacity(
             1 << 16,
@@ -175,6 +186,7 @@ pub fn scans(format: Format, input: Box<dyn BufRead>) -> Scans {
         Format::Carmen => Box::new(carmen::Reader::new(input)),
         Format::Hokuyo => Box::new(hokuyo::Reader::new(input)),
         Format::Lms200 => Box::new(lms200::Reader::new(input).map(|t| t.map(|t| t.record()))),
+        Format::Mcap => ros2_stream::records(input),
     }
 }
 
@@ -266,6 +278,23 @@ fn is_blank_or_comment(text: &str) -> bool {
     t.is_empty() || t.starts_with('#')
 }
 
+/// Most characters of a bad field quoted in an error message.
+pub const MAX_QUOTE: usize = 80;
+
+/// `token` quoted for an error message: escaped like `{:?}`, cut after [`MAX_QUOTE`]
+/// characters with "…" (a garbage "field" may be a megabyte long).
+///
+/// ```
+/// use host_tests::formats::quote;
+/// assert_eq!(quote("x1000"), r#""x1000""#);
+/// assert_eq!(quote(&"a".repeat(500)).chars().count(), 80 + 3);
+/// ```
+pub fn quote(token: &str) -> String {
+    let head: String = token.chars().take(MAX_QUOTE).collect();
+    let more = if head.len() < token.len() { "…" } else { "" };
+    format!("\"{}{more}\"", head.escape_debug())
+}
+
 /// Parses a number field, naming it in the error.
 pub(crate) fn number<T: std::str::FromStr>(
     line: u64,
@@ -276,7 +305,7 @@ pub(crate) fn number<T: std::str::FromStr>(
     token
         .trim()
         .parse()
-        .map_err(|_| InputError::line(line, format!("{what} is not a number: {token:?}")))
+        .map_err(|_| InputError::line(line, format!("{what} is not a number: {}", quote(token))))
 }
 
 /// Checks a beam count against the extractor's capacity.
@@ -305,6 +334,8 @@ pub(crate) fn checked_record(
         id,
         geometry,
         ranges_mm,
+        time: None,
+        pose: None,
     })
 }
 
@@ -323,7 +354,7 @@ fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
     }
 }
 
-/// One feature in the `pfe extract` JSON output.
+/// One feature in the `pfe extract` / `pfe listen` JSON output (`docs/JSON.md`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum FeatureJson {
@@ -333,6 +364,8 @@ pub enum FeatureJson {
         first: usize,
         /// Last beam index.
         last: usize,
+        /// Valid points fitted.
+        points: usize,
         /// Normal angle, rad.
         alpha: f32,
         /// Distance from the scanner, mm.
@@ -341,6 +374,8 @@ pub enum FeatureJson {
         var_alpha: f32,
         /// σ_ρ², mm².
         var_rho: f32,
+        /// cov(α, ρ), rad·mm.
+        cov_alpha_rho: f32,
         /// First point projected on the line, mm.
         start: [f32; 2],
         /// Last point projected on the line, mm.
@@ -352,13 +387,30 @@ pub enum FeatureJson {
         first: usize,
         /// Last beam index.
         last: usize,
+        /// Valid points fitted.
+        points: usize,
         /// Centre, mm.
         center: [f32; 2],
         /// Radius, mm.
         radius: f32,
-        /// Covariance of (centre x, centre y, radius), mm².
+        /// Covariance of (centre x, centre y, radius), mm², row by row; symmetric to the bit.
         cov: [[f32; 3]; 3],
+        /// Bearing from the centre to the first point, rad.
+        start_angle: f32,
+        /// Bearing from the centre to the last point, rad.
+        end_angle: f32,
     },
+}
+
+/// `cov` with each off-diagonal pair set to the mean of the two (bit-symmetric output).
+fn symmetrised(cov: [[f32; 3]; 3]) -> [[f32; 3]; 3] {
+    let mut c = cov;
+    for (i, j) in [(0, 1), (0, 2), (1, 2)] {
+        let m = 0.5 * (cov[i][j] + cov[j][i]);
+        c[i][j] = m;
+        c[j][i] = m;
+    }
+    c
 }
 
 impl From<&Feature> for FeatureJson {
@@ -367,49 +419,110 @@ impl From<&Feature> for FeatureJson {
             Feature::Line(l) => FeatureJson::Line {
                 first: usize::from(l.first),
                 last: usize::from(l.last),
+                points: usize::from(l.points),
                 alpha: l.alpha,
                 rho: l.rho,
                 var_alpha: l.var_alpha,
                 var_rho: l.var_rho,
+                cov_alpha_rho: l.cov_alpha_rho,
                 start: [l.start.x, l.start.y],
                 end: [l.end.x, l.end.y],
             },
             Feature::Circle(c) => FeatureJson::Circle {
                 first: usize::from(c.first),
                 last: usize::from(c.last),
+                points: usize::from(c.points),
                 center: [c.center.x, c.center.y],
                 radius: c.radius,
-                cov: c.cov,
+                cov: symmetrised(c.cov),
+                start_angle: c.start_angle,
+                end_angle: c.end_angle,
             },
         }
     }
 }
 
-/// One line of `pfe extract` output: `{"scan": ID, "marks": [...], "features": [...]}`.
+/// How a scan's extraction went: `{"error": null | "feature_capacity" | "too_many_readings" |
+/// "invalid_input", "dropped": N}`.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct StatusJson {
+    /// Why the extraction failed or was incomplete, if it was.
+    pub error: Option<String>,
+    /// Features found but dropped for the extractor's capacity.
+    pub dropped: usize,
+}
+
+impl StatusJson {
+    /// The status of an extraction's result.
+    pub fn of(result: &Result<(), pfe_core::ExtractError>) -> Self {
+        use pfe_core::ExtractError as E;
+        let (error, dropped) = match result {
+            Ok(()) => (None, 0),
+            Err(E::FeatureCapacity { dropped }) => (Some("feature_capacity"), *dropped),
+            Err(E::TooManyReadings { .. }) => (Some("too_many_readings"), 0),
+            Err(_) => (Some("invalid_input"), 0),
+        };
+        Self {
+            error: error.map(str::to_string),
+            dropped,
+        }
+    }
+}
+
+/// One line of `pfe extract` output: `{"scan": ID, "marks": [...], "features": [...],
+/// "status": {...}}`, with `time` and `pose` when the input has them (`docs/JSON.md`).
 ///
 /// ```
 /// use host_tests::formats::ScanJson;
-/// use host_tests::method::Extraction;
+/// use host_tests::methods::Extraction;
 /// let j = ScanJson::new(3, &Extraction { marks: vec![0, 9], features: vec![] });
-/// assert_eq!(serde_json::to_string(&j).unwrap(), r#"{"scan":3,"marks":[0,9],"features":[]}"#);
+/// assert_eq!(
+///     serde_json::to_string(&j).unwrap(),
+///     r#"{"scan":3,"marks":[0,9],"features":[],"status":{"error":null,"dropped":0}}"#
+/// );
 /// ```
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ScanJson {
     /// Scan ID.
     pub scan: u64,
-    /// Mark points (beam indices).
-    pub marks: Vec<usize>,
+    /// Timestamp of the input scan, s (CARMEN, Hokuyo), when it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time: Option<f64>,
+    /// Pose of the robot of the input scan, `[x m, y m, θ rad]` (CARMEN), when it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pose: Option<[f64; 3]>,
+    /// Mark points (beam indices); absent from `pfe listen` (not on the wire).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub marks: Option<Vec<usize>>,
     /// Features in scan order.
     pub features: Vec<FeatureJson>,
+    /// How the extraction went.
+    pub status: StatusJson,
 }
 
 impl ScanJson {
-    /// The output line for scan `id`.
+    /// The output line for scan `id` (status ok).
     pub fn new(id: u64, extraction: &Extraction) -> Self {
         Self {
             scan: id,
-            marks: extraction.marks.clone(),
+            time: None,
+            pose: None,
+            marks: Some(extraction.marks.clone()),
             features: extraction.features.iter().map(FeatureJson::from).collect(),
+            status: StatusJson::default(),
         }
+    }
+
+    /// With the extraction's status.
+    pub fn with_status(mut self, status: StatusJson) -> Self {
+        self.status = status;
+        self
+    }
+
+    /// With the input scan's time and pose, when its format has them.
+    pub fn with_input(mut self, record: &Record) -> Self {
+        self.time = record.time;
+        self.pose = record.pose;
+        self
     }
 }

@@ -15,22 +15,20 @@ fn main() {
 
 #[cfg(target_os = "none")]
 mod fw {
-    use cortex_m_rt::{entry, exception, ExceptionFrame};
+    use cortex_m_rt::entry;
     use defmt_semihosting as _;
-    use firmware::app::{ConfigChoice, LmsApp, RawScan};
+    use firmware::app::{RawScan, LMS_READINGS};
     use firmware::lms::{frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions};
     use firmware::output::{self, Counters, Report, Stage};
     use firmware_qemu::{
-        sys, time,
+        rt, sys, time,
         uart::{Uart, UART1},
     };
-    use pfe_core::{Config, Extractor, Scan, ScanGeometry};
+    use pfe_core::{Config, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
     /// Values a telegram may hold (the bench's scans have 361).
-    const N: usize = firmware::lms::driver::MAX_VALUES;
-    /// The firmware's extractor (the capacity of `firmware::app::LmsApp`).
-    type LmsExtractor = Extractor<N, { firmware::app::MAX_FEATURES }>;
+    const N: usize = LMS_READINGS;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
     struct Sink;
@@ -87,21 +85,8 @@ mod fw {
             sys::exit(sys::EXIT_USAGE);
         }
         // The firmware's extractor and application (the scans have 361 values).
-        let ex: &'static mut LmsExtractor = {
-            static mut EX: LmsExtractor = LmsExtractor::new();
-            #[allow(unsafe_code)]
-            // SAFETY: the only reference to EX, taken once before the loop.
-            unsafe {
-                &mut *core::ptr::addr_of_mut!(EX)
-            }
-        };
-        let app: &'static mut LmsApp = {
-            static mut APP: LmsApp = LmsApp::new(ConfigChoice::Default);
-            #[allow(unsafe_code)]
-            // SAFETY: as above.
-            unsafe {
-                &mut *core::ptr::addr_of_mut!(APP)
-            }
+        let (Some(ex), Some(app)) = (rt::take_extractor(), rt::take_app()) else {
+            sys::exit(sys::EXIT_USAGE)
         };
         let mut dec = Decoder::<812>::new();
         let mut codes = [0u16; N];
@@ -118,7 +103,7 @@ mod fw {
                 break;
             }
             let values = codes.get(..n).unwrap_or(&[]);
-            let scan = Scan::from_lms(g, values, 1.0);
+            let scan = RawScan::lms_8m(g, values, 1.0).to_pfe();
             let t0 = time::ticks();
             let _ = core::hint::black_box(ex.extract(&scan, &paper));
             let t_paper = time::ticks() - t0;
@@ -160,21 +145,5 @@ mod fw {
         report(&mut out, Report::Done { scans: seq });
         defmt::info!("bench: {} scans, stack {} of {} bytes", seq, used, size);
         sys::exit(sys::EXIT_OK)
-    }
-
-    #[exception]
-    fn SysTick() {
-        time::on_systick();
-    }
-
-    #[exception]
-    #[allow(unsafe_code)]
-    unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
-        sys::exit(sys::EXIT_FAULT)
-    }
-
-    #[panic_handler]
-    fn panic(_info: &core::panic::PanicInfo) -> ! {
-        sys::exit(sys::EXIT_PANIC)
     }
 }

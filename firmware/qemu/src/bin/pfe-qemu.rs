@@ -15,15 +15,15 @@ fn main() {
 
 #[cfg(target_os = "none")]
 mod fw {
-    use cortex_m_rt::{entry, exception, ExceptionFrame};
+    use cortex_m_rt::entry;
     use defmt_semihosting as _;
-    use firmware::app::{AppError, ConfigChoice, LmsApp};
+    use firmware::app::{AppError, ConfigChoice};
     use firmware::lms::types::Baud;
     use firmware::lms::{Config, Driver};
     use firmware::output::{self, Report};
-    use firmware_qemu::sys;
     use firmware_qemu::time::{self, Clock, Delay};
     use firmware_qemu::uart::{Uart, UART0, UART1};
+    use firmware_qemu::{rt, sys};
 
     /// Consecutive failed scans before giving up.
     const MAX_FAILURES: u32 = 5;
@@ -47,13 +47,8 @@ mod fw {
             ConfigChoice::Default
         };
         // Room for every LMS200 variant (up to 401 values) and 48 features.
-        let app: &'static mut LmsApp = {
-            static mut APP: LmsApp = LmsApp::new(ConfigChoice::Default);
-            #[allow(unsafe_code)]
-            // SAFETY: the only reference to APP, taken once here.
-            unsafe {
-                &mut *core::ptr::addr_of_mut!(APP)
-            }
+        let Some(app) = rt::take_app() else {
+            sys::exit(sys::EXIT_USAGE)
         };
         app.set_choice(choice);
         defmt::info!("pfe-qemu: {} scans (0 = forever), config {}", scans, choice);
@@ -96,21 +91,5 @@ mod fw {
         report(&mut out, Report::Stack { used, size });
         report(&mut out, Report::Done { scans: app.seq() });
         sys::exit(sys::EXIT_OK)
-    }
-
-    #[exception]
-    fn SysTick() {
-        time::on_systick();
-    }
-
-    #[exception]
-    #[allow(unsafe_code)]
-    unsafe fn HardFault(_ef: &ExceptionFrame) -> ! {
-        sys::exit(sys::EXIT_FAULT)
-    }
-
-    #[panic_handler]
-    fn panic(_info: &core::panic::PanicInfo) -> ! {
-        sys::exit(sys::EXIT_PANIC)
     }
 }

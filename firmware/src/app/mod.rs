@@ -1,0 +1,228 @@
+//! The application loop, and the only place where LMS scans meet pfe-core: scans from the
+//! driver → pfe-core → framed output.
+//!
+//! [`App`] owns a statically sized [`Extractor`] (put the `App` in a `static`: about
+//! `9·N + 64·M` bytes) and turns each [`RawScan`] into one output frame
+//! ([`crate::output::write_scan`]). Where the scans come from is a [`ScanSource`]: the LMS200
+//! driver on a board, a test double on the host.
+//!
+//! - `scan`: [`RawScan`], the driver's scan as pfe-core input (the one adapter).
+//! - `source`: [`ScanSource`], implemented by the driver; its counters as the output's.
+//!
+//! ```
+//! use firmware::app::{App, ConfigChoice, RawScan};
+//! use firmware::output::{Counters, Feed, FrameDecoder};
+//! use pfe_core::ScanGeometry;
+//! // A wall 2 m ahead, as raw LMS200 codes in mm.
+//! let g = ScanGeometry::LMS200_180_050;
+//! let values: Vec<u16> = (0..361)
+//!     .map(|i| {
+//!         let b = g.bearing(i);
+//!         if b.abs() < 1.0 { (2000.0 / b.cos()).round() as u16 } else { 8183 }
+//!     })
+//!     .collect();
+//! let mut app = App::<361, 48>::new(ConfigChoice::Default);
+//! let mut buf = [0u8; 1024];
+//! let mut out = &mut buf[..];
+//! let scan = RawScan::lms_8m(g, &values, 1.0);
+//! let header = app.process(&scan, Counters::default(), &mut out)?;
+//! assert_eq!(header.n_features, 1);
+//! let n = 1024 - out.len();
+//! let Feed::Frame { frame, .. } = FrameDecoder::<1024>::new().feed(&buf[..n]) else {
+//!     return Err("no frame".into());
+//! };
+//! assert!(frame.features[0].is_line());
+//! assert_eq!(frame.scan().map(|h| h.time_ms), Some(0)); // lms_8m: time unknown
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use embedded_io::Write;
+use pfe_core::{Config, ExtractError, Extractor};
+
+use crate::lms::types::Variant;
+use crate::output::{self, Counters, EncodeError, ScanHeader, ScanStatus};
+
+mod scan;
+mod source;
+
+pub use scan::RawScan;
+pub use source::ScanSource;
+
+/// The named pfe-core configurations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigChoice {
+    /// `Config::paper()`: the method as published.
+    Paper,
+    /// `Config::default()`: noise-model threshold, boundary localisation, fit comparison.
+    Default,
+}
+
+impl ConfigChoice {
+    /// The configuration.
+    pub const fn config(self) -> Config {
+        match self {
+            ConfigChoice::Paper => Config::paper(),
+            ConfigChoice::Default => Config::default_config(),
+        }
+    }
+}
+
+/// Why a step of the loop failed.
+#[derive(Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
+pub enum AppError<S, W> {
+    /// The scan source (driver) failed.
+    Source(S),
+    /// Writing the output frame failed.
+    Output(EncodeError<W>),
+}
+
+impl<S: core::fmt::Debug, W: core::fmt::Debug> core::fmt::Display for AppError<S, W> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            AppError::Source(e) => write!(f, "scan source: {e:?}"),
+            AppError::Output(e) => write!(f, "output: {e}"),
+        }
+    }
+}
+
+impl<S: core::fmt::Debug, W: core::fmt::Debug> core::error::Error for AppError<S, W> {}
+
+/// Readings the firmware's extractor has room for: every LMS2xx scan (100° at 0.25°: 401).
+pub const LMS_READINGS: usize = Variant::MAX_VALUES;
+/// Features the firmware's extractor has room for.
+pub const LMS_FEATURES: usize = 48;
+/// The firmware's extractor: room for every LMS2xx scan and [`LMS_FEATURES`] features.
+pub type LmsExtractor = Extractor<LMS_READINGS, LMS_FEATURES>;
+/// The application the firmware runs (its extractor an [`LmsExtractor`]).
+pub type LmsApp = App<LMS_READINGS, LMS_FEATURES>;
+
+/// The application: extractor with room for `N` readings and `M` features, a configuration
+/// and the scan sequence number.
+pub struct App<const N: usize, const M: usize> {
+    extractor: Extractor<N, M>,
+    config: ConfigSlot,
+    seq: u32,
+}
+
+/// The configuration an [`App`] uses. The named ones are tags only, so that a new `App` with
+/// the default configuration is all zero bytes: a `static` of it goes to `.bss` instead of
+/// being copied from flash (8 KiB of flash for a 401-value extractor).
+#[derive(Clone, Copy, Debug)]
+#[repr(u8)]
+enum ConfigSlot {
+    Default = 0,
+    Paper = 1,
+    Custom(Config) = 2,
+}
+
+impl ConfigSlot {
+    const fn named(choice: ConfigChoice) -> Self {
+        match choice {
+            ConfigChoice::Default => ConfigSlot::Default,
+            ConfigChoice::Paper => ConfigSlot::Paper,
+        }
+    }
+
+    fn get(&self) -> &Config {
+        match self {
+            ConfigSlot::Default => &DEFAULT,
+            ConfigSlot::Paper => &PAPER,
+            ConfigSlot::Custom(c) => c,
+        }
+    }
+}
+
+/// What [`ConfigSlot::Default`] and [`ConfigSlot::Paper`] stand for.
+static DEFAULT: Config = Config::default_config();
+static PAPER: Config = Config::paper();
+
+impl<const N: usize, const M: usize> App<N, M> {
+    /// A new application (`const`: it can live in a `static`).
+    pub const fn new(choice: ConfigChoice) -> Self {
+        Self::with_slot(ConfigSlot::named(choice))
+    }
+
+    /// A new application with any configuration.
+    pub const fn with_config(config: Config) -> Self {
+        Self::with_slot(ConfigSlot::Custom(config))
+    }
+
+    const fn with_slot(config: ConfigSlot) -> Self {
+        Self {
+            extractor: Extractor::new(),
+            config,
+            seq: 0,
+        }
+    }
+
+    /// Changes the configuration (in place: no copy of the extractor on the stack).
+    pub fn set_config(&mut self, config: Config) {
+        self.config = ConfigSlot::Custom(config);
+    }
+
+    /// Switches to a named configuration.
+    pub fn set_choice(&mut self, choice: ConfigChoice) {
+        self.config = ConfigSlot::named(choice);
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &Config {
+        self.config.get()
+    }
+
+    /// The extractor (features, marks and stats of the last scan).
+    pub fn extractor(&self) -> &Extractor<N, M> {
+        &self.extractor
+    }
+
+    /// Scans processed so far (the next scan's sequence number).
+    pub fn seq(&self) -> u32 {
+        self.seq
+    }
+
+    /// Extracts the features of `scan` and writes its frame to `out`; returns the header sent.
+    pub fn process<W: Write>(
+        &mut self,
+        scan: &RawScan<'_>,
+        counters: Counters,
+        out: &mut W,
+    ) -> Result<ScanHeader, EncodeError<W::Error>> {
+        let s = scan.to_pfe();
+        let result = self.extractor.extract(&s, self.config.get());
+        let stats = self.extractor.stats();
+        let status = match result {
+            Ok(_) => ScanStatus::Ok,
+            Err(ExtractError::FeatureCapacity { .. }) => ScanStatus::FeatureCapacity,
+            Err(ExtractError::TooManyReadings { .. }) => ScanStatus::TooManyReadings,
+            Err(_) => ScanStatus::InvalidInput,
+        };
+        let sat = |v: usize| u16::try_from(v).unwrap_or(u16::MAX);
+        let features = self.extractor.features();
+        let header = ScanHeader {
+            seq: self.seq,
+            time_ms: scan.time_ms,
+            counters,
+            valid: sat(stats.valid),
+            segments: sat(stats.segments),
+            dropped: sat(stats.dropped),
+            n_features: sat(features.len()),
+            status,
+        };
+        self.seq = self.seq.wrapping_add(1);
+        output::write_scan(out, &header, features)?;
+        Ok(header)
+    }
+
+    /// Waits for the next scan from `source` and processes it.
+    pub fn step<S: ScanSource, W: Write>(
+        &mut self,
+        source: &mut S,
+        out: &mut W,
+    ) -> Result<ScanHeader, AppError<S::Error, W::Error>> {
+        let (scan, counters) = source.next_scan().map_err(AppError::Source)?;
+        self.process(&scan, counters, out).map_err(AppError::Output)
+    }
+}

@@ -1,0 +1,78 @@
+//! The one bridge from LMS scans to pfe-core: [`RawScan`] (raw range codes with their
+//! geometry and unit) from the driver's [`ScanData`], and from it the pfe-core [`Scan`].
+
+use pfe_core::{Ranges, Scan, ScanGeometry};
+
+use crate::lms::driver::ScanData;
+use crate::lms::types::MeasuringMode;
+
+/// One scan as the driver delivers it: raw range codes (measuring-mode flag bits removed).
+#[derive(Clone, Copy, Debug)]
+pub struct RawScan<'a> {
+    /// Beam geometry of the scanner's variant.
+    pub geometry: ScanGeometry,
+    /// Range codes; 0 and codes above 8182 are no return.
+    pub values: &'a [u16],
+    /// mm per code: 1.0 in mm mode, 10.0 in cm mode.
+    pub mm_per_unit: f32,
+    /// Largest valid code (8182 in the 8 m / 80 m measuring modes).
+    pub max_valid: u16,
+    /// Firmware time when the telegram was complete, ms (the driver's clock; 0 if unknown).
+    pub time_ms: u32,
+}
+
+impl<'a> RawScan<'a> {
+    /// A scan in the 8 m / 80 m measuring modes (largest valid code 8182).
+    pub fn lms_8m(geometry: ScanGeometry, values: &'a [u16], mm_per_unit: f32) -> Self {
+        Self {
+            geometry,
+            values,
+            mm_per_unit,
+            max_valid: MeasuringMode::M8_FIELDS_AB_DAZZLE.max_valid(),
+            time_ms: 0,
+        }
+    }
+
+    /// The pfe-core input for this scan.
+    pub fn to_pfe(&self) -> Scan<'a> {
+        Scan {
+            geometry: self.geometry,
+            ranges: Ranges::Raw {
+                values: self.values,
+                mm_per_unit: self.mm_per_unit,
+                max_valid: self.max_valid,
+            },
+            motion: None,
+        }
+    }
+}
+
+/// The geometry of the scan's variant and the scan as
+/// pfe-core input.
+impl ScanData {
+    /// Beam geometry (centred field, value 0 on the right, counter-clockwise).
+    pub fn geometry(&self) -> ScanGeometry {
+        let mut g = ScanGeometry::lms200(
+            f32::from(self.variant.angle_deg),
+            self.variant.resolution_deg(),
+        );
+        g.r_max = f32::from(self.max_valid()) * self.mm_per_unit();
+        g
+    }
+
+    /// The scan as [`RawScan`] (raw codes, no copy).
+    pub fn raw(&self) -> RawScan<'_> {
+        RawScan {
+            geometry: self.geometry(),
+            values: self.codes(),
+            mm_per_unit: self.mm_per_unit(),
+            max_valid: self.max_valid(),
+            time_ms: self.time_ms,
+        }
+    }
+
+    /// The scan as pfe-core input (raw codes, no copy).
+    pub fn as_pfe_scan(&self) -> Scan<'_> {
+        self.raw().to_pfe()
+    }
+}

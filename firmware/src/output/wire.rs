@@ -1,0 +1,127 @@
+//! The wire types: what a frame carries, serialised by postcard (see the [module
+//! docs](super) for the frame layout).
+
+use serde::{Deserialize, Serialize};
+
+/// Version of the frame layout described here, the first byte of every frame's payload; bump it
+/// when a wire struct or the feature layout changes. A receiver drops a frame of another version
+/// ([`DecodeError::UnknownVersion`](super::DecodeError::UnknownVersion)).
+pub const WIRE_VERSION: u8 = 2;
+
+/// Most features one decoded frame can hold.
+pub const MAX_FEATURES: usize = 64;
+
+/// Largest encoding of one [`Feature`](pfe_core::Feature) (a circle: tag + 3 u16 varints + 15
+/// f32).
+pub const MAX_FEATURE_LEN: usize = 1 + 3 * 3 + 15 * 4;
+
+/// Largest frame on the wire for `features` features (header, features, CRC, COBS overhead
+/// and the terminating zero): size a receive buffer with it.
+pub const fn max_frame_len(features: usize) -> usize {
+    let raw = 64 + features * MAX_FEATURE_LEN + 4;
+    raw + raw / 254 + 2
+}
+
+/// Link counters of the scanner driver, cumulative since start.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Counters {
+    /// Telegrams received with a good CRC.
+    pub telegrams_ok: u32,
+    /// Telegrams dropped for a bad CRC.
+    pub crc_dropped: u32,
+    /// Bytes skipped while searching for a telegram start.
+    pub bytes_skipped: u32,
+    /// Times the driver re-initialised the scanner.
+    pub reinits: u32,
+}
+
+/// Header of a scan frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScanHeader {
+    /// Scan sequence number (0 for the first scan after start).
+    pub seq: u32,
+    /// Firmware time when the scan's telegram was complete, ms (the driver's clock; wraps).
+    pub time_ms: u32,
+    /// Link counters after this scan.
+    pub counters: Counters,
+    /// Valid readings in the scan.
+    pub valid: u16,
+    /// Segments found.
+    pub segments: u16,
+    /// Features that did not fit in the extractor's buffer (not sent).
+    pub dropped: u16,
+    /// Number of features that follow.
+    pub n_features: u16,
+    /// How the extraction went.
+    pub status: ScanStatus,
+}
+
+/// Outcome of one scan's extraction.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ScanStatus {
+    /// All features were extracted and sent.
+    #[default]
+    Ok,
+    /// The feature buffer was full: the first features are sent, `dropped` were lost.
+    FeatureCapacity,
+    /// The scan had more readings than the extractor's capacity: nothing extracted.
+    TooManyReadings,
+    /// The geometry or configuration was rejected: nothing extracted.
+    InvalidInput,
+}
+
+/// What a timing report measured (see [`Report::Timing`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Stage {
+    /// Decoding one B0 telegram (CRC and values).
+    Decode,
+    /// pfe-core with `Config::paper()`.
+    ExtractPaper,
+    /// pfe-core with `Config::default()`.
+    ExtractDefault,
+    /// Telegram bytes to encoded output frame, everything.
+    Pipeline,
+}
+
+/// Out-of-band reports of the firmware.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Report {
+    /// Stack high-water mark, bytes, out of the stack's size.
+    Stack {
+        /// Bytes of stack ever used.
+        used: u32,
+        /// Bytes reserved for the stack.
+        size: u32,
+    },
+    /// Timer ticks spent on one stage of one scan.
+    Timing {
+        /// Scan sequence number.
+        seq: u32,
+        /// What was measured.
+        stage: Stage,
+        /// Timer ticks (SysTick under QEMU `-icount shift=10`: instructions = ticks × 10 / 256).
+        ticks: u32,
+        /// Readings in the scan.
+        points: u16,
+    },
+    /// The firmware finished after `scans` scans.
+    Done {
+        /// Scans processed.
+        scans: u32,
+    },
+}
+
+/// What a frame is: the item after the version byte.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Header {
+    /// One scan's features follow.
+    Scan(ScanHeader),
+    /// A report; nothing follows.
+    Report(Report),
+}

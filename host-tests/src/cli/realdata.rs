@@ -1,0 +1,41 @@
+//! `pfe realdata`: the real-data benchmark without ground truth ([`crate::eval::realdata`]).
+
+use std::path::PathBuf;
+
+use crate::eval::realdata::{report, run_log};
+use crate::formats::Format;
+
+/// Arguments of `pfe realdata`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// CARMEN logs with poses (gzip allowed).
+    #[arg(required = true)]
+    logs: Vec<PathBuf>,
+    /// At most this many scans of each log (0 = all).
+    #[arg(long, default_value_t = 0)]
+    max_scans: usize,
+    /// Range noise σ_r told to every method, mm.
+    #[arg(long, default_value_t = Format::Carmen.sigma_r())]
+    sigma_r: f32,
+    /// Also write this Markdown report, with its plots (SVG) next to it.
+    #[arg(long)]
+    md: Option<PathBuf>,
+    /// The command named in the Markdown report.
+    #[arg(long, default_value = "pfe realdata")]
+    command: String,
+}
+
+/// Runs `pfe realdata`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let mut reports = Vec::new();
+    for log in &args.logs {
+        let r = run_log(log, args.sigma_r, args.max_scans)?;
+        println!("{}", report::table(&r));
+        reports.push(r);
+    }
+    if let Some(md) = &args.md {
+        report::write_markdown(md, &reports, &args.command)?;
+        eprintln!("wrote {} and its plots", md.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,174 @@
+//! One pair of consecutive scans: scan k's features moved into scan k+1's frame
+//! ([`super::frame`]) and matched there.
+//!
+//! - **Lines** of at least [`MIN_LINE_POINTS`] points are matched to the nearest line of k+1
+//!   (by `(Δα/0.1)² + (Δρ/300 mm)²`) within the gate |Δα| < [`GATE_ALPHA`],
+//!   |Δρ| < [`GATE_RHO_MM`] whose extent overlaps theirs along its direction.
+//! - **Circles** are matched to the k+1 circle whose centre is nearest, within
+//!   [`GATE_CENTER_MM`].
+
+use pfe_core::Feature;
+
+use super::frame::{nis, Cov2, FrameChange, LineObs, Pose};
+use super::refit::{refit_nis, Innovation};
+use super::CircleObs;
+
+/// Shortest line counted, points.
+pub const MIN_LINE_POINTS: usize = 10;
+/// Line gate on the normal angle, rad.
+pub const GATE_ALPHA: f64 = 0.1;
+/// Line gate on the distance, mm.
+pub const GATE_RHO_MM: f64 = 300.0;
+/// Circle gate on the centre, mm.
+pub const GATE_CENTER_MM: f64 = 300.0;
+
+/// One scan's features as the comparison needs them, with the scanner's pose.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Seen {
+    /// Pose of the scanner, mm and rad.
+    pub pose: Pose,
+    /// Lines.
+    pub lines: Vec<LineObs>,
+    /// Circles.
+    pub circles: Vec<CircleObs>,
+}
+
+impl Seen {
+    /// The features of one scan taken at `pose`.
+    pub fn new(pose: Pose, features: &[Feature]) -> Self {
+        let mut s = Seen {
+            pose,
+            ..Seen::default()
+        };
+        for f in features {
+            match f {
+                Feature::Line(l) => s.lines.push(LineObs {
+                    alpha: f64::from(l.alpha),
+                    rho: f64::from(l.rho),
+                    cov: [
+                        [f64::from(l.var_alpha), f64::from(l.cov_alpha_rho)],
+                        [f64::from(l.cov_alpha_rho), f64::from(l.var_rho)],
+                    ],
+                    start: [f64::from(l.start.x), f64::from(l.start.y)],
+                    end: [f64::from(l.end.x), f64::from(l.end.y)],
+                    points: usize::from(l.points),
+                }),
+                Feature::Circle(c) => s.circles.push(CircleObs {
+                    center: [f64::from(c.center.x), f64::from(c.center.y)],
+                    cov: [
+                        [f64::from(c.cov[0][0]), f64::from(c.cov[0][1])],
+                        [f64::from(c.cov[1][0]), f64::from(c.cov[1][1])],
+                    ],
+                    radius: f64::from(c.radius),
+                }),
+            }
+        }
+        s
+    }
+
+    /// The same with every covariance multiplied by `k` (tests of the NIS's sensitivity).
+    pub fn scaled(&self, k: f64) -> Self {
+        let scale = |c: &Cov2| [[k * c[0][0], k * c[0][1]], [k * c[1][0], k * c[1][1]]];
+        Seen {
+            pose: self.pose,
+            lines: self
+                .lines
+                .iter()
+                .map(|l| LineObs {
+                    cov: scale(&l.cov),
+                    ..*l
+                })
+                .collect(),
+            circles: self
+                .circles
+                .iter()
+                .map(|c| CircleObs {
+                    cov: scale(&c.cov),
+                    ..*c
+                })
+                .collect(),
+        }
+    }
+}
+
+/// What the pairs of one method's scans gave, summed.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PairTally {
+    /// Pairs compared.
+    pub pairs: usize,
+    /// Points of scan k's lines of ≥ [`MIN_LINE_POINTS`] points.
+    pub line_points: usize,
+    /// Points of those that re-appear.
+    pub line_points_matched: usize,
+    /// |Δρ| of matched lines, mm.
+    pub d_rho: Vec<f64>,
+    /// |Δα| of matched lines, rad.
+    pub d_alpha: Vec<f64>,
+    /// NIS of matched lines.
+    pub nis: Vec<f64>,
+    /// NIS of matched lines after the pair's pose refit (pairs with a refit only).
+    pub nis_refit: Vec<f64>,
+    /// Pairs with a pose refit.
+    pub refits: usize,
+    /// Circles of scan k.
+    pub circles: usize,
+    /// Of those, re-appearing.
+    pub circles_matched: usize,
+    /// Centre NIS of matched circles.
+    pub circle_nis: Vec<f64>,
+}
+
+impl PairTally {
+    /// Moves `a`'s features into `b`'s frame, matches them and adds the result.
+    pub fn add(&mut self, a: &Seen, b: &Seen) {
+        self.pairs += 1;
+        let change = FrameChange::between(a.pose, b.pose);
+        let mut innovations = Vec::new();
+        for l in a.lines.iter().filter(|l| l.points >= MIN_LINE_POINTS) {
+            self.line_points += l.points;
+            let moved = change.line(l);
+            let best = b
+                .lines
+                .iter()
+                .filter_map(|c| {
+                    let (d, s, alpha) = moved.difference(c);
+                    let gated = d[0].abs() < GATE_ALPHA && d[1].abs() < GATE_RHO_MM;
+                    let (m0, m1) = moved.extent_along(c);
+                    let (c0, c1) = c.extent_along(c);
+                    let overlap = m0 <= c1 && c0 <= m1;
+                    let cost = (d[0] / GATE_ALPHA).powi(2) + (d[1] / GATE_RHO_MM).powi(2);
+                    (gated && overlap).then_some((cost, Innovation { d, s, alpha }))
+                })
+                .min_by(|x, y| x.0.total_cmp(&y.0));
+            if let Some((_, inn)) = best {
+                self.line_points_matched += l.points;
+                self.d_rho.push(inn.d[1].abs());
+                self.d_alpha.push(inn.d[0].abs());
+                self.nis.extend(nis(inn.d, &inn.s));
+                innovations.push(inn);
+            }
+        }
+        if let Some(v) = refit_nis(&innovations) {
+            self.refits += 1;
+            self.nis_refit.extend(v);
+        }
+        for c in &a.circles {
+            self.circles += 1;
+            let moved = change.circle(c);
+            let best = b
+                .circles
+                .iter()
+                .map(|o| {
+                    let d = [moved.center[0] - o.center[0], moved.center[1] - o.center[1]];
+                    (d[0].hypot(d[1]), d, o)
+                })
+                .filter(|(dist, _, _)| *dist < GATE_CENTER_MM)
+                .min_by(|x, y| x.0.total_cmp(&y.0));
+            if let Some((_, d, o)) = best {
+                self.circles_matched += 1;
+                self.circle_nis
+                    .extend(nis(d, &super::frame::add(&moved.cov, &o.cov)));
+            }
+        }
+    }
+}

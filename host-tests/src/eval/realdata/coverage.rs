@@ -1,0 +1,115 @@
+//! How much of a scan the features cover, and how much of its smooth surfaces they leave as
+//! bare mark points.
+//!
+//! - A beam is **valid** when it has a return (finite, > 0, ≤ r_max).
+//! - A beam is **in a feature** when it lies in a feature's beam span `first..=last`.
+//! - A **smooth run** is a maximal run of at least [`MIN_SMOOTH_RUN`] consecutive valid beams
+//!   whose neighbours differ in range by less than [`SMOOTH_STEP_MM`]. Its beams that lie in
+//!   no feature are **bare**: a surface the scanner saw continuously but the method described
+//!   only by mark points (or not at all).
+
+use pfe_core::{Feature, ScanGeometry};
+
+/// Shortest smooth run, beams.
+pub const MIN_SMOOTH_RUN: usize = 10;
+/// Largest range step between neighbours inside a smooth run, mm.
+pub const SMOOTH_STEP_MM: f32 = 300.0;
+
+/// Beam counts of one scan (or a sum of scans).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Coverage {
+    /// Valid beams.
+    pub valid: usize,
+    /// Valid beams in a feature.
+    pub in_features: usize,
+    /// Beams of smooth runs in no feature.
+    pub bare: usize,
+}
+
+impl Coverage {
+    /// Counts one scan's beams.
+    pub fn of(geometry: &ScanGeometry, ranges_mm: &[f32], features: &[Feature]) -> Self {
+        let n = ranges_mm.len();
+        let mut covered = vec![false; n];
+        for f in features {
+            for c in covered.iter_mut().take(f.last() + 1).skip(f.first()) {
+                *c = true;
+            }
+        }
+        let valid: Vec<bool> = ranges_mm
+            .iter()
+            .map(|&r| r.is_finite() && r > 0.0 && r <= geometry.r_max)
+            .collect();
+        let mut out = Coverage {
+            valid: valid.iter().filter(|v| **v).count(),
+            in_features: valid
+                .iter()
+                .zip(&covered)
+                .filter(|(v, c)| **v && **c)
+                .count(),
+            bare: 0,
+        };
+        let mut i = 0;
+        while i < n {
+            if !valid[i] {
+                i += 1;
+                continue;
+            }
+            let mut j = i;
+            while j + 1 < n
+                && valid[j + 1]
+                && (ranges_mm[j + 1] - ranges_mm[j]).abs() < SMOOTH_STEP_MM
+            {
+                j += 1;
+            }
+            if j + 1 - i >= MIN_SMOOTH_RUN {
+                out.bare += (i..=j).filter(|&k| !covered[k]).count();
+            }
+            i = j + 1;
+        }
+        out
+    }
+
+    /// Adds `other`'s counts.
+    pub fn add(&mut self, other: &Coverage) {
+        self.valid += other.valid;
+        self.in_features += other.in_features;
+        self.bare += other.bare;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pfe_core::{LineFeature, Point};
+
+    fn line(first: u16, last: u16) -> Feature {
+        Feature::Line(LineFeature {
+            first,
+            last,
+            points: last - first + 1,
+            alpha: 0.0,
+            rho: 1000.0,
+            var_alpha: 1e-6,
+            var_rho: 1.0,
+            cov_alpha_rho: 0.0,
+            start: Point::new(1000.0, 0.0),
+            end: Point::new(1000.0, 1.0),
+        })
+    }
+
+    #[test]
+    fn counts_valid_covered_and_bare_beams() {
+        let g = ScanGeometry::LMS200_180_050;
+        // Beams 0..30 smooth, 30 no return, 31..36 smooth but short, 36 a jump, 37..60 smooth.
+        let mut r = vec![2000.0f32; 60];
+        r[30] = f32::NAN;
+        r[36] = 5000.0;
+        let cov = Coverage::of(&g, &r, &[line(5, 24), line(40, 59)]);
+        assert_eq!(cov.valid, 59);
+        assert_eq!(cov.in_features, 40);
+        // Run 0..=29: beams 0..5 and 25..30 bare (10); 31..=35 too short; 36 alone (jump on
+        // both sides); 37..=59: beams 37, 38, 39 bare.
+        assert_eq!(cov.bare, 13);
+    }
+}

@@ -1,0 +1,218 @@
+//! Real-data benchmark without ground truth: every method on consecutive scans of recorded
+//! logs whose poses are known (the shared CARMEN logs' corrected poses, taken as the laser's).
+//!
+//! Per log and method, over all scans and all pairs of consecutive scans k, k+1:
+//! - beams in features and bare beams of smooth runs, % of valid beams ([`coverage`]);
+//! - lines of k moved into k+1's frame and matched there ([`compare`]): the point-weighted
+//!   fraction that re-appears, the median |Δρ| and |Δα|, the median NIS of (α, ρ) with both
+//!   lines' full covariance carried across the frame change ([`frame`]), raw and after a
+//!   per-pair pose refit ([`refit`]);
+//! - circles that re-appear and their centre NIS.
+//!
+//! A pair is compared when both scans have a pose. Scan times are not used: in the shared
+//! logs consecutive scans are about 1 m apart (0.1 m in freiburg-079; the corrected logs keep a
+//! scan per step of the robot) and several logs' timestamps are 0 or garbage. `pfe realdata` ([`crate::cli::realdata`]) prints the table and
+//! writes `docs/REALDATA.md` ([`report`]).
+
+pub mod compare;
+pub mod coverage;
+pub mod frame;
+pub mod refit;
+pub mod report;
+mod svg;
+#[cfg(test)]
+mod tests;
+
+use std::path::Path;
+
+use anyhow::Context;
+use serde::Serialize;
+
+use crate::eval::score::quantile;
+use crate::formats::{InputError, Record};
+use crate::methods::baselines::{Acf, SplitMerge};
+use crate::methods::{Method, Pfe};
+
+pub use compare::{PairTally, Seen};
+pub use coverage::Coverage;
+pub use frame::{CircleObs, FrameChange, LineObs, Pose};
+
+/// The four methods, told the data's range noise `sigma_r` (mm): pfe `default` and `paper`,
+/// split-and-merge and ACF.
+pub fn methods(sigma_r: f32) -> Vec<Box<dyn Method>> {
+    vec![
+        Box::new(Pfe::new(
+            "pfe-default",
+            pfe_core::Config::default().with_sigma_r(sigma_r),
+        )),
+        Box::new(Pfe::new(
+            "pfe-paper",
+            pfe_core::Config::paper().with_sigma_r(sigma_r),
+        )),
+        Box::new(SplitMerge::new().with_sigma_r(sigma_r)),
+        Box::new(Acf::new().with_sigma_r(sigma_r)),
+    ]
+}
+
+/// Everything one method gave on one log.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Tally {
+    /// Scans read.
+    pub scans: usize,
+    /// Pairs of consecutive scans not compared (a pose missing).
+    pub pairs_skipped: usize,
+    /// Beam counts.
+    pub coverage: Coverage,
+    /// Pair results.
+    pub pairs: PairTally,
+}
+
+/// One method's figures on one log.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Method name.
+    pub method: String,
+    /// Scans.
+    pub scans: usize,
+    /// Pairs compared.
+    pub pairs: usize,
+    /// Valid beams in a feature, %.
+    pub in_features_pct: f64,
+    /// Bare beams of smooth runs, % of valid beams.
+    pub bare_pct: f64,
+    /// Point-weighted fraction of lines of ≥ 10 points that re-appear, %.
+    pub lines_reappear_pct: f64,
+    /// Matched lines.
+    pub lines_matched: usize,
+    /// Median |Δρ|, mm.
+    pub d_rho_mm: f64,
+    /// Median |Δα|, mrad.
+    pub d_alpha_mrad: f64,
+    /// Median line NIS.
+    pub nis: f64,
+    /// Median line NIS after the pose refit.
+    pub nis_refit: f64,
+    /// Pairs with a pose refit.
+    pub refits: usize,
+    /// Circles of scan k.
+    pub circles: usize,
+    /// Circles that re-appear, %.
+    pub circles_reappear_pct: f64,
+    /// Matched circles.
+    pub circles_matched: usize,
+    /// Median centre NIS of matched circles.
+    pub circle_nis: f64,
+}
+
+impl Tally {
+    /// The figures, named `method`.
+    pub fn summary(&self, method: &str) -> Summary {
+        let pct = |a: usize, b: usize| {
+            if b == 0 {
+                f64::NAN
+            } else {
+                100.0 * a as f64 / b as f64
+            }
+        };
+        let p = &self.pairs;
+        Summary {
+            method: method.to_string(),
+            scans: self.scans,
+            pairs: p.pairs,
+            in_features_pct: pct(self.coverage.in_features, self.coverage.valid),
+            bare_pct: pct(self.coverage.bare, self.coverage.valid),
+            lines_reappear_pct: pct(p.line_points_matched, p.line_points),
+            lines_matched: p.d_rho.len(),
+            d_rho_mm: quantile(&p.d_rho, 0.5),
+            d_alpha_mrad: 1000.0 * quantile(&p.d_alpha, 0.5),
+            nis: quantile(&p.nis, 0.5),
+            nis_refit: quantile(&p.nis_refit, 0.5),
+            refits: p.refits,
+            circles: p.circles,
+            circles_reappear_pct: pct(p.circles_matched, p.circles),
+            circles_matched: p.circles_matched,
+            circle_nis: quantile(&p.circle_nis, 0.5),
+        }
+    }
+}
+
+/// One log's figures, one [`Summary`] per method.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LogReport {
+    /// Log name (file name without `.log.gz`).
+    pub log: String,
+    /// Beams per scan (of the first scan).
+    pub beams: usize,
+    /// Per method.
+    pub methods: Vec<Summary>,
+}
+
+/// Runs `methods` over `records` (at most `max_scans`, 0 = all).
+pub fn run_records(
+    log: &str,
+    records: impl Iterator<Item = Result<Record, InputError>>,
+    methods: &mut [Box<dyn Method>],
+    max_scans: usize,
+) -> anyhow::Result<LogReport> {
+    let limit = if max_scans == 0 {
+        usize::MAX
+    } else {
+        max_scans
+    };
+    let mut tallies = vec![Tally::default(); methods.len()];
+    let mut previous: Vec<Option<Seen>> = vec![None; methods.len()];
+    let mut first = true;
+    let mut beams = 0;
+    for record in records.take(limit) {
+        let record = record.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
+        if beams == 0 {
+            beams = record.ranges_mm.len();
+        }
+        let pose = record
+            .pose
+            .map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t] as Pose);
+        for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
+            let ex = method.extract(&record.geometry, &record.ranges_mm);
+            tally.scans += 1;
+            tally.coverage.add(&Coverage::of(
+                &record.geometry,
+                &record.ranges_mm,
+                &ex.features,
+            ));
+            let seen = pose.map(|p| Seen::new(p, &ex.features));
+            match (prev.as_ref(), seen.as_ref()) {
+                (Some(a), Some(b)) => tally.pairs.add(a, b),
+                _ if !first => tally.pairs_skipped += 1,
+                _ => {}
+            }
+            *prev = seen;
+        }
+        first = false;
+    }
+    Ok(LogReport {
+        log: log.to_string(),
+        beams,
+        methods: methods
+            .iter()
+            .zip(&tallies)
+            .map(|(m, t)| t.summary(m.name()))
+            .collect(),
+    })
+}
+
+/// Runs the four [`methods`] (σ_r = `sigma_r` mm) on the CARMEN log `path`.
+pub fn run_log(path: &Path, sigma_r: f32, max_scans: usize) -> anyhow::Result<LogReport> {
+    let input = crate::formats::open_for(path, crate::formats::Format::Carmen, |r| r)
+        .with_context(|| format!("opening {}", path.display()))?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let name = name
+        .trim_end_matches(".gz")
+        .trim_end_matches(".log")
+        .trim_end_matches("-corrected")
+        .to_string();
+    let reader = crate::formats::carmen::Reader::new(input);
+    run_records(&name, reader, &mut methods(sigma_r), max_scans)
+}

@@ -1,0 +1,177 @@
+//! The frame change, matching and NIS on a simulated scene seen from two known poses, where
+//! the truth is known: consistent covariances must give NIS medians near the χ²₂ median.
+//!
+//! Features are fitted on the true segments (pfe-core's fits and range-noise covariances), so
+//! the test checks the benchmark's arithmetic, not an extractor's segmentation.
+
+use pfe_core::{
+    circle_feature, fit_circle, fit_line, line_feature, refine_circle, CircleMethod, Feature, Point,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use super::compare::{PairTally, Seen};
+use super::report::CHI2_2_MEDIAN;
+use crate::eval::score::quantile;
+use crate::scene::{render, Scenario, SceneKind, Shape, TruthKind};
+
+const SIGMA_R: f32 = 5.0;
+
+/// A 9 m × 7 m room with a box and three pillars, in mm.
+fn room() -> Vec<Shape> {
+    let seg = |a: [f64; 2], b: [f64; 2]| Shape::Segment { a, b };
+    let pillar = |x: f64, y: f64, r: f64| Shape::Circle {
+        center: [x, y],
+        radius: r,
+    };
+    vec![
+        seg([0.0, 0.0], [9000.0, 0.0]),
+        seg([9000.0, 0.0], [9000.0, 7000.0]),
+        seg([9000.0, 7000.0], [0.0, 7000.0]),
+        seg([0.0, 7000.0], [0.0, 0.0]),
+        seg([6000.0, 1000.0], [7500.0, 1000.0]),
+        seg([7500.0, 1000.0], [7500.0, 2200.0]),
+        seg([7500.0, 2200.0], [6000.0, 2200.0]),
+        seg([6000.0, 2200.0], [6000.0, 1000.0]),
+        pillar(2500.0, 5000.0, 300.0),
+        pillar(6500.0, 5200.0, 400.0),
+        pillar(4200.0, 1600.0, 250.0),
+    ]
+}
+
+/// The features of the true segments of one scan from `pose` (x mm, y mm, θ rad).
+fn features_from(pose: [f64; 3], rng: &mut ChaCha8Rng) -> Vec<Feature> {
+    let shapes: Vec<Shape> = room().iter().map(|s| s.to_frame(pose)).collect();
+    let scenario = Scenario::new(SceneKind::Office, 0).with_sigma(SIGMA_R);
+    let sim = render(&shapes, &scenario, rng);
+    let points = sim.points();
+    let origin = Point::new(0.0, 0.0);
+    sim.truth
+        .iter()
+        .filter_map(|t| {
+            let pts: Vec<Point> = points
+                .get(t.first..=t.last)?
+                .iter()
+                .map(|p| p.unwrap_or(Point::INVALID))
+                .collect();
+            match t.kind {
+                TruthKind::Line { .. } => line_feature(
+                    &pts,
+                    t.first,
+                    t.last,
+                    &fit_line(&pts).ok()?,
+                    origin,
+                    SIGMA_R,
+                ),
+                TruthKind::Circle { .. } if pts.len() >= 8 => {
+                    let c =
+                        refine_circle(&pts, fit_circle(&pts, CircleMethod::Hyper).ok()?, 5).ok()?;
+                    circle_feature(&pts, t.first, t.last, &c, origin, SIGMA_R)
+                }
+                TruthKind::Circle { .. } => None,
+            }
+        })
+        .collect()
+}
+
+/// `pairs` independent pairs of scans: a pose in the room, then one up to 1 m further and up
+/// to 0.3 rad turned; the second pose given to the benchmark is off by `pose_error`.
+fn simulate(pairs: usize, pose_error: [f64; 3]) -> Vec<(Seen, Seen)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    (0..pairs)
+        .map(|_| {
+            let a = [
+                rng.gen_range(1000.0..4500.0),
+                rng.gen_range(2800.0..4200.0),
+                rng.gen_range(-std::f64::consts::PI..std::f64::consts::PI),
+            ];
+            let step = rng.gen_range(0.0..1000.0);
+            let b = [
+                a[0] + step * a[2].cos(),
+                a[1] + step * a[2].sin(),
+                a[2] + rng.gen_range(-0.3..0.3),
+            ];
+            let fa = features_from(a, &mut rng);
+            let fb = features_from(b, &mut rng);
+            let b_told = [
+                b[0] + pose_error[0],
+                b[1] + pose_error[1],
+                b[2] + pose_error[2],
+            ];
+            (Seen::new(a, &fa), Seen::new(b_told, &fb))
+        })
+        .collect()
+}
+
+fn tally(pairs: &[(Seen, Seen)], scale: f64) -> PairTally {
+    let mut t = PairTally::default();
+    for (a, b) in pairs {
+        t.add(&a.scaled(scale), &b.scaled(scale));
+    }
+    t
+}
+
+/// Sample size and tolerance: the median of n draws of a χ²₂ (density ¼ at its median) has a
+/// standard error of 1 / (2 · ¼ · √n) = 2/√n (0.1 at the smallest sample allowed, 400); the
+/// tolerance is 3 standard errors plus 0.05 for the first-order covariances. A covariance 4×
+/// too large puts the median at 0.35, 4× too small at 5.5: both far outside.
+const MIN_SAMPLES: usize = 400;
+
+fn consistent(nis: &[f64]) -> bool {
+    let tolerance = 3.0 * 2.0 / (nis.len() as f64).sqrt() + 0.05;
+    nis.len() >= MIN_SAMPLES && (quantile(nis, 0.5) - CHI2_2_MEDIAN).abs() <= tolerance
+}
+
+#[test]
+fn line_nis_is_chi2_with_exact_poses_and_fails_with_scaled_covariances() {
+    let pairs = simulate(300, [0.0; 3]);
+    let t = tally(&pairs, 1.0);
+    assert!(
+        t.line_points_matched as f64 >= 0.9 * t.line_points as f64,
+        "lines should re-appear: {} of {} points",
+        t.line_points_matched,
+        t.line_points
+    );
+    assert!(
+        consistent(&t.nis),
+        "n {} median {}",
+        t.nis.len(),
+        quantile(&t.nis, 0.5)
+    );
+    assert!(!consistent(&tally(&pairs, 4.0).nis));
+    assert!(!consistent(&tally(&pairs, 0.25).nis));
+}
+
+#[test]
+fn circle_centre_nis_is_chi2_with_exact_poses_and_fails_with_scaled_covariances() {
+    let pairs = simulate(300, [0.0; 3]);
+    let t = tally(&pairs, 1.0);
+    // Some pillars are seen by too few beams in the second scan (or hidden) to be fitted.
+    assert!(t.circles_matched as f64 >= 0.75 * t.circles as f64);
+    let median = quantile(&t.circle_nis, 0.5);
+    assert!(
+        consistent(&t.circle_nis),
+        "n {} median {median}",
+        t.circle_nis.len()
+    );
+    assert!(!consistent(&tally(&pairs, 4.0).circle_nis));
+}
+
+#[test]
+fn the_pose_refit_removes_a_pose_error() {
+    let exact = tally(&simulate(150, [0.0; 3]), 1.0);
+    let off = tally(&simulate(150, [30.0, -20.0, 0.01]), 1.0);
+    let (raw, refit) = (quantile(&off.nis, 0.5), quantile(&off.nis_refit, 0.5));
+    let refit_exact = quantile(&exact.nis_refit, 0.5);
+    assert!(raw > 20.0, "a 36 mm / 10 mrad pose error must show: {raw}");
+    assert!(exact.refits >= 100 && off.refits == exact.refits);
+    assert!(
+        (refit / refit_exact - 1.0).abs() < 0.05,
+        "refit {refit} vs {refit_exact} with exact poses"
+    );
+    // Fewer degrees of freedom after the refit: below the χ²₂ median, but not far.
+    assert!(
+        refit_exact < CHI2_2_MEDIAN && refit_exact > 0.5,
+        "{refit_exact}"
+    );
+}

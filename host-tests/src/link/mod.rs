@@ -1,0 +1,9 @@
+//! The robot's side of the firmware's output link: frames in, JSON lines out.
+//!
+//! - `listen`: [`listen::Listener`] (sans-IO: byte chunks in, decoded scans and counts out),
+//!   [`listen::ListenJson`] (one output line per scan), the byte sources of `pfe listen`.
+//! - `run_qemu`: [`run_qemu::RunQemu`], the QEMU firmware between two serial lines
+//!   (`cargo xtask run-qemu`).
+
+pub mod listen;
+pub mod run_qemu;

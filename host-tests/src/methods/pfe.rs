@@ -1,0 +1,65 @@
+//! pfe-core behind the [`Method`] interface.
+
+use pfe_core::{Config, ExtractError, Extractor, Scan, ScanGeometry};
+
+use super::{Extraction, Method, MAX_BEAMS, MAX_FEATURES};
+
+/// pfe-core behind the [`Method`] interface.
+pub struct Pfe {
+    name: String,
+    config: Config,
+    extractor: Box<Extractor<MAX_BEAMS, MAX_FEATURES>>,
+    last: Result<(), ExtractError>,
+}
+
+impl Pfe {
+    /// PFE with `config`, reported as `name`.
+    pub fn new(name: &str, config: Config) -> Self {
+        Self {
+            name: name.to_string(),
+            config,
+            extractor: Box::new(Extractor::new()),
+            last: Ok(()),
+        }
+    }
+
+    /// The paper's configuration.
+    pub fn paper() -> Self {
+        Self::new("pfe-paper", Config::paper())
+    }
+
+    /// The default configuration.
+    pub fn default_config() -> Self {
+        Self::new("pfe-default", Config::default())
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// How the last [`Method::extract`] went (an error value means no features or, for
+    /// `FeatureCapacity`, the first ones only).
+    pub fn last_result(&self) -> Result<(), ExtractError> {
+        self.last
+    }
+}
+
+impl Method for Pfe {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
+        // Scans longer than the capacity are an error value: no features, kept for
+        // `last_result`.
+        self.last = self
+            .extractor
+            .extract(&Scan::from_mm(*geometry, ranges_mm), &self.config)
+            .map(|_| ());
+        Extraction {
+            marks: self.extractor.marks().collect(),
+            features: self.extractor.features().to_vec(),
+        }
+    }
+}

@@ -1,0 +1,429 @@
+//! Running the pfe firmware under QEMU (mps2-an386) from the host, and reading its output:
+//! shared by `examples/demo_host` (`cargo xtask demo`, `bench-mcu`, `size`), the soak and
+//! the end-to-end tests.
+
+use std::io::Read;
+use std::net::TcpListener;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use anyhow::{bail, Context, Result};
+use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
+use firmware::output::{DecodeError, Feed, Frame, FrameDecoder};
+
+/// The Cortex-M target.
+pub const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// The workspace root.
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| PathBuf::from("."))
+}
+
+/// True when `program` runs.
+pub fn have(program: &str) -> bool {
+    Command::new(program)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+}
+
+/// True when the thumbv7em target's standard library is installed.
+pub fn have_target() -> bool {
+    let Ok(out) = Command::new("rustc").args(["--print", "sysroot"]).output() else {
+        return false;
+    };
+    let sysroot = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    Path::new(&sysroot)
+        .join("lib/rustlib")
+        .join(TARGET)
+        .join("lib")
+        .is_dir()
+}
+
+/// Builds a firmware-qemu binary in release for the target; returns the ELF path.
+/// `target_dir` should differ from the calling cargo's (its lock is held during `cargo test`).
+pub fn build_firmware<V: AsRef<std::ffi::OsStr>>(
+    bin: &str,
+    features: &[&str],
+    env: &[(&str, V)],
+    target_dir: &Path,
+) -> Result<PathBuf> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut cmd = Command::new(cargo);
+    cmd.current_dir(root())
+        .args([
+            "build",
+            "--release",
+            "-p",
+            "firmware-qemu",
+            "--bin",
+            bin,
+            "--target",
+            TARGET,
+        ])
+        .env("CARGO_TARGET_DIR", target_dir)
+        .env_remove("RUSTFLAGS");
+    if !features.is_empty() {
+        cmd.args(["--features", &features.join(",")]);
+    }
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    let status = cmd.status().context("cannot run cargo")?;
+    if !status.success() {
+        bail!("building {bin} failed: {status}");
+    }
+    Ok(target_dir.join(TARGET).join("release").join(bin))
+}
+
+/// A QEMU command line for `elf` with UART0 and UART1 connected to `serial0`/`serial1` (QEMU
+/// `-serial` specs), semihosting arguments `args` and, optionally, `-icount shift=10`.
+pub fn qemu_command(
+    elf: &Path,
+    serial0: &str,
+    serial1: &str,
+    args: &[&str],
+    icount: bool,
+) -> Command {
+    let mut cmd = Command::new("qemu-system-arm");
+    let mut semi = String::from("enable=on,target=native,arg=pfe");
+    for a in args {
+        semi.push_str(",arg=");
+        semi.push_str(a);
+    }
+    cmd.args([
+        "-machine",
+        "mps2-an386",
+        "-cpu",
+        "cortex-m4",
+        "-display",
+        "none",
+    ])
+    .args(["-monitor", "none", "-nodefaults"])
+    .args(["-semihosting-config", &semi])
+    .args(["-serial", serial0, "-serial", serial1])
+    .arg("-kernel")
+    .arg(elf);
+    if icount {
+        cmd.args(["-icount", "shift=10"]);
+    }
+    cmd
+}
+
+/// What a QEMU run produced.
+pub struct Run {
+    /// Exit code (semihosting), `None` if killed.
+    pub code: Option<i32>,
+    /// Bytes the firmware wrote to UART1.
+    pub output: Vec<u8>,
+    /// Semihosting stdout (defmt frames).
+    pub stdout: Vec<u8>,
+    /// QEMU's stderr.
+    pub stderr: String,
+}
+
+/// A listener on a free local port (the firmware's UART1 connects to it as a client).
+pub fn listener() -> Result<(TcpListener, u16)> {
+    let l = TcpListener::bind("127.0.0.1:0").context("bind")?;
+    let port = l.local_addr()?.port();
+    Ok((l, port))
+}
+
+/// Runs QEMU (`cmd` from [`qemu_command`] with UART1 = `tcp:127.0.0.1:PORT` of `out`) to its
+/// end, collecting UART1 from `out`; kills it after `timeout`.
+pub fn run_collect(mut cmd: Command, out: TcpListener, timeout: Duration) -> Result<Run> {
+    let mut child: Child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .context("cannot start qemu-system-arm")?;
+    let stdout = child.stdout.take();
+    let stderr = child.stderr.take();
+    let so = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        if let Some(mut s) = stdout {
+            let _ = s.read_to_end(&mut v);
+        }
+        v
+    });
+    let se = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        if let Some(mut s) = stderr {
+            let _ = s.read_to_end(&mut v);
+        }
+        String::from_utf8_lossy(&v).into_owned()
+    });
+    out.set_nonblocking(true)?;
+    let start = Instant::now();
+    let mut output = Vec::new();
+    let mut conn = None;
+    let mut code = None;
+    loop {
+        if conn.is_none() {
+            if let Ok((s, _)) = out.accept() {
+                s.set_nonblocking(false)?;
+                s.set_read_timeout(Some(Duration::from_millis(20)))?;
+                conn = Some(s);
+            }
+        }
+        if let Some(s) = conn.as_mut() {
+            let mut buf = [0u8; 4096];
+            match s.read(&mut buf) {
+                Ok(0) => {}
+                Ok(n) => output.extend_from_slice(buf.get(..n).unwrap_or(&[])),
+                Err(_) => {}
+            }
+        } else {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        if let Some(st) = child.try_wait()? {
+            code = st.code();
+            break;
+        }
+        if start.elapsed() > timeout {
+            let _ = child.kill();
+            let _ = child.wait();
+            break;
+        }
+    }
+    // Drain what is left in the socket.
+    if let Some(mut s) = conn {
+        let _ = s.set_read_timeout(Some(Duration::from_millis(200)));
+        let mut rest = Vec::new();
+        let _ = s.read_to_end(&mut rest);
+        output.extend_from_slice(&rest);
+    }
+    Ok(Run {
+        code,
+        output,
+        stdout: so.join().unwrap_or_default(),
+        stderr: se.join().unwrap_or_default(),
+    })
+}
+
+/// Decodes every frame in `bytes`; returns the frames and the rejected ones.
+pub fn decode_frames(bytes: &[u8]) -> (Vec<Frame>, Vec<DecodeError>) {
+    let mut dec = Box::new(FrameDecoder::<16384>::new());
+    let (mut frames, mut errors) = (Vec::new(), Vec::new());
+    let mut rest = bytes;
+    loop {
+        match dec.feed(rest) {
+            Feed::Consumed => break,
+            Feed::Frame { frame, remaining } => {
+                frames.push(frame);
+                rest = remaining;
+            }
+            Feed::Error { error, remaining } => {
+                errors.push(error);
+                rest = remaining;
+            }
+        }
+    }
+    (frames, errors)
+}
+
+/// A B0 telegram (device → host) with `values` (mm unit bits set when `mm`), status 0x10.
+pub fn b0_telegram(values: &[u16], mm: bool) -> Result<Vec<u8>> {
+    let n = u16::try_from(values.len()).context("too many values")?;
+    let count = n | if mm { 1 << 14 } else { 0 };
+    let mut payload = vec![0xB0];
+    payload.extend_from_slice(&count.to_le_bytes());
+    for v in values {
+        payload.extend_from_slice(&v.to_le_bytes());
+    }
+    payload.push(0x10);
+    let mut out = vec![0u8; payload.len() + 6];
+    let n = encode_telegram(DEVICE_ADDRESS, &payload, &mut out)
+        .map_err(|e| anyhow::anyhow!("encode: {e:?}"))?;
+    out.truncate(n);
+    Ok(out)
+}
+
+/// The build profile the firmware ships with and the flash budget is measured on
+/// (`cargo xtask size`, `bench-mcu`): `opt-level = "s"` on top of the workspace's release
+/// profile (LTO, one codegen unit; pfe-core at 3, see the workspace Cargo.toml).
+pub const FIRMWARE_OPT_LEVEL: &str = "s";
+
+/// Simulated scenes served by the emulator, in order (cycling).
+pub struct SimSource {
+    ranges: Vec<Vec<f32>>,
+    next: usize,
+}
+
+impl SimSource {
+    /// Serves `ranges` (mm, one vector per scan) in order, cycling.
+    pub fn new(ranges: Vec<Vec<f32>>) -> Self {
+        Self { ranges, next: 0 }
+    }
+}
+
+impl crate::device::emulator::RangeSource for SimSource {
+    fn next_scan(&mut self, n: usize, _start_deg: f32, _step_deg: f32) -> Vec<f32> {
+        let r = match self.ranges.get(self.next % self.ranges.len().max(1)) {
+            Some(r) if r.len() == n => r.clone(),
+            _ => vec![f32::NAN; n],
+        };
+        self.next += 1;
+        r
+    }
+}
+
+/// One QEMU session: the firmware against the emulated LMS200 serving simulated scans.
+pub struct Session {
+    /// The simulated scans (the emulator serves `sims[k % len]` as its k-th B0 telegram).
+    pub sims: Vec<crate::scene::SimScan>,
+    /// What the emulator did.
+    pub emulator: crate::device::emulator::EmulatorReport,
+    /// QEMU's run.
+    pub run: Run,
+    /// Frames from UART1.
+    pub frames: Vec<Frame>,
+    /// Rejected frames.
+    pub bad_frames: Vec<DecodeError>,
+}
+
+/// Runs `elf` (pfe-qemu) for `scans` scans with `config` ("paper" / "default") against the
+/// emulator serving mixed simulated scenes from `seed`.
+pub fn session(
+    elf: &Path,
+    scans: u32,
+    config: &str,
+    seed: u64,
+    timeout: Duration,
+) -> Result<Session> {
+    use crate::device::emulator::serve::{serve_on, Pty};
+    use crate::device::emulator::{Emulator, EmulatorConfig, RunLimits};
+    use crate::scene::{Scenario, SceneKind};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let sims: Vec<_> = (seed..seed + u64::from(scans.max(1)))
+        .map(|s| Scenario::new(SceneKind::Mixed, s).simulate())
+        .collect();
+    let source = SimSource {
+        ranges: sims.iter().map(|s| s.ranges_mm.clone()).collect(),
+        next: 0,
+    };
+    // The LMS200 on a pty: QEMU's tty backend passes the UART's baud divisor on, so the
+    // emulator sees the firmware's baud switch (a TCP backend would not).
+    let link = std::env::temp_dir().join(format!(
+        "pfe-qemu-lms-{}-{seed}-{scans}",
+        std::process::id()
+    ));
+    let mut pty = Pty::open(&link)?;
+    let slave = pty.slave_path().display().to_string();
+    let (l1, p1) = listener()?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let limits = RunLimits {
+        stop: Some(stop.clone()),
+        max_time: Some(timeout),
+        ..RunLimits::default()
+    };
+    let emu = Emulator::new(EmulatorConfig::default(), Box::new(source));
+    let server = std::thread::spawn(move || serve_on(&mut pty, emu, limits));
+    let n = scans.to_string();
+    let cmd = qemu_command(
+        elf,
+        &slave,
+        &format!("tcp:127.0.0.1:{p1}"),
+        &[&n, config],
+        false,
+    );
+    let run = run_collect(cmd, l1, timeout)?;
+    stop.store(true, Ordering::Relaxed);
+    let emulator = server
+        .join()
+        .map_err(|_| anyhow::anyhow!("the emulator thread panicked"))??;
+    let (frames, bad_frames) = decode_frames(&run.output);
+    Ok(Session {
+        sims,
+        emulator,
+        run,
+        frames,
+        bad_frames,
+    })
+}
+
+/// pfe-core on the host, through the same `App` and frame encoding as the firmware, on the
+/// value words the emulator sent: the features the firmware should have sent, as decoded.
+pub fn host_features(
+    words: &[u16],
+    choice: firmware::app::ConfigChoice,
+) -> Result<Vec<pfe_core::Feature>> {
+    use firmware::app::{App, RawScan};
+    use firmware::lms::Variant;
+    let v = Variant::A180_R050;
+    let mut g = pfe_core::ScanGeometry::lms200(f32::from(v.angle_deg), v.resolution_deg());
+    g.r_max = f32::from(pfe_core::LMS_MAX_VALID_8M);
+    let codes: Vec<u16> = words.iter().map(|w| w & 0x1FFF).collect();
+    let mut app = Box::new(App::<361, 48>::new(choice));
+    let mut out = VecWriter(Vec::new());
+    app.process(
+        &RawScan::lms_8m(g, &codes, 1.0),
+        firmware::output::Counters::default(),
+        &mut out,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let (frames, errors) = decode_frames(&out.0);
+    if !errors.is_empty() {
+        bail!("host frame did not decode: {errors:?}");
+    }
+    Ok(frames
+        .into_iter()
+        .next()
+        .map(|f| f.features.to_vec())
+        .unwrap_or_default())
+}
+
+/// `embedded_io::Write` into a `Vec`.
+pub struct VecWriter(pub Vec<u8>);
+
+impl embedded_io::ErrorType for VecWriter {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_io::Write for VecWriter {
+    fn write(&mut self, buf: &[u8]) -> std::result::Result<usize, Self::Error> {
+        self.0.extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::result::Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
+/// Bit-level comparison of two features: `None` when identical, else the largest difference
+/// in units in the last place over all f32 fields (and `u32::MAX` for a different kind/range).
+pub fn ulps_apart(a: &pfe_core::Feature, b: &pfe_core::Feature) -> Option<u32> {
+    use pfe_core::Feature;
+    let fields = |f: &Feature| -> (u8, [u16; 3], Vec<f32>) {
+        match f {
+            Feature::Line(l) => (0, [l.first, l.last, l.points], l.values().to_vec()),
+            Feature::Circle(c) => (1, [c.first, c.last, c.points], c.values().to_vec()),
+        }
+    };
+    let (ka, ia, va) = fields(a);
+    let (kb, ib, vb) = fields(b);
+    if ka != kb || ia != ib {
+        return Some(u32::MAX);
+    }
+    let key = |x: f32| -> i64 {
+        let b = x.to_bits() as i32;
+        i64::from(if b < 0 { i32::MIN - b } else { b })
+    };
+    let worst = va
+        .iter()
+        .zip(&vb)
+        .map(|(x, y)| (key(*x) - key(*y)).unsigned_abs())
+        .max()
+        .unwrap_or(0);
+    (worst != 0).then(|| u32::try_from(worst).unwrap_or(u32::MAX))
+}
