@@ -7,7 +7,7 @@ use super::cobs::CobsWriter;
 use super::wire::{Header, Report, ScanHeader, ScanStatus, MAX_FEATURE_LEN, WIRE_VERSION};
 
 /// Bytes of features [`write_scan`] encodes at a time.
-const FEATURE_CHUNK: usize = 6 * MAX_FEATURE_LEN;
+const FEATURE_CHUNK: usize = 3 * MAX_FEATURE_LEN;
 
 /// Why a frame could not be written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
