@@ -6,11 +6,28 @@ use crate::math;
 /// A point in the scanner frame, in mm: x forward, y to the left.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(from = "[f32; 2]", into = "[f32; 2]")
+)]
 pub struct Point {
     /// Forward, mm.
     pub x: f32,
     /// Left, mm.
     pub y: f32,
+}
+
+impl From<[f32; 2]> for Point {
+    fn from([x, y]: [f32; 2]) -> Self {
+        Self { x, y }
+    }
+}
+
+impl From<Point> for [f32; 2] {
+    fn from(p: Point) -> Self {
+        [p.x, p.y]
+    }
 }
 
 impl Point {

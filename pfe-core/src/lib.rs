@@ -4,9 +4,27 @@
 //! for 2D laser scanner", *Robotics and Autonomous Systems* 59 (2011) 402–409, for
 //! microcontrollers: `no_std`, no allocator, `f32`, fixed capacities, no panics.
 //!
-//! Data path (one module per step): [`scan`] (readings, [`correction`], [`deskew`]) →
-//! [`predict`] (prediction point and threshold) → [`extract`] (mark, check step, segments,
-//! typing) → [`mod@line`] and [`circle`] fits with covariance → [`feature`].
+//! The paper's steps, in the order [`Extractor::extract`] runs them, and where each lives:
+//!
+//! | step | paper | module |
+//! |---|---|---|
+//! | readings and beam geometry | | [`scan`] |
+//! | readings to points: range correction, de-skew | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`]) |
+//! | prediction point and its error | §3.1 | [`predict`] |
+//! | mark points: the paper's threshold, or the default mode's walk with boundary refinement | §3.2, §3.6 | `mark` (`paper`, `noise`, `refine`) |
+//! | check step and pairing | §3.3 | `check` |
+//! | segments (and arc merges) | §3.4 | `segment` |
+//! | type of a segment (and the arc tests) | §3.5 | `classify` (`arc`) |
+//! | line and circle fits with covariance | §3.5 | [`fit::line`], [`fit::circle`] |
+//! | output | | [`feature`] |
+//!
+//! [`Extractor`] owns the beam table (what depends on the geometry only), the work buffers of
+//! one scan and the output; every step is a function of slices, not generic over the
+//! capacities, so it is compiled once, in this crate. [`config`] holds the two named
+//! configurations, [`error`] the errors, [`geometry`] the shared plane geometry.
+//!
+//! Features: `libm` (default) or `micromath` maths; `defmt` for `defmt::Format`; `serde` for
+//! `Serialize`/`Deserialize` of the output ([`Feature`], [`Stats`], [`Point`] as `[x, y]`).
 //!
 //! ```
 //! use pfe_core::{Config, Extractor, Scan, ScanGeometry};
@@ -23,28 +41,33 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod circle;
+mod beams;
+mod check;
+mod classify;
 pub mod config;
-pub mod correction;
-pub mod deskew;
 pub mod error;
-pub mod extract;
+mod extractor;
 pub mod feature;
+pub mod fit;
+mod flags;
 pub mod geometry;
-pub mod line;
+mod mark;
 mod math;
+mod pass;
 pub mod predict;
+pub mod preprocess;
 pub mod scan;
+mod segment;
 
-pub use circle::{
+pub use config::{Config, NoiseModel, Threshold, Typing, NP};
+pub use error::{ExtractError, FitError};
+pub use extractor::{Extractor, Stats};
+pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
+pub use fit::circle::{
     circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
 };
-pub use config::{Config, NoiseModel, Threshold, Typing, NP};
-pub use correction::RangeCorrection;
-pub use deskew::Motion;
-pub use error::{ExtractError, FitError};
-pub use extract::{Extractor, LmsExtractor, Stats, LMS_FEATURES, LMS_READINGS};
-pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
+pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
-pub use line::{fit_line, LineCovariance, LineFit};
+pub use preprocess::correction::RangeCorrection;
+pub use preprocess::deskew::Motion;
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

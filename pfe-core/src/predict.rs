@@ -3,8 +3,8 @@
 //! distance from it is the prediction error `D`. No trigonometry: the line's direction is the
 //! principal axis of the window's centred moments (one square root).
 
+use crate::fit::line;
 use crate::geometry::Point;
-use crate::line;
 use crate::math;
 
 /// Outcome of predicting one point.

@@ -1,8 +1,8 @@
 //! Scan input for any scanner: geometry, ranges (raw LMS codes or mm), optional motion.
 
-use crate::deskew::Motion;
 use crate::geometry::Point;
 use crate::math;
+use crate::preprocess::deskew::Motion;
 
 /// Where the beams point and how far the scanner sees.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,10 +4,10 @@
 use pfe_core::Feature;
 
 use super::cobs::CobsWriter;
-use super::wire::{Header, Report, ScanHeader, MAX_FEATURE_LEN, WIRE_VERSION};
+use super::wire::{Header, Report, ScanHeader, ScanStatus, MAX_FEATURE_LEN, WIRE_VERSION};
 
 /// Bytes of features [`write_scan`] encodes at a time.
-const FEATURE_CHUNK: usize = 6 * MAX_FEATURE_LEN;
+const FEATURE_CHUNK: usize = 3 * MAX_FEATURE_LEN;
 
 /// Why a frame could not be written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,6 +49,35 @@ fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
     w.at
 }
 
+/// The version byte and `postcard(Header::Scan(h))` in `out`, by hand (every integer a varint
+/// in declaration order, the enums as their variant index). Returns their length.
+fn scan_header_bytes(h: &ScanHeader, out: &mut [u8]) -> usize {
+    let mut w = Cursor { out, at: 0 };
+    w.byte(WIRE_VERSION);
+    w.varint(0);
+    let c = &h.counters;
+    for v in [
+        h.seq,
+        h.time_ms,
+        c.telegrams_ok,
+        c.crc_dropped,
+        c.bytes_skipped,
+        c.reinits,
+    ] {
+        w.varint(v);
+    }
+    for v in [h.valid, h.segments, h.dropped, h.n_features] {
+        w.varint(u32::from(v));
+    }
+    w.varint(match h.status {
+        ScanStatus::Ok => 0,
+        ScanStatus::FeatureCapacity => 1,
+        ScanStatus::TooManyReadings => 2,
+        ScanStatus::InvalidInput => 3,
+    });
+    w.at
+}
+
 /// Writes into a buffer (given at least [`MAX_FEATURE_LEN`] bytes, which every feature fits;
 /// a write past its end is dropped, never a panic).
 struct Cursor<'a> {
@@ -61,14 +90,14 @@ impl Cursor<'_> {
     #[inline(always)]
     fn head(&mut self, tag: u16, beams: [u16; 3]) {
         let [first, last, points] = beams;
-        self.varint(tag);
-        self.varint(first);
-        self.varint(last);
-        self.varint(points);
+        self.varint(u32::from(tag));
+        self.varint(u32::from(first));
+        self.varint(u32::from(last));
+        self.varint(u32::from(points));
     }
 
     /// LEB128, as postcard writes integers.
-    fn varint(&mut self, mut v: u16) {
+    fn varint(&mut self, mut v: u32) {
         while v >= 0x80 {
             self.byte(v as u8 | 0x80);
             v >>= 7;
@@ -104,11 +133,10 @@ pub fn write_scan<W: embedded_io::Write>(
     let mut h = *header;
     h.n_features = u16::try_from(features.len()).unwrap_or(u16::MAX);
     let mut enc = CobsWriter::new(w);
-    enc.put_item(&(WIRE_VERSION, Header::Scan(h)))?;
-    // Features gathered into a chunk, encoded a chunk at a time (fewer calls, and fewer
-    // bytes left over from the encoder's words).
+    // The header and the features gathered into a chunk, encoded a chunk at a time (fewer
+    // calls, and fewer bytes left over from the encoder's words).
     let mut chunk = [0u8; FEATURE_CHUNK];
-    let mut len = 0usize;
+    let mut len = scan_header_bytes(&h, &mut chunk);
     for f in features.iter().take(usize::from(h.n_features)) {
         if len + MAX_FEATURE_LEN > FEATURE_CHUNK {
             enc.put(chunk.get(..len).unwrap_or(&[]))
@@ -172,6 +200,55 @@ mod tests {
                 ),
             }
         }
+    }
+
+    /// The hand-written scan header is postcard's `(WIRE_VERSION, Header::Scan(h))`, for
+    /// integers at every varint length and every status.
+    #[test]
+    fn scan_header_bytes_are_postcards() -> Result<(), postcard::Error> {
+        use crate::output::Counters;
+        let edges = [
+            0u32,
+            1,
+            127,
+            128,
+            16383,
+            16384,
+            2_097_151,
+            2_097_152,
+            u32::MAX,
+        ];
+        let statuses = [
+            ScanStatus::Ok,
+            ScanStatus::FeatureCapacity,
+            ScanStatus::TooManyReadings,
+            ScanStatus::InvalidInput,
+        ];
+        for k in 0..2000usize {
+            let e = |i: usize| edges[(k * 7 + i * 5 + k / 9 * i) % edges.len()];
+            let s = |i: usize| e(i) as u16;
+            let h = ScanHeader {
+                seq: e(0),
+                time_ms: e(1),
+                counters: Counters {
+                    telegrams_ok: e(2),
+                    crc_dropped: e(3),
+                    bytes_skipped: e(4),
+                    reinits: e(5),
+                },
+                valid: s(6),
+                segments: s(7),
+                dropped: s(8),
+                n_features: s(9),
+                status: statuses[k % 4],
+            };
+            let mut want = [0u8; 96];
+            let want = postcard::to_slice(&(WIRE_VERSION, Header::Scan(h)), &mut want)?;
+            let mut got = [0u8; 96];
+            let n = scan_header_bytes(&h, &mut got);
+            assert_eq!(&got[..n], &want[..], "{h:?}");
+        }
+        Ok(())
     }
 
     /// The hand-written feature bytes are postcard's, for lines and circles with fields of

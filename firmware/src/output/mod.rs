@@ -19,9 +19,9 @@
 //!   high-water mark, timing) by nothing.
 //!
 //! The encoder ([`write_scan`], [`write_report`]) streams to any [`embedded_io::Write`] with a
-//! fixed 255-byte COBS block, a 96-byte scratch buffer for the header and a 420-byte chunk of
-//! features (written by hand, byte for byte what postcard writes): the frame size does not
-//! need RAM.
+//! fixed 255-byte COBS block and a 210-byte chunk for a scan's header and features (written
+//! by hand, byte for byte what postcard writes; a report goes through a 96-byte scratch
+//! buffer): the frame size does not need RAM.
 //! The decoder ([`FrameDecoder`]) is sans-IO: feed it byte chunks, get frames out.
 //!
 //! ```

@@ -1,13 +1,17 @@
 //! The extractor's output: lines and circles with their uncertainty and point range.
 
-use crate::circle::{circle_covariance_range, Circle};
+use crate::fit::circle::{circle_covariance_range, Circle};
+use crate::fit::line::{LineCovariance, LineFit};
 use crate::geometry::Point;
-use crate::line::{LineCovariance, LineFit};
 use crate::math;
+
+#[cfg(feature = "serde")]
+mod tagged;
 
 /// A line feature `x cos α + y sin α = ρ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LineFeature {
     /// Index of the first beam of the segment (counting every beam, valid or not).
     pub first: u16,
@@ -98,6 +102,7 @@ impl CircleFeature {
 /// A circle (or arc) feature.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct CircleFeature {
     /// Index of the first beam of the segment.
     pub first: u16,
@@ -120,6 +125,12 @@ pub struct CircleFeature {
 /// One extracted feature.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(tag = "kind", rename_all = "lowercase"),
+    serde(try_from = "tagged::Tagged")
+)]
 pub enum Feature {
     /// A straight segment.
     Line(LineFeature),

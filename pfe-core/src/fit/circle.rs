@@ -149,7 +149,7 @@ impl ArcSums {
     /// Residual sum of the least-squares line (the smaller scatter eigenvalue, ≥ 0).
     pub(crate) fn line_sse(&self) -> f32 {
         let (_, _, suu, svv, suv) = self.centred();
-        crate::line::smaller_eigenvalue(suu, svv, suv)
+        crate::fit::line::smaller_eigenvalue(suu, svv, suv)
     }
 
     /// The Kåsa circle (as [`fit_circle`] with [`CircleMethod::Kasa`], from centred moments).
@@ -368,6 +368,8 @@ pub(crate) struct NormalEquations {
 }
 
 impl NormalEquations {
+    /// The equations of `points` at the circle `c` (not inlined: its sums stay in registers).
+    #[inline(never)]
     pub(crate) fn at(points: &[Point], c: &Circle) -> Self {
         let mut eq = NormalEquations {
             jtj: [[0.0; 3]; 3],
@@ -609,7 +611,7 @@ mod tests {
                     (one_pass.radius - two_pass.radius).abs() < 1e-3 * r,
                     "{n} {r}"
                 );
-                let line = crate::line::fit_line(&pts)?.sse();
+                let line = crate::fit::line::fit_line(&pts)?.sse();
                 assert!(
                     (sums.line_sse() - line).abs() <= 1e-3 * line + 1.0,
                     "{n} {r}"

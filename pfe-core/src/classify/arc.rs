@@ -1,0 +1,79 @@
+//! Arc tests of the default mode: whether a run of points is an arc ([`arc_fit`]: used to
+//! continue an arc while marking and to merge neighbouring segments), and whether the arc of a
+//! segment's last points predicts the next point ([`continues_arc`]).
+
+use crate::fit::circle::{ArcSums, Circle};
+use crate::geometry::{ray_circle_intersection, Point};
+use crate::mark::NoiseRule;
+use crate::math;
+use crate::pass::Pass;
+
+/// Circle through `pts` when it explains them significantly better than a line (by
+/// `arc_chi2 σ_r²`), with every radial residual within `k σ_r + floor` and a radius of at most
+/// `arc_max_radius`.
+pub(crate) fn arc_fit(pts: &[Point], rule: &NoiseRule) -> Option<Circle> {
+    let (m, sigma_r) = (&rule.model, rule.sigma_r);
+    let var = sigma_r * sigma_r;
+    // One pass for both fits. The circle's residual sum is ≥ 0, so a line this good cannot be
+    // beaten by enough.
+    let sums = ArcSums::of(pts)?;
+    let line_sse = sums.line_sse();
+    if !(line_sse >= m.arc_chi2 * var) {
+        return None;
+    }
+    let circle = sums.kasa()?;
+    if !(circle.radius <= m.arc_max_radius) {
+        return None;
+    }
+    let tol = rule.k_sigma + m.floor;
+    // One pass: every radial residual within `tol`, and their sum of squares.
+    let mut sse = 0.0f32;
+    for p in pts {
+        let r = p.distance(&circle.center) - circle.radius;
+        if !(math::abs(r) <= tol) {
+            return None;
+        }
+        sse += r * r;
+    }
+    // An arc explains its points to the noise (RMS ≤ 1.5 σ_r); the rounded-off view of a
+    // corner does not.
+    (sse <= 2.25 * var * pts.len() as f32 && line_sse - sse >= m.arc_chi2 * var).then_some(circle)
+}
+
+/// Arc continuation test for point `k` of the segment starting at `s` (see
+/// [`crate::NoiseModel::arc_window`]): the circle through the segment's last points must
+/// explain them significantly better than a line and predict `k` along its beam.
+pub(crate) fn continues_arc(pass: &mut Pass<'_>, s: usize, k: usize, rule: &NoiseRule) -> bool {
+    let m = &rule.model;
+    let c = k - s;
+    if m.arc_window < 5 || c < 5 {
+        return false;
+    }
+    let window = pass.points.get(k - c.min(m.arc_window)..k);
+    let Some(circle) = window.and_then(|pts| arc_fit(pts, rule)) else {
+        return false;
+    };
+    pass.stats.predictions += 1;
+    let (target, origin) = (pass.point(k), pass.origin(k));
+    let (bx, by) = (target.x - origin.x, target.y - origin.y);
+    let r = math::hypot(bx, by);
+    if !(r > 0.0) {
+        return false;
+    }
+    let (dx, dy) = (bx / r, by / r);
+    match ray_circle_intersection(origin, dx, dy, circle.center, circle.radius) {
+        Some(t) => {
+            // The circle's position error (about σ_r across it) is stretched along the beam by
+            // 1/cos γ, γ between the beam and the circle's normal there.
+            let hit = Point::new(origin.x + dx * t, origin.y + dy * t);
+            let (nx, ny) = (hit.x - circle.center.x, hit.y - circle.center.y);
+            let cos_g = math::abs(nx * dx + ny * dy) / circle.radius;
+            let f = math::sqrt(1.0 + 1.0 / cos_g.max(0.1) / cos_g.max(0.1));
+            math::abs(r - t) <= rule.k_sigma * f + m.floor
+        }
+        // The beam passes just outside the fitted circle (a point at the very edge).
+        None => {
+            math::abs(target.distance(&circle.center) - circle.radius) <= rule.k_sigma + m.floor
+        }
+    }
+}

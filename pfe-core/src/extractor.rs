@@ -1,0 +1,339 @@
+//! The extractor: it owns a beam table, the work buffers of one scan and the output, and runs
+//! the steps over them (see [`Extractor::extract`]).
+
+use heapless::Vec;
+
+use crate::beams::{BeamTable, Beams};
+use crate::check;
+use crate::config::Config;
+use crate::error::ExtractError;
+use crate::feature::Feature;
+use crate::flags::{END, START};
+use crate::geometry::Point;
+use crate::mark::{self, Rule};
+use crate::pass::Pass;
+use crate::scan::Scan;
+use crate::segment;
+
+/// What one extraction did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Stats {
+    /// Readings in the scan.
+    pub readings: usize,
+    /// Valid points.
+    pub valid: usize,
+    /// Segments (of any length).
+    pub segments: usize,
+    /// Segments shorter than `min_points`, ignored.
+    pub short_segments: usize,
+    /// Segments whose fit failed (degenerate), ignored.
+    pub degenerate: usize,
+    /// Features stored.
+    pub features: usize,
+    /// Features that did not fit in the buffer.
+    pub dropped: usize,
+    /// Predictions made (N + M in the paper's count).
+    pub predictions: usize,
+}
+
+/// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
+/// put it in a `static` on a microcontroller.
+///
+/// ```
+/// use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
+/// // A wall 2 m ahead, seen by an LMS200 (180°, 0.5°): r = 2000 / cos(bearing).
+/// let g = ScanGeometry::LMS200_180_050;
+/// let ranges: Vec<f32> = (0..361)
+///     .map(|i| {
+///         let b = g.bearing(i);
+///         if b.abs() < 1.0 { 2000.0 / b.cos() } else { f32::NAN }
+///     })
+///     .collect();
+/// let mut ex = Extractor::<361, 32>::new();
+/// ex.extract(&Scan::from_mm(g, &ranges), &Config::default())?;
+/// assert_eq!(ex.features().len(), 1);
+/// assert!(matches!(ex.features().first(),
+///     Some(Feature::Line(l)) if (l.rho - 2000.0).abs() < 0.5 && l.alpha.abs() < 1e-3));
+/// # Ok::<(), pfe_core::ExtractError>(())
+/// ```
+pub struct Extractor<const N: usize, const M: usize> {
+    /// What depends only on the scan geometry, kept across scans.
+    beams: BeamTable<N>,
+    /// The last scan's points, ranges and flags.
+    work: Buffers<N>,
+    /// The last extraction's features and statistics.
+    out: Output<M>,
+}
+
+/// The work buffers of one scan: a slot per reading, `len` of them in use.
+struct Buffers<const N: usize> {
+    points: [Point; N],
+    ranges: [f32; N],
+    flags: [u8; N],
+    len: usize,
+}
+
+/// An extraction's output.
+struct Output<const M: usize> {
+    features: Vec<Feature, M>,
+    stats: Stats,
+}
+
+/// Where the segment step puts the features (an extractor's buffer, whatever its capacity).
+pub(crate) trait FeatureSink {
+    /// Stores `f`; false when there is no room.
+    fn push(&mut self, f: Feature) -> bool;
+}
+
+impl<const M: usize> FeatureSink for Vec<Feature, M> {
+    fn push(&mut self, f: Feature) -> bool {
+        Vec::push(self, f).is_ok()
+    }
+}
+
+impl<const N: usize, const M: usize> Default for Extractor<N, M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const N: usize, const M: usize> Extractor<N, M> {
+    /// An empty extractor (`const`, so it can live in a `static`).
+    pub const fn new() -> Self {
+        // All zero bytes (slots past `len` are never read), so that a `static` extractor goes
+        // to .bss rather than being copied from flash as well.
+        Self {
+            beams: BeamTable::new(),
+            work: Buffers {
+                points: [Point::new(0.0, 0.0); N],
+                ranges: [0.0; N],
+                flags: [0; N],
+                len: 0,
+            },
+            out: Output {
+                features: Vec::new(),
+                stats: Stats {
+                    readings: 0,
+                    valid: 0,
+                    segments: 0,
+                    short_segments: 0,
+                    degenerate: 0,
+                    features: 0,
+                    dropped: 0,
+                    predictions: 0,
+                },
+            },
+        }
+    }
+
+    /// Extracts the features of `scan`. On `Err(FeatureCapacity)` the first `M` features are
+    /// still available from [`features`](Self::features).
+    pub fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> Result<Stats, ExtractError> {
+        self.work.len = 0;
+        self.out.features.clear();
+        self.out.stats = Stats::default();
+        self.work.len = accept(scan, config, N)?;
+        let Self { beams, work, out } = self;
+        let beams = beams.of(scan.geometry);
+        run(
+            beams,
+            work.slots(),
+            scan,
+            config,
+            &mut out.stats,
+            &mut out.features,
+        )
+    }
+
+    /// Features of the last extraction, in scan order.
+    pub fn features(&self) -> &[Feature] {
+        &self.out.features
+    }
+
+    /// Statistics of the last extraction.
+    pub fn stats(&self) -> Stats {
+        self.out.stats
+    }
+
+    /// Points of the last scan (after correction and de-skew); invalid readings are
+    /// [`Point::INVALID`].
+    pub fn points(&self) -> &[Point] {
+        self.work.points.get(..self.work.len).unwrap_or(&[])
+    }
+
+    /// Mark points of the last extraction: the first and last point of every segment (after
+    /// the check step and pairing), in increasing order.
+    pub fn marks(&self) -> impl Iterator<Item = usize> + '_ {
+        self.work
+            .flags
+            .iter()
+            .take(self.work.len)
+            .enumerate()
+            .filter(|(_, f)| **f & (START | END) != 0)
+            .map(|(i, _)| i)
+    }
+
+    /// True when point `i` is a mark point.
+    pub fn is_mark(&self, i: usize) -> bool {
+        i < self.work.len
+            && self
+                .work
+                .flags
+                .get(i)
+                .is_some_and(|f| f & (START | END) != 0)
+    }
+}
+
+impl<const N: usize> Buffers<N> {
+    /// The slots in use: points, ranges and flags.
+    fn slots(&mut self) -> (&mut [Point], &mut [f32], &mut [u8]) {
+        let n = self.len;
+        (
+            self.points.get_mut(..n).unwrap_or_default(),
+            self.ranges.get_mut(..n).unwrap_or_default(),
+            self.flags.get_mut(..n).unwrap_or_default(),
+        )
+    }
+}
+
+/// The number of readings of `scan`, when an extractor with room for `capacity` readings can
+/// extract it with `config`.
+fn accept(scan: &Scan<'_>, config: &Config, capacity: usize) -> Result<usize, ExtractError> {
+    if !scan.geometry.is_valid() {
+        return Err(ExtractError::InvalidGeometry);
+    }
+    if !config.is_valid() {
+        return Err(ExtractError::InvalidConfig);
+    }
+    let n = scan.ranges.len();
+    let capacity = capacity.min(usize::from(u16::MAX));
+    if n > capacity {
+        return Err(ExtractError::TooManyReadings { got: n, capacity });
+    }
+    Ok(n)
+}
+
+/// The paper's steps in order, over an extractor's parts (not generic: compiled once, here).
+#[inline(never)]
+fn run(
+    beams: Beams<'_>,
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
+    scan: &Scan<'_>,
+    config: &Config,
+    stats: &mut Stats,
+    out: &mut dyn FeatureSink,
+) -> Result<Stats, ExtractError> {
+    // §2: readings to points (range correction, de-skew).
+    let mut pass = Pass::load(beams, slots, scan, config, stats);
+    let rule = Rule::new(config, scan.geometry.r_max, pass.beams.gap_factor);
+    // §3.1–3.2, §3.6: mark points by prediction.
+    mark::mark(&mut pass, &rule);
+    // §3.3: the check step.
+    if config.check_step {
+        check::check(&mut pass, &rule);
+    }
+    // §3.4–3.5: segments and pairing, merges, type and fit of each.
+    segment::segments(&mut pass, &rule, config, out);
+    match pass.stats.dropped {
+        0 => Ok(*pass.stats),
+        dropped => Err(ExtractError::FeatureCapacity { dropped }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math;
+    use crate::scan::ScanGeometry;
+
+    /// The default mode's check step, run over the starts its walk noted, changes the same
+    /// marks as the check step reading every flag: a corridor (side walls seen at grazing
+    /// incidence, where every point jumps from the one before: runs of starts the check step
+    /// joins) with random spikes and dropouts, with few and with more runs than are noted.
+    #[test]
+    fn noted_neighbours_give_the_full_check_step() {
+        let g = ScanGeometry::LMS200_180_050;
+        let config = Config::default();
+        let (mut seed, mut noted, mut overflowed, mut joined) = (7u32, 0, 0, 0);
+        let (mut a, mut b) = (Extractor::<361, 32>::new(), Extractor::<361, 32>::new());
+        for t in 0..200u32 {
+            let ranges = corridor(t, &mut seed);
+            let scan = Scan::from_mm(g, &ranges);
+            let mut flags = [[0u8; 361]; 2];
+            for (ex, all) in [(&mut a, false), (&mut b, true)] {
+                ex.work.len = ranges.len();
+                let Extractor { beams, work, out } = ex;
+                let mut pass =
+                    Pass::load(beams.of(g), work.slots(), &scan, &config, &mut out.stats);
+                let rule = Rule::new(&config, g.r_max, pass.beams.gap_factor);
+                mark::mark(&mut pass, &rule);
+                let mut before = [0u8; 361];
+                before.copy_from_slice(pass.flags);
+                match (&pass.neighbours, all) {
+                    (_, true) => pass.neighbours = None,
+                    (Some(_), false) => noted += 1,
+                    (None, false) => overflowed += 1,
+                }
+                check::check(&mut pass, &rule);
+                joined += usize::from(!all && pass.flags != before);
+                flags[usize::from(all)].copy_from_slice(pass.flags);
+            }
+            assert_eq!(flags[0], flags[1], "scan {t}");
+        }
+        assert!(
+            noted > 20 && overflowed > 20 && joined > 20,
+            "{noted} noted, {overflowed} overflowed, {joined} joined"
+        );
+    }
+
+    /// A corridor scan (LMS200, 180° at 0.5°): side walls 300 mm + 40 mm × (`t` mod 30) away,
+    /// an end wall at 7 m, `t` mod 40 random spikes and 4 dropouts in 256.
+    fn corridor(t: u32, seed: &mut u32) -> [f32; 361] {
+        let g = ScanGeometry::LMS200_180_050;
+        let (spikes, side) = (t % 40, 300.0 + 40.0 * (t % 30) as f32);
+        core::array::from_fn(|i| {
+            *seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let u = *seed >> 24;
+            let (sin, cos) = math::sin_cos(g.bearing(i));
+            if u < spikes {
+                500.0 + 7.0 * u as f32
+            } else if u < spikes + 4 {
+                f32::NAN
+            } else {
+                let to_side = side / math::abs(sin);
+                let to_end = if cos > 0.0 {
+                    7000.0 / cos
+                } else {
+                    f32::INFINITY
+                };
+                let r = if to_side < to_end { to_side } else { to_end };
+                if r < 7900.0 {
+                    r
+                } else {
+                    f32::NAN
+                }
+            }
+        })
+    }
+
+    /// Extractors of different capacities give the same marks, features and statistics, in
+    /// both modes.
+    #[test]
+    fn every_capacity_gives_the_same() {
+        let g = ScanGeometry::LMS200_180_050;
+        let (mut lms, mut other) = (Extractor::<401, 48>::new(), Extractor::<361, 48>::new());
+        let mut seed = 11u32;
+        for t in 0..60u32 {
+            let ranges = corridor(t, &mut seed);
+            let scan = Scan::from_mm(g, &ranges);
+            for config in [Config::default(), Config::paper()] {
+                let got = (lms.extract(&scan, &config), other.extract(&scan, &config));
+                assert_eq!(got.0, got.1, "scan {t}");
+                assert_eq!(lms.features(), other.features(), "scan {t}");
+                assert!(lms.marks().eq(other.marks()), "scan {t}");
+            }
+        }
+    }
+}

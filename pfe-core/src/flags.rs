@@ -1,0 +1,92 @@
+//! Per-point flags of one scan (valid, segment start, segment end, jump) and a search over
+//! them that reads four flags at a time.
+
+/// A valid point.
+pub(crate) const VALID: u8 = 1;
+/// First point of a segment (a mark point in the paper's sense).
+pub(crate) const START: u8 = 2;
+/// Last point of a segment (the paired mark point).
+pub(crate) const END: u8 = 4;
+/// A segment start caused by a jump (never inside one surface, so never merged).
+pub(crate) const JUMP: u8 = 8;
+
+/// What [`next_flag`] looks for.
+#[derive(Clone, Copy)]
+pub(crate) enum Seek {
+    /// A valid point that starts a segment.
+    Mark,
+    /// A point that is not a valid segment start.
+    NotMark,
+    /// A valid point.
+    Valid,
+    /// The end of a segment's points: a start or an invalid point.
+    SegmentEnd,
+}
+
+impl Seek {
+    /// A valid segment start.
+    pub(crate) const MARK: u8 = VALID | START;
+    /// `VALID` / `VALID | START` in each byte of a word of four flags.
+    const V4: u32 = u32::from_le_bytes([VALID; 4]);
+    const M4: u32 = u32::from_le_bytes([Self::MARK; 4]);
+
+    fn hit(self, f: u8) -> bool {
+        match self {
+            Seek::Mark => f & Self::MARK == Self::MARK,
+            Seek::NotMark => f & Self::MARK != Self::MARK,
+            Seek::Valid => f & VALID != 0,
+            Seek::SegmentEnd => f & Self::MARK != VALID,
+        }
+    }
+
+    /// True when none of the four flags in `word` is a hit.
+    fn none_in(self, word: u32) -> bool {
+        match self {
+            Seek::Mark => word & (Self::M4 & !Self::V4) == 0,
+            Seek::NotMark => word & Self::M4 == Self::M4,
+            Seek::Valid => word & Self::V4 == 0,
+            Seek::SegmentEnd => word & Self::M4 == Self::V4,
+        }
+    }
+}
+
+/// The first index from `from` whose flag `seek` finds, four flags at a time where it can tell
+/// from their word that none of them is one.
+#[inline(always)]
+pub(crate) fn next_flag(flags: &[u8], from: usize, seek: Seek) -> Option<usize> {
+    let flags = flags.get(from..)?;
+    let mut chunks = flags.chunks_exact(4);
+    let mut base = from;
+    for chunk in chunks.by_ref() {
+        if let [a, b, c, d] = *chunk {
+            if !seek.none_in(u32::from_le_bytes([a, b, c, d])) {
+                if let Some(i) = chunk.iter().position(|&f| seek.hit(f)) {
+                    return Some(base + i);
+                }
+            }
+        }
+        base += 4;
+    }
+    let rest = chunks.remainder();
+    Some(base + rest.iter().position(|&f| seek.hit(f))?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `Seek::none_in` never skips a word with a hit: every word of four flags made of the
+    /// five flag bits.
+    #[test]
+    fn seek_skips_only_words_without_hits() {
+        for seek in [Seek::Mark, Seek::NotMark, Seek::Valid, Seek::SegmentEnd] {
+            for w in 0u32..1 << 20 {
+                let bytes = [0u32, 5, 10, 15].map(|s| ((w >> s) & 0x1f) as u8);
+                let word = u32::from_le_bytes(bytes);
+                if seek.none_in(word) {
+                    assert!(!bytes.iter().any(|&f| seek.hit(f)), "{word:#010x}");
+                }
+            }
+        }
+    }
+}

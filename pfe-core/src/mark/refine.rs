@@ -1,0 +1,128 @@
+//! Where a segment boundary lies (default mode): after a detection, [`locate`] moves it back
+//! over the points that already left the old segment's line; a few points later,
+//! [`refine_boundary`] settles it between two fixed lines.
+
+use super::NoiseRule;
+use crate::config::NP;
+use crate::fit::line::fit_axis;
+use crate::geometry::Point;
+use crate::math;
+use crate::pass::Pass;
+use crate::predict::Prediction;
+
+/// Points of the new segment seen before its boundary is refined (its line in the refinement
+/// is fitted to the points after the candidates).
+pub(crate) const REFINE_AFTER: usize = 6;
+/// Points each side used to refine a boundary.
+const REFINE_SPAN: usize = 6;
+
+/// The earliest of the (up to 4) points before `k` that, with `k`, deviate on the same side
+/// from the line through the points of the segment starting at `s` before them. `at_k`: `k`'s
+/// prediction from its own window.
+pub(crate) fn locate(
+    pass: &mut Pass<'_>,
+    s: usize,
+    k: usize,
+    at_k: Option<Prediction>,
+    rule: &NoiseRule,
+) -> usize {
+    const BACK: usize = 4;
+    let m = &rule.model;
+    let c = k - s;
+    let back = BACK.min(c.saturating_sub(NP));
+    if back == 0 {
+        return k;
+    }
+    let ref_end = k - back;
+    let ref_start = ref_end.saturating_sub(m.window).max(s);
+    let Some(side) = at_k.map(|p| p.signed) else {
+        return k;
+    };
+    // Predictions from the reference line. Without de-skewing every beam sees it from the
+    // same origin: k's fit serves them all (each still counts as a prediction).
+    let fixed = pass
+        .motion
+        .is_none()
+        .then(|| pass.window_line(ref_start, ref_end, k));
+    let k_from_ref = match fixed {
+        Some(line) => line.and_then(|l| pass.predict_with(&l, k)),
+        None => pass.predict(ref_start, ref_end, k),
+    };
+    let predict = |pass: &mut Pass<'_>, j: usize| match fixed {
+        Some(line) => {
+            pass.stats.predictions += 1;
+            line.and_then(|l| pass.predict_with(&l, j))
+        }
+        None => pass.predict(ref_start, ref_end, j),
+    };
+    // Sign of k's deviation from the reference line (not from its own window).
+    let side = match k_from_ref {
+        Some(p) if math::finite(p.signed) => p.signed,
+        _ => side,
+    };
+    let mut b = k;
+    for j in (ref_end..k).rev() {
+        match predict(pass, j) {
+            Some(p) if p.signed * side > 0.0 && p.exceeds(m.k_locate, rule.sigma_r, m.floor) => {
+                b = j
+            }
+            _ => break,
+        }
+    }
+    // Each point moved to the new segment must lie on the line through the ones after it (a
+    // reference line through an arc's end also "sees" the arc's own last points deviate).
+    while b + 2 <= k {
+        let tol = rule.k_sigma + m.floor;
+        let consistent = match (pass.points.get(b + 1..=k), pass.points.get(b)) {
+            (Some(rest), Some(p)) => {
+                fit_axis(rest).is_ok_and(|l| math::abs(l.signed_distance(p)) <= tol)
+            }
+            _ => true,
+        };
+        if consistent {
+            break;
+        }
+        b += 1;
+    }
+    b
+}
+
+/// Best split between a segment starting at `old` and one starting near `b` and running to
+/// `end` (exclusive): the candidate in `b − 3 ..= b + 1` that puts the points between them on
+/// the nearer of two fixed lines, the left one fitted to up to `REFINE_SPAN` points before the
+/// candidates (the old segment's), the right one to up to `REFINE_SPAN` from the last candidate
+/// on (the new segment's): least sum of squared distances, one fit each side, not two fits per
+/// candidate.
+#[inline(never)]
+pub(crate) fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize) -> usize {
+    let lo = b.saturating_sub(3).max(old + NP);
+    let hi = (b + 1).min(end.saturating_sub(NP));
+    if lo >= hi {
+        return b;
+    }
+    let left = points.get(lo.saturating_sub(REFINE_SPAN).max(old)..lo);
+    let right = points.get(hi..end.min(hi + REFINE_SPAN));
+    let (Some(Ok(left)), Some(Ok(right))) = (left.map(fit_axis), right.map(fit_axis)) else {
+        return b;
+    };
+    let Some(contested) = points.get(lo..hi) else {
+        return b;
+    };
+    // Split j: points lo..j on the left line, j..hi on the right one.
+    let mut sse: f32 = contested.iter().map(|p| sq(right.signed_distance(p))).sum();
+    let (mut best, mut best_sse) = (lo, sse);
+    for (j, p) in (lo + 1..).zip(contested) {
+        sse += sq(left.signed_distance(p)) - sq(right.signed_distance(p));
+        // Ties keep the detected boundary.
+        if sse < best_sse || (sse == best_sse && j == b) {
+            best = j;
+            best_sse = sse;
+        }
+    }
+    best
+}
+
+/// `x²`.
+fn sq(x: f32) -> f32 {
+    x * x
+}

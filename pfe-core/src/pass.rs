@@ -1,0 +1,175 @@
+//! One extraction's work state, whatever the extractor's capacity: the beam table, the scan's
+//! points, ranges and flags, and the statistics. Every step is a function of it, compiled
+//! once in this crate.
+
+use heapless::Vec;
+
+use crate::beams::Beams;
+use crate::config::Config;
+use crate::extractor::Stats;
+use crate::flags::{START, VALID};
+use crate::geometry::Point;
+use crate::predict::{Prediction, WindowLine};
+use crate::preprocess;
+use crate::preprocess::deskew::Motion;
+use crate::scan::Scan;
+
+/// Most neighbouring segment starts the default mode's walk notes for its check step.
+pub(crate) const NEIGHBOURS: usize = 16;
+
+/// The work state of one extraction. `points`, `ranges` and `flags` hold one slot per reading.
+pub(crate) struct Pass<'a> {
+    /// The beam table of the scan's geometry.
+    pub beams: Beams<'a>,
+    /// Points (after correction and de-skew); invalid readings are [`Point::INVALID`].
+    pub points: &'a [Point],
+    /// Corrected measured range of each valid point, mm (its distance from the scanner).
+    pub ranges: &'a [f32],
+    /// Flags of each point (see [`crate::flags`]).
+    pub flags: &'a mut [u8],
+    /// Motion during the scan, when de-skewing.
+    pub motion: Option<Motion>,
+    /// Segment starts the default mode's walk set right after another one, in increasing
+    /// order: the only places where its check step can act. `None` when not known (the
+    /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
+    pub neighbours: Option<Vec<u16, NEIGHBOURS>>,
+    /// What the extraction did so far.
+    pub stats: &'a mut Stats,
+}
+
+impl<'a> Pass<'a> {
+    /// The work state of `scan` over the beam table `beams` and the slots (points, ranges,
+    /// flags) of its readings, which it fills (§2: range correction, de-skew).
+    pub(crate) fn load(
+        beams: Beams<'a>,
+        (points, ranges, flags): (&'a mut [Point], &'a mut [f32], &'a mut [u8]),
+        scan: &Scan<'_>,
+        config: &Config,
+        stats: &'a mut Stats,
+    ) -> Self {
+        let motion = scan.motion.filter(|m| m.is_valid());
+        let slots = (&mut *points, &mut *ranges, &mut *flags);
+        preprocess::load(slots, &beams, motion, scan, config, stats);
+        Self {
+            beams,
+            points,
+            ranges,
+            flags,
+            motion,
+            neighbours: None,
+            stats,
+        }
+    }
+
+    /// Number of readings.
+    pub(crate) fn len(&self) -> usize {
+        self.flags.len()
+    }
+
+    pub(crate) fn flag(&self, i: usize) -> u8 {
+        self.flags.get(i).copied().unwrap_or(0)
+    }
+
+    pub(crate) fn set(&mut self, i: usize, bit: u8) {
+        if let Some(f) = self.flags.get_mut(i) {
+            *f |= bit;
+        }
+    }
+
+    pub(crate) fn clear(&mut self, i: usize, bit: u8) {
+        if let Some(f) = self.flags.get_mut(i) {
+            *f &= !bit;
+        }
+    }
+
+    pub(crate) fn valid(&self, i: usize) -> bool {
+        self.flag(i) & VALID != 0
+    }
+
+    pub(crate) fn point(&self, i: usize) -> Point {
+        point_at(self.points, i)
+    }
+
+    /// Scanner position when beam `i` was taken (origin unless de-skewing).
+    pub(crate) fn origin(&self, i: usize) -> Point {
+        match self.motion {
+            Some(m) => moved_origin(m, i),
+            None => Point::new(0.0, 0.0),
+        }
+    }
+
+    pub(crate) fn range(&self, i: usize) -> f32 {
+        self.ranges.get(i).copied().unwrap_or(f32::NAN)
+    }
+
+    /// Predicts point `k` from points `from..to` (all valid).
+    pub(crate) fn predict(&mut self, from: usize, to: usize, k: usize) -> Option<Prediction> {
+        let line = self.window_line(from, to, k)?;
+        self.predict_with(&line, k)
+    }
+
+    /// Predicts point `k` from the points `from..k` right before it (all valid): the window
+    /// and the point with one bounds check.
+    #[inline(never)]
+    pub(crate) fn predict_next(&mut self, from: usize, k: usize) -> Option<Prediction> {
+        self.stats.predictions += 1;
+        let (p, window) = self.points.get(from..=k)?.split_last()?;
+        let r = *self.ranges.get(k)?;
+        let o = self.origin(k);
+        match &WindowLine::fit(window, o) {
+            Some(line) => predict_point(line, o, *p, r),
+            None => None,
+        }
+    }
+
+    /// The line of points `from..to`, seen from the origin of beam `k` (one prediction).
+    pub(crate) fn window_line(&mut self, from: usize, to: usize, k: usize) -> Option<WindowLine> {
+        self.stats.predictions += 1;
+        WindowLine::fit(self.points.get(from..to)?, self.origin(k))
+    }
+
+    /// Predicts point `k` from a window's line.
+    #[inline(never)]
+    pub(crate) fn predict_with(&self, line: &WindowLine, k: usize) -> Option<Prediction> {
+        let (Some(&p), Some(&r)) = (self.points.get(k), self.ranges.get(k)) else {
+            return None;
+        };
+        predict_point(line, self.origin(k), p, r)
+    }
+
+    /// Sets a segment start at `i` in increasing order, noting it when point `i − 1` starts
+    /// one too (see [`Self::neighbours`]).
+    pub(crate) fn start(&mut self, i: usize) {
+        self.set(i, START);
+        if i.checked_sub(1).is_some_and(|j| self.flag(j) & START != 0) {
+            let noted = match (&mut self.neighbours, u16::try_from(i)) {
+                (Some(list), Ok(i)) => list.push(i).is_ok(),
+                _ => false,
+            };
+            if !noted {
+                self.neighbours = None;
+            }
+        }
+    }
+}
+
+/// Predicts the point `p` at measured range `r` seen from `origin` by `line` (`None` unless
+/// `r > 0`).
+#[inline(never)]
+fn predict_point(line: &WindowLine, origin: Point, p: Point, r: f32) -> Option<Prediction> {
+    if !(r > 0.0) {
+        return None;
+    }
+    Some(line.predict(origin, p.x - origin.x, p.y - origin.y, r))
+}
+
+/// [`Pass::origin`] when de-skewing (not inlined: one copy for every caller).
+#[inline(never)]
+fn moved_origin(m: Motion, i: usize) -> Point {
+    m.pose(i).origin
+}
+
+/// Point `i` of `points` ([`Point::INVALID`] past their end).
+pub(crate) fn point_at(points: &[Point], i: usize) -> Point {
+    points.get(i).copied().unwrap_or(Point::INVALID)
+}
