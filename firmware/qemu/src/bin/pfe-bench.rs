@@ -1,9 +1,7 @@
 //! Instruction counts of the pipeline on `mps2-an386` under QEMU `-icount shift=10`
 //! (`cargo xtask bench-mcu` builds and runs it).
 //!
-//! The scans are built in (`PFE_BENCH_SCANS`: back-to-back B0 telegrams from the simulator,
-//! or the adversarial scans of `cargo xtask bench-mcu --worst`; the geometry follows the
-//! value count, the range unit the telegram's).
+//! The scans are built in (`PFE_BENCH_SCANS`: back-to-back B0 telegrams from the simulator).
 //! For every scan it measures, with SysTick, decoding the telegram, pfe-core `paper`, pfe-core
 //! `default`, and the whole pipeline (telegram bytes → features → encoded frame), and sends
 //! one `Report::Timing` frame per measurement on UART1, then `Report::Stack` and
@@ -20,21 +18,17 @@ mod fw {
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
     use firmware::app::{RawScan, LMS_READINGS};
-    use firmware::lms::{
-        frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions, Unit, Variant,
-    };
+    use firmware::lms::{frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions};
     use firmware::output::{self, Counters, Report, Stage};
     use firmware_qemu::{
         rt, sys, time,
         uart::{Uart, UART1},
     };
-    use pfe_core::{Config, ScanGeometry, LMS_MAX_VALID_8M};
+    use pfe_core::{Config, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
     /// Values a telegram may hold (the bench's scans have 361).
     const N: usize = LMS_READINGS;
-    /// Values in the simulator's scans.
-    const N_SIM: usize = 361;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
     struct Sink;
@@ -50,9 +44,8 @@ mod fw {
         }
     }
 
-    /// Decodes the telegram at the front of `bytes` into `codes`; returns (bytes used, count,
-    /// mm per code).
-    fn decode(dec: &mut Decoder<812>, bytes: &[u8], codes: &mut [u16; N]) -> (usize, usize, f32) {
+    /// Decodes the telegram at the front of `bytes` into `codes`; returns (bytes used, count).
+    fn decode(dec: &mut Decoder<812>, bytes: &[u8], codes: &mut [u16; N]) -> (usize, usize) {
         let mut used = 0;
         while let Some(rest) = bytes.get(used..) {
             if rest.is_empty() {
@@ -62,29 +55,14 @@ mod fw {
             used += n;
             if let Some(Event::Telegram(t)) = ev {
                 if let Ok(v) = MeasuredValues::parse(t.payload(), ReplyOptions::default()) {
-                    let mm_per_unit = v.unit().map_or(1.0, Unit::mm_per_unit);
-                    return (used, v.range_codes(MeasuringMode(0), codes), mm_per_unit);
+                    return (used, v.range_codes(MeasuringMode(0), codes));
                 }
             }
             if n == 0 {
                 break;
             }
         }
-        (used, 0, 1.0)
-    }
-
-    /// The geometry of a scan of `n` values in a unit of `mm_per_unit` mm: the simulator's
-    /// (180° at 0.5°, 8 m) for 361 values in mm, else the LMS200 variant with `n` values and
-    /// the unit's largest range (as the driver sets it).
-    fn geometry(n: usize, mm_per_unit: f32) -> ScanGeometry {
-        match Variant::from_values(n) {
-            Some(v) if n != N_SIM || mm_per_unit != 1.0 => {
-                let mut g = ScanGeometry::lms200(f32::from(v.angle_deg), v.resolution_deg());
-                g.r_max = f32::from(LMS_MAX_VALID_8M) * mm_per_unit;
-                g
-            }
-            _ => ScanGeometry::LMS200_180_050,
-        }
+        (used, 0)
     }
 
     fn report(out: &mut Uart, r: Report) {
@@ -112,20 +90,20 @@ mod fw {
         };
         let mut dec = Decoder::<812>::new();
         let mut codes = [0u16; N];
+        let g = ScanGeometry::LMS200_180_050;
         let (paper, default) = (Config::paper(), Config::default_config());
         let mut pos = 0usize;
         let mut seq = 0u32;
         while let Some(rest) = SCANS.get(pos..).filter(|r| !r.is_empty()) {
             // Decode.
             let t0 = time::ticks();
-            let (used, n, mm_per_unit) = decode(&mut dec, rest, &mut codes);
+            let (used, n) = decode(&mut dec, rest, &mut codes);
             let t_dec = time::ticks() - t0;
             if n == 0 {
                 break;
             }
             let values = codes.get(..n).unwrap_or(&[]);
-            let g = geometry(n, mm_per_unit);
-            let scan = RawScan::lms_8m(g, values, mm_per_unit).to_pfe();
+            let scan = RawScan::lms_8m(g, values, 1.0).to_pfe();
             let t0 = time::ticks();
             let _ = core::hint::black_box(ex.extract(&scan, &paper));
             let t_paper = time::ticks() - t0;
@@ -134,8 +112,8 @@ mod fw {
             let t_default = time::ticks() - t0;
             // Whole pipeline: bytes → codes → features → frame.
             let t0 = time::ticks();
-            let (_, n2, unit2) = decode(&mut dec, rest, &mut codes);
-            let raw = RawScan::lms_8m(geometry(n2, unit2), codes.get(..n2).unwrap_or(&[]), unit2);
+            let (_, n2) = decode(&mut dec, rest, &mut codes);
+            let raw = RawScan::lms_8m(g, codes.get(..n2).unwrap_or(&[]), 1.0);
             let r = app.process(&raw, Counters::default(), &mut Sink);
             let t_pipe = time::ticks() - t0;
             if r.is_err() {
