@@ -382,7 +382,10 @@ fn worst(o: &Opts) -> Result<()> {
         "Worst case per scan: adversarial scans (`host_tests::scene::adversarial`: structured \
          kinds, and the best scans of a hill-climb on pfe-core's work counters) on QEMU \
          `mps2-an386`, `-icount shift=10` (instruction counts, not cycles). The bound is the \
-         algorithmic one derived below for the scan's value count.\n\n\
+         algorithmic one derived below for the scan's value count. pfe-bench runs every \
+         scan with the 180°/0.5° geometry in mm (taking both from the telegram cost the \
+         median pipeline 5 instructions a point): the 401-value and cm-mode kinds carry \
+         their values, not their field of view or unit.\n\n\
          | scan kind | scans | values | host work (max) | paper max instr | default max instr | pipeline max instr/scan | bound instr/scan (visits) |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|\n",
     );
