@@ -7,6 +7,7 @@
 //!
 //! ```text
 //! UART bytes
+//!   → rx_ring       the receive interrupt's lock-free ring (counts what it loses)
 //!   → lms::codec    sans-IO telegram codec: framing, CRC-16, resync, commands, replies
 //!   → lms::driver   the device over a UART: init, retries, re-init; delivers ScanData
 //!   → app           the only bridge to pfe-core: ScanData → RawScan → pfe_core::Scan,
@@ -35,3 +36,4 @@ macro_rules! log {
 pub mod app;
 pub mod lms;
 pub mod output;
+pub mod rx_ring;

@@ -1,7 +1,9 @@
-//! `cargo xtask bench-mcu [--scans N]`: instruction counts of the firmware pipeline on QEMU
-//! mps2-an386 with `-icount shift=10` (SysTick-measured; instruction counts, not cycles), for
-//! pfe-core with libm and with micromath; refreshes docs/PERFORMANCE.md and fails when the
-//! whole pipeline needs more than 200 instructions per point (median).
+//! `cargo xtask bench-mcu [--scans N | --worst]`: instruction counts of the firmware pipeline
+//! on QEMU mps2-an386 with `-icount shift=10` (SysTick-measured; instruction counts, not
+//! cycles), for pfe-core with libm and with micromath; refreshes docs/PERFORMANCE.md and fails
+//! when the whole pipeline needs more than 200 instructions per point (median). `--worst`:
+//! the adversarial scans instead, the maximum per scan kind beside the algorithmic bound;
+//! fails above 1 000 000 instructions per scan.
 //!
 //! Steps: simulated scans → B0 telegrams (`demo_host bench-scans`), built into the
 //! `pfe-bench` firmware (`PFE_BENCH_SCANS`), run under QEMU, timing frames decoded and
@@ -65,7 +67,8 @@ pub fn run(args: &[String]) -> Result<()> {
     let scans = match args {
         [] => "100".to_string(),
         [flag, n] if flag == "--scans" => n.clone(),
-        _ => anyhow::bail!("usage: cargo xtask bench-mcu [--scans N]"),
+        [flag] if flag == "--worst" => return worst(),
+        _ => anyhow::bail!("usage: cargo xtask bench-mcu [--scans N | --worst]"),
     };
     util::ensure_target()?;
     util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
@@ -96,6 +99,35 @@ pub fn run(args: &[String]) -> Result<()> {
         libm.as_os_str(),
         "--elf-micromath".as_ref(),
         mm.as_os_str(),
+        "--md".as_ref(),
+        md.as_os_str(),
+    ])
+}
+
+/// `--worst`: the adversarial scans built into `pfe-bench` (libm), measured and tabulated.
+fn worst() -> Result<()> {
+    util::ensure_target()?;
+    util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
+    let base = target_dir().join("bench-mcu");
+    std::fs::create_dir_all(&base).context("creating the bench directory")?;
+    let (scans_file, kinds) = (base.join("worst.bin"), base.join("worst.txt"));
+    demo_host(&[
+        "worst-scans".as_ref(),
+        "--out".as_ref(),
+        scans_file.as_os_str(),
+        "--kinds".as_ref(),
+        kinds.as_os_str(),
+    ])?;
+    let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
+    // The libm build's directory: only the bench binary rebuilds.
+    let elf = build_fw("pfe-bench", &[], &env, &base.join("libm"))?;
+    let md = util::root().join("docs").join("PERFORMANCE.md");
+    demo_host(&[
+        "worst".as_ref(),
+        "--elf".as_ref(),
+        elf.as_os_str(),
+        "--kinds".as_ref(),
+        kinds.as_os_str(),
         "--md".as_ref(),
         md.as_os_str(),
     ])

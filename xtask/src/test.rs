@@ -107,6 +107,9 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     step("firmware instruction counts and their budget", || {
         crate::bench_mcu::run(&[])
     })?;
+    step("firmware worst case per scan and its budget", || {
+        crate::bench_mcu::run(&["--worst".into()])
+    })?;
     step(
         "host speed against the baselines (reported, not asserted)",
         || {

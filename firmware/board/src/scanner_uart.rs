@@ -3,18 +3,17 @@
 //! The LMS200 streams telegrams continuously (up to 500 kBd, 20 µs a byte) while the main
 //! loop runs the extractor (~4 ms a scan) and blocks writing feature frames on USART2, so
 //! polling the one-byte data register would lose most of a telegram. Instead the USART1 RXNE
-//! interrupt drains the data register into a single-producer single-consumer ring
-//! ([`heapless::spsc::Queue`], 2047 bytes: 2.8 full telegrams of 732 bytes, 41 ms at
-//! 500 kBd) and [`ScannerUart`], the driver's side, takes the bytes from it. Sending (the
-//! driver's short commands) stays polled.
+//! interrupt drains the data register into the firmware library's receive ring
+//! ([`firmware::rx_ring`]: lock-free SPSC, 2047 bytes, 2.8 full telegrams of 732 bytes,
+//! 41 ms at 500 kBd; host-tested in `firmware/tests/rx_ring.rs`) and [`ScannerUart`], the
+//! driver's side, takes the bytes from it. Sending (the driver's short commands) stays polled.
 //!
-//! The handler counts what it loses in atomics; [`ScannerUart::read`] reports new counts:
-//! - a receive overrun (the handler came too late) once as [`UartError::Overrun`] and a full
-//!   ring (the main loop fell behind) once as [`UartError::RingFull`], so the driver returns
-//!   them and the application logs them;
-//! - framing, noise and parity errors as a defmt warning only: they are expected while the
-//!   driver probes the baud rate (bytes at the wrong rate), and an error would abort the
-//!   probe. The damaged byte is dropped, so the telegram fails its CRC as it should.
+//! The handler counts what it loses in the ring's counters; reads report new counts once the
+//! bytes before them are read: a receive overrun (the handler came too late) as
+//! [`UartError::Overrun`] and a full ring (the main loop fell behind) as
+//! [`UartError::RingFull`], so the driver returns them and the application logs them;
+//! framing, noise and parity errors as a warning only (expected while the driver probes the
+//! baud rate; the damaged byte is dropped, so the telegram fails its CRC as it should).
 //!
 //! Ownership: the handler owns the receiver ([`Rx`]) and the ring's producer end in
 //! [`RX_SIDE`]; [`ScannerUart`] owns the transmitter and the consumer end. A baud switch masks
@@ -22,11 +21,9 @@
 //! the ring and hands the new receiver to the handler again.
 
 use core::cell::RefCell;
-use core::sync::atomic::{AtomicU32, Ordering};
 
 use cortex_m::interrupt::{self as irq, Mutex};
 use cortex_m::peripheral::NVIC;
-use heapless::spsc::{Consumer, Producer, Queue};
 use stm32f4xx_hal::{
     pac::{interrupt, Interrupt, USART1},
     prelude::*,
@@ -35,25 +32,19 @@ use stm32f4xx_hal::{
 };
 
 use firmware::lms::SetBaud;
-
-/// Ring slots; one stays free, so the ring holds 2047 bytes.
-const RING_SLOTS: usize = 2048;
+use firmware::rx_ring::{RxConsumer, RxCounters, RxLoss, RxProducer, RxQueue};
 
 /// The handler's half: the receiver and the ring's producer end.
 struct RxSide {
     rx: Rx<USART1>,
-    ring: Producer<'static, u8, RING_SLOTS>,
+    ring: RxProducer<'static>,
 }
 
 /// Set by [`ScannerUart::new`]; taken back (with USART1 masked) during a baud switch.
 static RX_SIDE: Mutex<RefCell<Option<RxSide>>> = Mutex::new(RefCell::new(None));
 
-/// Receive overruns: a byte arrived before the handler read the previous one.
-static OVERRUNS: AtomicU32 = AtomicU32::new(0);
-/// Bytes received with a framing, noise or parity error (dropped).
-static LINE_ERRORS: AtomicU32 = AtomicU32::new(0);
-/// Bytes dropped because the ring was full.
-static RING_FULL: AtomicU32 = AtomicU32::new(0);
+/// What the receive path lost.
+static RX_COUNTERS: RxCounters = RxCounters::new();
 
 /// Runs `f` on [`RX_SIDE`] in a critical section (never panics: nothing else can hold the
 /// borrow inside the critical section, and if something did, `f` is not run).
@@ -62,10 +53,6 @@ fn with_rx_side<R>(f: impl FnOnce(&mut Option<RxSide>) -> R) -> Option<R> {
         let mut side = RX_SIDE.borrow(cs).try_borrow_mut().ok()?;
         Some(f(&mut side))
     })
-}
-
-fn count(counter: &AtomicU32) {
-    counter.fetch_add(1, Ordering::Relaxed);
 }
 
 /// Drains the USART1 data register into the ring (RXNE; with RXNEIE set an overrun raises
@@ -80,14 +67,12 @@ fn USART1() {
         loop {
             match rx.read() {
                 Ok(b) => {
-                    if ring.enqueue(b).is_err() {
-                        count(&RING_FULL);
-                    }
+                    ring.push(b);
                 }
                 Err(nb::Error::WouldBlock) => break,
                 // The HAL drops the byte still in the data register along with it.
-                Err(nb::Error::Other(serial::Error::Overrun)) => count(&OVERRUNS),
-                Err(nb::Error::Other(_)) => count(&LINE_ERRORS),
+                Err(nb::Error::Other(serial::Error::Overrun)) => ring.overrun(),
+                Err(nb::Error::Other(_)) => ring.line_error(),
             }
         }
     });
@@ -124,46 +109,45 @@ impl From<serial::Error> for UartError {
     }
 }
 
+impl From<RxLoss> for UartError {
+    fn from(e: RxLoss) -> Self {
+        match e {
+            RxLoss::Overrun => UartError::Overrun,
+            RxLoss::RingFull => UartError::RingFull,
+        }
+    }
+}
+
 impl embedded_io::Error for UartError {
     fn kind(&self) -> embedded_io::ErrorKind {
         embedded_io::ErrorKind::Other
     }
 }
 
-/// Counter values already reported.
-#[derive(Default)]
-struct Reported {
-    overruns: u32,
-    line_errors: u32,
-    ring_full: u32,
-}
-
 /// USART1 as the driver wants it: embedded-io Read/ReadReady/Write and a baud switch.
 pub struct ScannerUart {
     /// `None` after a failed baud switch.
     tx: Option<Tx<USART1>>,
-    ring: Consumer<'static, u8, RING_SLOTS>,
+    ring: RxConsumer<'static>,
     rcc: Rcc,
-    reported: Reported,
 }
 
 impl ScannerUart {
     /// Starts interrupt-driven reception on `serial` (USART1). `None` if called twice.
     pub fn new(serial: Serial<USART1>, rcc: Rcc) -> Option<Self> {
-        let queue = cortex_m::singleton!(: Queue<u8, RING_SLOTS> = Queue::new())?;
-        let (producer, ring) = queue.split();
+        let queue = cortex_m::singleton!(: RxQueue = RxQueue::new())?;
+        let (producer, consumer) = queue.split();
         let mut uart = Self {
             tx: None,
-            ring,
+            ring: RxConsumer::new(consumer, &RX_COUNTERS),
             rcc,
-            reported: Reported::default(),
         };
-        uart.start(serial, producer);
+        uart.start(serial, RxProducer::new(producer, &RX_COUNTERS));
         Some(uart)
     }
 
     /// Hands the receiver and `producer` to the handler and unmasks USART1.
-    fn start(&mut self, serial: Serial<USART1>, producer: Producer<'static, u8, RING_SLOTS>) {
+    fn start(&mut self, serial: Serial<USART1>, producer: RxProducer<'static>) {
         let (tx, mut rx) = serial.split();
         rx.listen();
         self.tx = Some(tx);
@@ -177,39 +161,6 @@ impl ScannerUart {
             NVIC::unmask(Interrupt::USART1)
         };
     }
-
-    /// Reports the handler's new counts since the last call: line errors and ring-full
-    /// drops as warnings, then an overrun or a ring-full drop as an error (once).
-    fn take_error(&mut self) -> Result<(), UartError> {
-        let r = &mut self.reported;
-        let line_errors = since_last(&LINE_ERRORS, &mut r.line_errors);
-        let overruns = since_last(&OVERRUNS, &mut r.overruns);
-        let ring_full = since_last(&RING_FULL, &mut r.ring_full);
-        if line_errors > 0 {
-            defmt::warn!(
-                "USART1: {} bytes with framing/noise/parity errors",
-                line_errors
-            );
-        }
-        if ring_full > 0 {
-            defmt::warn!("USART1: receive ring full, {} bytes dropped", ring_full);
-        }
-        if overruns > 0 {
-            Err(UartError::Overrun)
-        } else if ring_full > 0 {
-            Err(UartError::RingFull)
-        } else {
-            Ok(())
-        }
-    }
-}
-
-/// How much `counter` grew since `*seen`; updates `*seen`.
-fn since_last(counter: &AtomicU32, seen: &mut u32) -> u32 {
-    let now = counter.load(Ordering::Relaxed);
-    let grew = now.wrapping_sub(*seen);
-    *seen = now;
-    grew
 }
 
 impl embedded_io::ErrorType for ScannerUart {
@@ -222,26 +173,18 @@ impl embedded_io::Read for ScannerUart {
         if self.tx.is_none() {
             return Err(UartError::Baud);
         }
-        self.take_error()?;
-        let Some((first, rest)) = buf.split_first_mut() else {
+        if buf.is_empty() {
             return Ok(0);
-        };
+        }
         // Spin rather than WFI: in sleep the STM32F4 stops HCLK to the debug port unless
         // DBGMCU says otherwise, which stalls defmt over RTT. The driver reads only after
         // `read_ready`, so this hardly ever spins.
-        *first = loop {
-            if let Some(b) = self.ring.dequeue() {
-                break b;
+        loop {
+            match self.ring.read(buf)? {
+                0 => core::hint::spin_loop(),
+                n => return Ok(n),
             }
-            core::hint::spin_loop();
-        };
-        let mut n = 1;
-        for slot in rest {
-            let Some(b) = self.ring.dequeue() else { break };
-            *slot = b;
-            n += 1;
         }
-        Ok(n)
     }
 }
 
@@ -288,7 +231,7 @@ impl SetBaud for ScannerUart {
             .map_err(|_| UartError::Baud)?;
         // Bytes at the old rate are stale; with the handler masked the consumer may empty
         // the ring.
-        while self.ring.dequeue().is_some() {}
+        self.ring.clear();
         self.start(serial, producer);
         Ok(())
     }

@@ -22,9 +22,10 @@
 //!
 //! Files by job: `vec2` maths, [`shape`] primitives and ray hits, [`raycast`] ray casting,
 //! [`truth`] ground truth and Cramér–Rao bounds, [`range_model`] the LMS200 range model,
-//! [`generate`] scene generators, [`scenario`] the recipe and the simulated scan, [`svg`] a
+//! [`generate`] scene generators, [`adversarial`] worst-case scans, [`scenario`] the recipe and the simulated scan, [`svg`] a
 //! picture of it.
 
+pub mod adversarial;
 pub mod generate;
 pub mod range_model;
 pub mod raycast;
