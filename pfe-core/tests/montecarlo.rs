@@ -182,13 +182,8 @@ fn circle_points(c: (f64, f64, f64), from: f64, to: f64, n: usize) -> Vec<(f64, 
 fn check_circle_spread(samples: &[[f64; 3]], predicted: [[f64; 3]; 3], label: &str) {
     let n = samples.len();
     let col = |k: usize| samples.iter().map(|s| s[k]).collect::<Vec<f64>>();
-    for k in 0..3 {
-        within(
-            &format!("{label} var[{k}]"),
-            predicted[k][k],
-            var(&col(k)),
-            n,
-        );
+    for (k, row) in predicted.iter().enumerate() {
+        within(&format!("{label} var[{k}]"), row[k], var(&col(k)), n);
     }
     for (i, j) in [(0, 1), (0, 2), (1, 2)] {
         let (xi, xj) = (col(i), col(j));

@@ -8,6 +8,7 @@ mod conformance;
 mod demo;
 mod eval;
 mod fuzz;
+mod mutants;
 mod no_panic;
 mod size;
 mod soak;
@@ -27,6 +28,7 @@ const HELP: &str = "cargo xtask <command> [args]
   bench-mcu     instruction counts on mps2-an386 under QEMU (budgets enforced)
   size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
   fuzz          every cargo-fuzz target for --seconds S
+  mutants       cargo-mutants on pfe-core (--firmware: lms and output) [--shard K/N]
   no-panic      firmware build whose link fails if a panic path survives
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
 ";
@@ -50,6 +52,7 @@ fn main() -> Result<()> {
         "bench-mcu" => bench_mcu::run(rest),
         "size" => size::run(rest),
         "fuzz" => fuzz::run(rest),
+        "mutants" => mutants::run(rest),
         "no-panic" => no_panic::run(rest),
         "soak" => soak::run(rest),
         other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
