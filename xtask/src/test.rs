@@ -99,6 +99,9 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
         }
         sh(&mut c)
     })?;
+    step("unit tests of the examples (the demo's checks)", || {
+        sh(cargo().args(["test", "-p", "host-tests", "--examples"]))
+    })?;
     step(
         "fuzz regressions and seeds replayed (cargo test --manifest-path fuzz/Cargo.toml)",
         || crate::fuzz::replay_regressions(skips),
