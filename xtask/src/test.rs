@@ -99,6 +99,14 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
         }
         sh(&mut c)
     })?;
+    step(
+        "pfe-core's micromath build against its error budget",
+        || {
+            sh(cargo()
+                .args(["test", "-p", "pfe-core", "--no-default-features"])
+                .args(["--features", "micromath", "--test", "micromath"]))
+        },
+    )?;
     step("unit tests of the examples (the demo's checks)", || {
         sh(cargo().args(["test", "-p", "host-tests", "--examples"]))
     })?;
