@@ -264,7 +264,10 @@ fn step_error_estimator_on_synthetic_rooms() {
 ///    nearly rectilinear pairs (|d| < 2°), read with the 180°/n step, estimates ε: 0 if
 ///    180°/n is the true step, (n − 1)/n − 1 = −1/n if 180°/(n − 1) is.
 ///
-/// The result is recorded in the docs of `formats::carmen`.
+/// Asserted: for the logs that can decide (n even, ≥ 100 pairs) the estimate is within 3 s.e.
+/// of 0, and more than 3 s.e. from −1/n wherever the two are ≥ 4 s.e. apart (≥ 4 such logs);
+/// the residuals are at the noise level and equal to second order. The result is recorded in
+/// the docs of `formats::carmen`.
 #[test]
 fn carmen_angle_convention() {
     const MIN_BEAMS: usize = 20;
@@ -272,7 +275,7 @@ fn carmen_angle_convention() {
         return;
     };
     let logs = carmen_logs(&d);
-    let (mut agree, mut decisive) = (0, 0);
+    let (mut agree, mut decisive, mut powerful) = (0, 0, 0);
     eprintln!(
         "| log | n | walls | RMS 180°/(n−1) | RMS 180°/n | pairs | ε (± s.e.) | −1/n | step |"
     );
@@ -352,13 +355,39 @@ fn carmen_angle_convention() {
         // Asserted only where the check can decide: n even and ≥ 100 pairs. For n odd
         // (acapulco, csail) the estimate is within 2 s.e. of both hypotheses: reported only
         // (see the docs of `formats::carmen`).
+        // Residuals: the walls are straight to the sensor's noise under either step (RMS below
+        // 30 mm: a reading bug, e.g. units or beam order, gives metres), and the two steps
+        // differ by second order only (within 2 %), as the check's docs say.
+        assert!(ea < 30.0 && eb < 30.0, "{name}: residuals {ea} / {eb} mm");
+        assert!(
+            (ea - eb).abs() <= 0.02 * ea.max(eb),
+            "{name}: residuals {ea} / {eb} mm differ by more than second order"
+        );
         if n % 2 == 0 && pairs >= 100 {
             decisive += 1;
             if !end_to_end {
                 agree += 1;
             }
+            // A significance test, not only "closer to": 180°/n (ε = 0) is never rejected at
+            // 3 s.e.; where the hypotheses are at least 4 s.e. apart (the estimate has the
+            // power to tell them), 180°/(n−1) (ε = −1/n) is rejected at 3 s.e.
+            assert!(
+                slope.abs() <= 3.0 * se,
+                "{name}: ε {slope:+.5} ± {se:.5} rejects 180°/n"
+            );
+            if predicted.abs() >= 4.0 * se {
+                powerful += 1;
+                assert!(
+                    (slope - predicted).abs() >= 3.0 * se,
+                    "{name}: ε {slope:+.5} ± {se:.5} does not reject 180°/(n−1) (−1/n = {predicted:+.5})"
+                );
+            }
         }
     }
+    assert!(
+        powerful >= 4,
+        "only {powerful} logs can reject 180°/(n−1) at 3 s.e."
+    );
     assert!(decisive >= 6, "only {decisive} decisive logs");
     assert_eq!(
         agree, decisive,

@@ -268,13 +268,24 @@ fn variant_and_cm_unit_via_installation_mode() {
         .with_emulator(|e| e.report().scans.last().cloned())
         .unwrap()
         .unwrap();
-    // cm quantum: every valid value within 5 mm of the room geometry.
+    // cm quantum: every valid value within 5 mm of the room geometry, and every beam the room
+    // returns (finite range within the 8 m of the room's walls) is valid: a scan reported all
+    // invalid fails.
+    let mut valid = 0;
     for i in 0..401 {
-        if let Some(mm) = s.range_mm(i) {
-            let truth = sent.ranges_mm[i];
-            assert!((mm - truth).abs() <= 5.0, "beam {i}: {mm} vs {truth}");
+        let truth = sent.ranges_mm[i];
+        match s.range_mm(i) {
+            Some(mm) => {
+                valid += 1;
+                assert!((mm - truth).abs() <= 5.0, "beam {i}: {mm} vs {truth}");
+            }
+            None => assert!(
+                !(truth > 0.0 && truth < 8000.0),
+                "beam {i}: the room returns {truth} mm, reported invalid"
+            ),
         }
     }
+    assert!(valid * 10 >= 401 * 9, "{valid} of 401 beams valid");
     // The pfe-core view uses the same numbers.
     let scan = s.as_pfe_scan();
     assert_eq!(scan.ranges.len(), 401);

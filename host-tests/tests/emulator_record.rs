@@ -1,5 +1,5 @@
 //! `pfe record` (firmware driver over a real tty) against the emulator on a pseudo-terminal:
-//! the capture holds exactly the scans the emulator sent.
+//! the capture holds exactly the scans the emulator sent: each one once, in the order sent.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -69,12 +69,45 @@ fn record_over_pty_captures_sent_scans() {
     }
     assert!(scans.len() >= 4, "{} scans in the capture", scans.len());
     let sent: Vec<_> = report.scans.iter().map(|s| s.words.clone()).collect();
-    for s in &scans {
-        assert!(sent.contains(s), "captured scan not sent by the emulator");
-    }
+    assert_sent_in_order(&scans, &sent);
     assert_eq!(
         report.scans.last().map(|s| s.unit),
         Some(firmware::lms::Unit::Mm)
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Every captured scan was sent, each at a later position than the one before: copies of one
+/// scan or reordered scans fail (the tagged source makes every sent scan distinct).
+fn assert_sent_in_order(captured: &[Vec<u16>], sent: &[Vec<u16>]) {
+    let mut next = 0;
+    for (i, c) in captured.iter().enumerate() {
+        let Some(at) = sent.iter().skip(next).position(|s| s == c) else {
+            let anywhere = sent.contains(c);
+            panic!(
+                "captured scan {i} {}",
+                if anywhere {
+                    "repeats or precedes an earlier capture"
+                } else {
+                    "was not sent by the emulator"
+                }
+            );
+        };
+        next += at + 1;
+    }
+}
+
+#[test]
+fn copies_and_reordered_scans_are_not_a_capture() {
+    let sent: Vec<Vec<u16>> = (0..6u16).map(|k| vec![k, 100 + k, 200 + k]).collect();
+    assert_sent_in_order(&sent[1..5], &sent);
+    assert_sent_in_order(&[sent[0].clone(), sent[3].clone()], &sent);
+    for bad in [
+        vec![sent[2].clone(); 4],
+        vec![sent[3].clone(), sent[2].clone()],
+        vec![vec![9, 9, 9]],
+    ] {
+        let r = std::panic::catch_unwind(|| assert_sent_in_order(&bad, &sent));
+        assert!(r.is_err(), "{bad:?} accepted");
+    }
 }

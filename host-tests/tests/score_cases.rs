@@ -5,7 +5,7 @@ use host_tests::eval::score::{
 };
 use host_tests::methods::Extraction;
 use host_tests::scene::{Crb, Scenario, SceneKind, TruthFeature, TruthKind};
-use pfe_core::{fit_line, CircleFeature, Feature, LineFeature, Point};
+use pfe_core::{fit_circle, fit_line, CircleFeature, CircleMethod, Feature, LineFeature, Point};
 use std::f64::consts::PI;
 
 fn truth_line(first: usize, last: usize, alpha: f64, rho: f64) -> TruthFeature {
@@ -193,28 +193,34 @@ fn aggregate_sums_before_ratios() {
     assert_eq!(total.line_errors.len(), 4);
 }
 
-/// An oracle that marks the true marks and fits each truth run with pfe-core gets no false
-/// marks, no misses and no misidentified features, and errors near the CRB.
+/// An oracle that marks the true marks and fits each truth run with pfe-core (a line or a
+/// Hyper circle on the run's measured points: nothing copied from the truth but the
+/// segmentation and the type) gets no false marks, no misses and no misidentified features,
+/// and errors near the CRB.
 #[test]
 fn oracle_on_simulated_scans() {
     let mut total = Score::default();
-    for seed in 0..30 {
-        let sim = Scenario::new(SceneKind::Office, seed).simulate();
+    // Office scenes, and mixed ones for enough circles.
+    for (kind, seed) in (0..30)
+        .map(|s| (SceneKind::Office, s))
+        .chain((0..30).map(|s| (SceneKind::Mixed, s)))
+    {
+        let sim = Scenario::new(kind, seed).simulate();
         let pts = sim.points();
         let features = sim
             .truth
             .iter()
             .map(|f| {
                 let p: Vec<Point> = (f.first..=f.last).map(|i| pts[i].unwrap()).collect();
-                let l = fit_line(&p).unwrap();
                 match f.kind {
-                    TruthKind::Line { .. } => line(f.first, f.last, l.alpha, l.rho),
-                    TruthKind::Circle { center, radius } => circle(
-                        f.first,
-                        f.last,
-                        [center[0] as f32, center[1] as f32],
-                        radius as f32,
-                    ),
+                    TruthKind::Line { .. } => {
+                        let l = fit_line(&p).unwrap();
+                        line(f.first, f.last, l.alpha, l.rho)
+                    }
+                    TruthKind::Circle { .. } => {
+                        let c = fit_circle(&p, CircleMethod::Hyper).unwrap();
+                        circle(f.first, f.last, [c.center.x, c.center.y], c.radius)
+                    }
                 }
             })
             .collect();
@@ -230,12 +236,66 @@ fn oracle_on_simulated_scans() {
         (total.missed, total.spurious, total.false_iden_ratio()),
         (0, 0, 0.0)
     );
-    // Least squares is near-efficient: RMS(Δρ / CRB σ_ρ) is about 1, not 0 and not 3.
-    let z: f64 = total
-        .line_errors
-        .iter()
-        .map(|e| (e.rho / e.crb_rho).powi(2))
-        .sum::<f64>()
-        / total.line_errors.len() as f64;
-    assert!(z.sqrt() > 0.7 && z.sqrt() < 2.0, "rms z = {}", z.sqrt());
+    // Errors in units of their Cramér–Rao σ. For an efficient estimator the RMS of n such z is
+    // √(χ²_n / n): 1 within 3/√(2n) at 3σ. It cannot be below that (no unbiased estimator
+    // beats the bound); above it the unweighted fits lose efficiency: lines a little to the
+    // uneven incidence (range noise is not isotropic), allowed 15 %; circles more, on arcs of a
+    // few beams where the first-order bound is optimistic, allowed 40 % (measured: lines 1.05,
+    // circles 1.23–1.36).
+    let band = |name: &str, loss: f64, z: Vec<f64>| {
+        let n = z.len() as f64;
+        let rms = (z.iter().map(|z| z * z).sum::<f64>() / n).sqrt();
+        let tol = 3.0 / (2.0 * n).sqrt();
+        eprintln!(
+            "{name}: rms z {rms:.3} over {n} (band {:.3}..{:.3})",
+            1.0 - tol,
+            1.0 + loss + tol
+        );
+        assert!(
+            rms > 1.0 - tol && rms < 1.0 + loss + tol,
+            "{name}: rms z = {rms} over {n}"
+        );
+    };
+    band(
+        "line ρ",
+        0.15,
+        total
+            .line_errors
+            .iter()
+            .map(|e| e.rho / e.crb_rho)
+            .collect(),
+    );
+    band(
+        "line α",
+        0.15,
+        total
+            .line_errors
+            .iter()
+            .map(|e| e.alpha / e.crb_alpha)
+            .collect(),
+    );
+    assert!(
+        total.circle_errors.len() >= 30,
+        "{} circles",
+        total.circle_errors.len()
+    );
+    band(
+        "circle R",
+        0.4,
+        total
+            .circle_errors
+            .iter()
+            .map(|e| e.radius / e.crb_radius)
+            .collect(),
+    );
+    // The centre error is a distance (two coordinates): its CRB is already the RMS.
+    band(
+        "circle centre",
+        0.4,
+        total
+            .circle_errors
+            .iter()
+            .map(|e| e.center / e.crb_center)
+            .collect(),
+    );
 }

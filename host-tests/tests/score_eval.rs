@@ -3,8 +3,8 @@
 use host_tests::cli::eval::parse_args;
 use host_tests::eval::{evaluate, quick_report, report, run_methods, scenarios, svg, EvalOptions};
 use host_tests::methods::{Extraction, Method};
-use host_tests::scene::{Scenario, SceneKind, SimScan};
-use pfe_core::ScanGeometry;
+use host_tests::scene::{Scenario, SceneKind, SimScan, TruthKind};
+use pfe_core::{CircleFeature, Feature, LineFeature, Point, ScanGeometry};
 
 /// Finds nothing.
 struct Blind;
@@ -50,6 +50,154 @@ fn known_methods_give_known_ratios() {
     assert_eq!(all.omitted_marks, 0);
     assert_eq!(all.false_marks, all.points - marks);
     assert!((blind.false_mark_ratio() + all.false_mark_ratio() - 1.0).abs() < 1e-12);
+}
+
+/// Outputs, scan after scan, the ground truth of the given scans as features (exact
+/// parameters), with every circle typed as a line when `swap_circles`, and one extra feature on
+/// beams 0..=1 of every scan when `extra`.
+struct Replay {
+    truth: Vec<Vec<Feature>>,
+    marks: Vec<Vec<usize>>,
+    next: usize,
+    extra: bool,
+}
+
+impl Replay {
+    fn new(sims: &[SimScan], swap_circles: bool, extra: bool) -> Self {
+        let feature = |f: &host_tests::scene::TruthFeature| {
+            let (first, last) = (f.first as u16, f.last as u16);
+            let points = last + 1 - first;
+            match f.kind {
+                TruthKind::Line { alpha, rho } => Feature::Line(LineFeature {
+                    first,
+                    last,
+                    points,
+                    alpha: alpha as f32,
+                    rho: rho as f32,
+                    var_alpha: 0.0,
+                    var_rho: 0.0,
+                    cov_alpha_rho: 0.0,
+                    start: Point::new(0.0, 0.0),
+                    end: Point::new(0.0, 0.0),
+                }),
+                TruthKind::Circle { center, radius } if !swap_circles => {
+                    Feature::Circle(CircleFeature {
+                        first,
+                        last,
+                        points,
+                        center: Point::new(center[0] as f32, center[1] as f32),
+                        radius: radius as f32,
+                        cov: [[0.0; 3]; 3],
+                        start_angle: 0.0,
+                        end_angle: 0.0,
+                    })
+                }
+                TruthKind::Circle { .. } => Feature::Line(LineFeature {
+                    first,
+                    last,
+                    points,
+                    alpha: 0.0,
+                    rho: 1000.0,
+                    var_alpha: 0.0,
+                    var_rho: 0.0,
+                    cov_alpha_rho: 0.0,
+                    start: Point::new(0.0, 0.0),
+                    end: Point::new(0.0, 0.0),
+                }),
+            }
+        };
+        Self {
+            truth: sims
+                .iter()
+                .map(|s| s.truth.iter().map(feature).collect())
+                .collect(),
+            marks: sims.iter().map(|s| s.true_marks.clone()).collect(),
+            next: 0,
+            extra,
+        }
+    }
+}
+
+impl Method for Replay {
+    fn name(&self) -> &str {
+        "replay"
+    }
+    fn extract(&mut self, _: &ScanGeometry, _: &[f32]) -> Extraction {
+        let k = self.next % self.truth.len();
+        self.next += 1;
+        let mut features = self.truth[k].clone();
+        if self.extra {
+            features.push(Feature::Line(LineFeature {
+                first: 0,
+                last: 1,
+                points: 2,
+                alpha: 0.0,
+                rho: 1.0,
+                var_alpha: 0.0,
+                var_rho: 0.0,
+                cov_alpha_rho: 0.0,
+                start: Point::new(0.0, 0.0),
+                end: Point::new(0.0, 0.0),
+            }));
+        }
+        Extraction {
+            marks: self.marks[k].clone(),
+            features,
+        }
+    }
+}
+
+#[test]
+fn methods_that_output_features_are_scored_exactly() {
+    let sims: Vec<SimScan> = scenarios(SceneKind::Mixed, 6, 5.0, 4)
+        .iter()
+        .map(Scenario::simulate)
+        .collect();
+    let truth: usize = sims.iter().map(|s| s.truth.len()).sum();
+    let circles: usize = sims
+        .iter()
+        .flat_map(|s| &s.truth)
+        .filter(|f| matches!(f.kind, TruthKind::Circle { .. }))
+        .count();
+    assert!(
+        circles > 0 && circles < truth,
+        "{circles} circles of {truth}"
+    );
+    let (mut exact, mut swapped, mut extra) = (
+        Replay::new(&sims, false, false),
+        Replay::new(&sims, true, false),
+        Replay::new(&sims, false, true),
+    );
+    let res = run_methods(&mut [&mut exact, &mut swapped, &mut extra], &sims);
+    let (e, s, x) = (&res[0].score, &res[1].score, &res[2].score);
+    // The truth itself: everything matched, no mark wrong, every error zero.
+    assert_eq!(
+        (e.matched, e.missed, e.spurious, e.predicted_features),
+        (truth, 0, 0, truth)
+    );
+    assert_eq!(
+        (e.false_marks, e.omitted_marks, e.false_iden_ratio()),
+        (0, 0, 0.0)
+    );
+    assert_eq!(e.line_errors.len() + e.circle_errors.len(), truth);
+    assert!(e
+        .line_errors
+        .iter()
+        .all(|l| l.rho < 1e-3 && l.alpha < 1e-6 && l.crb_rho > 0.0));
+    assert!(e
+        .circle_errors
+        .iter()
+        .all(|c| c.center < 1e-3 && c.radius < 1e-3 && c.crb_radius > 0.0));
+    // Circles typed as lines: matched, but every circle misidentified and without an error.
+    assert_eq!(
+        (s.matched, s.circles_as_lines, s.lines_as_circles),
+        (truth, circles, 0)
+    );
+    assert!((s.false_iden_ratio() - circles as f64 / truth as f64).abs() < 1e-12);
+    assert_eq!(s.circle_errors.len(), 0);
+    // One extra feature per scan: spurious, nothing else changes.
+    assert_eq!((x.matched, x.spurious), (truth, sims.len()));
+    assert!((x.spurious_ratio() - sims.len() as f64 / truth as f64).abs() < 1e-12);
 }
 
 #[test]

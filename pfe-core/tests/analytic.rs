@@ -105,11 +105,55 @@ fn assert_scene_slack(label: &str, prims: &[Prim], paper_slack: bool) {
                     matches!(prims[p], Prim::Seg(..)),
                     "{name}: {f:?}"
                 );
+                check_slack_parameters(&name, f, prims[p], b + 1 - a);
             }
         } else {
             assert_eq!(marks, expected, "{name}: marks");
             check(&name, prims, &feats, &truth);
         }
+    }
+}
+
+/// Parameters of a feature whose run may hold one point of the neighbouring surface (one
+/// beam late, within the paper's largest threshold `D` = 50 mm of the true surface): one point
+/// off by `D` among `n` moves a line by at most `4D/n` at the run's ends (`D/n` through the
+/// centroid plus `D (n/2)² / Σu²` through the slope, `Σu² ≈ n³/12`) and its angle by at most
+/// `6D/(n·L)` (L the run's length); a circle's centre and radius by at most `8D/n` (the
+/// circle has a third free parameter). Everything else in the scene is exact.
+fn check_slack_parameters(name: &str, f: &Feature, prim: Prim, n: usize) {
+    const D: f64 = 50.0;
+    let n = n as f64;
+    match (f, prim) {
+        (Feature::Line(l), Prim::Seg(x0, y0, x1, y1)) => {
+            let (ex, ey) = (x1 - x0, y1 - y0);
+            let len = ex.hypot(ey);
+            let (nx, ny) = (f64::from(l.alpha).cos(), f64::from(l.alpha).sin());
+            // The feature's end points on the true wall, and the fitted line's distance there.
+            for p in [l.start, l.end] {
+                let (px, py) = (f64::from(p.x), f64::from(p.y));
+                let off_wall = ((px - x0) * ey - (py - y0) * ex).abs() / len;
+                assert!(
+                    off_wall <= 4.0 * D / n + 0.5,
+                    "{name}: {l:?} end {p:?} is {off_wall} mm off the wall"
+                );
+            }
+            let cross = (ex / len * nx + ey / len * ny).abs(); // sin of the angle error
+            let run = f64::from(l.start.distance(&l.end));
+            assert!(
+                cross <= 6.0 * D / (n * run) + 1e-4,
+                "{name}: {l:?}: angle error {cross}"
+            );
+        }
+        (Feature::Circle(c), Prim::Circle(cx, cy, r)) => {
+            let tol = 8.0 * D / n + 0.5;
+            let dc = (f64::from(c.center.x) - cx).hypot(f64::from(c.center.y) - cy);
+            let dr = (f64::from(c.radius) - r).abs();
+            assert!(
+                dc <= tol && dr <= tol,
+                "{name}: {c:?}: centre {dc} mm, radius {dr} mm off (tol {tol})"
+            );
+        }
+        (f, p) => panic!("{name}: {f:?} typed wrongly for {p:?}"),
     }
 }
 

@@ -1,6 +1,8 @@
 //! Small and distant pillars (a few to a dozen beams, growing incidence towards their edges)
 //! with σ_r = 5 mm range noise: the default configuration must find each as one circle, not as
-//! a chain of short line pieces. Truth is the analytic ray casting of `common`.
+//! a chain of short line pieces, with its centre and radius within 4 Cramér–Rao standard
+//! deviations (computed here from the true circle and its beams), and nothing else but the
+//! wall. Truth is the analytic ray casting of `common`.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 mod common;
@@ -10,6 +12,36 @@ use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
 
 const SIGMA: f64 = 5.0;
 const TRIALS: u64 = 20;
+
+/// Cramér–Rao standard deviations (σ_cx, σ_cy, σ_R) of a circle seen by the beams at
+/// `bearings` with range noise `SIGMA`: the inverse of the Fisher information
+/// `Σ ∇r_i ∇r_iᵀ / σ²`, `r_i = b·c − √((b·c)² − |c|² + R²)` the range of beam `b` (unit).
+fn crb(cx: f64, cy: f64, r: f64, bearings: impl Iterator<Item = f64>) -> [f64; 3] {
+    let mut f = [[0.0f64; 3]; 3];
+    for b in bearings {
+        let (dx, dy) = (b.cos(), b.sin());
+        let bc = dx * cx + dy * cy;
+        let disc = bc * bc - (cx * cx + cy * cy) + r * r;
+        if disc <= 0.0 {
+            continue;
+        }
+        let s = disc.sqrt();
+        let g = [dx - (dx * bc - cx) / s, dy - (dy * bc - cy) / s, -r / s];
+        for i in 0..3 {
+            for j in 0..3 {
+                f[i][j] += g[i] * g[j] / (SIGMA * SIGMA);
+            }
+        }
+    }
+    // Diagonal of the inverse by cofactors.
+    let det = f[0][0] * (f[1][1] * f[2][2] - f[1][2] * f[2][1])
+        - f[0][1] * (f[1][0] * f[2][2] - f[1][2] * f[2][0])
+        + f[0][2] * (f[1][0] * f[2][1] - f[1][1] * f[2][0]);
+    let c00 = f[1][1] * f[2][2] - f[1][2] * f[2][1];
+    let c11 = f[0][0] * f[2][2] - f[0][2] * f[2][0];
+    let c22 = f[0][0] * f[1][1] - f[0][1] * f[1][0];
+    [(c00 / det).sqrt(), (c11 / det).sqrt(), (c22 / det).sqrt()]
+}
 
 /// One pillar of radius `r` at `dist` mm and `bearing` rad, in front of a wall at 7.9 m.
 fn scene(r: f64, dist: f64, bearing: f64) -> Vec<Prim> {
@@ -38,6 +70,8 @@ fn distant_pillars_are_single_circles() {
             let (exact, hits) = scan(&prims, start, step, 361, 8000.0);
             let truth = runs(&hits, 4);
             let &(first, last, _) = truth.iter().find(|t| t.2 == 0).unwrap();
+            let (cx, cy) = (dist * bearing.cos(), dist * bearing.sin());
+            let sd = crb(cx, cy, r, (first..=last).map(|i| start + step * i as f64));
             for t in 0..TRIALS {
                 cases += 1;
                 let mut noise = Noise::new(1000 * bi as u64 + t + (r as u64) * 7);
@@ -51,22 +85,40 @@ fn distant_pillars_are_single_circles() {
                     .iter()
                     .filter(|f| f.last() >= first && f.first() <= last)
                     .collect();
-                let ok = match over.as_slice() {
-                    [Feature::Circle(c)] => {
-                        let (cx, cy) = (dist * bearing.cos(), dist * bearing.sin());
-                        let centre = (f64::from(c.center.x) - cx).hypot(f64::from(c.center.y) - cy);
-                        let covered =
-                            usize::from(c.last).min(last) + 1 - usize::from(c.first).max(first);
-                        covered * 5 >= (last + 1 - first) * 4
-                            && centre < 0.3 * r
-                            && (f64::from(c.radius) - r).abs() < 0.3 * r
+                // Everything else is the wall behind (x = 7900): lines whose ends are on it.
+                let on_wall = |f: &Feature| match f {
+                    Feature::Line(l) => {
+                        (f64::from(l.start.x) - 7900.0).abs() < 4.0 * SIGMA + 1.0
+                            && (f64::from(l.end.x) - 7900.0).abs() < 4.0 * SIGMA + 1.0
                     }
-                    _ => false,
+                    Feature::Circle(_) => false,
                 };
+                let extras = ex.features().len() - over.len();
+                let no_spurious = extras <= 2
+                    && ex
+                        .features()
+                        .iter()
+                        .filter(|f| !(f.last() >= first && f.first() <= last))
+                        .all(on_wall);
+                let ok = no_spurious
+                    && match over.as_slice() {
+                        [Feature::Circle(c)] => {
+                            let covered =
+                                usize::from(c.last).min(last) + 1 - usize::from(c.first).max(first);
+                            covered * 5 >= (last + 1 - first) * 4
+                                && (f64::from(c.center.x) - cx).abs() < 4.0 * sd[0]
+                                && (f64::from(c.center.y) - cy).abs() < 4.0 * sd[1]
+                                && (f64::from(c.radius) - r).abs() < 4.0 * sd[2]
+                        }
+                        _ => false,
+                    };
                 if !ok {
                     failures.push(format!(
-                        "R {r} at {dist} mm, bearing {bearing}, beams {first}..={last}, trial {t}: {:?}",
-                        over.iter().map(|f| (matches!(f, Feature::Circle(_)), f.first(), f.last())).collect::<Vec<_>>()
+                        "R {r} at {dist} mm, bearing {bearing}, beams {first}..={last}, CRB σ {sd:.1?}, trial {t}: {:?}",
+                        ex.features().iter().map(|f| match f {
+                            Feature::Circle(c) => format!("circle {}..={} ({:.1}, {:.1}) R {:.1}", c.first, c.last, c.center.x, c.center.y, c.radius),
+                            Feature::Line(l) => format!("line {}..={} ({:.0}, {:.0})–({:.0}, {:.0})", l.first, l.last, l.start.x, l.start.y, l.end.x, l.end.y),
+                        }).collect::<Vec<_>>()
                     ));
                 }
             }

@@ -1,9 +1,14 @@
 // MRPT's CSickLaserSerial (libmrpt-hwdrivers) as an independent LMS200 client for
 // `cargo xtask conformance`: initialises against the device on argv[1] (38400 baud, mm mode,
 // 180 deg / 0.5 deg, as in trace E of lms200-init-traces.md) and prints argv[2] scans, one line
-// each: "SCAN <n> <r0>:<valid0> <r1>:<valid1> ..." with ranges in metres.
+// each: "SCAN <n> <r0>:<valid0> <r1>:<valid1> ..." with ranges in metres, then "BAUD <bps>":
+// the line speed the port was left at (the pty keeps its termios while the emulator holds it).
 #include <mrpt/hwdrivers/CSickLaserSerial.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
+
+#include <fcntl.h>
+#include <termios.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -66,5 +71,16 @@ int main(int argc, char** argv)
 		std::fprintf(stderr, "mrpt_client: %s\n", e.what());
 		return 1;
 	}
+	// The speed MRPT set on the port.
+	const int fd = open(argv[1], O_RDWR | O_NOCTTY | O_NONBLOCK);
+	struct termios t;
+	if (fd < 0 || tcgetattr(fd, &t) != 0)
+	{
+		std::fprintf(stderr, "mrpt_client: cannot read the port's speed\n");
+		return 4;
+	}
+	const speed_t s = cfgetospeed(&t);
+	close(fd);
+	std::printf("BAUD %d\n", s == B9600 ? 9600 : s == B19200 ? 19200 : s == B38400 ? 38400 : s == B500000 ? 500000 : -1);
 	return 0;
 }

@@ -7,7 +7,10 @@
 //! `fuzz/harness`'s `seeds` binary from the protocol test vectors and the real logs in
 //! `../shared/data`. A crash fails the command and names the reproducer in
 //! `fuzz/artifacts/<target>/`; copy it to `fuzz/regressions/<target>/` once fixed so that
-//! `cargo test --manifest-path fuzz/Cargo.toml` replays it forever.
+//! `cargo test --manifest-path fuzz/Cargo.toml` (a step of `cargo xtask test`) replays it
+//! forever. Each target is given both directories: its corpus (where libFuzzer adds what it
+//! finds) and its committed regressions (read only), so every run starts from the inputs that
+//! once crashed.
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -148,6 +151,27 @@ fn seeds(fuzz: &Path) -> Result<()> {
     crate::util::run(&mut c)
 }
 
+/// The corpus directories libFuzzer is given for `target`: the corpus it writes to first,
+/// then the committed regression inputs.
+fn corpus_dirs(fuzz: &Path, target: &str) -> [std::path::PathBuf; 2] {
+    [
+        fuzz.join("corpus").join(target),
+        fuzz.join("regressions").join(target),
+    ]
+}
+
+/// `cargo test` of the fuzz workspace: the harness replays `fuzz/regressions/<target>/` (and
+/// fails when a target has none) and generated seeds, without nightly or libFuzzer.
+pub fn replay_regressions(skips: &Path) -> Result<()> {
+    let mut c = Command::new("cargo");
+    c.args(["test", "--manifest-path"])
+        .arg(root().join("fuzz/Cargo.toml"))
+        .args(["-p", "pfe-fuzz-harness"])
+        .env("PFE_SKIPS_FILE", skips)
+        .env_remove("RUSTFLAGS");
+    crate::util::run(&mut c)
+}
+
 /// Entry point.
 pub fn run_cmd(args: &[String]) -> Result<()> {
     let mut seconds = 60u64;
@@ -185,7 +209,7 @@ pub fn run_cmd(args: &[String]) -> Result<()> {
         let artifacts = fuzz.join("artifacts").join(t);
         std::fs::create_dir_all(&artifacts)?;
         let mut c = fuzz_cmd(&["run", "--fuzz-dir", "fuzz", t]);
-        c.arg(&corpus)
+        c.args(corpus_dirs(&fuzz, t))
             .arg("--")
             .arg(format!("-max_total_time={seconds}"))
             .arg("-print_final_stats=1")
@@ -241,4 +265,33 @@ pub fn run_cmd(args: &[String]) -> Result<()> {
 /// `cargo xtask fuzz` entry point (see the module docs).
 pub fn run(args: &[String]) -> Result<()> {
     run_cmd(args)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{corpus_dirs, TARGETS};
+    use std::path::Path;
+
+    #[test]
+    fn every_target_gets_its_corpus_and_its_regressions() {
+        let fuzz = Path::new("/f");
+        for t in TARGETS {
+            assert_eq!(
+                corpus_dirs(fuzz, t),
+                [
+                    fuzz.join("corpus").join(t),
+                    fuzz.join("regressions").join(t)
+                ]
+            );
+        }
+        // The committed regressions exist for every target (the fuzz harness's test checks
+        // that each holds at least one input).
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
+        for t in TARGETS {
+            assert!(
+                corpus_dirs(&root, t)[1].is_dir(),
+                "fuzz/regressions/{t} is missing"
+            );
+        }
+    }
 }

@@ -8,6 +8,7 @@ mod conformance;
 mod demo;
 mod eval;
 mod fuzz;
+mod mutants;
 mod no_panic;
 mod realdata;
 mod run_qemu;
@@ -29,6 +30,7 @@ const HELP: &str = "cargo xtask <command> [args]
   bench-mcu     instruction counts on mps2-an386 under QEMU (budgets enforced)
   size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
   fuzz          every cargo-fuzz target for --seconds S
+  mutants       cargo-mutants on pfe-core (--firmware: lms and output) [--shard K/N]
   no-panic      firmware build whose link fails if a panic path survives
   run-qemu      firmware in QEMU between a scanner tty/pty and a feature pty (--scanner, --output)
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
@@ -54,6 +56,7 @@ fn main() -> Result<()> {
         "bench-mcu" => bench_mcu::run(rest),
         "size" => size::run(rest),
         "fuzz" => fuzz::run(rest),
+        "mutants" => mutants::run(rest),
         "no-panic" => no_panic::run(rest),
         "soak" => soak::run(rest),
         "realdata" => realdata::run(rest),

@@ -2,7 +2,8 @@
 //!
 //! Installs what it needs (the thumbv7em target; as root, Debian's qemu-system-arm, and
 //! libmrpt-hwdrivers-dev for the conformance step), then: formatting, clippy, rustdoc, the no_std
-//! builds, every host test (unit, integration, doc, the end-to-end QEMU and emulator runs),
+//! builds, every host test (unit, integration, doc, the end-to-end QEMU and emulator runs), the
+//! fuzz targets' bodies over the committed regression inputs and generated seeds,
 //! firmware sizes and their budgets, the instruction-count budget (`cargo xtask bench-mcu`:
 //! counts under `-icount` are deterministic), the host speed against the baselines (`pfe
 //! bench --report-only`: timings depend on the machine, so they are printed, not asserted),
@@ -98,6 +99,21 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
         }
         sh(&mut c)
     })?;
+    step(
+        "pfe-core's micromath build against its error budget",
+        || {
+            sh(cargo()
+                .args(["test", "-p", "pfe-core", "--no-default-features"])
+                .args(["--features", "micromath", "--test", "micromath"]))
+        },
+    )?;
+    step("unit tests of the examples (the demo's checks)", || {
+        sh(cargo().args(["test", "-p", "host-tests", "--examples"]))
+    })?;
+    step(
+        "fuzz regressions and seeds replayed (cargo test --manifest-path fuzz/Cargo.toml)",
+        || crate::fuzz::replay_regressions(skips),
+    )?;
     if quick {
         return Ok(());
     }

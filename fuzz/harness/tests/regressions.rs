@@ -2,35 +2,76 @@
 //! and freshly generated seeds through the fuzz targets' bodies: a fixed crash stays fixed.
 use std::path::{Path, PathBuf};
 
-fn replay(dir: &Path) -> usize {
-    let mut n = 0;
-    for target in ["lms_decoder", "extractor", "readers", "frame_decoder"] {
-        let Ok(entries) = std::fs::read_dir(dir.join(target)) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let data = std::fs::read(e.path()).unwrap();
-            eprintln!("{target}: {}", e.path().display());
-            match target {
-                "lms_decoder" => drop(pfe_fuzz_harness::lms_decoder(&data)),
-                "extractor" => drop(pfe_fuzz_harness::extractor(&data)),
-                "readers" => drop(pfe_fuzz_harness::readers(&data)),
-                _ => drop(pfe_fuzz_harness::frame_decoder(&data)),
-            }
-            n += 1;
-        }
+/// The fuzz targets (as `xtask::fuzz::TARGETS`).
+const TARGETS: [&str; 4] = ["lms_decoder", "extractor", "readers", "frame_decoder"];
+
+/// Runs one input through a target's body (its assertions are the checks).
+fn run_target(target: &str, data: &[u8]) {
+    match target {
+        "lms_decoder" => drop(pfe_fuzz_harness::lms_decoder(data)),
+        "extractor" => drop(pfe_fuzz_harness::extractor(data)),
+        "readers" => drop(pfe_fuzz_harness::readers(data)),
+        "frame_decoder" => drop(pfe_fuzz_harness::frame_decoder(data)),
+        other => panic!("unknown fuzz target {other}"),
     }
-    n
+}
+
+/// Replays every file of `dir/<target>/` for each target; returns the count per target.
+/// A missing directory counts 0.
+fn replay(dir: &Path) -> Vec<(&'static str, usize)> {
+    TARGETS
+        .iter()
+        .map(|&target| {
+            let mut n = 0;
+            if let Ok(entries) = std::fs::read_dir(dir.join(target)) {
+                let mut paths: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
+                paths.sort();
+                for p in paths.iter().filter(|p| p.is_file()) {
+                    let data = std::fs::read(p).unwrap();
+                    eprintln!("{target}: {}", p.display());
+                    run_target(target, &data);
+                    n += 1;
+                }
+            }
+            (target, n)
+        })
+        .collect()
+}
+
+/// Targets without a single input in `counts`.
+fn empty_targets(counts: &[(&'static str, usize)]) -> Vec<&'static str> {
+    counts.iter().filter(|c| c.1 == 0).map(|c| c.0).collect()
 }
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// Every target has committed inputs (at least its minimized seeds; fixed crashes are added by
+/// `cargo xtask fuzz`'s instructions) and every one of them passes the target's checks.
 #[test]
 fn committed_regressions_pass() {
-    let n = replay(&fuzz_dir().join("regressions"));
-    eprintln!("{n} regression inputs replayed");
+    let counts = replay(&fuzz_dir().join("regressions"));
+    eprintln!("regression inputs replayed: {counts:?}");
+    let empty = empty_targets(&counts);
+    assert!(
+        empty.is_empty(),
+        "fuzz/regressions/<target>/ is missing or empty for {empty:?}: commit at least one input each"
+    );
+}
+
+/// The replay counts a target with no directory as empty (so the test above fails for it).
+#[test]
+fn a_missing_regressions_directory_is_empty() {
+    let dir = std::env::temp_dir().join(format!("pfe-regr-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("readers")).unwrap();
+    std::fs::write(dir.join("readers/one"), b"\x001,2,3\n").unwrap();
+    let counts = replay(&dir);
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(
+        empty_targets(&counts),
+        ["lms_decoder", "extractor", "frame_decoder"]
+    );
 }
 
 #[test]
@@ -46,7 +87,8 @@ fn generated_seeds_pass_and_decode() {
     let out = std::env::temp_dir().join(format!("pfe-seeds-{}", std::process::id()));
     let files = pfe_fuzz_harness::seeds::generate(&out, &shared).unwrap();
     assert!(files >= 20, "{files} seed files");
-    assert_eq!(replay(&out), files);
+    let replayed: usize = replay(&out).iter().map(|c| c.1).sum();
+    assert_eq!(replayed, files);
     // The protocol vectors decode as telegrams.
     let vectors = pfe_fuzz_harness::seeds::protocol_vectors(&shared.join("docs")).unwrap();
     assert_eq!(vectors.len(), 21);

@@ -550,5 +550,29 @@ fn demo(o: &Opts) -> Result<()> {
             s.run.stderr
         );
     }
+    identical(equal, compared, worst_ulps)
+}
+
+/// The demo's claim, "N/N scans bit-identical" (firmware under QEMU against host pfe-core on
+/// the same B0 values), enforced: at least one scan compared and every compared scan equal.
+fn identical(equal: usize, compared: usize, worst_ulps: u32) -> Result<()> {
+    if compared == 0 {
+        bail!("no scan was compared with host pfe-core (every telegram damaged?)");
+    }
+    if equal != compared {
+        bail!(
+            "firmware and host pfe-core differ: {equal}/{compared} scans bit-identical (worst difference {worst_ulps} ulp)"
+        );
+    }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_demo_fails_unless_every_compared_scan_is_identical() {
+        assert!(super::identical(10, 10, 0).is_ok());
+        assert!(super::identical(9, 10, 3).is_err());
+        assert!(super::identical(0, 0, 0).is_err());
+    }
 }

@@ -14,6 +14,7 @@
 pub mod link;
 pub mod serve;
 pub mod source;
+pub mod telegram;
 
 pub use link::{HostPort, Link, LinkClock, LinkDelay, LinkError};
 pub use serve::{serve_pty, serve_tcp, serve_tcp_with, RunLimits};
@@ -22,9 +23,7 @@ pub use source::{RangeSource, RoomSource, SourceKind, TaggedSource};
 use std::collections::VecDeque;
 
 use firmware::lms::command::{code as ccode, mode as cmode, PASSWORD};
-use firmware::lms::frame::{
-    encode_telegram, Decoder, Event, ACK, DEVICE_ADDRESS, HOST_ADDRESS, MAX_TELEGRAM, NAK,
-};
+use firmware::lms::frame::{Decoder, Event, ACK, HOST_ADDRESS, MAX_TELEGRAM, NAK};
 use firmware::lms::reply::{code as rcode, status_offset, ConfigBlock};
 use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
 use rand::{Rng, SeedableRng};
@@ -300,11 +299,9 @@ impl Emulator {
     fn reply(&mut self, at: u64, payload: &[u8]) -> u64 {
         let mut p = payload.to_vec();
         p.push(self.cfg.status);
-        let mut buf = [0u8; MAX_TELEGRAM];
-        let Ok(n) = encode_telegram(DEVICE_ADDRESS, &p, &mut buf) else {
+        let Some(mut t) = telegram::device_telegram(&p) else {
             return at;
         };
-        let mut t = buf.get(..n).unwrap_or(&[]).to_vec();
         if self.cfg.faults.damage_replies && self.damage(&mut t) {
             self.report.damaged_replies += 1;
         }
@@ -523,8 +520,7 @@ impl Emulator {
             p.push(seq as u8);
         }
         p.push(self.cfg.status);
-        let mut buf = [0u8; MAX_TELEGRAM + 8];
-        let len = encode_telegram(DEVICE_ADDRESS, &p, &mut buf).unwrap_or(0);
+        let t = telegram::device_telegram(&p).unwrap_or_default();
         self.report.scans.push(SentScan {
             seq,
             words,
@@ -533,7 +529,7 @@ impl Emulator {
             mode,
             damaged: false,
         });
-        (buf.get(..len).unwrap_or(&[]).to_vec(), seq)
+        (t, seq)
     }
 
     /// Applies at most one damaging fault to telegram `t`; true when it was damaged.
