@@ -40,7 +40,7 @@ impl Reader {
 pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> {
     let mut t = text.split_ascii_whitespace();
     let _topic = t.next();
-    let _stamp: f64 = number(line, "stamp", t.next())?;
+    let stamp: f64 = number(line, "stamp", t.next())?;
     let angle_min: f32 = number(line, "angle_min", t.next())?;
     let angle_inc: f32 = number(line, "angle_increment", t.next())?;
     let range_min: f32 = number(line, "range_min", t.next())?;
@@ -82,7 +82,9 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
         angle_step: angle_inc,
         r_max: hi,
     };
-    checked_record(line, id, geometry, ranges)
+    let mut record = checked_record(line, id, geometry, ranges)?;
+    record.time = Some(stamp).filter(|s| s.is_finite());
+    Ok(record)
 }
 
 impl Iterator for Reader {
@@ -98,5 +100,18 @@ impl Iterator for Reader {
             Err(_) => self.lines.stop(),
         }
         Some(r)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_line;
+
+    #[test]
+    fn the_stamp_is_kept_as_the_scan_time() {
+        let r = parse_line(1, 0, "/scan 1483992048.5 -0.1 0.1 0.02 5.6 3 1.0 1.0 1.0")
+            .expect("a valid line");
+        assert_eq!(r.time, Some(1_483_992_048.5));
+        assert_eq!(r.pose, None);
     }
 }
