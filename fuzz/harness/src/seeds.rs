@@ -235,6 +235,8 @@ pub fn generate(out: &Path, shared: &Path) -> io::Result<usize> {
             Format::Carmen => 1,
             Format::Hokuyo => 2,
             Format::Lms200 => 3,
+            // Bags are binary containers, read by path: not a text reader's seed.
+            Format::Mcap => continue,
         };
         put(
             "readers",
