@@ -55,8 +55,14 @@ fn ray_line_intersection_is_the_signed_distance_along_the_ray() {
         );
         assert!((px * alpha.cos() + py * alpha.sin() - rho).abs() < 1e-2);
     }
-    // A ray along the line meets it nowhere.
+    // A ray along the line meets it nowhere; "parallel" is |d·n| < 10⁻⁶ (documented bound).
     assert!(ray_line_intersection(Point::new(0.0, 0.0), 0.0, 1.0, 0.0, 1000.0).is_none());
+    assert!(ray_line_intersection(Point::new(0.0, 0.0), 1e-7, 1.0, 0.0, 1000.0).is_none());
+    let edge = ray_line_intersection(Point::new(0.0, 0.0), 1e-6, 1.0, 0.0, 1.0);
+    assert!(
+        edge.is_some_and(|(t, dn)| dn == 1e-6 && (t - 1e6).abs() < 1.0),
+        "{edge:?}"
+    );
 }
 
 /// Independent f64 prediction: the principal axis of the window, its intersection with the
@@ -542,4 +548,75 @@ fn arcs_continue_as_one_circle() {
             );
         }
     }
+}
+
+#[test]
+fn lms200_variants_have_their_field_and_resolution() {
+    use std::f32::consts::PI;
+    for (field, res) in [
+        (180.0f32, 0.5f32),
+        (100.0, 0.25),
+        (180.0, 1.0),
+        (100.0, 1.0),
+    ] {
+        let g = ScanGeometry::lms200(field, res);
+        assert!(
+            (g.start_angle - (-field / 2.0).to_radians()).abs() < 1e-6,
+            "{g:?}"
+        );
+        assert!((g.angle_step - res.to_radians()).abs() < 1e-7, "{g:?}");
+        let beams = (field / res) as usize;
+        assert!((g.bearing(beams) - (field / 2.0).to_radians()).abs() < 1e-5);
+        assert_eq!(g.r_max, 8000.0);
+    }
+    let d = ScanGeometry::lms200(180.0, 0.5);
+    assert!((d.angle_step - ScanGeometry::LMS200_180_050.angle_step).abs() < 1e-7);
+    assert!((d.start_angle + PI / 2.0).abs() < 1e-6);
+}
+
+#[test]
+fn ray_circle_intersection_from_outside_and_inside() {
+    use pfe_core::geometry::ray_circle_intersection;
+    let c = Point::new(3000.0, 400.0);
+    let r = 500.0f64;
+    for (origin, bearing) in [
+        ((0.0f64, 0.0f64), 0.1f64),
+        ((100.0, -50.0), 0.2),
+        ((3100.0, 300.0), 1.0),
+        ((2900.0, 500.0), -2.5),
+    ] {
+        let (dx, dy) = (bearing.cos(), bearing.sin());
+        // f64: |o + t d − c| = r, nearest t > 0.
+        let (ox, oy) = (origin.0 - 3000.0, origin.1 - 400.0);
+        let b = -(dx * ox + dy * oy);
+        let disc = b * b - (ox * ox + oy * oy - r * r);
+        let want = if disc < 0.0 {
+            None
+        } else if b - disc.sqrt() > 0.0 {
+            Some(b - disc.sqrt())
+        } else if b + disc.sqrt() > 0.0 {
+            Some(b + disc.sqrt())
+        } else {
+            None
+        };
+        let got = ray_circle_intersection(
+            Point::new(origin.0 as f32, origin.1 as f32),
+            dx as f32,
+            dy as f32,
+            c,
+            r as f32,
+        );
+        match (got, want) {
+            (Some(g), Some(w)) => close(f64::from(g), w, 1e-5, &format!("{origin:?} {bearing}")),
+            (None, None) => {}
+            other => panic!("{origin:?} at {bearing}: {other:?}"),
+        }
+    }
+    // A ray from inside leaves through the far side; one pointing away from the circle misses.
+    let inside = ray_circle_intersection(Point::new(3000.0, 400.0), 1.0, 0.0, c, 500.0);
+    assert!(
+        inside.is_some_and(|t| (t - 500.0).abs() < 1e-3),
+        "{inside:?}"
+    );
+    assert!(ray_circle_intersection(Point::new(0.0, 0.0), -1.0, 0.0, c, 500.0).is_none());
 }
