@@ -4,23 +4,12 @@
 
 use std::f64::consts::PI;
 use std::io::Write;
-use std::path::PathBuf;
 use std::process::{Command, Output};
 
 use serde_json::Value;
 
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn pfe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod common;
+use common::{fixture, pfe};
 
 fn extract(format: &str, config: &str, file: &str) -> Output {
     let path = fixture(file);

@@ -3,25 +3,14 @@
 //! captures, and scans encoded here with the firmware's telegram encoder.
 
 use std::io::BufReader;
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Output;
 
 use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
 use host_tests::formats::lms200::{Reader, Telegram, Unit};
 use serde_json::Value;
 
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn pfe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod common;
+use common::{fixture, pfe};
 
 fn json_lines(out: &Output) -> Vec<Value> {
     String::from_utf8(out.stdout.clone())

@@ -33,18 +33,8 @@ impl Drop for TempDir {
     }
 }
 
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn pfe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+mod common;
+use common::{fixture, pfe};
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
