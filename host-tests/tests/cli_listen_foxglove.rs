@@ -3,6 +3,7 @@
 //! (tungstenite's client side) speaking `foxglove.websocket.v1`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
+mod common;
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpStream;
 use std::path::{Path, PathBuf};
@@ -89,28 +90,10 @@ fn pfe(args: &[&str], input: &Path) -> (i32, String) {
 }
 
 fn read_back(path: &Path) -> Option<Value> {
-    let script =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/foxglove/read_foxglove.py");
-    let skip = |why: String| {
-        host_tests::skip::skip(
-            "cli_listen_foxglove::listen_mcap_reads_back_message_for_message",
-            &format!("{why} (install python3 and `pip install mcap`)"),
-            host_tests::skip::Need::InCi,
-        );
-        None
-    };
-    let out = match Command::new("python3").arg(&script).arg(path).output() {
-        Ok(out) => out,
-        Err(e) => return skip(format!("python3 cannot be run ({e})")),
-    };
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() {
-        if stderr.contains("ModuleNotFoundError") {
-            return skip(format!("the Python package mcap is missing: {stderr}"));
-        }
-        panic!("read_foxglove.py failed: {stderr}");
-    }
-    Some(serde_json::from_slice(&out.stdout).unwrap())
+    common::read_foxglove(
+        "cli_listen_foxglove::listen_mcap_reads_back_message_for_message",
+        path,
+    )
 }
 
 fn near(v: &Value, expected: f64) -> bool {

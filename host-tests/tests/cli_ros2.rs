@@ -9,7 +9,7 @@
 use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use host_tests::skip::{skip, Need};
 use serde_json::Value;
@@ -34,7 +34,7 @@ impl Drop for TempDir {
 }
 
 mod common;
-use common::{fixture, pfe};
+use common::{fixture, pfe, python, read_foxglove};
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
@@ -46,36 +46,6 @@ fn lines(out: &Output) -> Vec<Value> {
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect()
-}
-
-/// Runs a Python fixture script; its JSON output, or `None` after reporting the skip.
-fn python(test: &str, script: &str, args: &[&str], packages: &str) -> Option<Value> {
-    let out = match Command::new("python3")
-        .arg(fixture(script))
-        .args(args)
-        .output()
-    {
-        Ok(out) => out,
-        Err(e) => {
-            let why =
-                format!("python3 cannot be run ({e}); install it and `pip install {packages}`");
-            skip(test, &why, Need::InCi);
-            return None;
-        }
-    };
-    let err = stderr(&out);
-    if !out.status.success() {
-        if err.contains("ModuleNotFoundError") {
-            let why = format!(
-                "the Python packages are missing ({}); `pip install {packages}`",
-                err.lines().last().unwrap_or("")
-            );
-            skip(test, &why, Need::InCi);
-            return None;
-        }
-        panic!("{script} failed: {err}");
-    }
-    Some(serde_json::from_slice(&out.stdout).unwrap())
 }
 
 #[test]
@@ -313,16 +283,6 @@ fn mcap_output_never_replaces_a_file_without_force() {
     assert_eq!(names, ["features.mcap", "one.mcap"]);
 }
 
-/// `read_foxglove.py`'s summary of `path`, or `None` after reporting the skip.
-fn read_back(test: &str, path: &Path) -> Option<Value> {
-    python(
-        test,
-        "foxglove/read_foxglove.py",
-        &[path.to_str().unwrap()],
-        "mcap",
-    )
-}
-
 /// The messages of the Foxglove file: (scan, scene) pairs, in order.
 fn pairs(back: &Value) -> Vec<(&Value, &Value)> {
     let m = back["messages"].as_array().unwrap();
@@ -348,7 +308,7 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let json = lines(&out);
-    let Some(back) = read_back(TEST, &fox) else {
+    let Some(back) = read_foxglove(TEST, &fox) else {
         return;
     };
     let names: Vec<(&str, &str)> = back["channels"]
@@ -402,7 +362,7 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let json = lines(&out);
-    let back = read_back(TEST, &fox).unwrap();
+    let back = read_foxglove(TEST, &fox).unwrap();
     let p = pairs(&back);
     assert_eq!(p.len(), json.len());
     for (k, ((scan, scene), line)) in p.iter().zip(&json).enumerate() {

@@ -3,8 +3,8 @@
 //! by field with what was written. Without python3 or `mcap` it reports a skip through
 //! `host_tests::skip` and passes, except under `CI=true`, where it fails.
 
+mod common;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use host_tests::formats::{self, Format, Record};
 use host_tests::foxglove::{FoxgloveWriter, FEATURES_TOPIC, NO_RETURN_M, SCAN_TOPIC};
@@ -24,27 +24,10 @@ fn records(name: &str, format: Format) -> Vec<Record> {
 }
 
 fn read_back(path: &Path) -> Option<Value> {
-    let script = fixture("foxglove/read_foxglove.py");
-    let skip = |why: String| {
-        host_tests::skip::skip(
-            "foxglove_mcap::foxglove_file_reads_back_message_for_message",
-            &format!("{why} (install python3 and `pip install mcap`)"),
-            host_tests::skip::Need::InCi,
-        );
-        None
-    };
-    let out = match Command::new("python3").arg(&script).arg(path).output() {
-        Ok(out) => out,
-        Err(e) => return skip(format!("python3 cannot be run ({e})")),
-    };
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    if !out.status.success() {
-        if stderr.contains("ModuleNotFoundError") {
-            return skip(format!("the Python package mcap is missing: {stderr}"));
-        }
-        panic!("read_foxglove.py failed: {stderr}");
-    }
-    Some(serde_json::from_slice(&out.stdout).unwrap())
+    common::read_foxglove(
+        "foxglove_mcap::foxglove_file_reads_back_message_for_message",
+        path,
+    )
 }
 
 fn f(v: &Value) -> f64 {
