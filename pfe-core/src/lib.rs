@@ -69,5 +69,5 @@ pub use fit::circle::{
 pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
 pub use preprocess::correction::RangeCorrection;
-pub use preprocess::deskew::Motion;
+pub use preprocess::deskew::{BeamTiming, Motion};
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

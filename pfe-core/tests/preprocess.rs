@@ -1,7 +1,9 @@
 //! Range correction and motion de-skew against analytic truth.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
-use pfe_core::{Config, Extractor, Feature, Motion, RangeCorrection, Scan, ScanGeometry};
+use pfe_core::{
+    BeamTiming, Config, Extractor, Feature, Motion, RangeCorrection, Scan, ScanGeometry,
+};
 
 /// A smooth systematic error like the LMS200's (±15 mm over 8 m).
 fn bias(r: f64) -> f64 {
@@ -89,26 +91,8 @@ fn deskew_puts_a_moving_scan_back_on_the_wall() {
     // The robot drives at 1 m/s and turns at 1 rad/s during a scan of 361 beams taken 26.7 µs
     // apart... times 100 to make the skew large (0.96 s): 0.96 m and 55°.
     let g = ScanGeometry::LMS200_180_050;
-    let m = Motion {
-        v: 1000.0,
-        omega: 1.0,
-        beam_dt: 0.002_666,
-    };
-    // Wall x = 4000 in the frame of beam 0. Beam i is taken from pose(i).
-    let ranges: Vec<f32> = (0..361)
-        .map(|i| {
-            let p = m.pose(i);
-            let b = g.bearing(i) + p.theta;
-            let (dx, dy) = (b.cos(), b.sin());
-            let t = (4000.0 - p.origin.x) / dx;
-            let y = p.origin.y + t * dy;
-            if dx > 0.1 && t > 0.0 && y.abs() < 3000.0 {
-                t
-            } else {
-                f32::NAN
-            }
-        })
-        .collect();
+    let m = Motion::uniform(1000.0, 1.0, 0.002_666);
+    let ranges = wall_seen_moving(g, &m, 4000.0);
     let mut ex = Extractor::<361, 8>::new();
     ex.extract(
         &Scan::from_mm(g, &ranges).with_motion(m),
@@ -130,4 +114,101 @@ fn deskew_puts_a_moving_scan_back_on_the_wall() {
         Feature::Circle(_) => true,
     });
     assert!(off, "{:?}", ex.features());
+}
+
+/// Ranges of the wall `x = wall` (frame of beam 0, |y| < 3 m) seen by the beams of `g`, each
+/// from the pose `m` gives it (exact ray–line intersection).
+fn wall_seen_moving(g: ScanGeometry, m: &Motion, wall: f32) -> Vec<f32> {
+    (0..361)
+        .map(|i| {
+            let p = m.pose(i);
+            let b = g.bearing(i) + p.theta;
+            let (dx, dy) = (b.cos(), b.sin());
+            let t = (wall - p.origin.x) / dx;
+            let y = p.origin.y + t * dy;
+            if dx > 0.1 && t > 0.0 && y.abs() < 3000.0 {
+                t
+            } else {
+                f32::NAN
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn beam_timing_of_interleaved_sweeps() {
+    let turn = 1.0 / 75.0;
+    let deg = turn / 360.0;
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-9;
+    // 1°: one sweep, 1° apart.
+    let t = BeamTiming::lms2xx(1.0);
+    assert_eq!(t.sweep_count(), 1);
+    assert!(close(t.time(7), 7.0 * deg));
+    // 0.5°: even beams in the first turn, odd ones a turn later.
+    let t = BeamTiming::lms2xx(0.5);
+    assert_eq!((t.sweep_count(), t.sweep(6), t.sweep(7)), (2, 0, 1));
+    assert!(close(t.time(6), 3.0 * deg) && close(t.time(7), turn + 3.0 * deg));
+    // 0.25°: four sweeps, beam i in sweep i mod 4.
+    let t = BeamTiming::lms2xx(0.25);
+    assert_eq!((t.sweep_count(), t.sweep(11)), (4, 3));
+    assert!(close(t.time(11), 3.0 * turn + 2.0 * deg));
+    // Zero sweeps count as one; a NaN time is not valid.
+    let t = BeamTiming::interleaved(0, 1.0, 0.5);
+    assert!(close(t.time(3), 1.5) && t.is_valid());
+    assert!(!BeamTiming::uniform(f32::NAN).is_valid());
+    assert!(!Motion {
+        v: 1.0,
+        omega: 0.0,
+        timing: BeamTiming::interleaved(2, f32::INFINITY, 0.1)
+    }
+    .is_valid());
+}
+
+#[test]
+fn deskew_with_interleaved_timing_puts_both_sweeps_on_the_wall() {
+    // 0.5° LMS200 on a robot at 0.6 m/s turning at 0.45 rad/s: the odd sweep is taken 8 mm
+    // further and 6 mrad turned (30 mm sideways at 5 m).
+    let g = ScanGeometry::LMS200_180_050;
+    let m = Motion {
+        v: 600.0,
+        omega: 0.45,
+        timing: BeamTiming::lms2xx(0.5),
+    };
+    let ranges = wall_seen_moving(g, &m, 5000.0);
+    let mut ex = Extractor::<361, 8>::new();
+    ex.extract(
+        &Scan::from_mm(g, &ranges).with_motion(m),
+        &Config::default(),
+    )
+    .unwrap();
+    let [Feature::Line(l)] = ex.features() else {
+        panic!("{:?}", ex.features())
+    };
+    assert!(
+        (l.rho - 5000.0).abs() < 1.0 && l.alpha.abs() < 1e-3,
+        "{l:?}"
+    );
+    // Every point of both sweeps on the wall.
+    let worst = ex
+        .points()
+        .iter()
+        .filter(|p| p.is_valid())
+        .map(|p| (p.x - 5000.0).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 0.5, "{worst} mm");
+    // The same motion taken as one sweep (beam i at i × 26.7 ms / 361) leaves the odd beams
+    // off the wall.
+    let uniform = Motion::uniform(600.0, 0.45, 2.0 * BeamTiming::LMS2XX_TURN / 361.0);
+    ex.extract(
+        &Scan::from_mm(g, &ranges).with_motion(uniform),
+        &Config::default(),
+    )
+    .unwrap();
+    let worst = ex
+        .points()
+        .iter()
+        .filter(|p| p.is_valid())
+        .map(|p| (p.x - 5000.0).abs())
+        .fold(0.0f32, f32::max);
+    assert!(worst > 10.0, "{worst} mm");
 }

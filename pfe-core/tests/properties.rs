@@ -4,8 +4,8 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use pfe_core::{
-    Config, ExtractError, Extractor, Feature, Motion, RangeCorrection, Scan, ScanGeometry,
-    Threshold,
+    BeamTiming, Config, ExtractError, Extractor, Feature, Motion, RangeCorrection, Scan,
+    ScanGeometry, Threshold,
 };
 use proptest::prelude::*;
 
@@ -117,12 +117,12 @@ proptest! {
 
     #[test]
     fn with_motion_and_correction(ranges in prop::collection::vec(range_value(), 0..361),
-                                  v in any::<f32>(), w in any::<f32>(), dt in any::<f32>(),
+                                  v in any::<f32>(), w in any::<f32>(), dt in any::<f32>(), sweeps in any::<u8>(),
                                   c in prop::array::uniform7(-1e3f32..1e3), cfg in config()) {
         let mut ex = Extractor::<361, 48>::new();
         let corr = RangeCorrection { coeffs: c, scale: 8000.0 };
         let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges)
-            .with_motion(Motion { v, omega: w, beam_dt: dt });
+            .with_motion(Motion { v, omega: w, timing: BeamTiming::interleaved(sweeps, dt * 360.0, dt) });
         let _ = ex.extract(&scan, &cfg.with_correction(corr));
         check_output(&ex, ranges.len());
     }
