@@ -277,6 +277,15 @@ impl Scenario {
     }
 }
 impl SimScan {
+    /// What an extractor may know about how the scan was taken: the odometry (when given) and
+    /// the number of sweeps.
+    pub fn context(&self) -> crate::methods::ScanContext {
+        crate::methods::ScanContext {
+            odometry: self.odometry,
+            sweeps: self.sweeps,
+        }
+    }
+
     /// Cartesian points of the measured ranges (`None`: no return).
     pub fn points(&self) -> Vec<Option<Point>> {
         self.ranges_mm
