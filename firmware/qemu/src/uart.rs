@@ -1,9 +1,12 @@
-//! CMSDK APB UART (ARM's simple UART on the MPS2 boards), polled.
+//! CMSDK APB UART (ARM's simple UART on the MPS2 boards): polled, or with the receive
+//! interrupt ([`crate::scanner_uart`] drains it into the receive ring).
 //!
 //! Registers: DATA +0x0, STATE +0x4 (bit 0 TX full, bit 1 RX full, bits 2/3 TX/RX overrun,
-//! write 1 to clear), CTRL +0x8 (bit 0 TX enable, bit 1 RX enable), INTSTATUS +0xC,
-//! BAUDDIV +0x10. Under QEMU the receiver holds one byte and stops reading the host socket
-//! until the firmware takes it, so polled reception loses nothing (back-pressure).
+//! write 1 to clear), CTRL +0x8 (bit 0 TX enable, bit 1 RX enable, bit 3 RX interrupt
+//! enable), INTSTATUS +0xC (bit 1 RX, write 1 to clear), BAUDDIV +0x10. Under QEMU the
+//! receiver holds one byte and stops reading the host socket until the firmware takes it, so
+//! polled reception loses nothing (back-pressure); with the interrupt the handler takes each
+//! byte at once and the host's bytes arrive as fast as it sends them.
 
 use core::convert::Infallible;
 
@@ -15,12 +18,19 @@ pub const UART1: usize = 0x4000_5000;
 const DATA: usize = 0x0;
 const STATE: usize = 0x4;
 const CTRL: usize = 0x8;
+const INTSTATUS: usize = 0xC;
 const BAUDDIV: usize = 0x10;
 /// APB clock of the UARTs on mps2-an386, Hz.
 const APB_HZ: u64 = 25_000_000;
 const TX_FULL: u32 = 1;
 const RX_FULL: u32 = 2;
 const RX_OVERRUN: u32 = 8;
+/// CTRL: transmitter and receiver enabled.
+const CTRL_TX_RX: u32 = 0b11;
+/// CTRL: receive interrupt enabled.
+const CTRL_RX_INT: u32 = 1 << 3;
+/// INTSTATUS: receive interrupt.
+const INT_RX: u32 = 2;
 
 /// One CMSDK UART.
 pub struct Uart {
@@ -36,13 +46,31 @@ impl Uart {
         let u = Self { base, overruns: 0 };
         // BAUDDIV must be ≥ 16 on the CMSDK UART; the rate itself is not emulated.
         u.write_reg(BAUDDIV, 16);
-        u.write_reg(CTRL, 0b11);
+        u.write_reg(CTRL, CTRL_TX_RX);
         u
+    }
+
+    /// Another handle on the UART at `base`, already enabled by [`Uart::new`] (writes no
+    /// register): to split a UART between an interrupt handler (the receive side) and the
+    /// main loop (the transmit side).
+    pub fn handle(base: usize) -> Self {
+        Self { base, overruns: 0 }
     }
 
     /// Receive overruns seen (bytes lost by the UART itself; none under QEMU).
     pub fn overruns(&self) -> u32 {
         self.overruns
+    }
+
+    /// Raises the receive interrupt (INTSTATUS RX) for every byte received from now on.
+    pub fn listen_rx(&mut self) {
+        self.write_reg(CTRL, CTRL_TX_RX | CTRL_RX_INT);
+    }
+
+    /// Acknowledges the receive interrupt. Do it before draining DATA: a byte that arrives
+    /// during the drain raises it again instead of being left behind.
+    pub fn clear_rx_interrupt(&mut self) {
+        self.write_reg(INTSTATUS, INT_RX);
     }
 
     #[allow(unsafe_code)]
