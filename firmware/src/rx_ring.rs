@@ -198,6 +198,21 @@ impl<'a, const S: usize> RxConsumer<'a, S> {
         }
     }
 
+    /// The driver's blocking read: spins until a byte is in the ring (or a loss is
+    /// reported), then takes what is there, up to `buf.len()` bytes; `Ok(0)` only for an
+    /// empty `buf`. Drivers read after `ready()`, so this hardly ever spins.
+    pub fn read_blocking(&mut self, buf: &mut [u8]) -> Result<usize, RxLoss> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            match self.read(buf)? {
+                0 => core::hint::spin_loop(),
+                n => return Ok(n),
+            }
+        }
+    }
+
     /// Takes what is in the ring, up to `buf.len()` bytes, without waiting.
     pub fn read_available(&mut self, buf: &mut [u8]) -> usize {
         let mut n = 0;

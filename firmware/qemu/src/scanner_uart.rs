@@ -120,15 +120,7 @@ impl embedded_io::ErrorType for ScannerUart {
 impl embedded_io::Read for ScannerUart {
     /// Blocks until a byte is in the ring, then takes what is there (up to `buf.len()`).
     fn read(&mut self, buf: &mut [u8]) -> Result<usize, RxLoss> {
-        if buf.is_empty() {
-            return Ok(0);
-        }
-        loop {
-            match self.ring.read(buf)? {
-                0 => core::hint::spin_loop(),
-                n => return Ok(n),
-            }
-        }
+        self.ring.read_blocking(buf)
     }
 }
 

@@ -15,11 +15,16 @@ pub const UART0: usize = 0x4000_4000;
 /// UART1 (feature output: `-serial` #2).
 pub const UART1: usize = 0x4000_5000;
 
-const DATA: usize = 0x0;
-const STATE: usize = 0x4;
-const CTRL: usize = 0x8;
-const INTSTATUS: usize = 0xC;
-const BAUDDIV: usize = 0x10;
+/// Register offsets.
+#[derive(Clone, Copy)]
+#[repr(usize)]
+enum Reg {
+    Data = 0x0,
+    State = 0x4,
+    Ctrl = 0x8,
+    IntStatus = 0xC,
+    BaudDiv = 0x10,
+}
 /// APB clock of the UARTs on mps2-an386, Hz.
 const APB_HZ: u64 = 25_000_000;
 const TX_FULL: u32 = 1;
@@ -45,8 +50,8 @@ impl Uart {
     pub fn new(base: usize) -> Self {
         let u = Self { base, overruns: 0 };
         // BAUDDIV must be ≥ 16 on the CMSDK UART; the rate itself is not emulated.
-        u.write_reg(BAUDDIV, 16);
-        u.write_reg(CTRL, CTRL_TX_RX);
+        u.write_reg(Reg::BaudDiv, 16);
+        u.write_reg(Reg::Ctrl, CTRL_TX_RX);
         u
     }
 
@@ -64,43 +69,43 @@ impl Uart {
 
     /// Raises the receive interrupt (INTSTATUS RX) for every byte received from now on.
     pub fn listen_rx(&mut self) {
-        self.write_reg(CTRL, CTRL_TX_RX | CTRL_RX_INT);
+        self.write_reg(Reg::Ctrl, CTRL_TX_RX | CTRL_RX_INT);
     }
 
     /// Acknowledges the receive interrupt. Do it before draining DATA: a byte that arrives
     /// during the drain raises it again instead of being left behind.
     pub fn clear_rx_interrupt(&mut self) {
-        self.write_reg(INTSTATUS, INT_RX);
+        self.write_reg(Reg::IntStatus, INT_RX);
     }
 
     #[allow(unsafe_code)]
-    fn read_reg(&self, off: usize) -> u32 {
+    fn read_reg(&self, reg: Reg) -> u32 {
         // SAFETY: `base` is one of the two CMSDK UART blocks of the MPS2 memory map; the
         // registers are 32-bit, aligned, and reads have no side effect except DATA (which
         // takes the received byte, as intended).
-        unsafe { core::ptr::read_volatile((self.base + off) as *const u32) }
+        unsafe { core::ptr::read_volatile((self.base + reg as usize) as *const u32) }
     }
 
     #[allow(unsafe_code)]
-    fn write_reg(&self, off: usize, v: u32) {
+    fn write_reg(&self, reg: Reg, v: u32) {
         // SAFETY: as in `read_reg`.
-        unsafe { core::ptr::write_volatile((self.base + off) as *mut u32, v) }
+        unsafe { core::ptr::write_volatile((self.base + reg as usize) as *mut u32, v) }
     }
 
     /// The next received byte, if one is waiting.
     pub fn try_read_byte(&mut self) -> Option<u8> {
-        let st = self.read_reg(STATE);
+        let st = self.read_reg(Reg::State);
         if st & RX_OVERRUN != 0 {
             self.overruns = self.overruns.saturating_add(1);
-            self.write_reg(STATE, RX_OVERRUN);
+            self.write_reg(Reg::State, RX_OVERRUN);
         }
-        (st & RX_FULL != 0).then(|| self.read_reg(DATA) as u8)
+        (st & RX_FULL != 0).then(|| self.read_reg(Reg::Data) as u8)
     }
 
     /// Sends one byte, waiting while the transmitter is full.
     pub fn write_byte(&mut self, b: u8) {
-        while self.read_reg(STATE) & TX_FULL != 0 {}
-        self.write_reg(DATA, u32::from(b));
+        while self.read_reg(Reg::State) & TX_FULL != 0 {}
+        self.write_reg(Reg::Data, u32::from(b));
     }
 }
 
@@ -137,7 +142,7 @@ impl embedded_io::Read for Uart {
 
 impl embedded_io::ReadReady for Uart {
     fn read_ready(&mut self) -> Result<bool, Infallible> {
-        Ok(self.read_reg(STATE) & RX_FULL != 0)
+        Ok(self.read_reg(Reg::State) & RX_FULL != 0)
     }
 }
 
@@ -150,7 +155,7 @@ impl embedded_io::Write for Uart {
     }
 
     fn flush(&mut self) -> Result<(), Infallible> {
-        while self.read_reg(STATE) & TX_FULL != 0 {}
+        while self.read_reg(Reg::State) & TX_FULL != 0 {}
         Ok(())
     }
 }
@@ -159,7 +164,7 @@ impl embedded_io::Write for Uart {
 /// on a pty sees the rate the firmware chose; on a TCP backend it has no effect.
 impl firmware::lms::SetBaud for Uart {
     fn set_baud(&mut self, baud: u32) -> Result<(), Infallible> {
-        self.write_reg(BAUDDIV, bauddiv(baud));
+        self.write_reg(Reg::BaudDiv, bauddiv(baud));
         Ok(())
     }
 }
