@@ -114,26 +114,35 @@ fn run(scans: u32, slow_ms: u32, every: u32, seed: u64) -> Option<Outcome> {
 
 #[test]
 fn backlog_within_the_ring_loses_nothing() {
-    // 250 ms after every fourth scan: about 960 bytes wait, more than a telegram.
-    let Some(o) = run(12, 250, 4, 300) else {
+    // 250 ms after every fourth scan: about 960 bytes wait, more than a telegram. QEMU runs in
+    // real time: on a loaded host it may be starved long enough to fill the ring anyway. Such
+    // a run must still account for its loss (the invariant: bytes are lost only when the ring
+    // was full, and then counted), but it does not test this case: up to three runs are made
+    // until one keeps its backlog within the ring.
+    for attempt in 0..3u64 {
+        let Some(o) = run(12, 250, 4, 300 + attempt) else {
+            return;
+        };
+        eprintln!("rx account {:?}, telegrams {:?}", o.rx, o.telegrams);
+        assert_eq!(o.rx["capacity"], CAPACITY);
+        assert!(o.rx["peak"] > TELEGRAM, "backlog {} bytes", o.rx["peak"]);
+        if o.rx["peak"] >= CAPACITY {
+            assert!(o.rx["ring_full"] > 0, "a full ring's loss is counted");
+            eprintln!("attempt {attempt}: QEMU was starved and the ring filled; again");
+            continue;
+        }
+        assert_eq!(o.rx["ring_full"], 0);
+        assert_eq!(o.rx["overruns"], 0);
+        assert_eq!(o.rx["scan_errors"], 0);
+        // Scans in = frames out: from the first frame on (a starved QEMU may miss telegrams
+        // while the driver initialises, as the soak allows), frame k is the k-th telegram.
+        let first = o.telegrams[0];
+        assert_eq!(o.telegrams, (first..first + 12).collect::<Vec<_>>());
+        assert_eq!(o.reinits, 0);
+        assert_eq!(o.damage_seen, 0);
         return;
-    };
-    eprintln!("rx account {:?}, telegrams {:?}", o.rx, o.telegrams);
-    assert_eq!(o.rx["capacity"], CAPACITY);
-    assert!(
-        o.rx["peak"] > TELEGRAM && o.rx["peak"] < CAPACITY,
-        "backlog {} bytes: more than a telegram, within the ring",
-        o.rx["peak"]
-    );
-    assert_eq!(o.rx["ring_full"], 0);
-    assert_eq!(o.rx["overruns"], 0);
-    assert_eq!(o.rx["scan_errors"], 0);
-    // Scans in = frames out: from the first frame on (a starved QEMU may miss telegrams
-    // while the driver initialises, as the soak allows), frame k is the k-th telegram.
-    let first = o.telegrams[0];
-    assert_eq!(o.telegrams, (first..first + 12).collect::<Vec<_>>());
-    assert_eq!(o.reinits, 0);
-    assert_eq!(o.damage_seen, 0);
+    }
+    panic!("three runs of 250 ms stalls all filled the 2047-byte ring: the host is too loaded");
 }
 
 #[test]
