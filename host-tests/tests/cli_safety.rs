@@ -1,24 +1,12 @@
 //! The `pfe` CLI never loses a user's data and never prints nonsense without an error: the
 //! emulator's pty link, `record`'s output file, argument and input validation, exit codes.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-fn pfe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-/// A fresh directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pfe-safety-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{fixture, pfe, scratch};
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
@@ -181,29 +169,15 @@ fn b0_count(bytes: &[u8]) -> usize {
 
 #[test]
 fn record_interrupted_keeps_what_it_had() {
-    use host_tests::device::emulator::serve::{serve_on, Pty};
-    use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
+    use common::PtyServer;
+    use host_tests::device::emulator::serve::Pty;
+    use host_tests::device::emulator::{Emulator, EmulatorConfig};
 
     let dir = scratch("rec-int");
     let link = dir.join("lms");
     let out = dir.join("capture.lms");
-    let mut pty = Pty::open(&link).unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let limits = RunLimits {
-        max_time: Some(Duration::from_secs(60)),
-        stop: Some(stop.clone()),
-        ..Default::default()
-    };
-    let emu = std::thread::spawn(move || {
-        serve_on(
-            &mut pty,
-            Emulator::from_config(EmulatorConfig::default()),
-            limits,
-        )
-        .map(|r| (r, pty))
-    });
+    let pty = Pty::open(&link).unwrap();
+    let emu = PtyServer::start(pty, Emulator::from_config(EmulatorConfig::default()));
     let child = Command::new(env!("CARGO_BIN_EXE_pfe"))
         .args([
             "record",
@@ -236,8 +210,7 @@ fn record_interrupted_keeps_what_it_had() {
     assert!(!out.exists(), "the output appears only at the end");
     interrupt(&child);
     let r = child.wait_with_output().unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let _ = emu.join().unwrap().unwrap();
+    let _ = emu.stop();
     assert_eq!(r.status.code(), Some(130), "{}", stderr(&r));
     assert!(stderr(&r).contains("interrupted"), "{}", stderr(&r));
     let bytes = std::fs::read(&out).expect("the capture is kept");
@@ -253,12 +226,6 @@ fn record_interrupted_keeps_what_it_had() {
         .collect();
     assert!(left.is_empty(), "temporary left: {left:?}");
     std::fs::remove_dir_all(&dir).unwrap();
-}
-
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
 }
 
 #[test]

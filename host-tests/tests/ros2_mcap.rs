@@ -20,25 +20,11 @@ use host_tests::methods::{Method, Pfe};
 use pfe_core::{Config, Feature};
 use serde_json::Value;
 
+mod common;
+
+use common::TempDir;
+
 const N_SCANS: usize = 50;
-
-/// A fresh scratch directory, removed when dropped.
-pub struct TempDir(pub PathBuf);
-
-impl TempDir {
-    pub fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("pfe-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        TempDir(d)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn shared_carmen() -> Option<PathBuf> {
     let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen");

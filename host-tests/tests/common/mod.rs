@@ -1,14 +1,45 @@
-//! Helpers shared by the `pfe` CLI tests.
+//! Helpers shared by the host-tests integration tests.
 #![allow(dead_code)]
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use host_tests::device::emulator::serve::{serve_on, Pty};
+use host_tests::device::emulator::{Emulator, EmulatorReport, RunLimits};
 
 /// A file of `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("tests/fixtures")
         .join(name)
+}
+
+/// A fresh, empty directory `pfe-TAG-PID` under the system's temporary directory.
+pub fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pfe-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A [`scratch`] directory, removed when dropped.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    /// A fresh `pfe-TAG-PID` directory.
+    pub fn new(tag: &str) -> Self {
+        TempDir(scratch(tag))
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
 }
 
 /// Runs `pfe ARGS` and returns what it did.
@@ -66,4 +97,30 @@ pub fn read_foxglove(test: &str, path: &std::path::Path) -> Option<serde_json::V
         &[path.to_str().unwrap()],
         "mcap",
     )
+}
+
+/// An emulator served on a pseudo-terminal in its own thread for at most 60 s.
+pub struct PtyServer {
+    stop: Arc<AtomicBool>,
+    thread: JoinHandle<anyhow::Result<(EmulatorReport, Pty)>>,
+}
+
+impl PtyServer {
+    /// Serves `emu` on `pty` until [`PtyServer::stop`].
+    pub fn start(mut pty: Pty, emu: Emulator) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let limits = RunLimits {
+            max_time: Some(Duration::from_secs(60)),
+            stop: Some(stop.clone()),
+            ..Default::default()
+        };
+        let thread = std::thread::spawn(move || serve_on(&mut pty, emu, limits).map(|r| (r, pty)));
+        PtyServer { stop, thread }
+    }
+
+    /// Stops serving; the emulator's report and the pseudo-terminal (kept open until here).
+    pub fn stop(self) -> (EmulatorReport, Pty) {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.join().unwrap().unwrap()
+    }
 }
