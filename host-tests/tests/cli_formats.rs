@@ -57,12 +57,7 @@ fn check_schema(v: &Value) {
     assert_eq!(status.len(), 2);
     assert!(status["error"].is_null() || status["error"].is_string());
     assert!(status["dropped"].is_u64());
-    let marks: Vec<u64> = v["marks"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| m.as_u64().unwrap())
-        .collect();
+    let marks: Vec<u64> = common::u64s(&v["marks"]);
     assert!(marks.windows(2).all(|w| w[0] < w[1]), "marks increasing");
     for f in v["features"].as_array().unwrap() {
         let o = f.as_object().unwrap();

@@ -105,15 +105,7 @@ fn check_scene(d: &Value, k: u32, stamp: u64) {
     for (j, (e, f)) in entities.iter().zip(&features).enumerate() {
         assert_eq!(e["id"], format!("feature-{j}"));
         assert_eq!((&e["timestamp"], &e["frame_id"]), (&t, &json!("laser")));
-        let meta = |key: &str| {
-            e["metadata"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|m| m["key"] == key)
-                .map(|m| m["value"].as_str().unwrap().to_string())
-                .unwrap_or_else(|| panic!("no metadata {key}"))
-        };
+        let meta = |key: &str| common::metadata(e, key);
         assert_eq!(meta("first"), f.first().to_string());
         assert_eq!(meta("last"), f.last().to_string());
         match f {

@@ -41,12 +41,7 @@ fn check_telegram(v: &Value, scan: u64, unit: &str, ranges: &[u64]) {
     assert_eq!(v["scan"].as_u64(), Some(scan));
     assert_eq!(v["unit"], unit);
     assert_eq!(v["status"].as_u64(), Some(0x10));
-    let got: Vec<u64> = v["ranges"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r.as_u64().unwrap())
-        .collect();
+    let got: Vec<u64> = common::u64s(&v["ranges"]);
     assert_eq!(got, ranges);
 }
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 mod common;
-use common::{fixture, scratch};
+use common::{fixture, scratch, stderr};
 
 fn plot(args: &[&str]) -> Output {
     let room = fixture("room.log");
@@ -14,10 +14,6 @@ fn plot(args: &[&str]) -> Output {
         .args(args)
         .output()
         .unwrap()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 /// Every `url(#X)` in `text` names an element `id="X"` defined once.
@@ -82,11 +78,8 @@ fn a_range_past_the_log_keeps_what_it_has_and_says_so() {
     let html = d.join("room.html");
     let out = plot(&["--scans", "1..5", "--html", html.to_str().unwrap()]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("1 of the 5 scans"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("1 of the 5 scans"), "{err}");
     let page = std::fs::read_to_string(&html).unwrap();
     assert_eq!(page.matches("<svg xmlns=").count(), 1);
     assert!(page.contains(r#"min="0" max="0""#));

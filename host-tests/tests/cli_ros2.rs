@@ -17,11 +17,7 @@ use serde_json::Value;
 const N_SCANS: usize = 30;
 
 mod common;
-use common::{fixture, pfe, python, read_foxglove, TempDir};
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use common::{fixture, pfe, python, read_foxglove, stderr, TempDir};
 
 fn lines(out: &Output) -> Vec<Value> {
     String::from_utf8(out.stdout.clone())
@@ -230,11 +226,8 @@ fn a_truncated_bag_prints_its_earlier_scans_then_fails() {
     let whole = write(&dir.0, "whole.mcap", &bytes);
     let out = pfe(&["extract", "--format", "carmen", &whole]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("try --format mcap"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("try --format mcap"), "{err}");
 }
 
 #[test]

@@ -6,11 +6,7 @@ use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{fixture, pfe, scratch};
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+use common::{fixture, pfe, scratch, stderr};
 
 /// Waits until `path` exists (as a link or a file), at most 10 s.
 fn wait_for(path: &Path) {
@@ -33,40 +29,33 @@ fn interrupt(child: &std::process::Child) {
     assert!(ok.success());
 }
 
+/// `pfe emulate --pty PTY --seconds SECONDS`.
+fn emulate(pty: &Path, seconds: &str) -> Output {
+    pfe(&[
+        "emulate",
+        "--pty",
+        pty.to_str().unwrap(),
+        "--seconds",
+        seconds,
+    ])
+}
+
 #[test]
 fn emulate_refuses_to_replace_a_file_at_its_pty_path() {
     let dir = scratch("emu-file");
     let path = dir.join("notes.txt");
     std::fs::write(&path, "a user's notes").unwrap();
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        path.to_str().unwrap(),
-        "--seconds",
-        "0.2",
-    ]);
+    let out = emulate(&path, "0.2");
     assert!(!out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("not replacing"), "{}", stderr(&out));
     assert_eq!(std::fs::read_to_string(&path).unwrap(), "a user's notes");
     // Nor a link to something else, nor a directory.
     let link = dir.join("link");
     std::os::unix::fs::symlink(&path, &link).unwrap();
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        link.to_str().unwrap(),
-        "--seconds",
-        "0.2",
-    ]);
+    let out = emulate(&link, "0.2");
     assert!(!out.status.success());
     assert_eq!(std::fs::read_link(&link).unwrap(), path);
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        dir.to_str().unwrap(),
-        "--seconds",
-        "0.2",
-    ]);
+    let out = emulate(&dir, "0.2");
     assert!(!out.status.success());
     assert!(dir.is_dir());
     std::fs::remove_dir_all(&dir).unwrap();
@@ -77,13 +66,7 @@ fn emulate_replaces_its_stale_link_and_removes_its_link_on_exit() {
     let dir = scratch("emu-stale");
     let link = dir.join("lms");
     std::os::unix::fs::symlink("/dev/pts/987654", &link).unwrap();
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        link.to_str().unwrap(),
-        "--seconds",
-        "0.3",
-    ]);
+    let out = emulate(&link, "0.3");
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(link.symlink_metadata().is_err(), "link left behind");
     std::fs::remove_dir_all(&dir).unwrap();
@@ -249,7 +232,7 @@ fn sigma_r_must_be_a_positive_finite_noise() {
         }
     }
     // The same arguments with a good σ_r work (so the failures above are σ_r's).
-    let out = pfe(&[
+    let plot = [
         "plot",
         "--format",
         "csv",
@@ -258,19 +241,10 @@ fn sigma_r_must_be_a_positive_finite_noise() {
         "--scan",
         "1",
         "-o",
-    ]);
+    ];
+    let out = pfe(&plot);
     assert_eq!(out.status.code(), Some(2), "-o needs a value");
-    let out = pfe(&[
-        "plot",
-        "--format",
-        "csv",
-        "--sigma-r=0.5",
-        file,
-        "--scan",
-        "1",
-        "-o",
-        svg.to_str().unwrap(),
-    ]);
+    let out = pfe(&[&plot[..], &[svg.to_str().unwrap()]].concat());
     assert!(out.status.success(), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
     let out = pfe(&[
@@ -466,11 +440,8 @@ fn decode_needs_no_format() {
     assert_eq!(String::from_utf8_lossy(&implicit.stdout).lines().count(), 3);
     let out = pfe(&["decode", fixture("room.csv").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("pfe extract --format csv"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("pfe extract --format csv"), "{err}");
 }
 
 #[test]
@@ -509,12 +480,7 @@ fn csv_nan_ranges_are_discontinuities() {
     assert_eq!(a.stdout, b.stdout, "NaN reads as no return (like 0)");
     let first: serde_json::Value =
         serde_json::from_str(String::from_utf8_lossy(&a.stdout).lines().next().unwrap()).unwrap();
-    let marks: Vec<u64> = first["marks"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| m.as_u64().unwrap())
-        .collect();
+    let marks: Vec<u64> = common::u64s(&first["marks"]);
     assert!(
         marks.contains(&29) && marks.contains(&31),
         "the gap splits the wall: {marks:?}"
@@ -557,11 +523,8 @@ fn a_skip_is_listed_and_fails_in_ci() {
     };
     let out = run("false");
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("SKIPPED: demo_test: no widget"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("SKIPPED: demo_test: no widget"), "{err}");
     let listed = std::fs::read_to_string(&file).unwrap();
     assert_eq!(
         listed,

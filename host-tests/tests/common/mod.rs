@@ -50,6 +50,31 @@ pub fn pfe(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// What a run wrote to stderr.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The JSON array `v` of whole numbers.
+pub fn u64s(v: &serde_json::Value) -> Vec<u64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect()
+}
+
+/// The value of `key` in a Foxglove entity's `metadata` list.
+pub fn metadata(entity: &serde_json::Value, key: &str) -> String {
+    entity["metadata"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["key"] == key)
+        .map(|m| m["value"].as_str().unwrap().to_string())
+        .unwrap_or_else(|| panic!("no metadata {key}"))
+}
+
 /// Runs the fixture script `script` (a path under `tests/fixtures`) with `args` and parses its
 /// JSON output; without python3 or its `packages`, reports `test` as skipped (a failure in CI)
 /// and returns `None`.
