@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 mod common;
-use common::{fixture, pfe};
+use common::{fixture, pfe, stderr};
 
 fn extract(format: &str, config: &str, file: &str) -> Output {
     let path = fixture(file);
@@ -176,11 +176,7 @@ fn check_room(scan: &Value, tol_rho: f64, tol_alpha: f64) {
 fn csv_room_walls_at_their_distance() {
     for config in ["paper", "default"] {
         let out = extract("csv", config, "room.csv");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert!(out.status.success(), "{}", stderr(&out));
         let s = scans(&out);
         let ids: Vec<u64> = s.iter().map(|v| v["scan"].as_u64().unwrap()).collect();
         assert_eq!(ids, [1, 2, 7]);
@@ -327,11 +323,7 @@ fn carmen_room_under_both_beam_counts() {
     // Scan 0: 181 beams at −90° + i·1°; scan 1: 180 beams at −90° + i·1° (the +90° beam
     // dropped). A wrong convention tilts the left wall by up to 1°: 17 mrad.
     let out = extract("carmen", "default", "room.log");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let s = scans(&out);
     assert_eq!(s.len(), 2);
     for scan in &s {
@@ -368,11 +360,7 @@ fn cylinder_beams() -> Vec<usize> {
 #[test]
 fn hokuyo_cylinder_found_where_it_is() {
     let out = extract("hokuyo", "default", "cylinder.txt");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let s = scans(&out);
     assert_eq!(s.len(), 2);
     let hit = cylinder_beams();
@@ -431,11 +419,7 @@ fn plot_writes_a_readable_svg() {
         "-o",
         svg.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
     assert!(text.contains("circles/arcs (1)") && text.contains("mark points"));

@@ -10,14 +10,16 @@ use host_tests::formats::lms200::{Reader, Telegram, Unit};
 use serde_json::Value;
 
 mod common;
-use common::{fixture, pfe};
+use common::{fixture, json_lines, pfe, stderr};
 
-fn json_lines(out: &Output) -> Vec<Value> {
-    String::from_utf8(out.stdout.clone())
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
+/// `pfe decode --format lms200 FIXTURE`.
+fn decode(name: &str) -> Output {
+    pfe(&[
+        "decode",
+        "--format",
+        "lms200",
+        fixture(name).to_str().unwrap(),
+    ])
 }
 
 /// The 361 values of lms200-b0-full-180-050-mm.txt: 8191, 8190, 8183, then 1000 + i (the
@@ -47,8 +49,7 @@ fn check_telegram(v: &Value, scan: u64, unit: &str, ranges: &[u64]) {
 
 #[test]
 fn decode_test_vectors() {
-    let path = fixture("lms200-good.bin");
-    let out = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
+    let out = decode("lms200-good.bin");
     assert!(out.status.success());
     let t = json_lines(&out);
     assert_eq!(t.len(), 3);
@@ -65,8 +66,7 @@ fn decode_test_vectors() {
 
 #[test]
 fn damaged_capture_still_decodes_the_good_telegrams() {
-    let path = fixture("lms200-damaged.bin");
-    let out = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
+    let out = decode("lms200-damaged.bin");
     assert!(out.status.success());
     let t = json_lines(&out);
     assert_eq!(t.len(), 3);
@@ -82,6 +82,7 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
         "{stderr}"
     );
     // extract numbers the same scans.
+    let path = fixture("lms200-damaged.bin");
     let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
     assert!(out.status.success());
     let ids: Vec<u64> = json_lines(&out)
@@ -142,11 +143,7 @@ fn extract_wall_in_mm_and_cm() {
     let path = dir.join("wall.bin");
     std::fs::write(&path, &capture).unwrap();
     let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "{}", stderr(&out));
     let scans = json_lines(&out);
     assert_eq!(scans.len(), 2);
     for (scan, tol) in scans.iter().zip([1.0, 10.0]) {

@@ -9,7 +9,6 @@
 use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 use host_tests::skip::{skip, Need};
 use serde_json::Value;
@@ -17,15 +16,7 @@ use serde_json::Value;
 const N_SCANS: usize = 30;
 
 mod common;
-use common::{fixture, pfe, python, read_foxglove, stderr, TempDir};
-
-fn lines(out: &Output) -> Vec<Value> {
-    String::from_utf8(out.stdout.clone())
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
+use common::{fixture, json_lines, pfe, python, read_foxglove, stderr, TempDir};
 
 #[test]
 fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
@@ -51,7 +42,7 @@ fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
         assert!(bag.status.success(), "{name}: {}", stderr(&bag));
         let log = pfe(&["extract", "--format", "carmen", m["log"].as_str().unwrap()]);
         assert!(log.status.success(), "{name}: {}", stderr(&log));
-        let (bag, log) = (lines(&bag), lines(&log));
+        let (bag, log) = (json_lines(&bag), json_lines(&log));
         assert_eq!(bag.len(), N_SCANS, "{name}");
         let stamps = m["stamps_ns"].as_array().unwrap();
         let mut features = 0;
@@ -188,7 +179,7 @@ fn two_laser_topics_are_listed_and_one_is_chosen_with_topic() {
     );
     let rear = pfe(&["extract", "--format", "mcap", "--topic", "/rear/scan", &two]);
     assert!(rear.status.success(), "{}", stderr(&rear));
-    let rear = lines(&rear);
+    let rear = json_lines(&rear);
     assert_eq!(rear.len(), 4);
     assert!(rear.iter().all(|l| l["frame_id"] == "rear"));
     assert_eq!(rear[3]["stamp_ns"], 4_000_000_000u64);
@@ -199,7 +190,7 @@ fn two_laser_topics_are_listed_and_one_is_chosen_with_topic() {
     let one = write(&dir.0, "one.mcap", &bag(&["/scan"], 3));
     let out = pfe(&["extract", "--format", "mcap", &one]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert_eq!(lines(&out).len(), 3);
+    assert_eq!(json_lines(&out).len(), 3);
     let svg = pfe(&["plot", "--format", "mcap", &one, "--scan", "2", "-o", "-"]);
     assert!(svg.status.success(), "{}", stderr(&svg));
     assert!(String::from_utf8_lossy(&svg.stdout).contains("(laser, 3.000000000 s)"));
@@ -212,7 +203,7 @@ fn a_truncated_bag_prints_its_earlier_scans_then_fails() {
     let cut = write(&dir.0, "cut.mcap", &bytes[..bytes.len() / 2]);
     let out = pfe(&["extract", "--format", "mcap", &cut]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
-    let kept = lines(&out);
+    let kept = json_lines(&out);
     assert!(!kept.is_empty() && kept.len() < 40, "{} scans", kept.len());
     assert!(stderr(&out).contains("truncated"), "{}", stderr(&out));
     // Not a bag at all: named, with a hint at the right format.
@@ -283,7 +274,7 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
         fox.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let json = lines(&out);
+    let json = json_lines(&out);
     let Some(back) = read_foxglove(TEST, &fox) else {
         return;
     };
@@ -337,7 +328,7 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
         fox.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let json = lines(&out);
+    let json = json_lines(&out);
     let back = read_foxglove(TEST, &fox).unwrap();
     let p = pairs(&back);
     assert_eq!(p.len(), json.len());

@@ -2,11 +2,11 @@
 //! emulator's pty link, `record`'s output file, argument and input validation, exit codes.
 
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{fixture, pfe, scratch, stderr};
+use common::{fixture, pfe, scratch, spawn_pfe, stderr};
 
 /// Waits until `path` exists (as a link or a file), at most 10 s.
 fn wait_for(path: &Path) {
@@ -76,18 +76,13 @@ fn emulate_replaces_its_stale_link_and_removes_its_link_on_exit() {
 fn emulate_removes_its_link_on_ctrl_c() {
     let dir = scratch("emu-int");
     let link = dir.join("lms");
-    let child = Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args([
-            "emulate",
-            "--pty",
-            link.to_str().unwrap(),
-            "--seconds",
-            "60",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_pfe(&[
+        "emulate",
+        "--pty",
+        link.to_str().unwrap(),
+        "--seconds",
+        "60",
+    ]);
     wait_for(&link);
     assert!(std::fs::read_link(&link).unwrap().starts_with("/dev/pts/"));
     let t0 = Instant::now();
@@ -161,19 +156,11 @@ fn record_interrupted_keeps_what_it_had() {
     let out = dir.join("capture.lms");
     let pty = Pty::open(&link).unwrap();
     let emu = PtyServer::start(pty, Emulator::from_config(EmulatorConfig::default()));
-    let child = Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args([
-            "record",
-            "--port",
-            link.to_str().unwrap(),
-            "--baud",
-            "38400",
-        ])
-        .args(["--scans", "1000000", "-o", out.to_str().unwrap()])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let (link, out_arg) = (link.to_str().unwrap(), out.to_str().unwrap());
+    let record = [
+        "record", "--port", link, "--baud", "38400", "--scans", "1000000",
+    ];
+    let child = spawn_pfe(&[&record[..], &["-o", out_arg]].concat());
     // Wait until the temporary capture holds a few scans (361 words each: ~730 bytes).
     let t0 = Instant::now();
     loop {

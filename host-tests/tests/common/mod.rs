@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -47,6 +47,26 @@ pub fn pfe(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pfe"))
         .args(args)
         .output()
+        .unwrap()
+}
+
+/// A run's stdout read as JSON lines.
+pub fn json_lines(out: &Output) -> Vec<serde_json::Value> {
+    String::from_utf8(out.stdout.clone())
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// Starts `pfe ARGS` with stdin, stdout and stderr piped.
+pub fn spawn_pfe(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
         .unwrap()
 }
 
