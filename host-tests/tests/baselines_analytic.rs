@@ -54,24 +54,24 @@ fn methods() -> Vec<Box<dyn Method>> {
     vec![Box::new(SplitMerge::new()), Box::new(Acf::new())]
 }
 
+/// The extraction's lines and its circles, each in order.
+fn lines_and_circles(e: &Extraction) -> (Vec<pfe_core::LineFeature>, Vec<pfe_core::CircleFeature>) {
+    let (mut lines, mut circles) = (Vec::new(), Vec::new());
+    for f in &e.features {
+        match f {
+            Feature::Line(l) => lines.push(*l),
+            Feature::Circle(c) => circles.push(*c),
+        }
+    }
+    (lines, circles)
+}
+
 fn lines(e: &Extraction) -> Vec<pfe_core::LineFeature> {
-    e.features
-        .iter()
-        .filter_map(|f| match f {
-            Feature::Line(l) => Some(*l),
-            Feature::Circle(_) => None,
-        })
-        .collect()
+    lines_and_circles(e).0
 }
 
 fn circles(e: &Extraction) -> Vec<pfe_core::CircleFeature> {
-    e.features
-        .iter()
-        .filter_map(|f| match f {
-            Feature::Circle(c) => Some(*c),
-            Feature::Line(_) => None,
-        })
-        .collect()
+    lines_and_circles(e).1
 }
 
 fn angle_diff(a: f32, b: f32) -> f32 {
