@@ -56,6 +56,20 @@ pub struct TopicInfo {
 }
 
 impl TopicInfo {
+    /// The topic of `channel`, with `messages` messages.
+    fn of(channel: &mcap::Channel, messages: u64) -> Self {
+        TopicInfo {
+            topic: channel.topic.clone(),
+            schema: channel
+                .schema
+                .as_ref()
+                .map(|s| s.name.clone())
+                .unwrap_or_default(),
+            encoding: channel.message_encoding.clone(),
+            messages,
+        }
+    }
+
     /// True for a CDR-encoded `sensor_msgs/msg/LaserScan` topic.
     pub fn is_laser_scan(&self) -> bool {
         self.schema == LASER_SCAN && self.encoding == "cdr"
@@ -173,15 +187,9 @@ pub fn topics_in<R: Read + Seek>(mut input: R) -> Result<Vec<TopicInfo>, InputEr
             let mut out: Vec<TopicInfo> = summary
                 .channels
                 .values()
-                .map(|c| TopicInfo {
-                    topic: c.topic.clone(),
-                    schema: c
-                        .schema
-                        .as_ref()
-                        .map(|s| s.name.clone())
-                        .unwrap_or_default(),
-                    encoding: c.message_encoding.clone(),
-                    messages: counts.and_then(|m| m.get(&c.id)).copied().unwrap_or(0),
+                .map(|c| {
+                    let messages = counts.and_then(|m| m.get(&c.id)).copied().unwrap_or(0);
+                    TopicInfo::of(c, messages)
                 })
                 .collect();
             out.sort_by(|a, b| a.topic.cmp(&b.topic));
@@ -198,16 +206,7 @@ pub fn topics_in<R: Read + Seek>(mut input: R) -> Result<Vec<TopicInfo>, InputEr
             Ok(m) => {
                 let c = &m.channel;
                 seen.entry(c.topic.clone())
-                    .or_insert_with(|| TopicInfo {
-                        topic: c.topic.clone(),
-                        schema: c
-                            .schema
-                            .as_ref()
-                            .map(|s| s.name.clone())
-                            .unwrap_or_default(),
-                        encoding: c.message_encoding.clone(),
-                        messages: 0,
-                    })
+                    .or_insert_with(|| TopicInfo::of(c, 0))
                     .messages += 1;
             }
             Err(e) if seen.is_empty() => return Err(mcap_error(consumed.get(), e)),
