@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 mod common;
-use common::{fixture, pfe, stderr};
+use common::{arg, fixture, pfe, stderr};
 
 fn extract(format: &str, config: &str, file: &str) -> Output {
     let path = fixture(file);
@@ -19,7 +19,7 @@ fn extract(format: &str, config: &str, file: &str) -> Output {
         format,
         "--config",
         config,
-        path.to_str().unwrap(),
+        arg(&path),
     ])
 }
 
@@ -269,7 +269,7 @@ fn csv_damage_of_every_kind_is_reported() {
     ] {
         let path = dir.join("damaged.csv");
         std::fs::write(&path, format!("{good}\n{bad}\n{good}\n")).unwrap();
-        let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+        let out = pfe(&["extract", "--format", "csv", arg(&path)]);
         assert_eq!(out.status.code(), Some(2), "{what}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains("line 2"), "{what}: {stderr}");
@@ -279,7 +279,7 @@ fn csv_damage_of_every_kind_is_reported() {
     let path = dir.join("long.csv");
     let long = format!("1,-90,0.05{}\n", ",1000".repeat(3000));
     std::fs::write(&path, long).unwrap();
-    let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "csv", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("2048"));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -298,7 +298,7 @@ fn gzip_is_read_transparently() {
         .unwrap();
     gz.finish().unwrap();
     let plain = extract("csv", "default", "room.csv");
-    let zipped = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    let zipped = pfe(&["extract", "--format", "csv", arg(&path)]);
     assert!(zipped.status.success());
     assert_eq!(plain.stdout, zipped.stdout);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -307,7 +307,7 @@ fn gzip_is_read_transparently() {
 #[test]
 fn unknown_format_and_unreadable_file_exit_2() {
     let path = fixture("room.csv");
-    let out = pfe(&["extract", "--format", "xyz", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "xyz", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("xyz"));
     let out = pfe(&["extract", "--format", "csv", "/nonexistent/scans.csv"]);
@@ -411,13 +411,13 @@ fn plot_writes_a_readable_svg() {
     let path = fixture("cylinder.txt");
     let out = pfe(&[
         "plot",
-        path.to_str().unwrap(),
+        arg(&path),
         "--format",
         "hokuyo",
         "--scan",
         "1",
         "-o",
-        svg.to_str().unwrap(),
+        arg(&svg),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(&svg).unwrap();
@@ -426,13 +426,13 @@ fn plot_writes_a_readable_svg() {
     // A scan that does not exist.
     let out = pfe(&[
         "plot",
-        path.to_str().unwrap(),
+        arg(&path),
         "--format",
         "hokuyo",
         "--scan",
         "5",
         "-o",
-        svg.to_str().unwrap(),
+        arg(&svg),
     ]);
     assert_eq!(out.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -474,7 +474,7 @@ fn hokuyo_non_finite_ranges_are_no_return_and_negative_is_an_error() {
         format!("{line}{}", line.replacen(" 1.0013 ", " -1.0 ", 1)),
     )
     .unwrap();
-    let out = pfe(&["extract", "--format", "hokuyo", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "hokuyo", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(

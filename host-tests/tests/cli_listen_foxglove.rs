@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 mod common;
-use common::scratch;
+use common::{arg, scratch};
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpStream;
 use std::path::Path;
@@ -142,24 +142,24 @@ fn listen_mcap_reads_back_message_for_message() {
     std::fs::write(&input, frames(n)).unwrap();
     let out = d.join("out.mcap");
     let before = now_ns();
-    let (code, err) = pfe(&["--mcap", out.to_str().unwrap()], &input);
+    let (code, err) = pfe(&["--mcap", arg(&out)], &input);
     let after = now_ns();
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("wrote"), "{err}");
     // Never over an existing file without --force; --force replaces it; --scans ends early
     // with a complete file.
-    let (code, err) = pfe(&["--mcap", out.to_str().unwrap()], &input);
+    let (code, err) = pfe(&["--mcap", arg(&out)], &input);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--force"), "{err}");
     let short = d.join("short.mcap");
     std::fs::write(&short, b"mine").unwrap();
-    let (code, err) = pfe(&["--mcap", short.to_str().unwrap(), "--scans", "2"], &input);
+    let (code, err) = pfe(&["--mcap", arg(&short), "--scans", "2"], &input);
     assert_eq!(
         (code, std::fs::read(&short).unwrap()),
         (2, b"mine".to_vec()),
         "{err}"
     );
-    let args = ["--mcap", short.to_str().unwrap(), "--force", "--scans", "2"];
+    let args = ["--mcap", arg(&short), "--force", "--scans", "2"];
     assert_eq!(pfe(&args, &input).0, 0);
 
     let Some(back) = read_back(&out) else {

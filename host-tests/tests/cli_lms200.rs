@@ -10,7 +10,7 @@ use host_tests::formats::lms200::{Reader, Telegram, Unit};
 use serde_json::Value;
 
 mod common;
-use common::{fixture, json_lines, pfe, stderr};
+use common::{arg, fixture, json_lines, pfe, stderr};
 
 /// `pfe decode --format lms200 FIXTURE`.
 fn decode(name: &str) -> Output {
@@ -83,7 +83,7 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
     );
     // extract numbers the same scans.
     let path = fixture("lms200-damaged.bin");
-    let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "lms200", arg(&path)]);
     assert!(out.status.success());
     let ids: Vec<u64> = json_lines(&out)
         .iter()
@@ -95,7 +95,7 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
 #[test]
 fn decode_rejects_other_formats() {
     let path = fixture("room.csv");
-    let out = pfe(&["decode", "--format", "csv", path.to_str().unwrap()]);
+    let out = pfe(&["decode", "--format", "csv", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("lms200"));
 }
@@ -142,7 +142,7 @@ fn extract_wall_in_mm_and_cm() {
     capture.extend(b0(&wall_codes(10.0), Unit::Cm));
     let path = dir.join("wall.bin");
     std::fs::write(&path, &capture).unwrap();
-    let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "lms200", arg(&path)]);
     assert!(out.status.success(), "{}", stderr(&out));
     let scans = json_lines(&out);
     assert_eq!(scans.len(), 2);

@@ -5,12 +5,12 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 mod common;
-use common::{fixture, scratch, stderr};
+use common::{arg, fixture, scratch, stderr};
 
 fn plot(args: &[&str]) -> Output {
     let room = fixture("room.log");
     Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(["plot", "--format", "carmen", room.to_str().unwrap()])
+        .args(["plot", "--format", "carmen", arg(&room)])
         .args(args)
         .output()
         .unwrap()
@@ -33,9 +33,9 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
         "--scans",
         "0..1",
         "--html",
-        html.to_str().unwrap(),
+        arg(&html),
         "--sheet",
-        sheet.to_str().unwrap(),
+        arg(&sheet),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let page = std::fs::read_to_string(&html).unwrap();
@@ -76,7 +76,7 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
 fn a_range_past_the_log_keeps_what_it_has_and_says_so() {
     let d = scratch("past");
     let html = d.join("room.html");
-    let out = plot(&["--scans", "1..5", "--html", html.to_str().unwrap()]);
+    let out = plot(&["--scans", "1..5", "--html", arg(&html)]);
     assert!(out.status.success(), "{}", stderr(&out));
     let err = stderr(&out);
     assert!(err.contains("1 of the 5 scans"), "{err}");
@@ -85,7 +85,7 @@ fn a_range_past_the_log_keeps_what_it_has_and_says_so() {
     assert!(page.contains(r#"min="0" max="0""#));
 
     // No scan in the range, a reversed or oversized range, --scans without a page: exit 2.
-    let none = plot(&["--scans", "7..9", "--html", html.to_str().unwrap()]);
+    let none = plot(&["--scans", "7..9", "--html", arg(&html)]);
     assert_eq!(none.status.code(), Some(2), "{}", stderr(&none));
     assert!(stderr(&none).contains("no scan with an ID in 7..9"));
     for bad in [

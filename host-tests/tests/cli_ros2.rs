@@ -16,7 +16,7 @@ use serde_json::Value;
 const N_SCANS: usize = 30;
 
 mod common;
-use common::{fixture, json_lines, pfe, python, read_foxglove, stderr, TempDir};
+use common::{arg, fixture, json_lines, pfe, python, read_foxglove, stderr, TempDir};
 
 #[test]
 fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
@@ -32,7 +32,7 @@ fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
     }
     let dir = TempDir::new("bags");
     let n = N_SCANS.to_string();
-    let args = [dir.0.to_str().unwrap(), logs.to_str().unwrap(), n.as_str()];
+    let args = [arg(&dir.0), arg(&logs), n.as_str()];
     let Some(manifest) = python(TEST, "ros2/make_bags.py", &args, "mcap mcap-ros2-support") else {
         return;
     };
@@ -160,7 +160,7 @@ fn bag(topics: &[&str], scans: i32) -> Vec<u8> {
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> String {
     let p = dir.join(name);
     std::fs::write(&p, bytes).unwrap();
-    p.to_str().unwrap().to_string()
+    arg(&p).to_string()
 }
 
 #[test]
@@ -208,7 +208,7 @@ fn a_truncated_bag_prints_its_earlier_scans_then_fails() {
     assert!(stderr(&out).contains("truncated"), "{}", stderr(&out));
     // Not a bag at all: named, with a hint at the right format.
     let log = fixture("room.log");
-    let out = pfe(&["extract", "--format", "mcap", log.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "mcap", arg(&log)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(
         stderr(&out).contains("not an MCAP file") && stderr(&out).contains("try --format carmen")
@@ -227,7 +227,7 @@ fn mcap_output_never_replaces_a_file_without_force() {
     let one = write(&dir.0, "one.mcap", &bag(&["/scan"], 3));
     let out_path = dir.0.join("features.mcap");
     std::fs::write(&out_path, b"mine").unwrap();
-    let out_arg = out_path.to_str().unwrap();
+    let out_arg = arg(&out_path);
     let out = pfe(&["extract", "--format", "mcap", &one, "--mcap", out_arg]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("--force"), "{}", stderr(&out));
@@ -265,14 +265,7 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
     // A bag: its stamps and frame.
     let one = write(&dir.0, "one.mcap", &bag(&["/scan"], 5));
     let fox = dir.0.join("bag-features.mcap");
-    let out = pfe(&[
-        "extract",
-        "--format",
-        "mcap",
-        &one,
-        "--mcap",
-        fox.to_str().unwrap(),
-    ]);
+    let out = pfe(&["extract", "--format", "mcap", &one, "--mcap", arg(&fox)]);
     assert!(out.status.success(), "{}", stderr(&out));
     let json = json_lines(&out);
     let Some(back) = read_foxglove(TEST, &fox) else {
@@ -323,9 +316,9 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
         "extract",
         "--format",
         "carmen",
-        room.to_str().unwrap(),
+        arg(&room),
         "--mcap",
-        fox.to_str().unwrap(),
+        arg(&fox),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let json = json_lines(&out);

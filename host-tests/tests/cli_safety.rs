@@ -6,7 +6,7 @@ use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
 mod common;
-use common::{fixture, pfe, scratch, spawn_pfe, stderr};
+use common::{arg, fixture, pfe, scratch, spawn_pfe, stderr};
 
 /// Waits until `path` exists (as a link or a file), at most 10 s.
 fn wait_for(path: &Path) {
@@ -31,13 +31,7 @@ fn interrupt(child: &std::process::Child) {
 
 /// `pfe emulate --pty PTY --seconds SECONDS`.
 fn emulate(pty: &Path, seconds: &str) -> Output {
-    pfe(&[
-        "emulate",
-        "--pty",
-        pty.to_str().unwrap(),
-        "--seconds",
-        seconds,
-    ])
+    pfe(&["emulate", "--pty", arg(&pty), "--seconds", seconds])
 }
 
 #[test]
@@ -76,13 +70,7 @@ fn emulate_replaces_its_stale_link_and_removes_its_link_on_exit() {
 fn emulate_removes_its_link_on_ctrl_c() {
     let dir = scratch("emu-int");
     let link = dir.join("lms");
-    let child = spawn_pfe(&[
-        "emulate",
-        "--pty",
-        link.to_str().unwrap(),
-        "--seconds",
-        "60",
-    ]);
+    let child = spawn_pfe(&["emulate", "--pty", arg(&link), "--seconds", "60"]);
     wait_for(&link);
     assert!(std::fs::read_link(&link).unwrap().starts_with("/dev/pts/"));
     let t0 = Instant::now();
@@ -105,7 +93,7 @@ fn record_never_empties_an_existing_file() {
     let dir = scratch("rec-exists");
     let out = dir.join("take1.lms");
     std::fs::write(&out, b"a user's recording").unwrap();
-    let o = out.to_str().unwrap();
+    let o = arg(&out);
     // Without --force: refused as bad input before the port is touched.
     let r = pfe(&["record", "--port", "/nonexistent/tty", "-o", o]);
     assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
@@ -156,7 +144,7 @@ fn record_interrupted_keeps_what_it_had() {
     let out = dir.join("capture.lms");
     let pty = Pty::open(&link).unwrap();
     let emu = PtyServer::start(pty, Emulator::from_config(EmulatorConfig::default()));
-    let (link, out_arg) = (link.to_str().unwrap(), out.to_str().unwrap());
+    let (link, out_arg) = (arg(&link), arg(&out));
     let record = [
         "record", "--port", link, "--baud", "38400", "--scans", "1000000",
     ];
@@ -201,7 +189,7 @@ fn record_interrupted_keeps_what_it_had() {
 #[test]
 fn sigma_r_must_be_a_positive_finite_noise() {
     let room = fixture("room.csv");
-    let file = room.to_str().unwrap();
+    let file = arg(&room);
     let dir = scratch("sigma");
     let svg = dir.join("p.svg");
     for bad in ["0", "-5", "NaN", "inf", "-inf", "5mm"] {
@@ -209,7 +197,7 @@ fn sigma_r_must_be_a_positive_finite_noise() {
         let plot = ["plot", "--format", "csv", &sigma, file, "--scan", "1", "-o"];
         for args in [
             vec!["extract", "--format", "csv", &sigma, file],
-            [&plot[..], &[svg.to_str().unwrap()]].concat(),
+            [&plot[..], &[arg(&svg)]].concat(),
         ] {
             let out = pfe(&args);
             assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
@@ -231,17 +219,10 @@ fn sigma_r_must_be_a_positive_finite_noise() {
     ];
     let out = pfe(&plot);
     assert_eq!(out.status.code(), Some(2), "-o needs a value");
-    let out = pfe(&[&plot[..], &[svg.to_str().unwrap()]].concat());
+    let out = pfe(&[&plot[..], &[arg(&svg)]].concat());
     assert!(out.status.success(), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
-    let out = pfe(&[
-        "extract",
-        "--format",
-        "csv",
-        "--sigma-r",
-        "0.5",
-        room.to_str().unwrap(),
-    ]);
+    let out = pfe(&["extract", "--format", "csv", "--sigma-r", "0.5", arg(&room)]);
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
@@ -249,7 +230,7 @@ fn sigma_r_must_be_a_positive_finite_noise() {
 fn input_with_no_scan_is_an_error_with_a_hint() {
     let room = fixture("room.csv");
     let capture = fixture("lms200-good.bin");
-    let (room, capture) = (room.to_str().unwrap(), capture.to_str().unwrap());
+    let (room, capture) = (arg(&room), arg(&capture));
     for (args, hint) in [
         (
             vec!["extract", "--format", "carmen", room],
@@ -300,14 +281,14 @@ fn input_with_no_scan_is_an_error_with_a_hint() {
             .collect::<Vec<_>>(),
     )
     .unwrap();
-    let out = pfe(&["extract", "--format", "lms200", junk.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "lms200", arg(&junk)]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("no scan found"), "{}", stderr(&out));
     assert!(stderr(&out).contains("--format"), "{}", stderr(&out));
     // Empty input is not an error (nothing to find).
     let empty = dir.join("empty.csv");
     std::fs::write(&empty, "").unwrap();
-    let out = pfe(&["extract", "--format", "csv", empty.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "csv", arg(&empty)]);
     assert!(out.status.success(), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -334,7 +315,7 @@ fn an_error_quotes_at_most_80_characters_of_the_bad_field() {
     ] {
         let path = dir.join("long.txt");
         std::fs::write(&path, text).unwrap();
-        let out = pfe(&["extract", "--format", format, path.to_str().unwrap()]);
+        let out = pfe(&["extract", "--format", format, arg(&path)]);
         assert_eq!(out.status.code(), Some(2), "{format}: {}", stderr(&out));
         let e = stderr(&out);
         assert!(
@@ -382,13 +363,7 @@ fn every_subcommand_exits_2_on_bad_arguments() {
 #[test]
 fn bench_carmen_must_be_a_directory() {
     let room = fixture("room.log");
-    let out = pfe(&[
-        "bench",
-        "--carmen",
-        room.to_str().unwrap(),
-        "--sim-scans",
-        "1",
-    ]);
+    let out = pfe(&["bench", "--carmen", arg(&room), "--sim-scans", "1"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("not a directory"), "{}", stderr(&out));
 }
@@ -400,7 +375,7 @@ fn plot_to_stdout() {
         "plot",
         "--format",
         "csv",
-        room.to_str().unwrap(),
+        arg(&room),
         "--scan",
         "1",
         "-o",
@@ -420,9 +395,9 @@ fn plot_to_stdout() {
 #[test]
 fn decode_needs_no_format() {
     let path = fixture("lms200-good.bin");
-    let implicit = pfe(&["decode", path.to_str().unwrap()]);
+    let implicit = pfe(&["decode", arg(&path)]);
     assert!(implicit.status.success(), "{}", stderr(&implicit));
-    let explicit = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
+    let explicit = pfe(&["decode", "--format", "lms200", arg(&path)]);
     assert_eq!(implicit.stdout, explicit.stdout);
     assert_eq!(String::from_utf8_lossy(&implicit.stdout).lines().count(), 3);
     let out = pfe(&["decode", fixture("room.csv").to_str().unwrap()]);
@@ -460,9 +435,9 @@ fn csv_nan_ranges_are_discontinuities() {
         format!("1,-30,1,{}\n2,-30,1,{}\n", ranges("0"), ranges("0")),
     )
     .unwrap();
-    let a = pfe(&["extract", "--format", "csv", nan.to_str().unwrap()]);
+    let a = pfe(&["extract", "--format", "csv", arg(&nan)]);
     assert!(a.status.success(), "{}", stderr(&a));
-    let b = pfe(&["extract", "--format", "csv", zero.to_str().unwrap()]);
+    let b = pfe(&["extract", "--format", "csv", arg(&zero)]);
     assert!(b.status.success(), "{}", stderr(&b));
     assert_eq!(a.stdout, b.stdout, "NaN reads as no return (like 0)");
     let first: serde_json::Value =
@@ -482,7 +457,7 @@ fn csv_beams_over_a_full_turn_are_rejected() {
     let ok = format!("1,-180,1{}\n", ",1000".repeat(361));
     let bad = format!("2,-180,1{}\n", ",1000".repeat(362));
     std::fs::write(&path, format!("{ok}{bad}")).unwrap();
-    let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "csv", arg(&path)]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("line 2"), "{}", stderr(&out));
     assert!(stderr(&out).contains("full turn"), "{}", stderr(&out));

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::PtyServer;
+use common::{arg, PtyServer};
 use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
 use host_tests::device::emulator::serve::Pty;
@@ -23,13 +23,13 @@ fn record_over_pty_captures_sent_scans() {
     let emu = PtyServer::start(pty, Emulator::from_config(cfg));
     let args: Vec<String> = [
         "--port",
-        link.to_str().unwrap(),
+        arg(&link),
         "--baud",
         "38400",
         "--scans",
         "4",
         "-o",
-        out.to_str().unwrap(),
+        arg(&out),
     ]
     .iter()
     .map(|s| s.to_string())

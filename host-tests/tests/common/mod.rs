@@ -1,7 +1,7 @@
 //! Helpers shared by the host-tests integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -40,6 +40,11 @@ impl Drop for TempDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// `path` as a command-line argument (test paths are UTF-8).
+pub fn arg(path: &Path) -> &str {
+    path.to_str().unwrap()
 }
 
 /// Runs `pfe ARGS` and returns what it did.
@@ -136,12 +141,7 @@ pub fn python(
 /// `read_foxglove.py`'s summary of the Foxglove file `path` (read by Python's `mcap`), or `None`
 /// after reporting `test` as skipped.
 pub fn read_foxglove(test: &str, path: &std::path::Path) -> Option<serde_json::Value> {
-    python(
-        test,
-        "foxglove/read_foxglove.py",
-        &[path.to_str().unwrap()],
-        "mcap",
-    )
+    python(test, "foxglove/read_foxglove.py", &[arg(path)], "mcap")
 }
 
 /// An emulator served on a pseudo-terminal in its own thread for at most 60 s.
