@@ -23,6 +23,13 @@ fn extract(format: &str, config: &str, file: &str) -> Output {
     ])
 }
 
+/// The scans of `pfe extract` on `name`, which must succeed.
+fn extracted(format: &str, config: &str, name: &str) -> Vec<Value> {
+    let out = extract(format, config, name);
+    assert!(out.status.success(), "{}", stderr(&out));
+    scans(&out)
+}
+
 /// Parses stdout as JSON lines and checks the schema of every object.
 fn scans(out: &Output) -> Vec<Value> {
     let text = String::from_utf8(out.stdout.clone()).unwrap();
@@ -175,9 +182,7 @@ fn check_room(scan: &Value, tol_rho: f64, tol_alpha: f64) {
 #[test]
 fn csv_room_walls_at_their_distance() {
     for config in ["paper", "default"] {
-        let out = extract("csv", config, "room.csv");
-        assert!(out.status.success(), "{}", stderr(&out));
-        let s = scans(&out);
+        let s = extracted("csv", config, "room.csv");
         let ids: Vec<u64> = s.iter().map(|v| v["scan"].as_u64().unwrap()).collect();
         assert_eq!(ids, [1, 2, 7]);
         // 1 mm quantisation: ρ within 1 mm, α within 1 mrad.
@@ -309,12 +314,12 @@ fn unknown_format_and_unreadable_file_exit_2() {
     let path = fixture("room.csv");
     let out = pfe(&["extract", "--format", "xyz", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("xyz"));
+    assert!(stderr(&out).contains("xyz"));
     let out = pfe(&["extract", "--format", "csv", "/nonexistent/scans.csv"]);
     assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("/nonexistent/scans.csv"), "{stderr}");
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("/nonexistent/scans.csv"), "{err}");
     assert!(out.stdout.is_empty());
 }
 
@@ -322,9 +327,7 @@ fn unknown_format_and_unreadable_file_exit_2() {
 fn carmen_room_under_both_beam_counts() {
     // Scan 0: 181 beams at −90° + i·1°; scan 1: 180 beams at −90° + i·1° (the +90° beam
     // dropped). A wrong convention tilts the left wall by up to 1°: 17 mrad.
-    let out = extract("carmen", "default", "room.log");
-    assert!(out.status.success(), "{}", stderr(&out));
-    let s = scans(&out);
+    let s = extracted("carmen", "default", "room.log");
     assert_eq!(s.len(), 2);
     for scan in &s {
         // 10 mm quantisation of the ranges.
@@ -359,9 +362,7 @@ fn cylinder_beams() -> Vec<usize> {
 
 #[test]
 fn hokuyo_cylinder_found_where_it_is() {
-    let out = extract("hokuyo", "default", "cylinder.txt");
-    assert!(out.status.success(), "{}", stderr(&out));
-    let s = scans(&out);
+    let s = extracted("hokuyo", "default", "cylinder.txt");
     assert_eq!(s.len(), 2);
     let hit = cylinder_beams();
     let (h0, h1) = (hit[0] as u64, *hit.last().unwrap() as u64);

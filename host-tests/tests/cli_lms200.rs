@@ -97,7 +97,7 @@ fn decode_rejects_other_formats() {
     let path = fixture("room.csv");
     let out = pfe(&["decode", "--format", "csv", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("lms200"));
+    assert!(stderr(&out).contains("lms200"));
 }
 
 /// A B0 telegram of `codes` in `unit` with status 0x10, encoded by the firmware's encoder.

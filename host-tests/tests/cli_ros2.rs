@@ -120,11 +120,7 @@ float32 range_max\nfloat32[] ranges\nfloat32[] intensities\n";
 /// before `/scan`, or "laser"), stamped 1 s, 2 s, ….
 fn bag(topics: &[&str], scans: i32) -> Vec<u8> {
     let mut out = Cursor::new(Vec::new());
-    let mut w = mcap::WriteOptions::new()
-        .compression(None)
-        .chunk_size(Some(4096))
-        .create(&mut out)
-        .unwrap();
+    let mut w = common::mcap_writer(&mut out, 4096);
     let schema = w
         .add_schema(
             "sensor_msgs/msg/LaserScan",

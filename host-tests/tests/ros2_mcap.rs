@@ -307,11 +307,7 @@ fn cdr_scan(sec: i32, n: usize) -> Vec<u8> {
 /// uncompressed chunks.
 fn rust_bag(laser: bool, scans: i32) -> Vec<u8> {
     let mut out = Cursor::new(Vec::new());
-    let mut w = mcap::WriteOptions::new()
-        .compression(None)
-        .chunk_size(Some(2048))
-        .create(&mut out)
-        .unwrap();
+    let mut w = common::mcap_writer(&mut out, 2048);
     let string = w
         .add_schema("std_msgs/msg/String", "ros2msg", b"string data\n")
         .unwrap();

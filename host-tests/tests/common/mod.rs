@@ -75,6 +75,18 @@ pub fn spawn_pfe(args: &[&str]) -> Child {
         .unwrap()
 }
 
+/// An MCAP writer into `out`, uncompressed, with chunks of `chunk_size` bytes.
+pub fn mcap_writer(
+    out: &mut std::io::Cursor<Vec<u8>>,
+    chunk_size: u64,
+) -> mcap::Writer<&mut std::io::Cursor<Vec<u8>>> {
+    mcap::WriteOptions::new()
+        .compression(None)
+        .chunk_size(Some(chunk_size))
+        .create(out)
+        .unwrap()
+}
+
 /// What a run wrote to stderr.
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
