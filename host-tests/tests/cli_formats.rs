@@ -410,31 +410,17 @@ fn plot_writes_a_readable_svg() {
     std::fs::create_dir_all(&dir).unwrap();
     let svg = dir.join("scan.svg");
     let path = fixture("cylinder.txt");
-    let out = pfe(&[
-        "plot",
-        arg(&path),
-        "--format",
-        "hokuyo",
-        "--scan",
-        "1",
-        "-o",
-        arg(&svg),
-    ]);
+    let plot = |scan| {
+        let args = ["plot", arg(&path), "--format", "hokuyo", "--scan", scan];
+        pfe(&[&args[..], &["-o", arg(&svg)]].concat())
+    };
+    let out = plot("1");
     assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
     assert!(text.contains("circles/arcs (1)") && text.contains("mark points"));
     // A scan that does not exist.
-    let out = pfe(&[
-        "plot",
-        arg(&path),
-        "--format",
-        "hokuyo",
-        "--scan",
-        "5",
-        "-o",
-        arg(&svg),
-    ]);
+    let out = plot("5");
     assert_eq!(out.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).unwrap();
 }

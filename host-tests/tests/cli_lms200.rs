@@ -14,12 +14,7 @@ use common::{arg, fixture, json_lines, pfe, stderr};
 
 /// `pfe decode --format lms200 FIXTURE`.
 fn decode(name: &str) -> Output {
-    pfe(&[
-        "decode",
-        "--format",
-        "lms200",
-        fixture(name).to_str().unwrap(),
-    ])
+    pfe(&["decode", "--format", "lms200", arg(&fixture(name))])
 }
 
 /// The 361 values of lms200-b0-full-180-050-mm.txt: 8191, 8190, 8183, then 1000 + i (the
