@@ -38,10 +38,7 @@ pub struct Args {
 
 /// `pfe bench` from an argument list.
 pub fn cli(args: &[String]) -> anyhow::Result<()> {
-    match super::parse_sub::<Args>("pfe bench", args)? {
-        Some(a) => run(a),
-        None => Ok(()),
-    }
+    super::parse_sub::<Args>("pfe bench", args)?.map_or(Ok(()), run)
 }
 
 /// Runs `pfe bench`.

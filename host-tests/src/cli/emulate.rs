@@ -53,10 +53,7 @@ fn source(s: &str) -> Result<SourceKind, String> {
 
 /// `pfe emulate` from an argument list.
 pub fn cli(args: &[String]) -> Result<()> {
-    match super::parse_sub::<Args>("pfe emulate", args)? {
-        Some(a) => run(a),
-        None => Ok(()),
-    }
+    super::parse_sub::<Args>("pfe emulate", args)?.map_or(Ok(()), run)
 }
 
 /// Runs `pfe emulate`.

@@ -37,10 +37,7 @@ pub struct Args {
 
 /// `pfe record` from an argument list.
 pub fn cli(args: &[String]) -> Result<()> {
-    match super::parse_sub::<Args>("pfe record", args)? {
-        Some(a) => run(a),
-        None => Ok(()),
-    }
+    super::parse_sub::<Args>("pfe record", args)?.map_or(Ok(()), run)
 }
 
 /// Runs `pfe record`.
