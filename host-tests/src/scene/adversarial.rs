@@ -176,26 +176,20 @@ pub fn structured() -> Vec<AdversarialScan> {
         let t = (i % 16) as f32 / 8.0;
         Some(2000.0 + 200.0 * if t < 1.0 { t } else { 2.0 - t })
     });
-    add("401 values at 0.25°", codes, true);
-    add(
-        "401 values at 0.25°",
-        arcs(&g401, 401, 10, 1500.0, 40.0, 1.0),
-        true,
-    );
+    for codes in [codes, arcs(&g401, 401, 10, 1500.0, 40.0, 1.0)] {
+        add("401 values at 0.25°", codes, true);
+    }
     // cm mode: ranges up to 81.82 m (a far wall, arcs far away, jumps across the range).
-    let codes = scan_of(361, 10.0, |i| {
+    let far_wall = scan_of(361, 10.0, |i| {
         wall(&g, i, 30_000.0, 0.0).map(|r| r.min(81_820.0))
     });
-    add("cm mode to 81.82 m", codes, false);
-    add(
-        "cm mode to 81.82 m",
-        arcs(&g, 361, 12, 60_000.0, 3_000.0, 10.0),
-        false,
-    );
-    let codes = scan_of(361, 10.0, |i| {
+    let far_arcs = arcs(&g, 361, 12, 60_000.0, 3_000.0, 10.0);
+    let jumps = scan_of(361, 10.0, |i| {
         Some(if (i / 5) % 2 == 0 { 81_820.0 } else { 20_000.0 })
     });
-    add("cm mode to 81.82 m", codes, false);
+    for codes in [far_wall, far_arcs, jumps] {
+        add("cm mode to 81.82 m", codes, false);
+    }
     // Near-collinear noise: a wall with noise at the edge of the line test, so the cached
     // window keeps failing and is refitted (and arcs, boundaries tried) at many points.
     for amp in [8.0f32, 12.0, 16.0, 24.0] {
