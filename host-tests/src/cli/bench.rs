@@ -44,7 +44,7 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
 /// Runs `pfe bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if args.carmen.exists() && !args.carmen.is_dir() {
-        return Err(super::BadInput(format!(
+        return Err(super::Exit::bad_input(format!(
             "--carmen {}: not a directory (give the folder of CARMEN logs)",
             args.carmen.display()
         ))
