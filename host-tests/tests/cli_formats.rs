@@ -311,8 +311,7 @@ fn gzip_is_read_transparently() {
 
 #[test]
 fn unknown_format_and_unreadable_file_exit_2() {
-    let path = fixture("room.csv");
-    let out = pfe(&["extract", "--format", "xyz", arg(&path)]);
+    let out = pfe(&["extract", "--format", "xyz", arg(&fixture("room.csv"))]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("xyz"));
     let out = pfe(&["extract", "--format", "csv", "/nonexistent/scans.csv"]);

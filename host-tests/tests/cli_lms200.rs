@@ -89,8 +89,7 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
 
 #[test]
 fn decode_rejects_other_formats() {
-    let path = fixture("room.csv");
-    let out = pfe(&["decode", "--format", "csv", arg(&path)]);
+    let out = pfe(&["decode", "--format", "csv", arg(&fixture("room.csv"))]);
     assert_eq!(out.status.code(), Some(2));
     assert!(stderr(&out).contains("lms200"));
 }
