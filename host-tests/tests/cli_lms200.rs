@@ -3,7 +3,6 @@
 //! captures, and scans encoded here with the firmware's telegram encoder.
 
 use std::io::BufReader;
-use std::process::Output;
 
 use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
 use host_tests::formats::lms200::{Reader, Telegram, Unit};
@@ -12,9 +11,11 @@ use serde_json::Value;
 mod common;
 use common::{arg, fixture, json_lines, pfe, stderr};
 
-/// `pfe decode --format lms200 FIXTURE`.
-fn decode(name: &str) -> Output {
-    pfe(&["decode", "--format", "lms200", arg(&fixture(name))])
+/// The telegrams and the stderr of `pfe decode --format lms200 FIXTURE`, which must succeed.
+fn decode(name: &str) -> (Vec<Value>, String) {
+    let out = pfe(&["decode", "--format", "lms200", arg(&fixture(name))]);
+    assert!(out.status.success());
+    (json_lines(&out), stderr(&out))
 }
 
 /// The 361 values of lms200-b0-full-180-050-mm.txt: 8191, 8190, 8183, then 1000 + i (the
@@ -44,14 +45,11 @@ fn check_telegram(v: &Value, scan: u64, unit: &str, ranges: &[u64]) {
 
 #[test]
 fn decode_test_vectors() {
-    let out = decode("lms200-good.bin");
-    assert!(out.status.success());
-    let t = json_lines(&out);
+    let (t, stderr) = decode("lms200-good.bin");
     assert_eq!(t.len(), 3);
     check_telegram(&t[0], 0, "mm", &[1000, 1001, 1002, 1003, 8191]);
     check_telegram(&t[1], 1, "cm", &[100, 200, 300]);
     check_telegram(&t[2], 2, "mm", &full_values());
-    let stderr = String::from_utf8_lossy(&out.stderr);
     // The host command (address 0x00) is skipped: 8 bytes.
     assert!(
         stderr.contains("3 telegrams good, 0 dropped for CRC, 8 bytes skipped"),
@@ -61,15 +59,12 @@ fn decode_test_vectors() {
 
 #[test]
 fn damaged_capture_still_decodes_the_good_telegrams() {
-    let out = decode("lms200-damaged.bin");
-    assert!(out.status.success());
-    let t = json_lines(&out);
+    let (t, stderr) = decode("lms200-damaged.bin");
     assert_eq!(t.len(), 3);
     check_telegram(&t[0], 0, "cm", &[100, 200, 300]);
     // Started inside a telegram that was cut off.
     check_telegram(&t[1], 1, "mm", &[1000, 1001, 1002, 1003, 8191]);
     check_telegram(&t[2], 2, "mm", &full_values());
-    let stderr = String::from_utf8_lossy(&out.stderr);
     // Dropped: the telegram with a flipped bit, the one cut off, the one truncated at the end.
     // Skipped: 4 noise bytes + 20 + 300 + 500.
     assert!(
