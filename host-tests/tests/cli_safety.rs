@@ -31,7 +31,7 @@ fn interrupt(child: &std::process::Child) {
 
 /// `pfe emulate --pty PTY --seconds SECONDS`.
 fn emulate(pty: &Path, seconds: &str) -> Output {
-    pfe(&["emulate", "--pty", arg(&pty), "--seconds", seconds])
+    pfe(&["emulate", "--pty", arg(pty), "--seconds", seconds])
 }
 
 #[test]
