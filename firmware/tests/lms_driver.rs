@@ -7,25 +7,11 @@
     clippy::panic
 )]
 
-use std::cell::Cell;
-use std::rc::Rc;
+mod common;
 
-use firmware::lms::driver::{Clock, Config, Driver, SetBaud};
+use common::Time;
+use firmware::lms::driver::{Config, Driver, SetBaud};
 use firmware::lms::Error;
-
-#[derive(Clone, Default)]
-struct Time(Rc<Cell<u64>>);
-
-impl embedded_hal::delay::DelayNs for Time {
-    fn delay_ns(&mut self, ns: u32) {
-        self.0.set(self.0.get() + u64::from(ns).div_ceil(1000));
-    }
-}
-impl Clock for Time {
-    fn now_ms(&mut self) -> u32 {
-        (self.0.get() / 1000) as u32
-    }
-}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct E;

@@ -54,24 +54,37 @@ fn methods() -> Vec<Box<dyn Method>> {
     vec![Box::new(SplitMerge::new()), Box::new(Acf::new())]
 }
 
+/// What `m` extracts from `r` (noise σ = `sigma`), which must be exactly one feature.
+fn one_feature(m: &mut dyn Method, r: &[f32], sigma: f64) -> Extraction {
+    let e = m.extract(&G, r);
+    assert_eq!(
+        e.features.len(),
+        1,
+        "{} σ={sigma}: {:?}",
+        m.name(),
+        e.features
+    );
+    e
+}
+
+/// The extraction's lines and its circles, each in order.
+fn lines_and_circles(e: &Extraction) -> (Vec<pfe_core::LineFeature>, Vec<pfe_core::CircleFeature>) {
+    let (mut lines, mut circles) = (Vec::new(), Vec::new());
+    for f in &e.features {
+        match f {
+            Feature::Line(l) => lines.push(*l),
+            Feature::Circle(c) => circles.push(*c),
+        }
+    }
+    (lines, circles)
+}
+
 fn lines(e: &Extraction) -> Vec<pfe_core::LineFeature> {
-    e.features
-        .iter()
-        .filter_map(|f| match f {
-            Feature::Line(l) => Some(*l),
-            Feature::Circle(_) => None,
-        })
-        .collect()
+    lines_and_circles(e).0
 }
 
 fn circles(e: &Extraction) -> Vec<pfe_core::CircleFeature> {
-    e.features
-        .iter()
-        .filter_map(|f| match f {
-            Feature::Circle(c) => Some(*c),
-            Feature::Line(_) => None,
-        })
-        .collect()
+    lines_and_circles(e).1
 }
 
 fn angle_diff(a: f32, b: f32) -> f32 {
@@ -88,14 +101,7 @@ fn single_wall_is_one_line_with_its_parameters() {
     for (sigma, tol_a, tol_r) in [(0.0, 1e-4, 0.5), (5.0, 5e-3, 6.0)] {
         let r = cast(&[wall(0.3, 2500.0)], sigma, 1);
         for mut m in methods() {
-            let e = m.extract(&G, &r);
-            assert_eq!(
-                e.features.len(),
-                1,
-                "{} σ={sigma}: {:?}",
-                m.name(),
-                e.features
-            );
+            let e = one_feature(&mut *m, &r, sigma);
             let l = lines(&e)[0];
             assert!(
                 angle_diff(l.alpha, 0.3) < tol_a,
@@ -214,14 +220,7 @@ fn pillar_is_one_circle_with_its_radius() {
     for (sigma, tol) in [(0.0, 1.0), (5.0, 8.0)] {
         let r = cast(&[pillar(2000.0, 300.0, 250.0)], sigma, 5);
         for mut m in methods() {
-            let e = m.extract(&G, &r);
-            assert_eq!(
-                e.features.len(),
-                1,
-                "{} σ={sigma}: {:?}",
-                m.name(),
-                e.features
-            );
+            let e = one_feature(&mut *m, &r, sigma);
             let c = circles(&e);
             assert_eq!(c.len(), 1, "{} σ={sigma}: not a circle", m.name());
             assert!(

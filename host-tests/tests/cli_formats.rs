@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 use serde_json::Value;
 
 mod common;
-use common::{fixture, pfe};
+use common::{arg, fixture, pfe, stderr};
 
 fn extract(format: &str, config: &str, file: &str) -> Output {
     let path = fixture(file);
@@ -19,8 +19,15 @@ fn extract(format: &str, config: &str, file: &str) -> Output {
         format,
         "--config",
         config,
-        path.to_str().unwrap(),
+        arg(&path),
     ])
+}
+
+/// The scans of `pfe extract` on `name`, which must succeed.
+fn extracted(format: &str, config: &str, name: &str) -> Vec<Value> {
+    let out = extract(format, config, name);
+    assert!(out.status.success(), "{}", stderr(&out));
+    scans(&out)
 }
 
 /// Parses stdout as JSON lines and checks the schema of every object.
@@ -57,12 +64,7 @@ fn check_schema(v: &Value) {
     assert_eq!(status.len(), 2);
     assert!(status["error"].is_null() || status["error"].is_string());
     assert!(status["dropped"].is_u64());
-    let marks: Vec<u64> = v["marks"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| m.as_u64().unwrap())
-        .collect();
+    let marks: Vec<u64> = common::u64s(&v["marks"]);
     assert!(marks.windows(2).all(|w| w[0] < w[1]), "marks increasing");
     for f in v["features"].as_array().unwrap() {
         let o = f.as_object().unwrap();
@@ -180,13 +182,7 @@ fn check_room(scan: &Value, tol_rho: f64, tol_alpha: f64) {
 #[test]
 fn csv_room_walls_at_their_distance() {
     for config in ["paper", "default"] {
-        let out = extract("csv", config, "room.csv");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let s = scans(&out);
+        let s = extracted("csv", config, "room.csv");
         let ids: Vec<u64> = s.iter().map(|v| v["scan"].as_u64().unwrap()).collect();
         assert_eq!(ids, [1, 2, 7]);
         // 1 mm quantisation: ρ within 1 mm, α within 1 mrad.
@@ -278,7 +274,7 @@ fn csv_damage_of_every_kind_is_reported() {
     ] {
         let path = dir.join("damaged.csv");
         std::fs::write(&path, format!("{good}\n{bad}\n{good}\n")).unwrap();
-        let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+        let out = pfe(&["extract", "--format", "csv", arg(&path)]);
         assert_eq!(out.status.code(), Some(2), "{what}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains("line 2"), "{what}: {stderr}");
@@ -288,7 +284,7 @@ fn csv_damage_of_every_kind_is_reported() {
     let path = dir.join("long.csv");
     let long = format!("1,-90,0.05{}\n", ",1000".repeat(3000));
     std::fs::write(&path, long).unwrap();
-    let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "csv", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("2048"));
     std::fs::remove_dir_all(&dir).unwrap();
@@ -307,7 +303,7 @@ fn gzip_is_read_transparently() {
         .unwrap();
     gz.finish().unwrap();
     let plain = extract("csv", "default", "room.csv");
-    let zipped = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    let zipped = pfe(&["extract", "--format", "csv", arg(&path)]);
     assert!(zipped.status.success());
     assert_eq!(plain.stdout, zipped.stdout);
     std::fs::remove_dir_all(&dir).unwrap();
@@ -315,15 +311,14 @@ fn gzip_is_read_transparently() {
 
 #[test]
 fn unknown_format_and_unreadable_file_exit_2() {
-    let path = fixture("room.csv");
-    let out = pfe(&["extract", "--format", "xyz", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "xyz", arg(&fixture("room.csv"))]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("xyz"));
+    assert!(stderr(&out).contains("xyz"));
     let out = pfe(&["extract", "--format", "csv", "/nonexistent/scans.csv"]);
     assert_eq!(out.status.code(), Some(2));
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(stderr.lines().count(), 1, "{stderr}");
-    assert!(stderr.contains("/nonexistent/scans.csv"), "{stderr}");
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("/nonexistent/scans.csv"), "{err}");
     assert!(out.stdout.is_empty());
 }
 
@@ -331,13 +326,7 @@ fn unknown_format_and_unreadable_file_exit_2() {
 fn carmen_room_under_both_beam_counts() {
     // Scan 0: 181 beams at −90° + i·1°; scan 1: 180 beams at −90° + i·1° (the +90° beam
     // dropped). A wrong convention tilts the left wall by up to 1°: 17 mrad.
-    let out = extract("carmen", "default", "room.log");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let s = scans(&out);
+    let s = extracted("carmen", "default", "room.log");
     assert_eq!(s.len(), 2);
     for scan in &s {
         // 10 mm quantisation of the ranges.
@@ -372,13 +361,7 @@ fn cylinder_beams() -> Vec<usize> {
 
 #[test]
 fn hokuyo_cylinder_found_where_it_is() {
-    let out = extract("hokuyo", "default", "cylinder.txt");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let s = scans(&out);
+    let s = extracted("hokuyo", "default", "cylinder.txt");
     assert_eq!(s.len(), 2);
     let hit = cylinder_beams();
     let (h0, h1) = (hit[0] as u64, *hit.last().unwrap() as u64);
@@ -426,35 +409,17 @@ fn plot_writes_a_readable_svg() {
     std::fs::create_dir_all(&dir).unwrap();
     let svg = dir.join("scan.svg");
     let path = fixture("cylinder.txt");
-    let out = pfe(&[
-        "plot",
-        path.to_str().unwrap(),
-        "--format",
-        "hokuyo",
-        "--scan",
-        "1",
-        "-o",
-        svg.to_str().unwrap(),
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let plot = |scan| {
+        let args = ["plot", arg(&path), "--format", "hokuyo", "--scan", scan];
+        pfe(&[&args[..], &["-o", arg(&svg)]].concat())
+    };
+    let out = plot("1");
+    assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
     assert!(text.contains("circles/arcs (1)") && text.contains("mark points"));
     // A scan that does not exist.
-    let out = pfe(&[
-        "plot",
-        path.to_str().unwrap(),
-        "--format",
-        "hokuyo",
-        "--scan",
-        "5",
-        "-o",
-        svg.to_str().unwrap(),
-    ]);
+    let out = plot("5");
     assert_eq!(out.status.code(), Some(2));
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -495,7 +460,7 @@ fn hokuyo_non_finite_ranges_are_no_return_and_negative_is_an_error() {
         format!("{line}{}", line.replacen(" 1.0013 ", " -1.0 ", 1)),
     )
     .unwrap();
-    let out = pfe(&["extract", "--format", "hokuyo", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "hokuyo", arg(&path)]);
     assert_eq!(out.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(

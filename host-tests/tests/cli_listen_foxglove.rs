@@ -4,9 +4,10 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 mod common;
+use common::{arg, scratch};
 use std::io::{BufRead, BufReader, Write};
 use std::net::TcpStream;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
@@ -69,13 +70,6 @@ fn now_ns() -> u64 {
         .as_nanos() as u64
 }
 
-fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pfe-listen-fox-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 fn pfe(args: &[&str], input: &Path) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_pfe"))
         .args(["listen", "--input"])
@@ -111,15 +105,7 @@ fn check_scene(d: &Value, k: u32, stamp: u64) {
     for (j, (e, f)) in entities.iter().zip(&features).enumerate() {
         assert_eq!(e["id"], format!("feature-{j}"));
         assert_eq!((&e["timestamp"], &e["frame_id"]), (&t, &json!("laser")));
-        let meta = |key: &str| {
-            e["metadata"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|m| m["key"] == key)
-                .map(|m| m["value"].as_str().unwrap().to_string())
-                .unwrap_or_else(|| panic!("no metadata {key}"))
-        };
+        let meta = |key: &str| common::metadata(e, key);
         assert_eq!(meta("first"), f.first().to_string());
         assert_eq!(meta("last"), f.last().to_string());
         match f {
@@ -156,24 +142,24 @@ fn listen_mcap_reads_back_message_for_message() {
     std::fs::write(&input, frames(n)).unwrap();
     let out = d.join("out.mcap");
     let before = now_ns();
-    let (code, err) = pfe(&["--mcap", out.to_str().unwrap()], &input);
+    let (code, err) = pfe(&["--mcap", arg(&out)], &input);
     let after = now_ns();
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("wrote"), "{err}");
     // Never over an existing file without --force; --force replaces it; --scans ends early
     // with a complete file.
-    let (code, err) = pfe(&["--mcap", out.to_str().unwrap()], &input);
+    let (code, err) = pfe(&["--mcap", arg(&out)], &input);
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--force"), "{err}");
     let short = d.join("short.mcap");
     std::fs::write(&short, b"mine").unwrap();
-    let (code, err) = pfe(&["--mcap", short.to_str().unwrap(), "--scans", "2"], &input);
+    let (code, err) = pfe(&["--mcap", arg(&short), "--scans", "2"], &input);
     assert_eq!(
         (code, std::fs::read(&short).unwrap()),
         (2, b"mine".to_vec()),
         "{err}"
     );
-    let args = ["--mcap", short.to_str().unwrap(), "--force", "--scans", "2"];
+    let args = ["--mcap", arg(&short), "--force", "--scans", "2"];
     assert_eq!(pfe(&args, &input).0, 0);
 
     let Some(back) = read_back(&out) else {

@@ -3,21 +3,19 @@
 //! captures, and scans encoded here with the firmware's telegram encoder.
 
 use std::io::BufReader;
-use std::process::Output;
 
 use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
 use host_tests::formats::lms200::{Reader, Telegram, Unit};
 use serde_json::Value;
 
 mod common;
-use common::{fixture, pfe};
+use common::{arg, fixture, json_lines, pfe, stderr};
 
-fn json_lines(out: &Output) -> Vec<Value> {
-    String::from_utf8(out.stdout.clone())
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
+/// The telegrams and the stderr of `pfe decode --format lms200 FIXTURE`, which must succeed.
+fn decode(name: &str) -> (Vec<Value>, String) {
+    let out = pfe(&["decode", "--format", "lms200", arg(&fixture(name))]);
+    assert!(out.status.success());
+    (json_lines(&out), stderr(&out))
 }
 
 /// The 361 values of lms200-b0-full-180-050-mm.txt: 8191, 8190, 8183, then 1000 + i (the
@@ -41,26 +39,17 @@ fn check_telegram(v: &Value, scan: u64, unit: &str, ranges: &[u64]) {
     assert_eq!(v["scan"].as_u64(), Some(scan));
     assert_eq!(v["unit"], unit);
     assert_eq!(v["status"].as_u64(), Some(0x10));
-    let got: Vec<u64> = v["ranges"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r.as_u64().unwrap())
-        .collect();
+    let got: Vec<u64> = common::u64s(&v["ranges"]);
     assert_eq!(got, ranges);
 }
 
 #[test]
 fn decode_test_vectors() {
-    let path = fixture("lms200-good.bin");
-    let out = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
-    assert!(out.status.success());
-    let t = json_lines(&out);
+    let (t, stderr) = decode("lms200-good.bin");
     assert_eq!(t.len(), 3);
     check_telegram(&t[0], 0, "mm", &[1000, 1001, 1002, 1003, 8191]);
     check_telegram(&t[1], 1, "cm", &[100, 200, 300]);
     check_telegram(&t[2], 2, "mm", &full_values());
-    let stderr = String::from_utf8_lossy(&out.stderr);
     // The host command (address 0x00) is skipped: 8 bytes.
     assert!(
         stderr.contains("3 telegrams good, 0 dropped for CRC, 8 bytes skipped"),
@@ -70,16 +59,12 @@ fn decode_test_vectors() {
 
 #[test]
 fn damaged_capture_still_decodes_the_good_telegrams() {
-    let path = fixture("lms200-damaged.bin");
-    let out = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
-    assert!(out.status.success());
-    let t = json_lines(&out);
+    let (t, stderr) = decode("lms200-damaged.bin");
     assert_eq!(t.len(), 3);
     check_telegram(&t[0], 0, "cm", &[100, 200, 300]);
     // Started inside a telegram that was cut off.
     check_telegram(&t[1], 1, "mm", &[1000, 1001, 1002, 1003, 8191]);
     check_telegram(&t[2], 2, "mm", &full_values());
-    let stderr = String::from_utf8_lossy(&out.stderr);
     // Dropped: the telegram with a flipped bit, the one cut off, the one truncated at the end.
     // Skipped: 4 noise bytes + 20 + 300 + 500.
     assert!(
@@ -88,7 +73,8 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
     );
     // extract numbers the same scans; the partial ones (3 and 5 values: no LMS200 variant, so
     // no known beam angles) are not scans, and it says so.
-    let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
+    let path = fixture("lms200-damaged.bin");
+    let out = pfe(&["extract", "--format", "lms200", arg(&path)]);
     assert!(out.status.success());
     let ids: Vec<u64> = json_lines(&out)
         .iter()
@@ -103,10 +89,9 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
 
 #[test]
 fn decode_rejects_other_formats() {
-    let path = fixture("room.csv");
-    let out = pfe(&["decode", "--format", "csv", path.to_str().unwrap()]);
+    let out = pfe(&["decode", "--format", "csv", arg(&fixture("room.csv"))]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("lms200"));
+    assert!(stderr(&out).contains("lms200"));
 }
 
 /// A B0 telegram of `codes` in `unit` with status 0x10, encoded by the firmware's encoder.
@@ -151,12 +136,8 @@ fn extract_wall_in_mm_and_cm() {
     capture.extend(b0(&wall_codes(10.0), Unit::Cm));
     let path = dir.join("wall.bin");
     std::fs::write(&path, &capture).unwrap();
-    let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = pfe(&["extract", "--format", "lms200", arg(&path)]);
+    assert!(out.status.success(), "{}", stderr(&out));
     let scans = json_lines(&out);
     assert_eq!(scans.len(), 2);
     for (scan, tol) in scans.iter().zip([1.0, 10.0]) {

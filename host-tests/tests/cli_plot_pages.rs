@@ -4,30 +4,16 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
-fn scratch(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("pfe-pages-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::{arg, fixture, scratch, stderr};
 
 fn plot(args: &[&str]) -> Output {
     let room = fixture("room.log");
     Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(["plot", "--format", "carmen", room.to_str().unwrap()])
+        .args(["plot", "--format", "carmen", arg(&room)])
         .args(args)
         .output()
         .unwrap()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 /// Every `url(#X)` in `text` names an element `id="X"` defined once.
@@ -47,9 +33,9 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
         "--scans",
         "0..1",
         "--html",
-        html.to_str().unwrap(),
+        arg(&html),
         "--sheet",
-        sheet.to_str().unwrap(),
+        arg(&sheet),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let page = std::fs::read_to_string(&html).unwrap();
@@ -90,19 +76,16 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
 fn a_range_past_the_log_keeps_what_it_has_and_says_so() {
     let d = scratch("past");
     let html = d.join("room.html");
-    let out = plot(&["--scans", "1..5", "--html", html.to_str().unwrap()]);
+    let out = plot(&["--scans", "1..5", "--html", arg(&html)]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("1 of the 5 scans"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("1 of the 5 scans"), "{err}");
     let page = std::fs::read_to_string(&html).unwrap();
     assert_eq!(page.matches("<svg xmlns=").count(), 1);
     assert!(page.contains(r#"min="0" max="0""#));
 
     // No scan in the range, a reversed or oversized range, --scans without a page: exit 2.
-    let none = plot(&["--scans", "7..9", "--html", html.to_str().unwrap()]);
+    let none = plot(&["--scans", "7..9", "--html", arg(&html)]);
     assert_eq!(none.status.code(), Some(2), "{}", stderr(&none));
     assert!(stderr(&none).contains("no scan with an ID in 7..9"));
     for bad in [

@@ -9,44 +9,14 @@
 use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 use host_tests::skip::{skip, Need};
 use serde_json::Value;
 
 const N_SCANS: usize = 30;
 
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("pfe-cli-ros2-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        TempDir(d)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 mod common;
-use common::{fixture, pfe, python, read_foxglove};
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn lines(out: &Output) -> Vec<Value> {
-    String::from_utf8(out.stdout.clone())
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
-}
+use common::{arg, fixture, json_lines, pfe, python, read_foxglove, stderr, TempDir};
 
 #[test]
 fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
@@ -62,7 +32,7 @@ fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
     }
     let dir = TempDir::new("bags");
     let n = N_SCANS.to_string();
-    let args = [dir.0.to_str().unwrap(), logs.to_str().unwrap(), n.as_str()];
+    let args = [arg(&dir.0), arg(&logs), n.as_str()];
     let Some(manifest) = python(TEST, "ros2/make_bags.py", &args, "mcap mcap-ros2-support") else {
         return;
     };
@@ -72,7 +42,7 @@ fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
         assert!(bag.status.success(), "{name}: {}", stderr(&bag));
         let log = pfe(&["extract", "--format", "carmen", m["log"].as_str().unwrap()]);
         assert!(log.status.success(), "{name}: {}", stderr(&log));
-        let (bag, log) = (lines(&bag), lines(&log));
+        let (bag, log) = (json_lines(&bag), json_lines(&log));
         assert_eq!(bag.len(), N_SCANS, "{name}");
         let stamps = m["stamps_ns"].as_array().unwrap();
         let mut features = 0;
@@ -150,11 +120,7 @@ float32 range_max\nfloat32[] ranges\nfloat32[] intensities\n";
 /// before `/scan`, or "laser"), stamped 1 s, 2 s, ….
 fn bag(topics: &[&str], scans: i32) -> Vec<u8> {
     let mut out = Cursor::new(Vec::new());
-    let mut w = mcap::WriteOptions::new()
-        .compression(None)
-        .chunk_size(Some(4096))
-        .create(&mut out)
-        .unwrap();
+    let mut w = common::mcap_writer(&mut out, 4096);
     let schema = w
         .add_schema(
             "sensor_msgs/msg/LaserScan",
@@ -190,7 +156,7 @@ fn bag(topics: &[&str], scans: i32) -> Vec<u8> {
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> String {
     let p = dir.join(name);
     std::fs::write(&p, bytes).unwrap();
-    p.to_str().unwrap().to_string()
+    arg(&p).to_string()
 }
 
 #[test]
@@ -209,7 +175,7 @@ fn two_laser_topics_are_listed_and_one_is_chosen_with_topic() {
     );
     let rear = pfe(&["extract", "--format", "mcap", "--topic", "/rear/scan", &two]);
     assert!(rear.status.success(), "{}", stderr(&rear));
-    let rear = lines(&rear);
+    let rear = json_lines(&rear);
     assert_eq!(rear.len(), 4);
     assert!(rear.iter().all(|l| l["frame_id"] == "rear"));
     assert_eq!(rear[3]["stamp_ns"], 4_000_000_000u64);
@@ -220,7 +186,7 @@ fn two_laser_topics_are_listed_and_one_is_chosen_with_topic() {
     let one = write(&dir.0, "one.mcap", &bag(&["/scan"], 3));
     let out = pfe(&["extract", "--format", "mcap", &one]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert_eq!(lines(&out).len(), 3);
+    assert_eq!(json_lines(&out).len(), 3);
     let svg = pfe(&["plot", "--format", "mcap", &one, "--scan", "2", "-o", "-"]);
     assert!(svg.status.success(), "{}", stderr(&svg));
     assert!(String::from_utf8_lossy(&svg.stdout).contains("(laser, 3.000000000 s)"));
@@ -233,12 +199,12 @@ fn a_truncated_bag_prints_its_earlier_scans_then_fails() {
     let cut = write(&dir.0, "cut.mcap", &bytes[..bytes.len() / 2]);
     let out = pfe(&["extract", "--format", "mcap", &cut]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
-    let kept = lines(&out);
+    let kept = json_lines(&out);
     assert!(!kept.is_empty() && kept.len() < 40, "{} scans", kept.len());
     assert!(stderr(&out).contains("truncated"), "{}", stderr(&out));
     // Not a bag at all: named, with a hint at the right format.
     let log = fixture("room.log");
-    let out = pfe(&["extract", "--format", "mcap", log.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "mcap", arg(&log)]);
     assert_eq!(out.status.code(), Some(2));
     assert!(
         stderr(&out).contains("not an MCAP file") && stderr(&out).contains("try --format carmen")
@@ -247,11 +213,8 @@ fn a_truncated_bag_prints_its_earlier_scans_then_fails() {
     let whole = write(&dir.0, "whole.mcap", &bytes);
     let out = pfe(&["extract", "--format", "carmen", &whole]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("try --format mcap"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("try --format mcap"), "{err}");
 }
 
 #[test]
@@ -260,7 +223,7 @@ fn mcap_output_never_replaces_a_file_without_force() {
     let one = write(&dir.0, "one.mcap", &bag(&["/scan"], 3));
     let out_path = dir.0.join("features.mcap");
     std::fs::write(&out_path, b"mine").unwrap();
-    let out_arg = out_path.to_str().unwrap();
+    let out_arg = arg(&out_path);
     let out = pfe(&["extract", "--format", "mcap", &one, "--mcap", out_arg]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("--force"), "{}", stderr(&out));
@@ -298,16 +261,9 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
     // A bag: its stamps and frame.
     let one = write(&dir.0, "one.mcap", &bag(&["/scan"], 5));
     let fox = dir.0.join("bag-features.mcap");
-    let out = pfe(&[
-        "extract",
-        "--format",
-        "mcap",
-        &one,
-        "--mcap",
-        fox.to_str().unwrap(),
-    ]);
+    let out = pfe(&["extract", "--format", "mcap", &one, "--mcap", arg(&fox)]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let json = lines(&out);
+    let json = json_lines(&out);
     let Some(back) = read_foxglove(TEST, &fox) else {
         return;
     };
@@ -356,12 +312,12 @@ fn foxglove_output_holds_one_laser_scan_and_one_scene_update_per_scan() {
         "extract",
         "--format",
         "carmen",
-        room.to_str().unwrap(),
+        arg(&room),
         "--mcap",
-        fox.to_str().unwrap(),
+        arg(&fox),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let json = lines(&out);
+    let json = json_lines(&out);
     let back = read_foxglove(TEST, &fox).unwrap();
     let p = pairs(&back);
     assert_eq!(p.len(), json.len());

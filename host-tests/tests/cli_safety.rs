@@ -1,28 +1,12 @@
 //! The `pfe` CLI never loses a user's data and never prints nonsense without an error: the
 //! emulator's pty link, `record`'s output file, argument and input validation, exit codes.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::path::Path;
+use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-fn pfe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-/// A fresh directory for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pfe-safety-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{arg, fixture, pfe, scratch, spawn_pfe, stderr};
 
 /// Waits until `path` exists (as a link or a file), at most 10 s.
 fn wait_for(path: &Path) {
@@ -45,40 +29,27 @@ fn interrupt(child: &std::process::Child) {
     assert!(ok.success());
 }
 
+/// `pfe emulate --pty PTY --seconds SECONDS`.
+fn emulate(pty: &Path, seconds: &str) -> Output {
+    pfe(&["emulate", "--pty", arg(pty), "--seconds", seconds])
+}
+
 #[test]
 fn emulate_refuses_to_replace_a_file_at_its_pty_path() {
     let dir = scratch("emu-file");
     let path = dir.join("notes.txt");
     std::fs::write(&path, "a user's notes").unwrap();
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        path.to_str().unwrap(),
-        "--seconds",
-        "0.2",
-    ]);
+    let out = emulate(&path, "0.2");
     assert!(!out.status.success(), "{}", stderr(&out));
     assert!(stderr(&out).contains("not replacing"), "{}", stderr(&out));
     assert_eq!(std::fs::read_to_string(&path).unwrap(), "a user's notes");
     // Nor a link to something else, nor a directory.
     let link = dir.join("link");
     std::os::unix::fs::symlink(&path, &link).unwrap();
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        link.to_str().unwrap(),
-        "--seconds",
-        "0.2",
-    ]);
+    let out = emulate(&link, "0.2");
     assert!(!out.status.success());
     assert_eq!(std::fs::read_link(&link).unwrap(), path);
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        dir.to_str().unwrap(),
-        "--seconds",
-        "0.2",
-    ]);
+    let out = emulate(&dir, "0.2");
     assert!(!out.status.success());
     assert!(dir.is_dir());
     std::fs::remove_dir_all(&dir).unwrap();
@@ -89,13 +60,7 @@ fn emulate_replaces_its_stale_link_and_removes_its_link_on_exit() {
     let dir = scratch("emu-stale");
     let link = dir.join("lms");
     std::os::unix::fs::symlink("/dev/pts/987654", &link).unwrap();
-    let out = pfe(&[
-        "emulate",
-        "--pty",
-        link.to_str().unwrap(),
-        "--seconds",
-        "0.3",
-    ]);
+    let out = emulate(&link, "0.3");
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(link.symlink_metadata().is_err(), "link left behind");
     std::fs::remove_dir_all(&dir).unwrap();
@@ -105,18 +70,7 @@ fn emulate_replaces_its_stale_link_and_removes_its_link_on_exit() {
 fn emulate_removes_its_link_on_ctrl_c() {
     let dir = scratch("emu-int");
     let link = dir.join("lms");
-    let child = Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args([
-            "emulate",
-            "--pty",
-            link.to_str().unwrap(),
-            "--seconds",
-            "60",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let child = spawn_pfe(&["emulate", "--pty", arg(&link), "--seconds", "60"]);
     wait_for(&link);
     assert!(std::fs::read_link(&link).unwrap().starts_with("/dev/pts/"));
     let t0 = Instant::now();
@@ -139,7 +93,7 @@ fn record_never_empties_an_existing_file() {
     let dir = scratch("rec-exists");
     let out = dir.join("take1.lms");
     std::fs::write(&out, b"a user's recording").unwrap();
-    let o = out.to_str().unwrap();
+    let o = arg(&out);
     // Without --force: refused as bad input before the port is touched.
     let r = pfe(&["record", "--port", "/nonexistent/tty", "-o", o]);
     assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
@@ -181,42 +135,20 @@ fn b0_count(bytes: &[u8]) -> usize {
 
 #[test]
 fn record_interrupted_keeps_what_it_had() {
-    use host_tests::device::emulator::serve::{serve_on, Pty};
-    use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
+    use common::PtyServer;
+    use host_tests::device::emulator::serve::Pty;
+    use host_tests::device::emulator::{Emulator, EmulatorConfig};
 
     let dir = scratch("rec-int");
     let link = dir.join("lms");
     let out = dir.join("capture.lms");
-    let mut pty = Pty::open(&link).unwrap();
-    let stop = Arc::new(AtomicBool::new(false));
-    let limits = RunLimits {
-        max_time: Some(Duration::from_secs(60)),
-        stop: Some(stop.clone()),
-        ..Default::default()
-    };
-    let emu = std::thread::spawn(move || {
-        serve_on(
-            &mut pty,
-            Emulator::from_config(EmulatorConfig::default()),
-            limits,
-        )
-        .map(|r| (r, pty))
-    });
-    let child = Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args([
-            "record",
-            "--port",
-            link.to_str().unwrap(),
-            "--baud",
-            "38400",
-        ])
-        .args(["--scans", "1000000", "-o", out.to_str().unwrap()])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+    let pty = Pty::open(&link).unwrap();
+    let emu = PtyServer::start(pty, Emulator::from_config(EmulatorConfig::default()));
+    let (link, out_arg) = (arg(&link), arg(&out));
+    let record = [
+        "record", "--port", link, "--baud", "38400", "--scans", "1000000",
+    ];
+    let child = spawn_pfe(&[&record[..], &["-o", out_arg]].concat());
     // Wait until the temporary capture holds a few scans (361 words each: ~730 bytes).
     let t0 = Instant::now();
     loop {
@@ -236,8 +168,7 @@ fn record_interrupted_keeps_what_it_had() {
     assert!(!out.exists(), "the output appears only at the end");
     interrupt(&child);
     let r = child.wait_with_output().unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let _ = emu.join().unwrap().unwrap();
+    let _ = emu.stop();
     assert_eq!(r.status.code(), Some(130), "{}", stderr(&r));
     assert!(stderr(&r).contains("interrupted"), "{}", stderr(&r));
     let bytes = std::fs::read(&out).expect("the capture is kept");
@@ -255,16 +186,10 @@ fn record_interrupted_keeps_what_it_had() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
-}
-
 #[test]
 fn sigma_r_must_be_a_positive_finite_noise() {
     let room = fixture("room.csv");
-    let file = room.to_str().unwrap();
+    let file = arg(&room);
     let dir = scratch("sigma");
     let svg = dir.join("p.svg");
     for bad in ["0", "-5", "NaN", "inf", "-inf", "5mm"] {
@@ -272,7 +197,7 @@ fn sigma_r_must_be_a_positive_finite_noise() {
         let plot = ["plot", "--format", "csv", &sigma, file, "--scan", "1", "-o"];
         for args in [
             vec!["extract", "--format", "csv", &sigma, file],
-            [&plot[..], &[svg.to_str().unwrap()]].concat(),
+            [&plot[..], &[arg(&svg)]].concat(),
         ] {
             let out = pfe(&args);
             assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
@@ -282,7 +207,7 @@ fn sigma_r_must_be_a_positive_finite_noise() {
         }
     }
     // The same arguments with a good σ_r work (so the failures above are σ_r's).
-    let out = pfe(&[
+    let plot = [
         "plot",
         "--format",
         "csv",
@@ -291,29 +216,13 @@ fn sigma_r_must_be_a_positive_finite_noise() {
         "--scan",
         "1",
         "-o",
-    ]);
+    ];
+    let out = pfe(&plot);
     assert_eq!(out.status.code(), Some(2), "-o needs a value");
-    let out = pfe(&[
-        "plot",
-        "--format",
-        "csv",
-        "--sigma-r=0.5",
-        file,
-        "--scan",
-        "1",
-        "-o",
-        svg.to_str().unwrap(),
-    ]);
+    let out = pfe(&[&plot[..], &[arg(&svg)]].concat());
     assert!(out.status.success(), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
-    let out = pfe(&[
-        "extract",
-        "--format",
-        "csv",
-        "--sigma-r",
-        "0.5",
-        room.to_str().unwrap(),
-    ]);
+    let out = pfe(&["extract", "--format", "csv", "--sigma-r", "0.5", arg(&room)]);
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
@@ -321,7 +230,7 @@ fn sigma_r_must_be_a_positive_finite_noise() {
 fn input_with_no_scan_is_an_error_with_a_hint() {
     let room = fixture("room.csv");
     let capture = fixture("lms200-good.bin");
-    let (room, capture) = (room.to_str().unwrap(), capture.to_str().unwrap());
+    let (room, capture) = (arg(&room), arg(&capture));
     for (args, hint) in [
         (
             vec!["extract", "--format", "carmen", room],
@@ -372,14 +281,14 @@ fn input_with_no_scan_is_an_error_with_a_hint() {
             .collect::<Vec<_>>(),
     )
     .unwrap();
-    let out = pfe(&["extract", "--format", "lms200", junk.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "lms200", arg(&junk)]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("no scan found"), "{}", stderr(&out));
     assert!(stderr(&out).contains("--format"), "{}", stderr(&out));
     // Empty input is not an error (nothing to find).
     let empty = dir.join("empty.csv");
     std::fs::write(&empty, "").unwrap();
-    let out = pfe(&["extract", "--format", "csv", empty.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "csv", arg(&empty)]);
     assert!(out.status.success(), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -406,7 +315,7 @@ fn an_error_quotes_at_most_80_characters_of_the_bad_field() {
     ] {
         let path = dir.join("long.txt");
         std::fs::write(&path, text).unwrap();
-        let out = pfe(&["extract", "--format", format, path.to_str().unwrap()]);
+        let out = pfe(&["extract", "--format", format, arg(&path)]);
         assert_eq!(out.status.code(), Some(2), "{format}: {}", stderr(&out));
         let e = stderr(&out);
         assert!(
@@ -454,13 +363,7 @@ fn every_subcommand_exits_2_on_bad_arguments() {
 #[test]
 fn bench_carmen_must_be_a_directory() {
     let room = fixture("room.log");
-    let out = pfe(&[
-        "bench",
-        "--carmen",
-        room.to_str().unwrap(),
-        "--sim-scans",
-        "1",
-    ]);
+    let out = pfe(&["bench", "--carmen", arg(&room), "--sim-scans", "1"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("not a directory"), "{}", stderr(&out));
 }
@@ -472,7 +375,7 @@ fn plot_to_stdout() {
         "plot",
         "--format",
         "csv",
-        room.to_str().unwrap(),
+        arg(&room),
         "--scan",
         "1",
         "-o",
@@ -492,18 +395,15 @@ fn plot_to_stdout() {
 #[test]
 fn decode_needs_no_format() {
     let path = fixture("lms200-good.bin");
-    let implicit = pfe(&["decode", path.to_str().unwrap()]);
+    let implicit = pfe(&["decode", arg(&path)]);
     assert!(implicit.status.success(), "{}", stderr(&implicit));
-    let explicit = pfe(&["decode", "--format", "lms200", path.to_str().unwrap()]);
+    let explicit = pfe(&["decode", "--format", "lms200", arg(&path)]);
     assert_eq!(implicit.stdout, explicit.stdout);
     assert_eq!(String::from_utf8_lossy(&implicit.stdout).lines().count(), 3);
     let out = pfe(&["decode", fixture("room.csv").to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2));
-    assert!(
-        stderr(&out).contains("pfe extract --format csv"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("pfe extract --format csv"), "{err}");
 }
 
 #[test]
@@ -535,19 +435,14 @@ fn csv_nan_ranges_are_discontinuities() {
         format!("1,-30,1,{}\n2,-30,1,{}\n", ranges("0"), ranges("0")),
     )
     .unwrap();
-    let a = pfe(&["extract", "--format", "csv", nan.to_str().unwrap()]);
+    let a = pfe(&["extract", "--format", "csv", arg(&nan)]);
     assert!(a.status.success(), "{}", stderr(&a));
-    let b = pfe(&["extract", "--format", "csv", zero.to_str().unwrap()]);
+    let b = pfe(&["extract", "--format", "csv", arg(&zero)]);
     assert!(b.status.success(), "{}", stderr(&b));
     assert_eq!(a.stdout, b.stdout, "NaN reads as no return (like 0)");
     let first: serde_json::Value =
         serde_json::from_str(String::from_utf8_lossy(&a.stdout).lines().next().unwrap()).unwrap();
-    let marks: Vec<u64> = first["marks"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|m| m.as_u64().unwrap())
-        .collect();
+    let marks: Vec<u64> = common::u64s(&first["marks"]);
     assert!(
         marks.contains(&29) && marks.contains(&31),
         "the gap splits the wall: {marks:?}"
@@ -562,7 +457,7 @@ fn csv_beams_over_a_full_turn_are_rejected() {
     let ok = format!("1,-180,1{}\n", ",1000".repeat(361));
     let bad = format!("2,-180,1{}\n", ",1000".repeat(362));
     std::fs::write(&path, format!("{ok}{bad}")).unwrap();
-    let out = pfe(&["extract", "--format", "csv", path.to_str().unwrap()]);
+    let out = pfe(&["extract", "--format", "csv", arg(&path)]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("line 2"), "{}", stderr(&out));
     assert!(stderr(&out).contains("full turn"), "{}", stderr(&out));
@@ -590,11 +485,8 @@ fn a_skip_is_listed_and_fails_in_ci() {
     };
     let out = run("false");
     assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("SKIPPED: demo_test: no widget"),
-        "{}",
-        stderr(&out)
-    );
+    let err = stderr(&out);
+    assert!(err.contains("SKIPPED: demo_test: no widget"), "{err}");
     let listed = std::fs::read_to_string(&file).unwrap();
     assert_eq!(
         listed,

@@ -5,15 +5,14 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::Duration;
 
 use firmware::lms::types::{Baud, MeasuringMode, Unit};
-use host_tests::device::emulator::serve::{serve_on, Pty};
-use host_tests::device::emulator::{
-    Emulator, EmulatorConfig, RangeSource, RunLimits, TaggedSource,
-};
+use host_tests::device::emulator::serve::Pty;
+use host_tests::device::emulator::{Emulator, EmulatorConfig, RangeSource, TaggedSource};
+
+mod common;
+
+use common::PtyServer;
 
 const SCANS: usize = 12;
 
@@ -104,29 +103,15 @@ fn mrpt_reads_exactly_the_emulated_scans() {
     std::fs::create_dir_all(&dir).unwrap();
     let Some(bin) = compile(&dir) else { return };
     let link = dir.join("lms");
-    let mut pty = Pty::open(&link).unwrap();
+    let pty = Pty::open(&link).unwrap();
     let cfg = EmulatorConfig::default();
-    let stop = Arc::new(AtomicBool::new(false));
-    let limits = RunLimits {
-        max_time: Some(Duration::from_secs(60)),
-        stop: Some(stop.clone()),
-        ..Default::default()
-    };
-    let emu = std::thread::spawn(move || {
-        serve_on(
-            &mut pty,
-            Emulator::new(cfg, Box::new(TaggedWithGaps::default())),
-            limits,
-        )
-        .map(|r| (r, pty))
-    });
+    let emu = PtyServer::start(pty, Emulator::new(cfg, Box::new(TaggedWithGaps::default())));
     let out = Command::new(&bin)
         .arg(&link)
         .arg(SCANS.to_string())
         .output()
         .unwrap();
-    stop.store(true, Ordering::Relaxed);
-    let (report, _pty) = emu.join().unwrap().unwrap();
+    let (report, _pty) = emu.stop();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(
         out.status.success(),

@@ -1,14 +1,13 @@
 //! `pfe record` (firmware driver over a real tty) against the emulator on a pseudo-terminal:
 //! the capture holds exactly the scans the emulator sent: each one once, in the order sent.
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
-use std::time::Duration;
+mod common;
 
+use common::{arg, PtyServer};
 use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
-use host_tests::device::emulator::serve::{serve_on, Pty};
-use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits, SourceKind};
+use host_tests::device::emulator::serve::Pty;
+use host_tests::device::emulator::{Emulator, EmulatorConfig, SourceKind};
 
 #[test]
 fn record_over_pty_captures_sent_scans() {
@@ -16,36 +15,27 @@ fn record_over_pty_captures_sent_scans() {
     std::fs::create_dir_all(&dir).unwrap();
     let link = dir.join("lms");
     let out = dir.join("capture.lms");
-    let mut pty = Pty::open(&link).unwrap();
+    let pty = Pty::open(&link).unwrap();
     let cfg = EmulatorConfig {
         source: SourceKind::Tagged,
         ..Default::default()
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    let limits = RunLimits {
-        max_time: Some(Duration::from_secs(60)),
-        stop: Some(stop.clone()),
-        ..Default::default()
-    };
-    let emu = std::thread::spawn(move || {
-        serve_on(&mut pty, Emulator::from_config(cfg), limits).map(|r| (r, pty))
-    });
+    let emu = PtyServer::start(pty, Emulator::from_config(cfg));
     let args: Vec<String> = [
         "--port",
-        link.to_str().unwrap(),
+        arg(&link),
         "--baud",
         "38400",
         "--scans",
         "4",
         "-o",
-        out.to_str().unwrap(),
+        arg(&out),
     ]
     .iter()
     .map(|s| s.to_string())
     .collect();
     let res = host_tests::cli::record::cli(&args);
-    stop.store(true, Ordering::Relaxed);
-    let (report, _pty) = emu.join().unwrap().unwrap();
+    let (report, _pty) = emu.stop();
     res.unwrap();
 
     let bytes = std::fs::read(&out).unwrap();

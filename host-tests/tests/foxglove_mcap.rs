@@ -143,15 +143,7 @@ fn foxglove_file_reads_back_message_for_message() {
             assert_eq!(e["id"], format!("feature-{j}"));
             assert_eq!(time(&e["timestamp"]), expected_time);
             assert_eq!(e["frame_id"], "laser");
-            let meta = |key: &str| {
-                e["metadata"]
-                    .as_array()
-                    .unwrap()
-                    .iter()
-                    .find(|m| m["key"] == key)
-                    .map(|m| m["value"].as_str().unwrap().to_string())
-                    .unwrap_or_else(|| panic!("no metadata {key}"))
-            };
+            let meta = |key: &str| common::metadata(e, key);
             assert_eq!(meta("first"), feature.first().to_string());
             assert_eq!(meta("last"), feature.last().to_string());
             assert_eq!(e["texts"].as_array().unwrap().len(), 1);

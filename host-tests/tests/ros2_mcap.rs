@@ -20,25 +20,11 @@ use host_tests::methods::{Method, Pfe};
 use pfe_core::{Config, Feature};
 use serde_json::Value;
 
+mod common;
+
+use common::TempDir;
+
 const N_SCANS: usize = 50;
-
-/// A fresh scratch directory, removed when dropped.
-pub struct TempDir(pub PathBuf);
-
-impl TempDir {
-    pub fn new(tag: &str) -> Self {
-        let d = std::env::temp_dir().join(format!("pfe-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        TempDir(d)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 fn shared_carmen() -> Option<PathBuf> {
     let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen");
@@ -321,11 +307,7 @@ fn cdr_scan(sec: i32, n: usize) -> Vec<u8> {
 /// uncompressed chunks.
 fn rust_bag(laser: bool, scans: i32) -> Vec<u8> {
     let mut out = Cursor::new(Vec::new());
-    let mut w = mcap::WriteOptions::new()
-        .compression(None)
-        .chunk_size(Some(2048))
-        .create(&mut out)
-        .unwrap();
+    let mut w = common::mcap_writer(&mut out, 2048);
     let string = w
         .add_schema("std_msgs/msg/String", "ros2msg", b"string data\n")
         .unwrap();

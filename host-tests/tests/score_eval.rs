@@ -31,12 +31,17 @@ impl Method for MarkAll {
     }
 }
 
-#[test]
-fn known_methods_give_known_ratios() {
-    let sims: Vec<SimScan> = scenarios(SceneKind::Mixed, 5, 5.0, 3)
+/// `n` simulated scans of mixed scenes (σ_r = 5 mm) from `seed`.
+fn mixed_scans(n: usize, seed: u64) -> Vec<SimScan> {
+    scenarios(SceneKind::Mixed, n, 5.0, seed)
         .iter()
         .map(Scenario::simulate)
-        .collect();
+        .collect()
+}
+
+#[test]
+fn known_methods_give_known_ratios() {
+    let sims = mixed_scans(5, 3);
     let (mut a, mut b) = (Blind, MarkAll);
     let res = run_methods(&mut [&mut a, &mut b], &sims);
     let truth: usize = sims.iter().map(|s| s.truth.len()).sum();
@@ -149,10 +154,7 @@ impl Method for Replay {
 
 #[test]
 fn methods_that_output_features_are_scored_exactly() {
-    let sims: Vec<SimScan> = scenarios(SceneKind::Mixed, 6, 5.0, 4)
-        .iter()
-        .map(Scenario::simulate)
-        .collect();
+    let sims = mixed_scans(6, 4);
     let truth: usize = sims.iter().map(|s| s.truth.len()).sum();
     let circles: usize = sims
         .iter()

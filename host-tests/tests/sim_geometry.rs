@@ -244,6 +244,44 @@ fn noise_has_the_requested_sigma() {
     );
 }
 
+/// RMS (position, shape) errors of `trials` fits to the points at `bearings`, each at range
+/// `range(bearing)` plus Gaussian noise of σ = `sigma` (a generator seeded with `seed`);
+/// `squared_errors` gives one fit's squared (position, shape) errors.
+fn monte_carlo_rms(
+    bearings: &[f64],
+    range: impl Fn(f64) -> f64,
+    (sigma, seed, trials): (f64, u64, u32),
+    squared_errors: impl Fn(&[Point]) -> (f64, f64),
+) -> (f64, f64) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let normal = rand_distr::Normal::new(0.0, sigma).unwrap();
+    let (mut sp, mut ss) = (0.0, 0.0);
+    for _ in 0..trials {
+        let pts: Vec<Point> = bearings
+            .iter()
+            .map(|&phi| {
+                let r = range(phi) + rand_distr::Distribution::sample(&normal, &mut rng);
+                Point::new((r * phi.cos()) as f32, (r * phi.sin()) as f32)
+            })
+            .collect();
+        let (p, s) = squared_errors(&pts);
+        sp += p;
+        ss += s;
+    }
+    (
+        (sp / f64::from(trials)).sqrt(),
+        (ss / f64::from(trials)).sqrt(),
+    )
+}
+
+/// An RMS error at or just above its Cramér–Rao bound: within 0.9 and `max_ratio` times it.
+fn near_bound(what: &str, rms: f64, bound: f64, max_ratio: f64) {
+    assert!(
+        rms > 0.9 * bound && rms < max_ratio * bound,
+        "{what} {rms} vs {bound}"
+    );
+}
+
 #[test]
 fn line_crb_matches_monte_carlo_of_least_squares() {
     // At oblique incidence the unweighted fit is not efficient, so compare at near-normal
@@ -253,37 +291,20 @@ fn line_crb_matches_monte_carlo_of_least_squares() {
         .map(|i| (f64::from(i) - 20.0) * 0.5f64.to_radians())
         .collect();
     let b = crb(&TruthKind::Line { alpha, rho }, &bearings, sigma).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let normal = rand_distr::Normal::new(0.0, sigma).unwrap();
-    let (mut sr, mut sa) = (0.0, 0.0);
-    let trials = 2000;
-    for _ in 0..trials {
-        let pts: Vec<Point> = bearings
-            .iter()
-            .map(|&phi| {
-                let r =
-                    rho / (phi - alpha).cos() + rand_distr::Distribution::sample(&normal, &mut rng);
-                Point::new((r * phi.cos()) as f32, (r * phi.sin()) as f32)
-            })
-            .collect();
-        let l = fit_line(&pts).unwrap();
-        sr += (f64::from(l.rho) - rho).powi(2);
-        sa += (f64::from(l.alpha) - alpha).powi(2);
-    }
-    let (er, ea) = (
-        (sr / f64::from(trials)).sqrt(),
-        (sa / f64::from(trials)).sqrt(),
+    let (er, ea) = monte_carlo_rms(
+        &bearings,
+        |phi| rho / (phi - alpha).cos(),
+        (sigma, 5, 2000),
+        |pts| {
+            let l = fit_line(pts).unwrap();
+            (
+                (f64::from(l.rho) - rho).powi(2),
+                (f64::from(l.alpha) - alpha).powi(2),
+            )
+        },
     );
-    assert!(
-        er > 0.9 * b.position && er < 1.3 * b.position,
-        "rho {er} vs {}",
-        b.position
-    );
-    assert!(
-        ea > 0.9 * b.shape && ea < 1.3 * b.shape,
-        "alpha {ea} vs {}",
-        b.shape
-    );
+    near_bound("rho", er, b.position, 1.3);
+    near_bound("alpha", ea, b.shape, 1.3);
 }
 
 #[test]
@@ -314,37 +335,19 @@ fn circle_crb_matches_monte_carlo_of_geometric_fit() {
         .collect();
     assert!(bearings.len() > 30);
     let b = crb(&kind, &bearings, sigma).unwrap();
-    let normal = rand_distr::Normal::new(0.0, sigma).unwrap();
-    let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let (mut sc, mut sr) = (0.0, 0.0);
-    let trials = 1000;
-    for _ in 0..trials {
-        let pts: Vec<Point> = bearings
-            .iter()
-            .map(|&phi| {
-                let u = [phi.cos(), phi.sin()];
-                let t = shape.ray_hit([0.0, 0.0], u).unwrap()
-                    + rand_distr::Distribution::sample(&normal, &mut rng);
-                Point::new((t * u[0]) as f32, (t * u[1]) as f32)
-            })
-            .collect();
-        let c = refine_circle(&pts, fit_circle(&pts, CircleMethod::Hyper).unwrap(), 10).unwrap();
-        sc += (f64::from(c.center.x) - center[0]).powi(2)
-            + (f64::from(c.center.y) - center[1]).powi(2);
-        sr += (f64::from(c.radius) - radius).powi(2);
-    }
-    let (ec, er) = (
-        (sc / f64::from(trials)).sqrt(),
-        (sr / f64::from(trials)).sqrt(),
+    let (ec, er) = monte_carlo_rms(
+        &bearings,
+        |phi| shape.ray_hit([0.0, 0.0], [phi.cos(), phi.sin()]).unwrap(),
+        (sigma, 11, 1000),
+        |pts| {
+            let c = refine_circle(pts, fit_circle(pts, CircleMethod::Hyper).unwrap(), 10).unwrap();
+            (
+                (f64::from(c.center.x) - center[0]).powi(2)
+                    + (f64::from(c.center.y) - center[1]).powi(2),
+                (f64::from(c.radius) - radius).powi(2),
+            )
+        },
     );
-    assert!(
-        ec > 0.9 * b.position && ec < 1.35 * b.position,
-        "centre {ec} vs {}",
-        b.position
-    );
-    assert!(
-        er > 0.9 * b.shape && er < 1.35 * b.shape,
-        "radius {er} vs {}",
-        b.shape
-    );
+    near_bound("centre", ec, b.position, 1.35);
+    near_bound("radius", er, b.shape, 1.35);
 }

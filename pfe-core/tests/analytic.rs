@@ -15,6 +15,24 @@ fn lms() -> ScanGeometry {
     ScanGeometry::LMS200_180_050
 }
 
+/// `n` beams 1° apart from `start_deg` (ranges up to 8 m), beam i reading
+/// `range(i, bearing in rad)` mm.
+fn one_degree_scan(
+    start_deg: f32,
+    n: usize,
+    range: impl Fn(usize, f64) -> f64,
+) -> (ScanGeometry, Vec<f32>) {
+    let g = ScanGeometry {
+        start_angle: start_deg.to_radians(),
+        angle_step: 1f32.to_radians(),
+        r_max: 8000.0,
+    };
+    let ranges = (0..n)
+        .map(|i| range(i, g.bearing(i) as f64) as f32)
+        .collect();
+    (g, ranges)
+}
+
 type Outcome = (Vec<usize>, Vec<Feature>, Vec<(usize, usize, usize)>);
 
 fn run(prims: &[Prim], config: &Config) -> Outcome {
@@ -197,29 +215,23 @@ fn room_corners() {
     );
 }
 
+/// A wall at x = 2000 mm with a 900 mm door.
+const DOOR_WALL: [Prim; 2] = [
+    Prim::Seg(2000.0, -3000.0, 2000.0, -300.0),
+    Prim::Seg(2000.0, 600.0, 2000.0, 3000.0),
+];
+
 #[test]
 fn door_gap() {
     // A wall with a 900 mm door; through it a far wall.
-    assert_scene(
-        "gap",
-        &[
-            Prim::Seg(2000.0, -3000.0, 2000.0, -300.0),
-            Prim::Seg(2000.0, 600.0, 2000.0, 3000.0),
-            Prim::Seg(5000.0, -2000.0, 5000.0, 2000.0),
-        ],
-    );
+    let far_wall = Prim::Seg(5000.0, -2000.0, 5000.0, 2000.0);
+    assert_scene("gap", &[DOOR_WALL[0], DOOR_WALL[1], far_wall]);
 }
 
 #[test]
 fn gap_without_return() {
     // The door opens onto nothing within r_max: invalid readings separate the walls.
-    assert_scene(
-        "gap-nan",
-        &[
-            Prim::Seg(2000.0, -3000.0, 2000.0, -300.0),
-            Prim::Seg(2000.0, 600.0, 2000.0, 3000.0),
-        ],
-    );
+    assert_scene("gap-nan", &DOOR_WALL);
 }
 
 #[test]
@@ -251,18 +263,10 @@ fn pillar_in_front_of_wall() {
 /// points are exactly 0, 9, 10 and 19.
 #[test]
 fn twenty_points_two_segments() {
-    let g = ScanGeometry {
-        start_angle: -10f32.to_radians(),
-        angle_step: 1f32.to_radians(),
-        r_max: 8000.0,
-    };
-    let ranges: Vec<f32> = (0..20)
-        .map(|i| {
-            let b = g.bearing(i) as f64;
-            let d = if i < 10 { 2000.0 } else { 1500.0 };
-            (d / b.cos()) as f32
-        })
-        .collect();
+    let (g, ranges) = one_degree_scan(-10.0, 20, |i, b| {
+        let d = if i < 10 { 2000.0 } else { 1500.0 };
+        d / b.cos()
+    });
     for (name, config) in configs() {
         let mut ex = Extractor::<20, 4>::new();
         ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
@@ -282,23 +286,15 @@ fn twenty_points_two_segments() {
 /// boundary points. Without the check step the spurious marks remain.
 #[test]
 fn check_step_leaves_two_boundary_points() {
-    let g = ScanGeometry {
-        start_angle: -15f32.to_radians(),
-        angle_step: 1f32.to_radians(),
-        r_max: 8000.0,
-    };
     // Wall at x = 2000 for beams 0..15, then a wall at 45° further away.
-    let ranges: Vec<f32> = (0..30)
-        .map(|i| {
-            let b = g.bearing(i) as f64;
-            if i < 15 {
-                (2000.0 / b.cos()) as f32
-            } else {
-                // Line x + y = 3000 → r = 3000 / (cos b + sin b).
-                (3000.0 / (b.cos() + b.sin())) as f32
-            }
-        })
-        .collect();
+    let (g, ranges) = one_degree_scan(-15.0, 30, |i, b| {
+        if i < 15 {
+            2000.0 / b.cos()
+        } else {
+            // Line x + y = 3000 → r = 3000 / (cos b + sin b).
+            3000.0 / (b.cos() + b.sin())
+        }
+    });
     let mut ex = Extractor::<30, 4>::new();
     let paper = Config::paper();
     ex.extract(&Scan::from_mm(g, &ranges), &paper).unwrap();

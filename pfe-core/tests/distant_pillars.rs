@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{runs, scan, Noise, Prim};
+use common::{overlapping, runs, scan, Noise, Prim};
 use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
 
 const SIGMA: f64 = 5.0;
@@ -80,11 +80,7 @@ fn distant_pillars_are_single_circles() {
                     .map(|&x| (f64::from(x) + SIGMA * noise.gauss()).round() as f32)
                     .collect();
                 ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
-                let over: Vec<&Feature> = ex
-                    .features()
-                    .iter()
-                    .filter(|f| f.last() >= first && f.first() <= last)
-                    .collect();
+                let over = overlapping(ex.features(), first, last);
                 // Everything else is the wall behind (x = 7900): lines whose ends are on it.
                 let on_wall = |f: &Feature| match f {
                     Feature::Line(l) => {

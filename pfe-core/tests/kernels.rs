@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::{runs, scan, Noise, Prim};
+use common::{overlapping, runs, scan, Noise, Prim};
 use pfe_core::geometry::ray_line_intersection;
 use pfe_core::predict::{predict, WindowLine};
 use pfe_core::{
@@ -524,11 +524,7 @@ fn arcs_continue_as_one_circle() {
                 .map(|&x| (f64::from(x) + sigma * noise.gauss()) as f32)
                 .collect();
             ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
-            let over: Vec<&Feature> = ex
-                .features()
-                .iter()
-                .filter(|f| f.last() >= first && f.first() <= last)
-                .collect();
+            let over = overlapping(ex.features(), first, last);
             let [Feature::Circle(c)] = over.as_slice() else {
                 panic!("pillar ({cx}, {cy}, {r}), trial {t}: {over:#?}");
             };

@@ -141,15 +141,7 @@ fn line_covariance_jensfelt_christensen_isotropic() {
     let (mut al, mut rh) = (Vec::new(), Vec::new());
     let mut predicted = (0.0, 0.0, 0.0);
     for _ in 0..TRIALS {
-        let pts: Vec<Point> = truth
-            .iter()
-            .map(|&(x, y)| {
-                Point::new(
-                    (x + SIGMA * noise.gauss()) as f32,
-                    (y + SIGMA * noise.gauss()) as f32,
-                )
-            })
-            .collect();
+        let pts = jitter(&truth, &mut noise);
         let l = fit_line(&pts).unwrap();
         let c = l.covariance_jc(25.0, 25.0, 0.0);
         al.push(l.alpha as f64);
@@ -166,6 +158,19 @@ fn line_covariance_jensfelt_christensen_isotropic() {
         cov(&al, &rh) / (var(&al) * var(&rh)).sqrt(),
         TRIALS,
     );
+}
+
+/// `truth` with independent Gaussian noise of σ = `SIGMA` on x and on y.
+fn jitter(truth: &[(f64, f64)], noise: &mut Noise) -> Vec<Point> {
+    truth
+        .iter()
+        .map(|&(x, y)| {
+            Point::new(
+                (x + SIGMA * noise.gauss()) as f32,
+                (y + SIGMA * noise.gauss()) as f32,
+            )
+        })
+        .collect()
 }
 
 fn circle_points(c: (f64, f64, f64), from: f64, to: f64, n: usize) -> Vec<(f64, f64)> {
@@ -213,15 +218,7 @@ fn circle_covariance_isotropic_noise() {
     let mut samples = Vec::new();
     let mut predicted = [[0.0; 3]; 3];
     for _ in 0..TRIALS {
-        let pts: Vec<Point> = truth
-            .iter()
-            .map(|&(x, y)| {
-                Point::new(
-                    (x + SIGMA * noise.gauss()) as f32,
-                    (y + SIGMA * noise.gauss()) as f32,
-                )
-            })
-            .collect();
+        let pts = jitter(&truth, &mut noise);
         let c = refine_circle(&pts, fit_circle(&pts, CircleMethod::Hyper).unwrap(), 10).unwrap();
         samples.push([c.center.x as f64, c.center.y as f64, c.radius as f64]);
         accumulate(

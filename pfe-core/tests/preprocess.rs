@@ -2,7 +2,8 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use pfe_core::{
-    BeamTiming, Config, Extractor, Feature, Motion, RangeCorrection, Scan, ScanGeometry,
+    BeamTiming, Config, Extractor, Feature, LineFeature, Motion, RangeCorrection, Scan,
+    ScanGeometry,
 };
 
 /// A smooth systematic error like the LMS200's (±15 mm over 8 m).
@@ -10,14 +11,29 @@ fn bias(r: f64) -> f64 {
     15.0 * (r / 8000.0 * 5.0).sin() * (1.0 - r / 16000.0)
 }
 
-#[test]
-fn calibration_recovers_a_sixth_order_error_curve() {
-    let pairs: Vec<(f32, f32)> = (0..200)
+/// The one feature found in `scan`, which must be a line.
+fn one_line(scan: &Scan, config: &Config) -> LineFeature {
+    let mut ex = Extractor::<361, 8>::new();
+    ex.extract(scan, config).unwrap();
+    let [Feature::Line(l)] = ex.features() else {
+        panic!("{:?}", ex.features())
+    };
+    *l
+}
+
+/// (measured, true) ranges every 39.5 mm from 100 mm, measured with [`bias`].
+fn calibration_pairs() -> Vec<(f32, f32)> {
+    (0..200)
         .map(|i| {
             let t = 100.0 + 39.5 * i as f64;
             ((t + bias(t)) as f32, t as f32)
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn calibration_recovers_a_sixth_order_error_curve() {
+    let pairs = calibration_pairs();
     let c = RangeCorrection::calibrate(&pairs).unwrap();
     let worst = pairs
         .iter()
@@ -53,12 +69,7 @@ fn calibration_rejects_bad_input() {
 #[test]
 fn correction_in_the_extractor_removes_the_bias() {
     let g = ScanGeometry::LMS200_180_050;
-    let pairs: Vec<(f32, f32)> = (0..200)
-        .map(|i| {
-            let t = 100.0 + 39.5 * i as f64;
-            ((t + bias(t)) as f32, t as f32)
-        })
-        .collect();
+    let pairs = calibration_pairs();
     let corr = RangeCorrection::calibrate(&pairs).unwrap();
     let ranges: Vec<f32> = (0..361)
         .map(|i| {
@@ -71,15 +82,10 @@ fn correction_in_the_extractor_removes_the_bias() {
             }
         })
         .collect();
-    let mut ex = Extractor::<361, 8>::new();
-    ex.extract(
+    let l = one_line(
         &Scan::from_mm(g, &ranges),
         &Config::default().with_correction(corr),
-    )
-    .unwrap();
-    let [Feature::Line(l)] = ex.features() else {
-        panic!("{:?}", ex.features())
-    };
+    );
     assert!(
         (l.rho - 3000.0).abs() < 0.5 && l.alpha.abs() < 1e-4,
         "{l:?}"
@@ -93,20 +99,16 @@ fn deskew_puts_a_moving_scan_back_on_the_wall() {
     let g = ScanGeometry::LMS200_180_050;
     let m = Motion::uniform(1000.0, 1.0, 0.002_666);
     let ranges = wall_seen_moving(g, &m, 4000.0);
-    let mut ex = Extractor::<361, 8>::new();
-    ex.extract(
+    let l = one_line(
         &Scan::from_mm(g, &ranges).with_motion(m),
         &Config::default(),
-    )
-    .unwrap();
-    let [Feature::Line(l)] = ex.features() else {
-        panic!("{:?}", ex.features())
-    };
+    );
     assert!(
         (l.rho - 4000.0).abs() < 1.0 && l.alpha.abs() < 1e-3,
         "{l:?}"
     );
     // Without de-skew the same readings do not form one wall at x = 4000.
+    let mut ex = Extractor::<361, 8>::new();
     ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
         .unwrap();
     let off = ex.features().iter().all(|f| match f {

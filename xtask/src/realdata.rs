@@ -3,7 +3,7 @@
 //! pass through; `--check` is CI's short run (60 scans a log, printed, no document). Skips loudly, exit 0, when the shared
 //! data is absent.
 
-use crate::util::{self, cargo};
+use crate::util;
 use anyhow::{Context, Result};
 
 /// The shared logs, relative to the repository root.
@@ -34,19 +34,8 @@ pub fn run(args: &[String]) -> Result<()> {
         named.push(' ');
         named.push_str(a);
     }
-    let mut cmd = cargo();
-    cmd.args([
-        "run",
-        "--release",
-        "-q",
-        "-p",
-        "host-tests",
-        "--bin",
-        "pfe",
-        "--",
-    ])
-    .arg("realdata")
-    .args(&logs);
+    let mut cmd = util::pfe();
+    cmd.arg("realdata").args(&logs);
     if args.iter().any(|a| a == "--check") {
         // CI's shortened run: the first scans of every log, printed, no document written.
         cmd.args(["--max-scans", "60"]);

@@ -128,22 +128,7 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     })?;
     step(
         "host speed against the baselines (reported, not asserted)",
-        || {
-            sh(cargo().args([
-                "run",
-                "--release",
-                "-q",
-                "-p",
-                "host-tests",
-                "--bin",
-                "pfe",
-                "--",
-                "bench",
-                "--reps",
-                "5",
-                "--report-only",
-            ]))
-        },
+        || sh(crate::util::pfe().args(["bench", "--reps", "5", "--report-only"])),
     )?;
     step("MRPT conformance", || crate::conformance::run(&[]))?;
     step(

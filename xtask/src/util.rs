@@ -19,18 +19,22 @@ pub fn cargo() -> Command {
     c
 }
 
+/// `cargo run --release -q -p host-tests {target} {name}`, `target` `--bin` or `--example`.
+fn host_tests_run(target: &str, name: &str) -> Command {
+    let mut c = cargo();
+    c.args(["run", "--release", "-q", "-p", "host-tests", target, name]);
+    c
+}
+
 /// `cargo run --release -q -p host-tests --example {name}` (append `--` and its arguments).
 pub fn host_example(name: &str) -> Command {
-    let mut c = cargo();
-    c.args([
-        "run",
-        "--release",
-        "-q",
-        "-p",
-        "host-tests",
-        "--example",
-        name,
-    ]);
+    host_tests_run("--example", name)
+}
+
+/// `cargo run --release -q -p host-tests --bin pfe --` (append the `pfe` arguments).
+pub fn pfe() -> Command {
+    let mut c = host_tests_run("--bin", "pfe");
+    c.arg("--");
     c
 }
 

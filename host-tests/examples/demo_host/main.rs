@@ -59,6 +59,19 @@ impl Opts {
             .map(PathBuf::from)
             .with_context(|| format!("--{k} is required"))
     }
+    /// With `--md PATH`: writes `md` as section `name` of that document, reproduced by
+    /// `command`.
+    fn write_section(&self, name: &str, command: &str, md: &str) -> Result<()> {
+        if let Some(path) = self.get("md") {
+            host_tests::docs::write_section(
+                Path::new(path),
+                name,
+                &format!("`{command}`"),
+                &format!("Reproduce: `{command}`\n\n{md}"),
+            )?;
+        }
+        Ok(())
+    }
     fn num(&self, k: &str, default: u64) -> Result<u64> {
         self.get(k)
             .map(|v| {
@@ -252,14 +265,7 @@ fn bench(o: &Opts) -> Result<()> {
         }
     ));
     println!("{md}");
-    if let Some(path) = o.get("md") {
-        host_tests::docs::write_section(
-            Path::new(path),
-            "bench-mcu",
-            "`cargo xtask bench-mcu`",
-            &format!("Reproduce: `cargo xtask bench-mcu`\n\n{md}"),
-        )?;
-    }
+    o.write_section("bench-mcu", "cargo xtask bench-mcu", &md)?;
     if pipe_median.is_nan() || pipe_median > BUDGET_PER_POINT {
         bail!("pipeline median {pipe_median:.1} instructions/point > budget {BUDGET_PER_POINT}");
     }
@@ -404,14 +410,7 @@ fn worst(o: &Opts) -> Result<()> {
     ));
     md.push_str(BOUND_DERIVATION);
     println!("{md}");
-    if let Some(path) = o.get("md") {
-        host_tests::docs::write_section(
-            Path::new(path),
-            "bench-mcu-worst",
-            "`cargo xtask bench-mcu --worst`",
-            &format!("Reproduce: `cargo xtask bench-mcu --worst`\n\n{md}"),
-        )?;
-    }
+    o.write_section("bench-mcu-worst", "cargo xtask bench-mcu --worst", &md)?;
     if max > WORST_BUDGET {
         bail!("worst-case pipeline {max:.0} instructions/scan > budget {WORST_BUDGET}");
     }

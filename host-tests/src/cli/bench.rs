@@ -38,16 +38,13 @@ pub struct Args {
 
 /// `pfe bench` from an argument list.
 pub fn cli(args: &[String]) -> anyhow::Result<()> {
-    match super::parse_sub::<Args>("pfe bench", args)? {
-        Some(a) => run(a),
-        None => Ok(()),
-    }
+    super::parse_sub::<Args>("pfe bench", args)?.map_or(Ok(()), run)
 }
 
 /// Runs `pfe bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if args.carmen.exists() && !args.carmen.is_dir() {
-        return Err(super::BadInput(format!(
+        return Err(super::Exit::bad_input(format!(
             "--carmen {}: not a directory (give the folder of CARMEN logs)",
             args.carmen.display()
         ))

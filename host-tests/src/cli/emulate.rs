@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::{Context, Result};
 
 use super::lms_args::LmsArgs;
-use super::BadInput;
+use super::Exit;
 use crate::device::emulator::serve::clear_stale_link;
 use crate::device::emulator::{
     serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind,
@@ -53,10 +53,7 @@ fn source(s: &str) -> Result<SourceKind, String> {
 
 /// `pfe emulate` from an argument list.
 pub fn cli(args: &[String]) -> Result<()> {
-    match super::parse_sub::<Args>("pfe emulate", args)? {
-        Some(a) => run(a),
-        None => Ok(()),
-    }
+    super::parse_sub::<Args>("pfe emulate", args)?.map_or(Ok(()), run)
 }
 
 /// Runs `pfe emulate`.
@@ -85,7 +82,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     let report = match (a.pty, a.tcp) {
         (Some(p), None) => {
-            clear_stale_link(&p).map_err(|e| BadInput(format!("--pty: {e:#}")))?;
+            clear_stale_link(&p).map_err(|e| Exit::bad_input(format!("--pty: {e:#}")))?;
             eprintln!("emulating an LMS200 on {}", p.display());
             serve_pty(&p, Emulator::from_config(cfg), limits)?
         }
@@ -95,7 +92,7 @@ pub fn run(a: Args) -> Result<()> {
             serve_tcp(l, cfg, limits)?
         }
         _ => {
-            return Err(BadInput(format!(
+            return Err(Exit::bad_input(format!(
                 "give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"
             ))
             .into())

@@ -49,7 +49,7 @@ impl Args {
                 .split(',')
                 .map(|s| s.trim().parse::<f32>())
                 .collect::<Result<_, _>>()
-                .map_err(|e| super::BadInput(format!("--sweep: {e}")))?,
+                .map_err(|e| super::Exit::bad_input(format!("--sweep: {e}")))?,
             None => d.sweep,
         };
         let o = EvalOptions {
@@ -68,7 +68,7 @@ impl Args {
         };
         let bad = |s: f32| s.is_nan() || s < 0.0;
         if o.scans == 0 || bad(o.sigma) || o.sweep.iter().any(|s| bad(*s)) {
-            return Err(super::BadInput("--scans must be > 0 and every σ ≥ 0".into()).into());
+            return Err(super::Exit::bad_input("--scans must be > 0 and every σ ≥ 0").into());
         }
         Ok(o)
     }

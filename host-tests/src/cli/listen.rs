@@ -209,7 +209,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if a.seconds.is_some_and(|s| !(s.is_finite() && s > 0.0)) {
         return Err(Failure::input("--seconds must be a positive number"));
     }
-    if crate::link::listen::baud_rate(a.baud).is_none() {
+    if crate::device::tty::baud_rate(a.baud).is_none() {
         return Err(Failure::input(format!("unsupported --baud {}", a.baud)));
     }
     let source = match (&a.tcp, &a.input) {

@@ -97,18 +97,15 @@ impl Failure {
         }
     }
 
-    /// A subcommand's error, named after it: exit code 2 for bad input ([`BadInput`],
-    /// an existing output file, a bad argument), 130 for [`Interrupted`], 1 otherwise.
+    /// A subcommand's error, named after it: the code of an [`Exit`], 2 for an existing
+    /// output file or a bad argument, 1 otherwise.
     fn of(name: &str, e: &anyhow::Error) -> Self {
         let text = format!("{e:#}");
         let text = text.strip_prefix("error: ").unwrap_or(&text);
-        let code = if e.is::<BadInput>()
-            || e.is::<crate::device::record::OutputExists>()
-            || e.is::<clap::Error>()
-        {
+        let code = if let Some(exit) = e.downcast_ref::<Exit>() {
+            exit.code
+        } else if e.is::<crate::device::record::OutputExists>() || e.is::<clap::Error>() {
             2
-        } else if e.is::<Interrupted>() {
-            130
         } else {
             1
         };
@@ -119,29 +116,40 @@ impl Failure {
     }
 }
 
-/// A bad-input error from a subcommand returning `anyhow` (exit code 2).
+/// An error from a subcommand returning `anyhow` that sets `pfe`'s exit code.
 #[derive(Debug)]
-pub struct BadInput(pub String);
+pub struct Exit {
+    /// The exit code.
+    pub code: u8,
+    /// What to print.
+    pub message: String,
+}
 
-impl std::fmt::Display for BadInput {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+impl Exit {
+    /// Bad input (exit code 2).
+    pub fn bad_input(message: impl Into<String>) -> Self {
+        Exit {
+            code: 2,
+            message: message.into(),
+        }
+    }
+
+    /// A run stopped by Ctrl-C or SIGTERM after keeping what it had (exit code 130).
+    pub fn interrupted(message: impl Into<String>) -> Self {
+        Exit {
+            code: 130,
+            message: message.into(),
+        }
     }
 }
 
-impl std::error::Error for BadInput {}
-
-/// A run stopped by Ctrl-C or SIGTERM after keeping what it had (exit code 130).
-#[derive(Debug)]
-pub struct Interrupted(pub String);
-
-impl std::fmt::Display for Interrupted {
+impl std::fmt::Display for Exit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+        f.write_str(&self.message)
     }
 }
 
-impl std::error::Error for Interrupted {}
+impl std::error::Error for Exit {}
 
 /// Runs `pfe` with the process's arguments.
 pub fn main() -> ExitCode {

@@ -6,7 +6,7 @@ use anyhow::Result;
 use firmware::lms::driver::Config;
 
 use super::lms_args::LmsArgs;
-use super::BadInput;
+use super::Exit;
 use crate::device::record::{record, RecordOptions};
 
 const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE [--force]
@@ -37,10 +37,7 @@ pub struct Args {
 
 /// `pfe record` from an argument list.
 pub fn cli(args: &[String]) -> Result<()> {
-    match super::parse_sub::<Args>("pfe record", args)? {
-        Some(a) => run(a),
-        None => Ok(()),
-    }
+    super::parse_sub::<Args>("pfe record", args)?.map_or(Ok(()), run)
 }
 
 /// Runs `pfe record`.
@@ -56,7 +53,7 @@ pub fn run(a: Args) -> Result<()> {
         cfg.unit = u;
     }
     let (Some(port), Some(out)) = (a.port, a.output) else {
-        return Err(BadInput(format!("--port and -o are required\n\n{USAGE}")).into());
+        return Err(Exit::bad_input(format!("--port and -o are required\n\n{USAGE}")).into());
     };
     let opts = RecordOptions {
         overwrite: a.force,
@@ -65,7 +62,7 @@ pub fn run(a: Args) -> Result<()> {
     let s = record(&port, cfg, a.scans, &out, &opts)?;
     println!("{}", serde_json::to_string(&s)?);
     if s.interrupted {
-        return Err(super::Interrupted(format!(
+        return Err(super::Exit::interrupted(format!(
             "interrupted after {} scans; the {} bytes received are in {}",
             s.scans,
             s.bytes,

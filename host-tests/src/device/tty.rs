@@ -24,14 +24,18 @@ pub struct TtyPort {
     stop: Option<Arc<AtomicBool>>,
 }
 
-fn baud_rate(bps: u32) -> Option<BaudRate> {
+/// The termios rate for `bps`.
+pub fn baud_rate(bps: u32) -> Option<BaudRate> {
     Some(match bps {
         9600 => BaudRate::B9600,
         19200 => BaudRate::B19200,
         38400 => BaudRate::B38400,
         57600 => BaudRate::B57600,
         115_200 => BaudRate::B115200,
+        230_400 => BaudRate::B230400,
+        460_800 => BaudRate::B460800,
         500_000 => BaudRate::B500000,
+        921_600 => BaudRate::B921600,
         _ => return None,
     })
 }

@@ -1,7 +1,7 @@
 //! The evaluation as Markdown (docs/EVALUATION.md) and as plain text.
 
 use super::{Evaluation, Level, MethodResult};
-use crate::eval::score::quantile;
+use crate::eval::score::{quantile, Score};
 use std::fmt::Write as _;
 
 /// Median |error| / CRB σ of an efficient unbiased Gaussian estimator (and 95th percentile).
@@ -87,6 +87,17 @@ fn f(v: f64, d: usize) -> String {
     }
 }
 
+/// A score's FalseMarkRatio, FalseIdenRatio, missed and spurious ratios as table cells.
+fn ratios(s: &Score) -> String {
+    format!(
+        "{:.4} | {:.4} | {:.3} | {:.3}",
+        s.false_mark_ratio(),
+        s.false_iden_ratio(),
+        s.missed_ratio(),
+        s.spurious_ratio()
+    )
+}
+
 fn pair(p: (f64, f64), d: usize) -> String {
     format!("{} / {}", f(p.0, d), f(p.1, d))
 }
@@ -111,13 +122,10 @@ fn counts_table(out: &mut String, level: &Level, with_time: bool) {
         };
         let _ = writeln!(
             out,
-            "| {} |{} {:.4} | {:.4} | {:.3} | {:.3} | {} / {} |",
+            "| {} |{} {} | {} / {} |",
             r.name,
             time,
-            s.false_mark_ratio(),
-            s.false_iden_ratio(),
-            s.missed_ratio(),
-            s.spurious_ratio(),
+            ratios(s),
             s.matched,
             s.truth_features
         );
@@ -232,14 +240,11 @@ pub fn markdown(ev: &Evaluation) -> String {
             let e = errors(r);
             let _ = writeln!(
                 out,
-                "| {} | {:.1} | {} | {:.4} | {:.4} | {:.3} | {:.3} | {} | {} |",
+                "| {} | {:.1} | {} | {} | {} | {} |",
                 k.name(),
                 per,
                 r.name,
-                s.false_mark_ratio(),
-                s.false_iden_ratio(),
-                s.missed_ratio(),
-                s.spurious_ratio(),
+                ratios(s),
                 f(e.rho.0, 2),
                 f(e.center.0, 1)
             );
@@ -258,13 +263,10 @@ pub fn markdown(ev: &Evaluation) -> String {
             let e = errors(r);
             let _ = writeln!(
                 out,
-                "| {} | {} | {:.4} | {:.4} | {:.3} | {:.3} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} |",
                 name,
                 r.name,
-                s.false_mark_ratio(),
-                s.false_iden_ratio(),
-                s.missed_ratio(),
-                s.spurious_ratio(),
+                ratios(s),
                 f(e.rho.0, 2),
                 f(e.center.0, 1),
                 f(e.z_rho.0, 2)
@@ -283,13 +285,10 @@ pub fn markdown(ev: &Evaluation) -> String {
             let e = errors(r);
             let _ = writeln!(
                 out,
-                "| {} | {} | {:.4} | {:.4} | {:.3} | {:.3} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 level.sigma,
                 r.name,
-                s.false_mark_ratio(),
-                s.false_iden_ratio(),
-                s.missed_ratio(),
-                s.spurious_ratio(),
+                ratios(s),
                 f(e.rho.0, 2),
                 f(e.alpha.0, 2),
                 f(e.center.0, 1),

@@ -5,7 +5,7 @@ use crate::eval::report::{crb_summary, errors, EFFICIENT_Z};
 use std::fmt::Write as _;
 
 /// Colours of the methods, in order.
-const COLORS: [&str; 6] = [
+pub(crate) const COLORS: [&str; 6] = [
     "#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
 ];
 
@@ -17,7 +17,8 @@ struct Series {
     ys: Vec<f64>,
 }
 
-fn esc(s: &str) -> String {
+/// `s` with `&`, `<` and `>` escaped for SVG text.
+pub(crate) fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
@@ -139,7 +140,8 @@ fn legend(out: &mut String, x: f64, y: f64, series: &[Series]) {
     }
 }
 
-fn nice_ceiling(v: f64) -> f64 {
+/// The least of 1, 2, 2.5, 5 or 10 times a power of ten that is at least `v` (1 for NaN or ≤ 0).
+pub(crate) fn nice_ceiling(v: f64) -> f64 {
     if v.is_nan() || v <= 0.0 {
         return 1.0;
     }
@@ -152,7 +154,8 @@ fn nice_ceiling(v: f64) -> f64 {
     10.0 * p
 }
 
-fn fmt_tick(v: f64) -> String {
+/// An axis label: `v` to 3 decimals without trailing zeros.
+pub(crate) fn fmt_tick(v: f64) -> String {
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s.is_empty() || s == "-" {

@@ -63,7 +63,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, checked_record, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, ranges_mm, InputError, Lines, Record};
 
 /// Default maximum range, mm: readings at or beyond it are no return.
 pub const DEFAULT_MAX_RANGE_MM: f32 = 50_000.0;
@@ -135,28 +135,14 @@ impl Reader {
         let mut tokens = rest.split_ascii_whitespace();
         let n: usize = number(line, "beam count", tokens.next())?;
         check_beams(line, n)?;
-        let mut ranges = Vec::with_capacity(n);
-        for k in 0..n {
-            let token = tokens.next().ok_or_else(|| {
-                InputError::line(line, format!("FLASER declares {n} ranges but has {k}"))
-            })?;
-            let r: f32 = number(line, &format!("range {k}"), Some(token))?;
-            if !(r.is_finite() && r >= 0.0) {
-                return Err(InputError::line(
-                    line,
-                    format!(
-                        "range {k} is not a range in metres: {}",
-                        super::quote(token)
-                    ),
-                ));
-            }
-            let mm = r * 1000.0;
-            ranges.push(if mm > 0.0 && mm < self.r_max {
-                mm
-            } else {
-                f32::NAN
-            });
-        }
+        let r_max = self.r_max;
+        let ranges = ranges_mm(
+            line,
+            ("FLASER", n),
+            &mut tokens,
+            |r| (!(r.is_finite() && r >= 0.0)).then_some("not a range in metres"),
+            |mm| mm > 0.0 && mm < r_max,
+        )?;
         // The laser pose, odometry pose and timestamp must follow the ranges.
         let Some(x) = tokens.next() else {
             return Err(InputError::line(

@@ -18,7 +18,7 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use super::{check_beams, checked_record, number, InputError, Lines, Record};
+use super::{check_beams, checked_record, number, ranges_mm, InputError, Lines, Record};
 
 /// Streaming Hokuyo reader.
 pub struct Reader {
@@ -48,26 +48,14 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
     let n: usize = number(line, "beam count", t.next())?;
     check_beams(line, n)?;
     let (lo, hi) = (range_min * 1000.0, range_max * 1000.0);
-    let mut ranges = Vec::with_capacity(n);
-    for k in 0..n {
-        let token = t.next().ok_or_else(|| {
-            InputError::line(line, format!("line declares {n} ranges but has {k}"))
-        })?;
-        let r: f32 = number(line, &format!("range {k}"), Some(token))?;
-        if r < 0.0 {
-            return Err(InputError::line(
-                line,
-                format!("range {k} is negative: {}", super::quote(token)),
-            ));
-        }
-        let mm = r * 1000.0;
-        // NaN and ±inf (as ROS writes non-finite ranges) fail these tests: no return.
-        ranges.push(if mm > 0.0 && mm >= lo && mm <= hi {
-            mm
-        } else {
-            f32::NAN
-        });
-    }
+    // NaN and ±inf (as ROS writes non-finite ranges) fail the range test: no return.
+    let ranges = ranges_mm(
+        line,
+        ("line", n),
+        &mut t,
+        |r| (r < 0.0).then_some("negative"),
+        |mm| mm > 0.0 && mm >= lo && mm <= hi,
+    )?;
     if let Some(extra) = t.next() {
         return Err(InputError::line(
             line,

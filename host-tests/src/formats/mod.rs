@@ -336,6 +336,34 @@ pub(crate) fn check_beams(line: u64, n: usize) -> Result<(), InputError> {
     }
 }
 
+/// The `n` ranges in metres that `tokens` hold next on text line `line`, in mm. `bad` names
+/// what is wrong with a reading that is an error (`None`: it is fine); a reading that `valid`
+/// rejects has no return (NaN). `record` names the line's kind for a line with fewer ranges.
+pub(crate) fn ranges_mm<'a>(
+    line: u64,
+    (record, n): (&str, usize),
+    tokens: &mut impl Iterator<Item = &'a str>,
+    bad: impl Fn(f32) -> Option<&'static str>,
+    valid: impl Fn(f32) -> bool,
+) -> Result<Vec<f32>, InputError> {
+    let mut ranges = Vec::with_capacity(n);
+    for k in 0..n {
+        let token = tokens.next().ok_or_else(|| {
+            InputError::line(line, format!("{record} declares {n} ranges but has {k}"))
+        })?;
+        let r: f32 = number(line, &format!("range {k}"), Some(token))?;
+        if let Some(what) = bad(r) {
+            return Err(InputError::line(
+                line,
+                format!("range {k} is {what}: {}", quote(token)),
+            ));
+        }
+        let mm = r * 1000.0;
+        ranges.push(if valid(mm) { mm } else { f32::NAN });
+    }
+    Ok(ranges)
+}
+
 /// The record read from `line`, once its geometry is usable.
 pub(crate) fn checked_record(
     line: u64,

@@ -32,8 +32,10 @@ use firmware::output::{
     max_frame_len, DecodeError, Feed, Frame, FrameDecoder, Header, ScanHeader, ScanStatus,
     MAX_FEATURES,
 };
-use nix::sys::termios::{self, BaudRate, SetArg};
+use nix::sys::termios::{self, SetArg};
 use serde::Serialize;
+
+use crate::device::tty::baud_rate;
 
 use crate::formats::{FeatureJson, ScanJson, StatusJson};
 
@@ -215,22 +217,6 @@ impl ListenJson {
             received,
         }
     }
-}
-
-/// The termios rate for `bps`.
-pub fn baud_rate(bps: u32) -> Option<BaudRate> {
-    Some(match bps {
-        9600 => BaudRate::B9600,
-        19200 => BaudRate::B19200,
-        38400 => BaudRate::B38400,
-        57600 => BaudRate::B57600,
-        115_200 => BaudRate::B115200,
-        230_400 => BaudRate::B230400,
-        460_800 => BaudRate::B460800,
-        500_000 => BaudRate::B500000,
-        921_600 => BaudRate::B921600,
-        _ => return None,
-    })
 }
 
 /// Opens a serial port or pty read-only, raw 8N1 at `bps` (blocking reads).

@@ -126,6 +126,7 @@ pub fn structured() -> Vec<AdversarialScan> {
     let g401 = ScanGeometry::lms200(100.0, 0.25);
     let mut rng = ChaCha8Rng::seed_from_u64(20);
     let mut out = Vec::new();
+    let mut add = |kind, codes, mm| out.push(AdversarialScan::new(kind, codes, mm));
     // Zigzags: walls meeting at corners every `p` beams (a boundary to locate and refine at
     // each corner, a merge test after each).
     for p in [6usize, 9, 12] {
@@ -134,17 +135,17 @@ pub fn structured() -> Vec<AdversarialScan> {
             let tri = if t < 1.0 { t } else { 2.0 - t };
             Some(2000.0 + 300.0 * tri)
         });
-        out.push(AdversarialScan::new("zigzag", codes, true));
+        add("zigzag", codes, true);
     }
     // Every beam a breakpoint: a jump at every beam.
     let codes = scan_of(361, 1.0, |i| Some(if i % 2 == 0 { 1500.0 } else { 4000.0 }));
-    out.push(AdversarialScan::new("every beam a breakpoint", codes, true));
+    add("every beam a breakpoint", codes, true);
     // All short segments: runs of 2 or 3 beams (below min_points), a jump between them.
     for w in [2usize, 3] {
         let codes = scan_of(361, 1.0, |i| {
             Some(if (i / w) % 2 == 0 { 1800.0 } else { 3000.0 })
         });
-        out.push(AdversarialScan::new("all short segments", codes, true));
+        add("all short segments", codes, true);
     }
     // All arcs: pillars side by side (arc fits, circle typing and refinement per segment).
     for (w, c, r) in [
@@ -152,11 +153,7 @@ pub fn structured() -> Vec<AdversarialScan> {
         (12, 2000.0, 120.0),
         (24, 1200.0, 150.0),
     ] {
-        out.push(AdversarialScan::new(
-            "all arcs",
-            arcs(&g, 361, w, c, r, 1.0),
-            true,
-        ));
+        add("all arcs", arcs(&g, 361, w, c, r, 1.0), true);
     }
     // Features at capacity and beyond: 4- to 7-beam walls at alternating depths, each its
     // own feature (more segments than the 48 features the firmware keeps).
@@ -165,40 +162,34 @@ pub fn structured() -> Vec<AdversarialScan> {
             let d = if (i / w) % 2 == 0 { 1600.0 } else { 2600.0 };
             wall(&g, i, d, g.bearing(i - i % w))
         });
-        out.push(AdversarialScan::new("features at capacity", codes, true));
+        add("features at capacity", codes, true);
     }
     // Alternating invalid readings: every other beam (or every third) no return.
     for p in [2usize, 3] {
         let codes = scan_of(361, 1.0, |i| {
             (i % p != 0).then(|| wall(&g, i, 2500.0, 0.0))?
         });
-        out.push(AdversarialScan::new("alternating invalid", codes, true));
+        add("alternating invalid", codes, true);
     }
     // 401 values at 0.25°: zigzag, arcs and noise over the longest scan.
     let codes = scan_of(401, 1.0, |i| {
         let t = (i % 16) as f32 / 8.0;
         Some(2000.0 + 200.0 * if t < 1.0 { t } else { 2.0 - t })
     });
-    out.push(AdversarialScan::new("401 values at 0.25°", codes, true));
-    out.push(AdversarialScan::new(
-        "401 values at 0.25°",
-        arcs(&g401, 401, 10, 1500.0, 40.0, 1.0),
-        true,
-    ));
+    for codes in [codes, arcs(&g401, 401, 10, 1500.0, 40.0, 1.0)] {
+        add("401 values at 0.25°", codes, true);
+    }
     // cm mode: ranges up to 81.82 m (a far wall, arcs far away, jumps across the range).
-    let codes = scan_of(361, 10.0, |i| {
+    let far_wall = scan_of(361, 10.0, |i| {
         wall(&g, i, 30_000.0, 0.0).map(|r| r.min(81_820.0))
     });
-    out.push(AdversarialScan::new("cm mode to 81.82 m", codes, false));
-    out.push(AdversarialScan::new(
-        "cm mode to 81.82 m",
-        arcs(&g, 361, 12, 60_000.0, 3_000.0, 10.0),
-        false,
-    ));
-    let codes = scan_of(361, 10.0, |i| {
+    let far_arcs = arcs(&g, 361, 12, 60_000.0, 3_000.0, 10.0);
+    let jumps = scan_of(361, 10.0, |i| {
         Some(if (i / 5) % 2 == 0 { 81_820.0 } else { 20_000.0 })
     });
-    out.push(AdversarialScan::new("cm mode to 81.82 m", codes, false));
+    for codes in [far_wall, far_arcs, jumps] {
+        add("cm mode to 81.82 m", codes, false);
+    }
     // Near-collinear noise: a wall with noise at the edge of the line test, so the cached
     // window keeps failing and is refitted (and arcs, boundaries tried) at many points.
     for amp in [8.0f32, 12.0, 16.0, 24.0] {
@@ -206,7 +197,7 @@ pub fn structured() -> Vec<AdversarialScan> {
             let n: f32 = rng.gen_range(-amp..=amp);
             wall(&g, i, 2000.0, 0.0).map(|r| r + n)
         });
-        out.push(AdversarialScan::new("near-collinear noise", codes, true));
+        add("near-collinear noise", codes, true);
     }
     out
 }

@@ -4,6 +4,7 @@
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::{FRAC_PI_2, PI};
+use std::ops::Range;
 
 use super::vec2::{add, cross, dir, norm, scale, sub, wrap_pi, V2};
 use super::{SceneKind, Shape};
@@ -258,6 +259,45 @@ impl Scene {
             }
         }
     }
+
+    /// Up to `n` circles of a radius drawn from `radii`, each needing `reach` mm of free room.
+    fn scatter_circles(
+        &mut self,
+        rng: &mut ChaCha8Rng,
+        n: usize,
+        margin: f64,
+        radii: Range<f64>,
+        reach: f64,
+    ) {
+        let place = |sc: &mut Scene, rng: &mut ChaCha8Rng, c| {
+            let r = rng.gen_range(radii.clone());
+            sc.circle(c, r);
+            0.0
+        };
+        self.scatter(rng, n, margin, place, |_| reach);
+    }
+
+    /// Up to `n` boxes of a size drawn from `widths × heights` at any angle, each needing
+    /// `reach` mm of free room.
+    fn scatter_boxes(
+        &mut self,
+        rng: &mut ChaCha8Rng,
+        n: usize,
+        margin: f64,
+        [widths, heights]: [Range<f64>; 2],
+        reach: f64,
+    ) {
+        let place = |sc: &mut Scene, rng: &mut ChaCha8Rng, c| {
+            let (bw, bh) = (
+                rng.gen_range(widths.clone()),
+                rng.gen_range(heights.clone()),
+            );
+            let angle = rng.gen_range(-PI..PI);
+            sc.rect(c, bw, bh, angle);
+            0.0
+        };
+        self.scatter(rng, n, margin, place, |_| reach);
+    }
 }
 
 /// Four walls of a `w × h` room (counter-clockwise, room inside) with doors.
@@ -316,17 +356,7 @@ pub(super) fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
                 |rng| rng.gen_range(300.0..600.0),
             );
             if rng.gen_bool(0.4) {
-                sc.scatter(
-                    rng,
-                    1,
-                    300.0,
-                    |sc, rng, c| {
-                        let r = rng.gen_range(150.0..400.0);
-                        sc.circle(c, r);
-                        0.0
-                    },
-                    |_| 400.0,
-                );
+                sc.scatter_circles(rng, 1, 300.0, 150.0..400.0, 400.0);
             }
             if rng.gen_bool(0.3) {
                 let (a, b) = walls[rng.gen_range(0..4)];
@@ -346,30 +376,9 @@ pub(super) fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
             );
             room(&mut sc, rng, w, h, 1, false);
             let n = rng.gen_range(12..=22);
-            sc.scatter(
-                rng,
-                n,
-                200.0,
-                |sc, rng, c| {
-                    let (bw, bh) = (rng.gen_range(200.0..700.0), rng.gen_range(200.0..700.0));
-                    let angle = rng.gen_range(-PI..PI);
-                    sc.rect(c, bw, bh, angle);
-                    0.0
-                },
-                |_| 500.0,
-            );
+            sc.scatter_boxes(rng, n, 200.0, [200.0..700.0, 200.0..700.0], 500.0);
             let m = rng.gen_range(0..=3);
-            sc.scatter(
-                rng,
-                m,
-                200.0,
-                |sc, rng, c| {
-                    let r = rng.gen_range(80.0..250.0);
-                    sc.circle(c, r);
-                    0.0
-                },
-                |_| 250.0,
-            );
+            sc.scatter_circles(rng, m, 200.0, 80.0..250.0, 250.0);
         }
         SceneKind::Pillars => {
             let (w, h) = (
@@ -393,30 +402,9 @@ pub(super) fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
                 sc.pilasters(rng, a, b, k, 400.0);
             }
             let n = rng.gen_range(8..=14);
-            sc.scatter(
-                rng,
-                n,
-                300.0,
-                |sc, rng, c| {
-                    let r = rng.gen_range(100.0..500.0);
-                    sc.circle(c, r);
-                    0.0
-                },
-                |_| 500.0,
-            );
+            sc.scatter_circles(rng, n, 300.0, 100.0..500.0, 500.0);
             if rng.gen_bool(0.5) {
-                sc.scatter(
-                    rng,
-                    1,
-                    300.0,
-                    |sc, rng, c| {
-                        let (bw, bh) = (rng.gen_range(400.0..1200.0), rng.gen_range(400.0..1200.0));
-                        let angle = rng.gen_range(-PI..PI);
-                        sc.rect(c, bw, bh, angle);
-                        0.0
-                    },
-                    |_| 700.0,
-                );
+                sc.scatter_boxes(rng, 1, 300.0, [400.0..1200.0, 400.0..1200.0], 700.0);
             }
         }
         SceneKind::Corridor => {

@@ -1,8 +1,15 @@
-//! Helpers shared by the `pfe` CLI tests.
+//! Helpers shared by the host-tests integration tests.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use host_tests::device::emulator::serve::{serve_on, Pty};
+use host_tests::device::emulator::{Emulator, EmulatorReport, RunLimits};
 
 /// A file of `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
@@ -11,12 +18,98 @@ pub fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// A fresh, empty directory `pfe-TAG-PID` under the system's temporary directory.
+pub fn scratch(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("pfe-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A [`scratch`] directory, removed when dropped.
+pub struct TempDir(pub PathBuf);
+
+impl TempDir {
+    /// A fresh `pfe-TAG-PID` directory.
+    pub fn new(tag: &str) -> Self {
+        TempDir(scratch(tag))
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// `path` as a command-line argument (test paths are UTF-8).
+pub fn arg(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
 /// Runs `pfe ARGS` and returns what it did.
 pub fn pfe(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pfe"))
         .args(args)
         .output()
         .unwrap()
+}
+
+/// A run's stdout read as JSON lines.
+pub fn json_lines(out: &Output) -> Vec<serde_json::Value> {
+    String::from_utf8(out.stdout.clone())
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+/// Starts `pfe ARGS` with stdin, stdout and stderr piped.
+pub fn spawn_pfe(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// An MCAP writer into `out`, uncompressed, with chunks of `chunk_size` bytes.
+pub fn mcap_writer(
+    out: &mut std::io::Cursor<Vec<u8>>,
+    chunk_size: u64,
+) -> mcap::Writer<&mut std::io::Cursor<Vec<u8>>> {
+    mcap::WriteOptions::new()
+        .compression(None)
+        .chunk_size(Some(chunk_size))
+        .create(out)
+        .unwrap()
+}
+
+/// What a run wrote to stderr.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// The JSON array `v` of whole numbers.
+pub fn u64s(v: &serde_json::Value) -> Vec<u64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_u64().unwrap())
+        .collect()
+}
+
+/// The value of `key` in a Foxglove entity's `metadata` list.
+pub fn metadata(entity: &serde_json::Value, key: &str) -> String {
+    entity["metadata"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["key"] == key)
+        .map(|m| m["value"].as_str().unwrap().to_string())
+        .unwrap_or_else(|| panic!("no metadata {key}"))
 }
 
 /// Runs the fixture script `script` (a path under `tests/fixtures`) with `args` and parses its
@@ -60,10 +153,31 @@ pub fn python(
 /// `read_foxglove.py`'s summary of the Foxglove file `path` (read by Python's `mcap`), or `None`
 /// after reporting `test` as skipped.
 pub fn read_foxglove(test: &str, path: &std::path::Path) -> Option<serde_json::Value> {
-    python(
-        test,
-        "foxglove/read_foxglove.py",
-        &[path.to_str().unwrap()],
-        "mcap",
-    )
+    python(test, "foxglove/read_foxglove.py", &[arg(path)], "mcap")
+}
+
+/// An emulator served on a pseudo-terminal in its own thread for at most 60 s.
+pub struct PtyServer {
+    stop: Arc<AtomicBool>,
+    thread: JoinHandle<anyhow::Result<(EmulatorReport, Pty)>>,
+}
+
+impl PtyServer {
+    /// Serves `emu` on `pty` until [`PtyServer::stop`].
+    pub fn start(mut pty: Pty, emu: Emulator) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let limits = RunLimits {
+            max_time: Some(Duration::from_secs(60)),
+            stop: Some(stop.clone()),
+            ..Default::default()
+        };
+        let thread = std::thread::spawn(move || serve_on(&mut pty, emu, limits).map(|r| (r, pty)));
+        PtyServer { stop, thread }
+    }
+
+    /// Stops serving; the emulator's report and the pseudo-terminal (kept open until here).
+    pub fn stop(self) -> (EmulatorReport, Pty) {
+        self.stop.store(true, Ordering::Relaxed);
+        self.thread.join().unwrap().unwrap()
+    }
 }

@@ -1,4 +1,5 @@
-//! Exact ray casting of walls and circles for the analytic tests (independent of pfe-core).
+//! Exact ray casting of walls and circles for the analytic tests (independent of pfe-core), and
+//! a filter of extracted features by beam range.
 #![allow(clippy::indexing_slicing)]
 #![allow(dead_code)]
 
@@ -104,4 +105,16 @@ impl Noise {
         let (u1, u2) = (self.uniform(), self.uniform());
         (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
     }
+}
+
+/// The features that cover any beam of `first..=last`.
+pub fn overlapping(
+    features: &[pfe_core::Feature],
+    first: usize,
+    last: usize,
+) -> Vec<&pfe_core::Feature> {
+    features
+        .iter()
+        .filter(|f| f.last() >= first && f.first() <= last)
+        .collect()
 }

@@ -16,114 +16,24 @@ pub mod serve;
 pub mod source;
 pub mod telegram;
 
+mod commands;
+mod config;
+mod report;
+mod scans;
+
+pub use config::{EmulatorConfig, Faults};
 pub use link::{HostPort, Link, LinkClock, LinkDelay, LinkError};
+pub use report::{EmulatorReport, SentScan};
 pub use serve::{serve_pty, serve_tcp, serve_tcp_with, RunLimits};
 pub use source::{RangeSource, RoomSource, SourceKind, TaggedSource};
 
 use std::collections::VecDeque;
 
-use firmware::lms::command::{code as ccode, mode as cmode, PASSWORD};
-use firmware::lms::frame::{Decoder, Event, ACK, HOST_ADDRESS, MAX_TELEGRAM, NAK};
-use firmware::lms::reply::{code as rcode, status_offset, ConfigBlock};
-use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
+use firmware::lms::frame::{Decoder, Event, HOST_ADDRESS, MAX_TELEGRAM, NAK};
+use firmware::lms::reply::{code as rcode, ConfigBlock};
+use firmware::lms::types::{Baud, Variant};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-/// Fault injection on the device's output, deterministic from [`EmulatorConfig::seed`].
-/// Probabilities are per B0 telegram; at most one damaging fault hits one telegram.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Faults {
-    /// Flip one bit of one byte.
-    pub bit_flip: f64,
-    /// Drop one byte.
-    pub drop_byte: f64,
-    /// Send one byte twice.
-    pub duplicate_byte: f64,
-    /// Cut the telegram short.
-    pub truncate: f64,
-    /// Insert 1–40 random bytes before the telegram (does not damage it).
-    pub garbage: f64,
-    /// After this many B0 telegrams, stay silent for `silence_ms` (streaming resumes after).
-    pub silence_after_scans: Option<u32>,
-    /// Length of the silence, ms.
-    pub silence_ms: u32,
-    /// After this many B0 telegrams, reset spontaneously (back to 9600, request mode, 0x90).
-    pub reset_after_scans: Option<u32>,
-    /// Answer this many of the next commands with NAK instead of ACK + reply.
-    pub nak_commands: u32,
-    /// Apply the damaging faults (flip, drop, duplicate, truncate) to replies as well.
-    pub damage_replies: bool,
-}
-
-/// Emulator settings.
-#[derive(Clone, Debug)]
-pub struct EmulatorConfig {
-    /// Baud at power-on (9600 on a real device).
-    pub initial_baud: Baud,
-    /// Variant at power-on.
-    pub variant: Variant,
-    /// Configuration block at power-on (unit, measuring mode, availability).
-    pub config: ConfigBlock,
-    /// Type string (BA reply).
-    pub type_string: String,
-    /// Status byte of every reply.
-    pub status: u8,
-    /// Delay from the end of a command to the ACK, µs.
-    pub ack_delay_us: u64,
-    /// Delay from the ACK to the reply, µs.
-    pub reply_delay_us: u64,
-    /// Time from a reset to the power-on message, µs.
-    pub reset_time_us: u64,
-    /// Seed of the fault injection and garbling.
-    pub seed: u64,
-    /// Faults to inject.
-    pub faults: Faults,
-    /// Built-in scan source (used by [`serve_tcp`] and `pfe emulate`).
-    pub source: SourceKind,
-    /// Command codes this device does not implement: answered `92` (incorrect command), as
-    /// a variant or a simpler emulator might.
-    pub unsupported: Vec<u8>,
-    /// Baud rates this device cannot switch to: `20 4x` for them is answered `A0 01` and the
-    /// device stays at its rate (an RS-232 LMS200 has no 500 000 Bd).
-    pub refused_bauds: Vec<Baud>,
-}
-
-impl Default for EmulatorConfig {
-    fn default() -> Self {
-        Self {
-            initial_baud: Baud::B9600,
-            variant: Variant::A180_R050,
-            config: ConfigBlock::default_mm(),
-            type_string: "LMS200;30106".into(),
-            status: 0x10,
-            ack_delay_us: 1200,
-            reply_delay_us: 2000,
-            reset_time_us: 200_000,
-            seed: 1,
-            faults: Faults::default(),
-            source: SourceKind::Room,
-            unsupported: Vec::new(),
-            refused_bauds: Vec::new(),
-        }
-    }
-}
-
-/// A scan the emulator sent.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SentScan {
-    /// Sequence number (0-based) of B0 telegrams sent.
-    pub seq: u32,
-    /// The value words sent.
-    pub words: Vec<u16>,
-    /// The ranges (mm) the source produced.
-    pub ranges_mm: Vec<f32>,
-    /// Unit and measuring mode in force.
-    pub unit: Unit,
-    /// Measuring mode in force.
-    pub mode: MeasuringMode,
-    /// True when a fault or a baud mismatch damaged it on the way.
-    pub damaged: bool,
-}
 
 /// One byte on its way to the host.
 #[derive(Clone, Copy, Debug)]
@@ -132,27 +42,6 @@ struct TxByte {
     byte: u8,
     baud: u32,
     scan: Option<u32>,
-}
-
-/// Counters and logs of one emulator run.
-#[derive(Clone, Debug, Default)]
-pub struct EmulatorReport {
-    /// Commands received with a good CRC (code bytes, in order).
-    pub commands: Vec<u8>,
-    /// B0 telegrams sent.
-    pub scans: Vec<SentScan>,
-    /// Host bytes dropped because the host's baud differed from the device's.
-    pub garbled_in: u64,
-    /// Device bytes garbled because the host's baud differed.
-    pub garbled_out: u64,
-    /// Host telegrams with a bad CRC (answered with NAK).
-    pub bad_commands: u32,
-    /// Device bytes sent.
-    pub bytes_out: u64,
-    /// Resets (commanded or injected).
-    pub resets: u32,
-    /// Replies damaged by [`Faults::damage_replies`].
-    pub damaged_replies: u32,
 }
 
 /// The emulated LMS200.
@@ -340,236 +229,6 @@ impl Emulator {
                 None => {}
             }
         }
-    }
-
-    fn command(&mut self, now: u64, p: &[u8]) {
-        let Some((&cmd, data)) = p.split_first() else {
-            return;
-        };
-        self.report.commands.push(cmd);
-        let ack_at = now + self.cfg.ack_delay_us;
-        if self.nak_left > 0 {
-            self.nak_left -= 1;
-            self.emit(ack_at, &[NAK], None);
-            return;
-        }
-        let t = self.emit(ack_at, &[ACK], None);
-        let at = t + self.cfg.reply_delay_us;
-        if self.cfg.unsupported.contains(&cmd) {
-            self.reply(at, &[rcode::INCORRECT]);
-            return;
-        }
-        match (cmd, data) {
-            (ccode::MODE, [m, pw @ ..]) => {
-                let m = *m;
-                if m == cmode::INSTALL {
-                    let ok = pw == PASSWORD.as_slice();
-                    self.install = ok;
-                    self.reply(at, &[rcode::MODE, if ok { 0 } else { 1 }]);
-                    return;
-                }
-                self.install = false;
-                if Baud::from_mode_code(m).is_some_and(|b| self.cfg.refused_bauds.contains(&b)) {
-                    self.reply(at, &[rcode::MODE, 1]);
-                    return;
-                }
-                let end = self.reply(at, &[rcode::MODE, 0]);
-                if let Some(b) = Baud::from_mode_code(m) {
-                    self.pending_baud = Some((end, b));
-                } else if m == cmode::CONTINUOUS {
-                    if !self.streaming {
-                        self.streaming = true;
-                        self.next_scan_us = end + 5000;
-                    }
-                } else if m == cmode::ON_REQUEST {
-                    self.streaming = false;
-                }
-            }
-            (ccode::REQUEST_VALUES, _) => {
-                let t = self.make_b0();
-                self.send_b0(at, t);
-            }
-            (ccode::STATUS, []) => {
-                let b1 = self.b1();
-                self.reply(at, &b1);
-            }
-            (ccode::ERRORS, []) => {
-                self.reply(at, &[rcode::ERRORS]);
-            }
-            (ccode::TYPE, []) => {
-                let mut p = vec![rcode::TYPE];
-                p.extend(self.cfg.type_string.as_bytes());
-                self.reply(at, &p);
-            }
-            (ccode::VARIANT, [a0, a1, r0, r1]) => {
-                let v = Variant::new(
-                    u16::from_le_bytes([*a0, *a1]),
-                    u16::from_le_bytes([*r0, *r1]),
-                );
-                let ok = v.is_valid();
-                if ok {
-                    self.variant = v;
-                }
-                self.reply(at, &[rcode::VARIANT, u8::from(ok), *a0, *a1, *r0, *r1]);
-            }
-            (ccode::GET_CONFIG, []) => {
-                let mut p = vec![rcode::CONFIG];
-                p.extend(self.block.as_bytes());
-                self.reply(at, &p);
-            }
-            (ccode::SET_CONFIG, block) => {
-                let parsed = ConfigBlock::from_bytes(block);
-                let ok = self.install && parsed.is_some();
-                if let (true, Some(b)) = (ok, parsed) {
-                    self.block = b;
-                }
-                let mut p = vec![rcode::CONFIG_SET, u8::from(ok)];
-                p.extend(parsed.unwrap_or(self.block).as_bytes());
-                self.reply(at, &p);
-            }
-            (ccode::RESET, []) => {
-                self.reply(at, &[rcode::RESET_ACK]);
-                self.reset(self.line_free_us);
-            }
-            _ => {
-                self.reply(at, &[rcode::INCORRECT]);
-            }
-        }
-    }
-
-    /// Device reset at `t`: deaf for the reset time, then 9600 baud, request mode, 0x90.
-    fn reset(&mut self, t: u64) {
-        self.report.resets += 1;
-        self.streaming = false;
-        self.install = false;
-        self.pending_baud = None;
-        self.decoder.clear();
-        self.reboot_at_us = Some(t + self.cfg.reset_time_us);
-    }
-
-    /// The operating mode B1 reports (payload index 8): `00` in installation mode, `24` while
-    /// streaming, `25` (values on request, the power-on mode) otherwise.
-    pub fn operating_mode(&self) -> u8 {
-        if self.install {
-            cmode::INSTALL
-        } else if self.streaming {
-            cmode::CONTINUOUS
-        } else {
-            cmode::ON_REQUEST
-        }
-    }
-
-    /// The B1 payload (code + 152 data bytes) at S1's offsets (protocol notes §6).
-    fn b1(&self) -> Vec<u8> {
-        let mut p = vec![0u8; status_offset::PAYLOAD_LEN - 1];
-        p[0] = rcode::STATUS;
-        p[1..8].copy_from_slice(b"V02.10 ");
-        p[status_offset::OPERATING_MODE] = self.operating_mode();
-        p[status_offset::DEVICE_STATUS] = 0;
-        p[10..18].copy_from_slice(b"07380000");
-        // 18: variant type (0 = standard type 6); 124–130: PROM software version.
-        p[18] = 0;
-        p[124..131].copy_from_slice(b"V02.10 ");
-        p[status_offset::MEASURING_MODE] = self.block.measuring_mode().0;
-        p[status_offset::SCAN_ANGLE..status_offset::SCAN_ANGLE + 2]
-            .copy_from_slice(&self.variant.angle_deg.to_le_bytes());
-        p[status_offset::RESOLUTION..status_offset::RESOLUTION + 2]
-            .copy_from_slice(&self.variant.resolution_cdeg.to_le_bytes());
-        p[status_offset::BAUD..status_offset::BAUD + 2]
-            .copy_from_slice(&self.baud.status_word().to_le_bytes());
-        p[status_offset::ADDRESS] = 0;
-        p[status_offset::UNIT] = self.block.unit().map_or(0, Unit::config_byte);
-        p
-    }
-
-    /// Encodes range `mm` as a code for the current unit and mode.
-    pub fn encode_range(mm: f32, unit: Unit, mode: MeasuringMode) -> u16 {
-        let mask = mode.range_mask();
-        if !mm.is_finite() || mm <= 0.0 {
-            return mask;
-        }
-        let v = (mm / unit.mm_per_unit()).round();
-        if v > f32::from(mode.max_valid()) {
-            if mode.range_bits() >= 16 {
-                mode.max_valid()
-            } else {
-                mask - 8
-            }
-        } else {
-            v as u16
-        }
-    }
-
-    fn make_b0(&mut self) -> (Vec<u8>, u32) {
-        let n = self.variant.values();
-        let step = self.variant.resolution_deg();
-        let ranges = self.source.next_scan(n, self.variant.start_deg(), step);
-        let unit = self.block.unit().unwrap_or(Unit::Cm);
-        let mode = self.block.measuring_mode();
-        let words: Vec<u16> = (0..n)
-            .map(|i| Self::encode_range(ranges.get(i).copied().unwrap_or(f32::NAN), unit, mode))
-            .collect();
-        let seq = self.report.scans.len() as u32;
-        let count = (n as u16 & 0x3FF) | (unit.count_bits() << 14);
-        let mut p = vec![rcode::VALUES];
-        p.extend(count.to_le_bytes());
-        for w in &words {
-            p.extend(w.to_le_bytes());
-        }
-        if self.block.realtime_index() {
-            p.push(seq as u8);
-        }
-        p.push(self.cfg.status);
-        let t = telegram::device_telegram(&p).unwrap_or_default();
-        self.report.scans.push(SentScan {
-            seq,
-            words,
-            ranges_mm: ranges,
-            unit,
-            mode,
-            damaged: false,
-        });
-        (t, seq)
-    }
-
-    /// Applies at most one damaging fault to telegram `t`; true when it was damaged.
-    fn damage(&mut self, t: &mut Vec<u8>) -> bool {
-        let f = &self.cfg.faults;
-        let (pf, pd, pu, pt) = (f.bit_flip, f.drop_byte, f.duplicate_byte, f.truncate);
-        let r: f64 = self.rng.gen();
-        let len = t.len();
-        if len < 2 {
-            return false;
-        }
-        if r < pf {
-            let i = self.rng.gen_range(0..len);
-            t[i] ^= 1 << self.rng.gen_range(0..8);
-        } else if r < pf + pd {
-            t.remove(self.rng.gen_range(0..len));
-        } else if r < pf + pd + pu {
-            let i = self.rng.gen_range(0..len);
-            let b = t[i];
-            t.insert(i, b);
-        } else if r < pf + pd + pu + pt {
-            t.truncate(self.rng.gen_range(1..len));
-        } else {
-            return false;
-        }
-        true
-    }
-
-    fn send_b0(&mut self, at: u64, (mut t, seq): (Vec<u8>, u32)) {
-        if self.damage(&mut t) {
-            if let Some(s) = self.report.scans.get_mut(seq as usize) {
-                s.damaged = true;
-            }
-        }
-        if self.rng.gen_bool(self.cfg.faults.garbage.clamp(0.0, 1.0)) {
-            let n = self.rng.gen_range(1..=40);
-            let g: Vec<u8> = (0..n).map(|_| self.rng.gen()).collect();
-            self.emit(at, &g, None);
-        }
-        self.emit(at, &t, Some(seq));
     }
 
     /// Runs the device up to `now_us`: baud switches, reboots, continuous output, faults.

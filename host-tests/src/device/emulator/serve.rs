@@ -98,6 +98,19 @@ fn run_realtime(emu: &mut Emulator, wire: &mut dyn Wire, limits: &RunLimits) -> 
     Ok(())
 }
 
+/// True for an error that only means "not now" on a non-blocking descriptor.
+fn busy(e: &std::io::Error) -> bool {
+    e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted
+}
+
+/// Writes what `w` takes of `bytes` now: 0 when it would block.
+fn write_some(w: &mut impl Write, bytes: &[u8]) -> std::io::Result<usize> {
+    match w.write(bytes) {
+        Err(e) if busy(&e) => Ok(0),
+        r => r,
+    }
+}
+
 struct TcpWire {
     s: TcpStream,
 }
@@ -107,20 +120,12 @@ impl Wire for TcpWire {
         match self.s.read(buf) {
             Ok(0) => Ok(None),
             Ok(n) => Ok(Some(n)),
-            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
-                Ok(Some(0))
-            }
+            Err(e) if busy(&e) => Ok(Some(0)),
             Err(e) => Err(e),
         }
     }
     fn write_device(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
-        match self.s.write(bytes) {
-            Ok(n) => Ok(n),
-            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
-                Ok(0)
-            }
-            Err(e) => Err(e),
-        }
+        write_some(&mut self.s, bytes)
     }
     fn host_baud(&mut self) -> Option<u32> {
         None
@@ -177,22 +182,14 @@ impl Wire for PtyWire {
     fn read_host(&mut self, buf: &mut [u8]) -> std::io::Result<Option<usize>> {
         match self.master.read(buf) {
             Ok(n) => Ok(Some(n)),
-            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
-                Ok(Some(0))
-            }
+            Err(e) if busy(&e) => Ok(Some(0)),
             // EIO: no process has the slave open (we keep one, so this is transient).
             Err(e) if e.raw_os_error() == Some(nix::libc::EIO) => Ok(Some(0)),
             Err(e) => Err(e),
         }
     }
     fn write_device(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
-        match self.master.write(bytes) {
-            Ok(n) => Ok(n),
-            Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
-                Ok(0)
-            }
-            Err(e) => Err(e),
-        }
+        write_some(&mut self.master, bytes)
     }
     fn host_baud(&mut self) -> Option<u32> {
         // The client's speed as set on the slave; an unknown one never matches the device.

@@ -9,7 +9,7 @@
 
 use pfe_core::Feature;
 
-use super::frame::{nis, Cov2, FrameChange, LineObs, Pose};
+use super::frame::{nis, FrameChange, LineObs, Pose};
 use super::refit::{refit_nis, Innovation};
 use super::CircleObs;
 
@@ -68,26 +68,14 @@ impl Seen {
 
     /// The same with every covariance multiplied by `k` (tests of the NIS's sensitivity).
     pub fn scaled(&self, k: f64) -> Self {
-        let scale = |c: &Cov2| [[k * c[0][0], k * c[0][1]], [k * c[1][0], k * c[1][1]]];
-        Seen {
-            pose: self.pose,
-            lines: self
-                .lines
-                .iter()
-                .map(|l| LineObs {
-                    cov: scale(&l.cov),
-                    ..*l
-                })
-                .collect(),
-            circles: self
-                .circles
-                .iter()
-                .map(|c| CircleObs {
-                    cov: scale(&c.cov),
-                    ..*c
-                })
-                .collect(),
+        let mut s = self.clone();
+        let lines = s.lines.iter_mut().map(|l| &mut l.cov);
+        for cov in lines.chain(s.circles.iter_mut().map(|c| &mut c.cov)) {
+            for v in cov.iter_mut().flatten() {
+                *v *= k;
+            }
         }
+        s
     }
 }
 

@@ -159,6 +159,15 @@ const PLOTS: [(&str, &str); 4] = [
     ("realdata-circles.svg", "circle centre NIS median"),
 ];
 
+/// A bar chart: title, y label, the value per method, a reference line, log y.
+type Chart = (
+    &'static str,
+    &'static str,
+    fn(&Summary) -> f64,
+    Option<(f64, &'static str)>,
+    bool,
+);
+
 /// The four plots: lines re-appearing, bare beams, line NIS after the refit, circle NIS.
 pub fn plots(reports: &[LogReport]) -> Vec<String> {
     let groups: Vec<String> = reports.iter().map(|r| r.log.clone()).collect();
@@ -179,40 +188,43 @@ pub fn plots(reports: &[LogReport]) -> Vec<String> {
             })
             .collect()
     };
-    vec![
-        grouped_bars(
+    let nis = Some((CHI2_2_MEDIAN, "χ²₂ median"));
+    let charts: [Chart; 4] = [
+        (
             "Lines of ≥ 10 points that re-appear in the next scan (point-weighted)",
             "%",
-            &groups,
-            &series(&|s| s.lines_reappear_pct),
+            |s| s.lines_reappear_pct,
             None,
             false,
         ),
-        grouped_bars(
+        (
             "Beams of smooth runs in no feature",
             "% of valid beams",
-            &groups,
-            &series(&|s| s.bare_pct),
+            |s| s.bare_pct,
             Some((1.0, "1 %")),
             false,
         ),
-        grouped_bars(
+        (
             "Line NIS median after the per-pair pose refit",
             "NIS (log)",
-            &groups,
-            &series(&|s| s.nis_refit),
-            Some((CHI2_2_MEDIAN, "χ²₂ median")),
+            |s| s.nis_refit,
+            nis,
             true,
         ),
-        grouped_bars(
+        (
             "Circle centre NIS median",
             "NIS (log)",
-            &groups,
-            &series(&|s| s.circle_nis),
-            Some((CHI2_2_MEDIAN, "χ²₂ median")),
+            |s| s.circle_nis,
+            nis,
             true,
         ),
-    ]
+    ];
+    charts
+        .iter()
+        .map(|&(title, ylabel, metric, reference, log_y)| {
+            grouped_bars(title, ylabel, &groups, &series(&metric), reference, log_y)
+        })
+        .collect()
 }
 
 /// Writes [`markdown`] to `path` and the plots next to it.

@@ -2,16 +2,7 @@
 
 use std::fmt::Write as _;
 
-/// Colours of the methods, in order.
-const COLORS: [&str; 6] = [
-    "#d62728", "#1f77b4", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b",
-];
-
-fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
+use crate::eval::svg::{esc, fmt_tick, nice_ceiling, COLORS};
 
 /// Bars of every series (`name`, one value per group) side by side in each group; y linear
 /// from 0, or logarithmic (`log_y`, values ≤ 0 or NaN not drawn); a dashed line at
@@ -135,28 +126,6 @@ pub fn grouped_bars(
     }
     out.push_str("</svg>\n");
     out
-}
-
-fn nice_ceiling(v: f64) -> f64 {
-    if v.is_nan() || v <= 0.0 {
-        return 1.0;
-    }
-    let p = 10f64.powf(v.log10().floor());
-    [1.0, 2.0, 2.5, 5.0, 10.0]
-        .iter()
-        .map(|m| m * p)
-        .find(|c| v <= *c)
-        .unwrap_or(10.0 * p)
-}
-
-fn fmt_tick(v: f64) -> String {
-    let s = format!("{v:.3}");
-    let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s.is_empty() || s == "-" {
-        "0".to_string()
-    } else {
-        s.to_string()
-    }
 }
 
 #[cfg(test)]

@@ -53,7 +53,12 @@ impl Abd {
         } else {
             f32::INFINITY
         };
-        geometric + 3.0 * super::sane_sigma(self.sigma_r)
+        geometric + 3.0 * self.sigma()
+    }
+
+    /// The range noise σ_r (mm) the thresholds use: `sigma_r`, or the default when it is unusable.
+    pub fn sigma(&self) -> f32 {
+        super::sane_sigma(self.sigma_r)
     }
 
     /// Segments of consecutive valid points, as inclusive index ranges in increasing order.

@@ -49,10 +49,7 @@
 //! Cost: O(n · k_max) for the windows (each point grows its own window, as the method is
 //! defined), plus one smoothing pass and the fits — more work per point than PFE.
 
-use super::{
-    abd::Abd, assemble, circle_fit, sane_sigma, scan_points, settle_boundaries, slice, Model,
-    Piece, MIN_POINTS,
-};
+use super::{abd::Abd, circle_fit, extract_segments, slice, Model, Piece, MIN_POINTS};
 use crate::methods::{Extraction, Method};
 use pfe_core::{Point, ScanGeometry};
 
@@ -130,14 +127,10 @@ impl Acf {
         self
     }
 
-    fn sigma(&self) -> f32 {
-        sane_sigma(self.abd.sigma_r)
-    }
-
     /// Steps 1–3 on the points of one segment.
     fn curvature(&self, seg: &[Point]) -> Curvature {
         let n = seg.len();
-        let u_k = self.u_k_sigma * self.sigma();
+        let u_k = self.u_k_sigma * self.abd.sigma();
         let k_max = self.k_max.max(1);
         let k_min = self.k_min.clamp(1, k_max);
         // Cumulative polyline length: path(i, j) = cum[j] − cum[i].
@@ -180,7 +173,7 @@ impl Acf {
                 *v = k;
             }
         }
-        let sr = self.sigma();
+        let sr = self.abd.sigma();
         let mut raw = vec![0.0f32; n];
         let mut raw_kappa = vec![0.0f32; n];
         let mut sigma_tau = vec![f32::INFINITY; n];
@@ -340,14 +333,10 @@ impl Method for Acf {
     }
 
     fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
-        let opts = scan_points(geometry, ranges_mm);
-        let pts: Vec<Point> = opts.iter().map(|p| p.unwrap_or(Point::INVALID)).collect();
-        let mut pieces = Vec::new();
-        for (s, e) in self.abd.segments(geometry, &opts) {
-            let seg = slice(&pts, s, e);
-            let mut seg_pieces = Vec::new();
+        extract_segments(&self.abd, geometry, ranges_mm, |pts, s, e, pieces| {
+            let seg = slice(pts, s, e);
             if seg.len() < MIN_POINTS {
-                seg_pieces.push(Piece {
+                pieces.push(Piece {
                     first: s,
                     last: e,
                     model: Model::Line,
@@ -356,15 +345,12 @@ impl Method for Acf {
                 let c = self.curvature(seg);
                 let mut a = 0usize;
                 for k in self.corners(&c) {
-                    self.type_runs(seg, &c, a, k, s, &mut seg_pieces);
+                    self.type_runs(seg, &c, a, k, s, pieces);
                     a = k + 1;
                 }
-                self.type_runs(seg, &c, a, seg.len() - 1, s, &mut seg_pieces);
+                self.type_runs(seg, &c, a, seg.len() - 1, s, pieces);
             }
-            settle_boundaries(&pts, &mut seg_pieces);
-            pieces.extend(seg_pieces);
-        }
-        assemble(&pts, &pieces, self.sigma())
+        })
     }
 }
 

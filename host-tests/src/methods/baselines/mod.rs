@@ -23,6 +23,7 @@ pub use abd::Abd;
 pub use acf::Acf;
 pub use split_merge::SplitMerge;
 
+use crate::methods::Extraction;
 use pfe_core::{
     circle_feature, fit_circle, fit_line, line_feature, refine_circle, CircleMethod, Feature,
     LineFit, Point, Scan, ScanGeometry,
@@ -162,6 +163,26 @@ pub fn refit(pts: &[Point], features: &[Feature], sigma_r: f32) -> crate::method
         })
         .collect();
     assemble(pts, &pieces, sane_sigma(sigma_r))
+}
+
+/// The frame of the ABD-based baselines: the scan's points, each ABD segment (inclusive beam
+/// indices) cut into pieces by `cut`, piece boundaries settled, the pieces fitted.
+pub(crate) fn extract_segments(
+    abd: &Abd,
+    geometry: &ScanGeometry,
+    ranges_mm: &[f32],
+    mut cut: impl FnMut(&[Point], usize, usize, &mut Vec<Piece>),
+) -> Extraction {
+    let opts = scan_points(geometry, ranges_mm);
+    let pts: Vec<Point> = opts.iter().map(|p| p.unwrap_or(Point::INVALID)).collect();
+    let mut pieces = Vec::new();
+    for (s, e) in abd.segments(geometry, &opts) {
+        let mut seg_pieces = Vec::new();
+        cut(&pts, s, e, &mut seg_pieces);
+        settle_boundaries(&pts, &mut seg_pieces);
+        pieces.extend(seg_pieces);
+    }
+    assemble(&pts, &pieces, abd.sigma())
 }
 
 /// A sane σ_r: positive and finite, else the default.

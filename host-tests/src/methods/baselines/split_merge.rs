@@ -25,8 +25,8 @@
 //! `max_radius = 2000 mm` (as pfe-core's default typing), σ_r = 5 mm.
 
 use super::{
-    abd::Abd, assemble, circle_fit, circle_max_residual, line_max_residual, sane_sigma,
-    scan_points, settle_boundaries, slice, Model, Piece,
+    abd::Abd, circle_fit, circle_max_residual, extract_segments, line_max_residual, slice, Model,
+    Piece,
 };
 use crate::methods::{Extraction, Method};
 use pfe_core::{fit_line, Point, ScanGeometry};
@@ -88,17 +88,13 @@ impl SplitMerge {
         self
     }
 
-    fn sigma(&self) -> f32 {
-        sane_sigma(self.abd.sigma_r)
-    }
-
     fn d_split(&self, a: &Point, b: &Point) -> f32 {
         let frac = if self.length_fraction.is_finite() {
             self.length_fraction.max(0.0)
         } else {
             0.0
         };
-        self.k_sigma * self.sigma() + frac * a.distance(b)
+        self.k_sigma * self.abd.sigma() + frac * a.distance(b)
     }
 
     /// Splits segment `s..=e` of `pts` into pieces, appended in scan order.
@@ -207,16 +203,9 @@ impl Method for SplitMerge {
     }
 
     fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
-        let opts = scan_points(geometry, ranges_mm);
-        let pts: Vec<Point> = opts.iter().map(|p| p.unwrap_or(Point::INVALID)).collect();
-        let mut pieces = Vec::new();
-        for (s, e) in self.abd.segments(geometry, &opts) {
-            let mut seg_pieces = Vec::new();
-            self.split(&pts, s, e, &mut seg_pieces);
-            self.merge(&pts, &mut seg_pieces);
-            settle_boundaries(&pts, &mut seg_pieces);
-            pieces.extend(seg_pieces);
-        }
-        assemble(&pts, &pieces, self.sigma())
+        extract_segments(&self.abd, geometry, ranges_mm, |pts, s, e, pieces| {
+            self.split(pts, s, e, pieces);
+            self.merge(pts, pieces);
+        })
     }
 }
