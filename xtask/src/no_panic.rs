@@ -17,7 +17,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::util::{cargo, ensure_target, root};
+use crate::util::{cargo, ensure_flip_link, ensure_target, root};
 
 const TARGET: &str = "thumbv7em-none-eabihf";
 const SYMBOL: &str = "__pfe_panic_path_survived";
@@ -225,6 +225,7 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!("unknown argument {other:?} (usage: cargo xtask no-panic [--overflow-checks])");
     }
     ensure_target()?;
+    ensure_flip_link()?;
     let (ok, stderr) = build(false, overflow)?;
     if ok {
         let elf = elf(overflow);
