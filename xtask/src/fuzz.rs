@@ -19,7 +19,13 @@ use std::process::{Command, Stdio};
 use crate::util::{have, root};
 
 /// The fuzz targets, in the order they run.
-pub const TARGETS: [&str; 4] = ["lms_decoder", "extractor", "readers", "frame_decoder"];
+pub const TARGETS: [&str; 5] = [
+    "lms_decoder",
+    "extractor",
+    "readers",
+    "frame_decoder",
+    "lms_driver",
+];
 
 /// libFuzzer's summary of one run.
 #[derive(Debug, Default)]

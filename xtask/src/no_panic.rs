@@ -1,8 +1,10 @@
 //! `cargo xtask no-panic [--overflow-checks]`: proves at link time that the firmware's scan
-//! path has no panic path.
+//! path and LMS driver have no panic path.
 //!
 //! Builds `firmware/no-panic` (UART bytes → LMS decoder → reply → pfe-core with both
-//! configurations → output frames) in release for thumbv7em-none-eabihf. Its panic handler
+//! configurations → output frames; and the LMS driver's init sequence, baud probe, re-init,
+//! `poll`, `stop` and `reset_device` over a register-backed UART, delay, clock and
+//! configuration, so nothing about replies, timing or settings is known) in release for thumbv7em-none-eabihf. Its panic handler
 //! calls a symbol defined nowhere, so the link fails while any panic (bounds check, unwrap,
 //! division by zero, …) is still reachable after optimisation. On failure it rebuilds with
 //! `--features probe` (a panic handler that links), disassembles, and lists every surviving
@@ -15,7 +17,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::util::{cargo, ensure_target, root};
+use crate::util::{cargo, ensure_flip_link, ensure_target, root};
 
 const TARGET: &str = "thumbv7em-none-eabihf";
 const SYMBOL: &str = "__pfe_panic_path_survived";
@@ -223,6 +225,7 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!("unknown argument {other:?} (usage: cargo xtask no-panic [--overflow-checks])");
     }
     ensure_target()?;
+    ensure_flip_link()?;
     let (ok, stderr) = build(false, overflow)?;
     if ok {
         let elf = elf(overflow);
@@ -240,7 +243,8 @@ pub fn run(args: &[String]) -> Result<()> {
         }
         println!(
             "no-panic: PASS — {} links with a panic handler that references the undefined `{SYMBOL}`: \
-             no panic path survives on the scan path (decoder → reply → pfe-core paper+default → output frames){}",
+             no panic path survives on the scan path (decoder → reply → pfe-core paper+default → output frames) \
+             nor in the LMS driver (init, baud probe, re-init, poll, stop, reset){}",
             elf.display(),
             if overflow { ", overflow checks on" } else { "" }
         );

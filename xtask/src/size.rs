@@ -100,6 +100,7 @@ pub fn run(args: &[String]) -> Result<()> {
         bail!("usage: cargo xtask size");
     }
     util::ensure_target()?;
+    util::ensure_flip_link()?;
     util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
     let tool = llvm_size()?;
     let base = target_dir().join("size");

@@ -71,6 +71,18 @@ pub fn ensure_target() -> Result<()> {
     Ok(())
 }
 
+/// Makes sure flip-link, the firmware's linker (`.cargo/config.toml`), is on PATH
+/// (`cargo install flip-link --locked`, about 10 s).
+pub fn ensure_flip_link() -> Result<()> {
+    if !have("flip-link") {
+        run(Command::new("cargo").args(["install", "flip-link", "--locked"]))?;
+    }
+    if !have("flip-link") {
+        bail!("flip-link is still missing after `cargo install flip-link --locked`");
+    }
+    Ok(())
+}
+
 /// Makes sure `program` exists, installing Debian `package` when running as root; otherwise
 /// says precisely what is missing.
 pub fn ensure_apt(program: &str, package: &str) -> Result<()> {

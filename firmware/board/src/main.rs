@@ -2,7 +2,9 @@
 //! LMS200 on USART1 (PA9 TX, PA10 RX, through an RS-232/RS-422 transceiver) at the baud the
 //! driver asks for, received by interrupt into a ring (`scanner_uart.rs`); one feature frame
 //! per scan on USART2 (PA2 TX, PA3 RX) at 460800 baud, defmt logs over RTT, panics reported
-//! by panic-probe.
+//! by panic-probe. The independent watchdog (250 ms) is fed once per main-loop iteration and
+//! by the driver's polling delay; the cause of the last reset is logged at start-up
+//! (`watchdog.rs`).
 //!
 //! `cargo run --release` in this directory flashes it with probe-rs (see `.cargo/config.toml`).
 #![cfg_attr(target_os = "none", no_std, no_main)]
@@ -14,6 +16,8 @@ fn main() {
 
 #[cfg(target_os = "none")]
 mod scanner_uart;
+#[cfg(target_os = "none")]
+mod watchdog;
 
 #[cfg(target_os = "none")]
 mod fw {
@@ -31,6 +35,7 @@ mod fw {
     };
 
     use crate::scanner_uart::ScannerUart;
+    use crate::watchdog;
     use firmware::app::{AppError, ConfigChoice, LmsApp};
     use firmware::lms::{Clock, Config, Driver};
 
@@ -54,10 +59,11 @@ mod fw {
         }
     }
 
-    /// Busy-wait delay counting core cycles.
+    /// Busy-wait delay counting core cycles; feeds the watchdog (the driver waits through it).
     struct Delay;
     impl embedded_hal::delay::DelayNs for Delay {
         fn delay_ns(&mut self, ns: u32) {
+            watchdog::feed();
             let cycles = u64::from(ns) * u64::from(SYSCLK_HZ / 1_000_000) / 1000;
             cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX).max(1));
         }
@@ -68,6 +74,8 @@ mod fw {
         let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
             defmt::panic!("peripherals taken twice");
         };
+        let reset = watchdog::take_reset_cause(&dp.RCC);
+        watchdog::start(dp.IWDG, &dp.DBGMCU);
         let mut rcc = dp
             .RCC
             .freeze(RccConfig::hse(25.MHz()).sysclk(SYSCLK_HZ.Hz()));
@@ -110,10 +118,12 @@ mod fw {
         };
         let mut lms = Driver::new(uart, Delay, Millis, Config::default());
         defmt::info!(
-            "pfe-board: LMS200 on USART1, features on USART2 at {} baud",
-            OUTPUT_BAUD
+            "pfe-board: LMS200 on USART1, features on USART2 at {} baud; last reset: {}",
+            OUTPUT_BAUD,
+            reset
         );
         loop {
+            watchdog::feed();
             match app.step(&mut lms, &mut out) {
                 Ok(h) => defmt::debug!("scan {}: {} features", h.seq, h.n_features),
                 Err(AppError::Source(e)) => defmt::warn!("scanner: {}", e),

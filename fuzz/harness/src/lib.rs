@@ -15,7 +15,10 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod lms_driver;
 pub mod seeds;
+
+pub use lms_driver::lms_driver;
 
 use std::io::Cursor;
 

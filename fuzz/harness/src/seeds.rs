@@ -146,13 +146,18 @@ pub fn generate(out: &Path, shared: &Path) -> io::Result<usize> {
         })
         .collect();
 
-    // lms_decoder: chunking bytes + stream.
-    for (i, v) in vectors.iter().enumerate() {
-        put(
-            "lms_decoder",
-            &format!("vector-{i:02}"),
-            &[&[0u8, 0][..], v].concat(),
-        )?;
+    // lms_decoder: chunking bytes + stream. Each vector whole, each real B0 in random chunks.
+    let singles = vectors
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (format!("vector-{i:02}"), [0u8, 0], v))
+        .chain(
+            b0s.iter()
+                .enumerate()
+                .map(|(i, t)| (format!("real-b0-{i:02}"), [0x03u8, 0x42], t)),
+        );
+    for (name, chunking, t) in singles {
+        put("lms_decoder", &name, &[&chunking[..], t].concat())?;
     }
     let mut all = Vec::new();
     for v in vectors.iter().chain(&b0s) {
@@ -187,12 +192,10 @@ pub fn generate(out: &Path, shared: &Path) -> io::Result<usize> {
             &[&[0x0Bu8, 0x11][..], &stream].concat(),
         )?;
     }
-    for (i, t) in b0s.iter().enumerate() {
-        put(
-            "lms_decoder",
-            &format!("real-b0-{i:02}"),
-            &[&[0x03u8, 0x42][..], t].concat(),
-        )?;
+
+    // lms_driver: sessions with the emulator, refusals, raw vectors, a wrapping clock.
+    for (name, bytes) in crate::lms_driver::seeds(&vectors) {
+        put("lms_driver", &name, &bytes)?;
     }
 
     // extractor: real scans in the sane layout, mm and raw codes.

@@ -3,7 +3,13 @@
 use std::path::{Path, PathBuf};
 
 /// The fuzz targets (as `xtask::fuzz::TARGETS`).
-const TARGETS: [&str; 4] = ["lms_decoder", "extractor", "readers", "frame_decoder"];
+const TARGETS: [&str; 5] = [
+    "lms_decoder",
+    "extractor",
+    "readers",
+    "frame_decoder",
+    "lms_driver",
+];
 
 /// Runs one input through a target's body (its assertions are the checks).
 fn run_target(target: &str, data: &[u8]) {
@@ -12,6 +18,7 @@ fn run_target(target: &str, data: &[u8]) {
         "extractor" => drop(pfe_fuzz_harness::extractor(data)),
         "readers" => drop(pfe_fuzz_harness::readers(data)),
         "frame_decoder" => drop(pfe_fuzz_harness::frame_decoder(data)),
+        "lms_driver" => drop(pfe_fuzz_harness::lms_driver(data)),
         other => panic!("unknown fuzz target {other}"),
     }
 }
@@ -70,7 +77,7 @@ fn a_missing_regressions_directory_is_empty() {
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(
         empty_targets(&counts),
-        ["lms_decoder", "extractor", "frame_decoder"]
+        ["lms_decoder", "extractor", "frame_decoder", "lms_driver"]
     );
 }
 
