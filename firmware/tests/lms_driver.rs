@@ -120,3 +120,78 @@ fn errors_display() {
     };
     assert!(e.to_string().contains("0x3b"));
 }
+
+/// A device that streams scans without end and answers no command: every byte read takes its
+/// line time at 38 400 Bd (260 µs) on the shared clock. Reading more than `limit` bytes means
+/// the driver never gave up.
+struct Chatty {
+    time: Time,
+    telegram: Vec<u8>,
+    at: usize,
+    read: usize,
+    limit: usize,
+}
+impl embedded_io::ErrorType for Chatty {
+    type Error = E;
+}
+impl embedded_io::Read for Chatty {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, E> {
+        assert!(
+            self.read < self.limit,
+            "the driver kept reading: a wait never ended"
+        );
+        let n = buf.len().min(16);
+        for b in &mut buf[..n] {
+            *b = self.telegram[self.at];
+            self.at = (self.at + 1) % self.telegram.len();
+        }
+        self.read += n;
+        self.time.0.set(self.time.0.get() + 260 * n as u64);
+        Ok(n)
+    }
+}
+impl embedded_io::ReadReady for Chatty {
+    fn read_ready(&mut self) -> Result<bool, E> {
+        Ok(true)
+    }
+}
+impl embedded_io::Write for Chatty {
+    fn write(&mut self, b: &[u8]) -> Result<usize, E> {
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> Result<(), E> {
+        Ok(())
+    }
+}
+impl SetBaud for Chatty {
+    fn set_baud(&mut self, _: u32) -> Result<(), E> {
+        Ok(())
+    }
+}
+
+/// A line that never falls quiet (a scanner left streaming, whose scans answer no command)
+/// does not keep a command's wait going: init gives up after its tries, in bounded time.
+#[test]
+fn a_line_that_never_falls_quiet_does_not_hold_a_wait() {
+    use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
+    let mut payload = vec![0xB0];
+    payload.extend_from_slice(&((0b01u16 << 14) | 361).to_le_bytes());
+    payload.extend((0..361u16).flat_map(|i| (1000 + i).to_le_bytes()));
+    payload.push(0x10);
+    let mut telegram = vec![0u8; 812];
+    let n = encode_telegram(DEVICE_ADDRESS, &payload, &mut telegram).unwrap();
+    telegram.truncate(n);
+    let t = Time::default();
+    let uart = Chatty {
+        time: t.clone(),
+        telegram,
+        at: 0,
+        read: 0,
+        limit: 2_000_000,
+    };
+    let mut d = Driver::new(uart, t.clone(), t.clone(), Config::default());
+    assert!(d.init().is_err());
+    assert!(d.counters().timeouts > 0);
+    let secs = t.0.get() as f64 / 1e6;
+    assert!(secs < 120.0, "init took {secs} s of line time");
+}

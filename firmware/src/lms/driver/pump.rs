@@ -143,13 +143,16 @@ where
                         code: rcode::INCORRECT,
                     })
                 }
-                Some(_) => {}
-                None => {
+                // Anything else (a scan, another reply) does not answer: the wait still ends at
+                // its timeout, even on a line that never falls quiet.
+                event => {
                     if self.elapsed_since(t0) >= timeout_ms {
                         self.counters.timeouts = self.counters.timeouts.saturating_add(1);
                         return Err(Error::Timeout { command });
                     }
-                    self.idle();
+                    if event.is_none() {
+                        self.idle();
+                    }
                 }
             }
         }
