@@ -433,3 +433,18 @@ fn baud_switch_reply_at_old_rate_then_garbled_mismatch() {
     assert!(out.is_empty());
     assert_eq!(e.report().garbled_in, n as u64);
 }
+
+#[test]
+fn a_slow_caller_gets_the_waiting_scans_without_a_reinit() {
+    // The caller takes 1.5 s over a scan (longer than the 1 s silence timeout) while the
+    // scanner keeps streaming into the receive buffer: the scans that arrived meanwhile come
+    // next, in order, and the driver does not re-initialise a device that never fell silent.
+    let (link, mut lms) = setup(tagged(), Config::default());
+    let first = TaggedSource::tag_of(lms.next_scan().unwrap().codes()).unwrap();
+    link.advance(1_500_000).unwrap();
+    for k in 1..4u32 {
+        let s = lms.next_scan().unwrap();
+        assert_eq!(TaggedSource::tag_of(s.codes()), Some(first + k));
+    }
+    assert_eq!(lms.counters().reinits, 0);
+}

@@ -92,11 +92,29 @@ where
             self.init()?;
         }
         loop {
+            // What is waiting is read first: after a slow caller the scans that arrived
+            // meanwhile are in the receive buffer, and the line was not silent.
+            let drained = match self.pump()? {
+                Some(Rx::Scan) => {
+                    if self.accept_scan() {
+                        return Ok(&self.scan);
+                    }
+                    false
+                }
+                Some(Rx::Reply(c)) => {
+                    self.unexpected_reply(c);
+                    false
+                }
+                Some(_) => false,
+                None => true,
+            };
             // The limit is at least the configured timeout: compare with that first (this
             // runs at every poll).
             let silent = self.elapsed_since(self.last_scan_ms);
             if self.reset_seen
-                || (silent >= self.config.silence_timeout_ms && silent >= self.silence_limit_ms())
+                || (drained
+                    && silent >= self.config.silence_timeout_ms
+                    && silent >= self.silence_limit_ms())
             {
                 log!(
                     warn,
@@ -116,15 +134,8 @@ where
                 self.init()?;
                 continue;
             }
-            match self.pump()? {
-                Some(Rx::Scan) => {
-                    if self.accept_scan() {
-                        return Ok(&self.scan);
-                    }
-                }
-                Some(Rx::Reply(c)) => self.unexpected_reply(c),
-                Some(_) => {}
-                None => self.idle(),
+            if drained {
+                self.idle();
             }
         }
     }
