@@ -36,6 +36,9 @@ pub struct Stats {
     pub dropped: usize,
     /// Predictions made (N + M in the paper's count).
     pub predictions: usize,
+    /// Interleaved sweeps moved onto sweep 0 by their estimated offset (scans of several
+    /// sweeps without motion, see [`crate::preprocess::sweeps`]).
+    pub sweeps_aligned: usize,
 }
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
@@ -123,6 +126,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     features: 0,
                     dropped: 0,
                     predictions: 0,
+                    sweeps_aligned: 0,
                 },
             },
         }

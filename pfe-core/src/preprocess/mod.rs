@@ -1,9 +1,11 @@
 //! Pre-processing (§2): readings to points, with the systematic range [`correction`] and
-//! motion de-skewing ([`deskew`]) when configured. Invalid readings (no return, reserved codes)
-//! are not points.
+//! motion de-skewing ([`deskew`]) when configured, and, for interleaved sweeps without
+//! motion, each sweep moved onto sweep 0 by its offset estimated from the scan ([`sweeps`]).
+//! Invalid readings (no return, reserved codes) are not points.
 
 pub mod correction;
 pub mod deskew;
+pub mod sweeps;
 
 use crate::beams::Beams;
 use crate::config::Config;
@@ -50,8 +52,12 @@ pub(crate) fn load(
     stats.readings = n;
     stats.valid = n - invalid;
     if config.correction.is_some() || motion.is_some() {
-        let slots = (points, ranges, flags, dirs);
+        let slots = (&mut *points, &mut *ranges, &mut *flags, dirs);
         stats.valid -= adjust(slots, motion, scan, config);
+    }
+    if motion.is_none() && scan.sweeps > 1 {
+        let s = usize::from(scan.sweeps);
+        stats.sweeps_aligned = sweeps::align(points, ranges, flags, s, g.angle_step);
     }
 }
 
