@@ -16,7 +16,7 @@
 //! `(dx, dy, dθ)` over such beams where the surface is smooth (no jump, a small `e₀`), solved
 //! again once without the rows beyond 3σ of the first solution (corners, edges).
 //!
-//! [`align`] moves sweep `s`'s points by the estimate (rotation `dθ`, then translation `d`)
+//! The extractor moves sweep `s`'s points by the estimate (rotation `dθ`, then translation `d`)
 //! when it is significant (χ² of the estimate against its covariance above
 //! [`SweepOffset::CHI2_SIGNIFICANT`]) and moves some point by more than
 //! [`SweepOffset::MIN_SHIFT_MM`]; otherwise the points stay as they are.
@@ -56,7 +56,7 @@ impl SweepOffset {
     /// Smallest point displacement worth applying, mm.
     pub const MIN_SHIFT_MM: f32 = 1.0;
 
-    /// True when [`align`] applies this offset.
+    /// True when the extractor applies this offset.
     pub fn is_significant(&self) -> bool {
         self.chi2 > Self::CHI2_SIGNIFICANT && self.max_shift > Self::MIN_SHIFT_MM
     }
