@@ -34,7 +34,7 @@ impl<'a> RawScan<'a> {
     }
 
     /// The pfe-core input for this scan, with the interleaved sweeps of the variant's
-    /// resolution (0.5°: 2, 0.25°: 4; see [`sweeps_of`]).
+    /// resolution (0.5°: 2, 0.25°: 4; see `sweeps_of`).
     pub fn to_pfe(&self) -> Scan<'a> {
         Scan {
             geometry: self.geometry,
