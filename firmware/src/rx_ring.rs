@@ -6,7 +6,8 @@
 //!
 //! What is lost is counted in [`RxCounters`] (atomics, shared by both ends): bytes dropped
 //! because the ring was full (the main loop fell behind), receive overruns (the handler came
-//! too late) and line errors. [`RxConsumer::read`] reports new counts once the bytes before
+//! too late) and line errors; beside them the most bytes ever waiting (the backlog's
+//! high-water mark). [`RxConsumer::read`] reports new counts once the bytes before
 //! them are read, so the driver returns the loss as a UART error, its decoder resyncs on the next header, and
 //! nothing re-initialises the device for it.
 
@@ -26,6 +27,7 @@ pub struct RxCounters {
     ring_full: AtomicU32,
     overruns: AtomicU32,
     line_errors: AtomicU32,
+    peak: AtomicU32,
 }
 
 impl RxCounters {
@@ -35,6 +37,7 @@ impl RxCounters {
             ring_full: AtomicU32::new(0),
             overruns: AtomicU32::new(0),
             line_errors: AtomicU32::new(0),
+            peak: AtomicU32::new(0),
         }
     }
 
@@ -51,6 +54,12 @@ impl RxCounters {
     /// Bytes with a framing, noise or parity error (dropped).
     pub fn line_errors(&self) -> u32 {
         self.line_errors.load(Ordering::Relaxed)
+    }
+
+    /// The most bytes ever waiting in the ring (the backlog's high-water mark; a full ring
+    /// shows as its capacity, `RING_SLOTS - 1`).
+    pub fn peak(&self) -> u32 {
+        self.peak.load(Ordering::Relaxed)
     }
 }
 
@@ -73,7 +82,13 @@ impl<'a, const S: usize> RxProducer<'a, S> {
     /// Puts a received byte into the ring; false (and counted) when the ring is full.
     pub fn push(&mut self, b: u8) -> bool {
         let ok = self.ring.enqueue(b).is_ok();
-        if !ok {
+        if ok {
+            // Only the producer writes `peak`: a load and a store suffice (no CAS on armv6m).
+            let len = u32::try_from(self.ring.len()).unwrap_or(u32::MAX);
+            if len > self.counters.peak() {
+                self.counters.peak.store(len, Ordering::Relaxed);
+            }
+        } else {
             count(&self.counters.ring_full);
         }
         ok
@@ -180,6 +195,21 @@ impl<'a, const S: usize> RxConsumer<'a, S> {
         match self.read_available(buf) {
             0 => self.take_error().map(|()| 0),
             n => Ok(n),
+        }
+    }
+
+    /// The driver's blocking read: spins until a byte is in the ring (or a loss is
+    /// reported), then takes what is there, up to `buf.len()` bytes; `Ok(0)` only for an
+    /// empty `buf`. Drivers read after `ready()`, so this hardly ever spins.
+    pub fn read_blocking(&mut self, buf: &mut [u8]) -> Result<usize, RxLoss> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            match self.read(buf)? {
+                0 => core::hint::spin_loop(),
+                n => return Ok(n),
+            }
         }
     }
 

@@ -83,6 +83,52 @@ pub fn build_firmware<V: AsRef<std::ffi::OsStr>>(
     Ok(target_dir.join(TARGET).join("release").join(bin))
 }
 
+/// For a QEMU test named `test`: `bin` of firmware-qemu built as shipped (opt-level "s") in
+/// `$CARGO_TARGET_DIR/<dir>` (not the outer cargo's target dir: its lock is held while tests
+/// run); `None` after a [`skip`](crate::skip::skip) when `PFE_SKIP_QEMU` is set
+/// (`cargo xtask test --quick`), or when qemu-system-arm or the target is missing (a failure
+/// under `CI=true`).
+pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
+    use crate::skip::{skip, Need};
+    if std::env::var_os("PFE_SKIP_QEMU").is_some() {
+        skip(
+            test,
+            "PFE_SKIP_QEMU is set (cargo xtask test --quick)",
+            Need::Optional,
+        );
+        return None;
+    }
+    if !have("qemu-system-arm") {
+        skip(
+            test,
+            "qemu-system-arm is not installed (apt-get install qemu-system-arm)",
+            Need::InCi,
+        );
+        return None;
+    }
+    if !have_target() {
+        skip(
+            test,
+            "the thumbv7em-none-eabihf target is missing (rustup target add thumbv7em-none-eabihf)",
+            Need::InCi,
+        );
+        return None;
+    }
+    let dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root().join("target"))
+        .join(dir);
+    match build_firmware(
+        bin,
+        &[],
+        &[("CARGO_PROFILE_RELEASE_OPT_LEVEL", FIRMWARE_OPT_LEVEL)],
+        &dir,
+    ) {
+        Ok(elf) => Some(elf),
+        Err(e) => panic!("{test}: {e:#}"),
+    }
+}
+
 /// A QEMU command line for `elf` with UART0 and UART1 connected to `serial0`/`serial1` (QEMU
 /// `-serial` specs), semihosting arguments `args` and, optionally, `-icount shift=10`.
 pub fn qemu_command(
@@ -299,13 +345,27 @@ pub fn session(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
+    session_with(elf, scans, &[config], scans, seed, timeout)
+}
+
+/// [`session`] with pfe-qemu's semihosting arguments after `scans` (`args`: config, baud,
+/// slow_ms, slow_every) and `rooms` distinct simulated scenes (more than `scans` when
+/// telegrams may be lost, so that every telegram stays identifiable by its features).
+pub fn session_with(
+    elf: &Path,
+    scans: u32,
+    args: &[&str],
+    rooms: u32,
+    seed: u64,
+    timeout: Duration,
+) -> Result<Session> {
     use crate::device::emulator::serve::{serve_on, Pty};
     use crate::device::emulator::{Emulator, EmulatorConfig, RunLimits};
     use crate::scene::{Scenario, SceneKind};
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 
-    let sims: Vec<_> = (seed..seed + u64::from(scans.max(1)))
+    let sims: Vec<_> = (seed..seed + u64::from(rooms.max(1)))
         .map(|s| Scenario::new(SceneKind::Mixed, s).simulate())
         .collect();
     let source = SimSource {
@@ -330,13 +390,10 @@ pub fn session(
     let emu = Emulator::new(EmulatorConfig::default(), Box::new(source));
     let server = std::thread::spawn(move || serve_on(&mut pty, emu, limits));
     let n = scans.to_string();
-    let cmd = qemu_command(
-        elf,
-        &slave,
-        &format!("tcp:127.0.0.1:{p1}"),
-        &[&n, config],
-        false,
-    );
+    let all: Vec<&str> = std::iter::once(n.as_str())
+        .chain(args.iter().copied())
+        .collect();
+    let cmd = qemu_command(elf, &slave, &format!("tcp:127.0.0.1:{p1}"), &all, false);
     let run = run_collect(cmd, l1, timeout)?;
     stop.store(true, Ordering::Relaxed);
     let emulator = server
@@ -350,6 +407,18 @@ pub fn session(
         frames,
         bad_frames,
     })
+}
+
+/// The receive path's account pfe-qemu writes to semihosting stderr at its end
+/// (`rx: ring_full=… overruns=… line_errors=… peak=… capacity=… scan_errors=…`), by key.
+pub fn rx_stats(stderr: &str) -> Option<std::collections::BTreeMap<String, u32>> {
+    let line = stderr.lines().rev().find_map(|l| l.strip_prefix("rx:"))?;
+    line.split_whitespace()
+        .map(|kv| {
+            let (k, v) = kv.split_once('=')?;
+            Some((k.to_string(), v.parse().ok()?))
+        })
+        .collect()
 }
 
 /// pfe-core on the host, through the same `App` and frame encoding as the firmware, on the

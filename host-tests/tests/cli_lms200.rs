@@ -86,14 +86,19 @@ fn damaged_capture_still_decodes_the_good_telegrams() {
         stderr.contains("3 telegrams good, 3 dropped for CRC, 824 bytes skipped"),
         "{stderr}"
     );
-    // extract numbers the same scans.
+    // extract numbers the same scans; the partial ones (3 and 5 values: no LMS200 variant, so
+    // no known beam angles) are not scans, and it says so.
     let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
     assert!(out.status.success());
     let ids: Vec<u64> = json_lines(&out)
         .iter()
         .map(|v| v["scan"].as_u64().unwrap())
         .collect();
-    assert_eq!(ids, [0, 1, 2]);
+    assert_eq!(ids, [2]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    for t in ["telegram 0: 3 values", "telegram 1: 5 values"] {
+        assert!(stderr.contains(t), "{stderr}");
+    }
 }
 
 #[test]
@@ -230,4 +235,39 @@ fn a_flipped_byte_loses_at_most_its_own_telegram() {
             assert_eq!(got_payloads, exp_payloads, "byte {pos} ^ {flip:#x}");
         }
     }
+}
+
+/// A B0 telegram whose value count no LMS200 variant sends (3 values, a partial scan: its
+/// beams' angles are unknown) is decoded and counted, but `extract` skips it with a message
+/// instead of reading it as a guessed 180° field; the scans around it come through.
+#[test]
+fn a_telegram_of_an_unknown_value_count_is_not_a_scan() {
+    let mut capture = b0(&wall_codes(1.0), Unit::Mm);
+    capture.extend(b0(&[100, 200, 300], Unit::Mm));
+    capture.extend(b0(&wall_codes(1.0), Unit::Mm));
+    let input = BufReader::new(std::io::Cursor::new(capture.clone()));
+    let mut reader = Reader::new(Box::new(input));
+    let telegrams: Vec<Telegram> = reader.by_ref().map(|t| t.unwrap()).collect();
+    let scans: Vec<bool> = telegrams.iter().map(|t| t.record().is_some()).collect();
+    assert_eq!(scans, [true, false, true]);
+    let s = reader.summary();
+    assert_eq!((s.good, s.unknown_count, s.crc_errors), (3, 1, 0), "{s:?}");
+
+    let dir = std::env::temp_dir().join(format!("pfe-cli-lms-odd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("odd.bin");
+    std::fs::write(&path, &capture).unwrap();
+    let out = pfe(&["extract", "--format", "lms200", path.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let scans = json_lines(&out);
+    assert_eq!(scans.len(), 2, "{stderr}");
+    assert!(scans
+        .iter()
+        .all(|s| s["features"].as_array().unwrap().len() == 1));
+    assert!(
+        stderr.contains("telegram 1: 3 values match no LMS200 variant"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -14,44 +14,7 @@ use firmware::app::ConfigChoice;
 use firmware::output::{Header, Report, ScanStatus};
 
 fn firmware_elf() -> Option<PathBuf> {
-    use host_tests::skip::{skip, Need};
-    if std::env::var_os("PFE_SKIP_QEMU").is_some() {
-        skip(
-            "e2e_qemu",
-            "PFE_SKIP_QEMU is set (cargo xtask test --quick)",
-            Need::Optional,
-        );
-        return None;
-    }
-    if !qemu::have("qemu-system-arm") {
-        skip(
-            "e2e_qemu",
-            "qemu-system-arm is not installed (apt-get install qemu-system-arm)",
-            Need::InCi,
-        );
-        return None;
-    }
-    if !qemu::have_target() {
-        skip(
-            "e2e_qemu",
-            "the thumbv7em-none-eabihf target is missing (rustup target add thumbv7em-none-eabihf)",
-            Need::InCi,
-        );
-        return None;
-    }
-    // Not the outer cargo's target dir: its lock is held while tests run.
-    let dir = std::env::var_os("CARGO_TARGET_DIR")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| qemu::root().join("target"))
-        .join("e2e-firmware");
-    let elf = qemu::build_firmware(
-        "pfe-qemu",
-        &[],
-        &[("CARGO_PROFILE_RELEASE_OPT_LEVEL", qemu::FIRMWARE_OPT_LEVEL)],
-        &dir,
-    )
-    .unwrap();
-    Some(elf)
+    qemu::test_firmware("e2e_qemu", "pfe-qemu", "e2e-firmware")
 }
 
 fn check(elf: &std::path::Path, scans: u32, config: &str, choice: ConfigChoice, seed: u64) {

@@ -1,5 +1,6 @@
 //! Board support for QEMU's `mps2-an386` (Cortex-M4F) used by the pfe firmware binaries:
-//! CMSDK APB UARTs as polled `embedded-io` ports, a SysTick time base, semihosting exit and
+//! CMSDK APB UARTs as polled `embedded-io` ports, UART0 to the scanner through its receive
+//! interrupt and the firmware's receive ring ([`scanner_uart`]), a SysTick time base, semihosting exit and
 //! arguments, the stack high-water mark, and the runtime glue the binaries share (exception
 //! and panic handlers, the statics in [`rt`]).
 //!
@@ -11,6 +12,9 @@
 
 #[cfg(target_os = "none")]
 pub mod uart;
+
+#[cfg(target_os = "none")]
+pub mod scanner_uart;
 
 #[cfg(target_os = "none")]
 pub mod time;

@@ -1,16 +1,44 @@
-//! Runtime glue every binary shares: the SysTick, HardFault and panic handlers, and the
-//! statics the pipeline runs in (no heap).
+//! Runtime glue every binary shares: the SysTick, HardFault, device interrupt and panic
+//! handlers, and the statics the pipeline runs in (no heap).
 
 use core::sync::atomic::{AtomicBool, Ordering};
 
 use cortex_m_rt::{exception, ExceptionFrame};
 use firmware::app::{ConfigChoice, LmsApp, LmsExtractor};
+use firmware::output::{self, Report};
 
-use crate::{sys, time};
+use crate::uart::Uart;
+use crate::{scanner_uart, sys, time};
+
+/// Takes the core peripherals and starts the SysTick time base ([`time::start`]); exits with
+/// [`sys::EXIT_USAGE`] when called twice.
+pub fn start_clock() {
+    let Some(cp) = cortex_m::Peripherals::take() else {
+        sys::exit(sys::EXIT_USAGE)
+    };
+    time::start(cp.SYST);
+}
+
+/// Sends `r` as a report frame on `out`; exits with [`sys::EXIT_OUTPUT`] when that fails.
+pub fn report(out: &mut Uart, r: Report) {
+    if output::write_report(out, &r).is_err() {
+        sys::exit(sys::EXIT_OUTPUT);
+    }
+}
 
 #[exception]
 fn SysTick() {
     time::on_systick();
+}
+
+/// Device interrupts (cortex-m-rt's vector table sends them all here with their number):
+/// UART0's receive interrupt; no other is unmasked.
+#[exception]
+#[allow(unsafe_code)]
+unsafe fn DefaultHandler(irqn: i16) {
+    if irqn == scanner_uart::UART0_RX_IRQ as i16 {
+        scanner_uart::on_rx_interrupt();
+    }
 }
 
 #[exception]

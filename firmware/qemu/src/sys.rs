@@ -1,5 +1,5 @@
 //! Semihosting (QEMU: `-semihosting-config enable=on,target=native`): exit codes, command
-//! line arguments, and the stack high-water mark.
+//! line arguments, a statistics line on stderr, and the stack high-water mark.
 
 /// Exit code of a normal end.
 pub const EXIT_OK: i32 = 0;
@@ -36,6 +36,47 @@ pub fn arg_u32(i: usize) -> Option<u32> {
 /// The `i`-th argument after the program name equals `word`.
 pub fn arg_is(i: usize, word: &str) -> bool {
     with_arg(i, |s| (s == word).then_some(())).is_some()
+}
+
+/// Writes `prefix` and ` key=value` for each of `stats` as one line to semihosting stderr
+/// (QEMU's stderr; defmt has stdout), e.g. `rx: ring_full=0 peak=731`. No `core::fmt`.
+pub fn eprint_stats(prefix: &str, stats: &[(&str, u32)]) {
+    use semihosting::io::Write as _;
+    let Ok(mut err) = semihosting::io::stderr() else {
+        return;
+    };
+    let mut line = [0u8; 256];
+    let mut n = 0;
+    let mut put = |bytes: &[u8]| {
+        for &b in bytes {
+            if let Some(slot) = line.get_mut(n) {
+                *slot = b;
+                n += 1;
+            }
+        }
+    };
+    put(prefix.as_bytes());
+    for (key, value) in stats {
+        put(b" ");
+        put(key.as_bytes());
+        put(b"=");
+        let mut digits = [0u8; 10];
+        let mut v = *value;
+        let mut k = digits.len();
+        loop {
+            k -= 1;
+            if let Some(d) = digits.get_mut(k) {
+                *d = b'0' + (v % 10) as u8;
+            }
+            v /= 10;
+            if v == 0 || k == 0 {
+                break;
+            }
+        }
+        put(digits.get(k..).unwrap_or(&[]));
+    }
+    put(b"\n");
+    let _ = err.write_all(line.get(..n).unwrap_or(&[]));
 }
 
 /// Bytes of stack ever used (from cortex-m-rt's `paint-stack` fill value) and the stack size.

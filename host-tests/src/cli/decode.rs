@@ -63,8 +63,15 @@ pub fn run(a: Args) -> Result<(), Failure> {
     let s = reader.summary();
     eprintln!(
         "pfe: {} bytes: {} telegrams good, {} dropped for CRC, {} bytes skipped \
-         ({} dropped for length, {} malformed B0, {} other telegrams)",
-        s.bytes, s.good, s.crc_errors, s.skipped, s.bad_length, s.malformed, s.other_telegrams
+         ({} dropped for length, {} malformed B0, {} B0 of an unknown value count, {} other telegrams)",
+        s.bytes,
+        s.good,
+        s.crc_errors,
+        s.skipped,
+        s.bad_length,
+        s.malformed,
+        s.unknown_count,
+        s.other_telegrams
     );
     if let Some(e) = error {
         return Err(e);

@@ -69,7 +69,7 @@ pub fn run_methods_timed(
                 let mut time = Duration::ZERO;
                 for sim in scans {
                     let t0 = Instant::now();
-                    let ex = m.extract(&sim.geometry, &sim.ranges_mm);
+                    let ex = m.extract_in(&sim.geometry, &sim.ranges_mm, &sim.context());
                     time += t0.elapsed();
                     if pass == 0 {
                         score.add(&score_sim(&ex, sim));
@@ -218,7 +218,13 @@ pub fn run_scenarios(
 /// A named change to the scenarios (a robustness condition).
 pub type Condition = (&'static str, fn(&mut Scenario));
 
-/// The robustness conditions at the main σ: (name, change to the scenario).
+/// Forward speed of the moving conditions, mm/s: 8 mm in one 13.33 ms mirror turn.
+pub const MOVING_V: f32 = 600.0;
+/// Turn rate of the moving conditions, rad/s: 6 mrad in one mirror turn.
+pub const MOVING_OMEGA: f32 = 0.45;
+
+/// The robustness conditions at the main σ: (name, change to the scenario). Each runs on the
+/// main comparison's scenes (the long-corridor condition on long corridors with the same seeds).
 pub fn conditions() -> Vec<Condition> {
     vec![
         ("systematic bias ±15 mm (uncorrected)", |s| s.bias = true),
@@ -229,6 +235,26 @@ pub fn conditions() -> Vec<Condition> {
         ("1° resolution (181 beams)", |s| {
             s.resolution = crate::scene::Resolution::One
         }),
+        (
+            "interleaved 0.5°, 8 mm / 6 mrad between sweeps, no odometry",
+            |s| *s = s.with_motion(MOVING_V, MOVING_OMEGA),
+        ),
+        (
+            "interleaved 0.5°, 8 mm / 6 mrad between sweeps, odometry given",
+            |s| {
+                *s = s.with_motion(MOVING_V, MOVING_OMEGA);
+                s.odometry_given = true;
+            },
+        ),
+        ("interleaved 0.25° (4 sweeps), moving, no odometry", |s| {
+            *s = s.with_motion(MOVING_V, MOVING_OMEGA);
+            s.resolution = crate::scene::Resolution::Quarter;
+        }),
+        ("cm mode, long corridors to 80 m", |s| {
+            s.kind = SceneKind::LongCorridor;
+            s.range_mode = crate::scene::RangeMode::Cm;
+        }),
+        ("incidence-dependent noise", |s| s.incidence_noise = true),
     ]
 }
 

@@ -81,16 +81,11 @@ pub fn geometry(n: usize, unit: Unit) -> Option<ScanGeometry> {
 }
 
 impl Telegram {
-    /// The scan as a [`Record`] (no-return codes as `NaN`). A count that matches no LMS200
-    /// variant is read as a 180° field.
-    pub fn record(&self) -> Record {
-        let n = self.ranges.len();
-        let geometry = geometry(n, self.unit).unwrap_or(ScanGeometry {
-            start_angle: -std::f32::consts::FRAC_PI_2,
-            angle_step: std::f32::consts::PI / n.saturating_sub(1).max(1) as f32,
-            r_max: f32::from(MAX_VALID) * self.unit.mm(),
-        });
-        Record {
+    /// The scan as a [`Record`] (no-return codes as `NaN`); `None` for a count that matches no
+    /// LMS200 variant (a partial scan: its beams' angles are unknown).
+    pub fn record(&self) -> Option<Record> {
+        let geometry = geometry(self.ranges.len(), self.unit)?;
+        Some(Record {
             id: self.ordinal,
             geometry,
             ranges_mm: self
@@ -106,7 +101,7 @@ impl Telegram {
                 .collect(),
             time: None,
             pose: None,
-        }
+        })
     }
 }
 
@@ -123,6 +118,9 @@ pub struct Summary {
     pub other_telegrams: u64,
     /// 0xB0 telegrams with a good CRC whose payload does not match their count word.
     pub malformed: u64,
+    /// Good 0xB0 telegrams whose value count no LMS200 variant sends (181, 361, 101, 201, 401),
+    /// e.g. partial scans: decoded, but not scans (their beam geometry is unknown).
+    pub unknown_count: u64,
     /// Bytes skipped while hunting for a telegram (including a truncated one at the end).
     pub skipped: u64,
     /// Bytes read.
@@ -205,6 +203,9 @@ impl Reader {
                 return None;
             }
         };
+        if geometry(values.words().count(), unit).is_none() {
+            self.summary.unknown_count += 1;
+        }
         let mode = MeasuringMode::M8_FIELDS_AB_DAZZLE;
         let ranges = values.words().map(|w| w & mode.range_mask()).collect();
         let t = Telegram {

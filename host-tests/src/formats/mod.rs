@@ -185,7 +185,21 @@ pub fn scans(format: Format, input: Box<dyn BufRead>) -> Scans {
         Format::Csv => Box::new(csv::Reader::new(input)),
         Format::Carmen => Box::new(carmen::Reader::new(input)),
         Format::Hokuyo => Box::new(hokuyo::Reader::new(input)),
-        Format::Lms200 => Box::new(lms200::Reader::new(input).map(|t| t.map(|t| t.record()))),
+        Format::Lms200 => Box::new(lms200::Reader::new(input).filter_map(|t| match t {
+            Ok(t) => {
+                let record = t.record();
+                if record.is_none() {
+                    eprintln!(
+                        "pfe: telegram {}: {} values match no LMS200 variant (181, 361, 101, \
+                         201 or 401): its beams' angles are unknown, skipped",
+                        t.ordinal,
+                        t.ranges.len()
+                    );
+                }
+                record.map(Ok)
+            }
+            Err(e) => Some(Err(e)),
+        })),
         Format::Mcap => ros2_stream::records(input),
     }
 }

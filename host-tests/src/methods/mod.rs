@@ -6,7 +6,7 @@ pub mod pfe;
 
 pub use pfe::Pfe;
 
-use pfe_core::{Feature, ScanGeometry};
+use pfe_core::{Feature, Motion, ScanGeometry};
 
 /// Capacity of the host extractor: any scanner up to 2048 beams, 256 features.
 pub const MAX_BEAMS: usize = 2048;
@@ -28,4 +28,24 @@ pub trait Method {
     fn name(&self) -> &str;
     /// Extracts one scan.
     fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction;
+    /// Extracts one scan knowing more about how it was taken (default: ignores `context`, as
+    /// the baselines do).
+    fn extract_in(
+        &mut self,
+        geometry: &ScanGeometry,
+        ranges_mm: &[f32],
+        context: &ScanContext,
+    ) -> Extraction {
+        let _ = context;
+        self.extract(geometry, ranges_mm)
+    }
+}
+
+/// What is known about a scan beyond its geometry and ranges.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ScanContext {
+    /// The robot's motion during the scan (odometry), when known.
+    pub odometry: Option<Motion>,
+    /// Number of interleaved sweeps the scan is made of (0 or 1: one).
+    pub sweeps: usize,
 }

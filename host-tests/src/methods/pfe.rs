@@ -2,7 +2,7 @@
 
 use pfe_core::{Config, ExtractError, Extractor, Scan, ScanGeometry};
 
-use super::{Extraction, Method, MAX_BEAMS, MAX_FEATURES};
+use super::{Extraction, Method, ScanContext, MAX_BEAMS, MAX_FEATURES};
 
 /// pfe-core behind the [`Method`] interface.
 pub struct Pfe {
@@ -51,12 +51,23 @@ impl Method for Pfe {
     }
 
     fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
+        self.extract_in(geometry, ranges_mm, &ScanContext::default())
+    }
+
+    fn extract_in(
+        &mut self,
+        geometry: &ScanGeometry,
+        ranges_mm: &[f32],
+        context: &ScanContext,
+    ) -> Extraction {
+        let mut scan = Scan::from_mm(*geometry, ranges_mm);
+        if let Some(odometry) = context.odometry {
+            scan = scan.with_motion(odometry);
+        }
+        // sweeps: scan = scan.with_sweeps(context.sweeps);
         // Scans longer than the capacity are an error value: no features, kept for
         // `last_result`.
-        self.last = self
-            .extractor
-            .extract(&Scan::from_mm(*geometry, ranges_mm), &self.config)
-            .map(|_| ());
+        self.last = self.extractor.extract(&scan, &self.config).map(|_| ());
         Extraction {
             marks: self.extractor.marks().collect(),
             features: self.extractor.features().to_vec(),

@@ -286,6 +286,7 @@ fn room(
 pub(super) fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
     let mut sc = Scene::default();
     match kind {
+        SceneKind::LongCorridor => return long_corridor(rng),
         SceneKind::Office | SceneKind::Mixed => {
             let (w, h) = (
                 rng.gen_range(5000.0..12000.0),
@@ -461,5 +462,28 @@ pub(super) fn build_scene(kind: SceneKind, rng: &mut ChaCha8Rng) -> Scene {
             sc.heading = Some((0.0, 0.5));
         }
     }
+    sc
+}
+
+/// A corridor 30–80 m long and 2–4 m wide, side walls with doors (some recessed, some opening
+/// on a room behind) and shallow pilasters, closed at both ends; the scanner looks along it
+/// (heading within ±0.3 rad of the axis), so the side walls are seen far away at grazing
+/// incidence.
+pub(super) fn long_corridor(rng: &mut ChaCha8Rng) -> Scene {
+    let mut sc = Scene::default();
+    let len = rng.gen_range(30000.0..80000.0);
+    let wid = rng.gen_range(2000.0..4000.0);
+    let doors_r = (len / rng.gen_range(3000.0..8000.0)) as usize;
+    let doors_l = (len / rng.gen_range(3000.0..8000.0)) as usize;
+    sc.wall(rng, [0.0, 0.0], [len, 0.0], doors_r, true);
+    sc.wall(rng, [len, wid], [0.0, wid], doors_l, true);
+    for (a, b) in [([0.0, 0.0], [len, 0.0]), ([len, wid], [0.0, wid])] {
+        let k = (len / rng.gen_range(5000.0..15000.0)) as usize;
+        sc.pilasters(rng, a, b, k, 0.1 * wid);
+    }
+    sc.seg([len, 0.0], [len, wid]);
+    sc.seg([0.0, wid], [0.0, 0.0]);
+    sc.area = [800.0, len - 800.0, 0.3 * wid, 0.7 * wid];
+    sc.heading = Some((0.0, 0.3));
     sc
 }

@@ -1,14 +1,21 @@
-//! The LMS200 range model: Gaussian noise, optional systematic bias, integer-mm quantisation,
-//! no-return codes and optional mixed pixels, with the ground truth of the measured scan.
+//! The LMS200 range model: Gaussian noise (optionally growing with the incidence angle),
+//! optional systematic bias, quantisation to the range mode's unit (1 mm or 10 mm), no-return
+//! codes and optional mixed pixels, with the ground truth of the measured scan. A moving
+//! scanner measures each beam from its pose at the beam's time.
 
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use std::f64::consts::PI;
 
-use super::{bearing, cast, crb, Scenario, Shape, SimScan, TruthFeature, TruthKind, MIN_RUN};
+use super::{
+    bearing, cast_moving, crb, incidence_noise_factor, Scenario, Shape, SimScan, TruthFeature,
+    TruthKind, MIN_RUN,
+};
+use pfe_core::LMS_MAX_VALID_8M;
 
-/// The raw LMS code written for a beam without return (first reserved code in the 8 m mode).
+/// The raw LMS code written for a beam without return (first reserved code in the 8 m / 80 m
+/// modes).
 pub const NO_RETURN_CODE: u16 = 8183;
 
 /// Amplitude of the optional systematic range bias, mm (LMS200 data sheet, 8 m mode).
@@ -20,14 +27,28 @@ pub fn systematic_bias_mm(r_mm: f64) -> f64 {
     let x = (r_mm / 8000.0).clamp(0.0, 1.5);
     BIAS_AMPLITUDE_MM * (0.7 * (2.0 * PI * 1.3 * x + 0.4).sin() + 0.3 * (2.0 * x - 1.0))
 }
-/// Measures `shapes` (scanner frame) as `scenario` says, with ground truth.
+/// Measures `shapes` (in the scanner frame of beam 0) as `scenario` says, with ground truth.
+/// Each beam is cast from the scanner's pose at its time ([`Scenario::pose`]); its range is
+/// measured from there and reported at its nominal bearing.
 pub fn render(shapes: &[Shape], scenario: &Scenario, rng: &mut ChaCha8Rng) -> SimScan {
-    let geometry = scenario.resolution.geometry();
+    let geometry = scenario.geometry();
     let r_max = f64::from(geometry.r_max);
-    let hits = cast(shapes, &geometry);
+    let unit = f64::from(scenario.range_mode.mm_per_unit());
+    let hits = cast_moving(shapes, &geometry, |i| scenario.pose(i));
     let n = hits.len();
-    let mut true_r: Vec<f64> = hits.iter().map(|h| h.map_or(f64::NAN, |h| h.0)).collect();
-    let mut prim: Vec<Option<usize>> = hits.iter().map(|h| h.map(|h| h.1)).collect();
+    let mut true_r: Vec<f64> = hits
+        .iter()
+        .map(|h| h.map_or(f64::NAN, |h| h.range))
+        .collect();
+    let mut prim: Vec<Option<usize>> = hits.iter().map(|h| h.map(|h| h.primitive)).collect();
+    // Noise factor per beam (1 unless the noise depends on the incidence angle).
+    let factor: Vec<f64> = hits
+        .iter()
+        .map(|h| match h {
+            Some(h) if scenario.incidence_noise => incidence_noise_factor(h.incidence),
+            _ => 1.0,
+        })
+        .collect();
     // Ground truth comes from the clean hits; mixed pixels then remove beams from it.
     if scenario.mixed_pixels {
         let mut i = 0;
@@ -60,19 +81,25 @@ pub fn render(shapes: &[Shape], scenario: &Scenario, rng: &mut ChaCha8Rng) -> Si
         }
         if sigma > 0.0 {
             if let Some(nd) = &normal {
-                r += nd.sample(rng);
+                let f = factor.get(i).copied().unwrap_or(1.0);
+                r += if f == 1.0 {
+                    nd.sample(rng)
+                } else {
+                    f * nd.sample(rng)
+                };
             }
         }
-        let q = r.round();
-        if q >= 1.0 && q <= r_max {
-            ranges_mm[i] = q as f32;
+        let q = (r / unit).round();
+        if q >= 1.0 && q * unit <= r_max && q <= f64::from(LMS_MAX_VALID_8M) {
+            ranges_mm[i] = (q * unit) as f32;
             raw[i] = q as u16;
         } else {
             prim[i] = None;
         }
     }
-    // Truth: maximal runs of ≥ MIN_RUN beams on one primitive.
-    let sigma_eff = (sigma * sigma + 1.0 / 12.0).sqrt(); // noise + integer quantisation
+    // Truth: maximal runs of ≥ MIN_RUN beams on one primitive. The CRB takes the RMS noise of
+    // the run's beams, with the quantisation's.
+    let quantum = unit * unit / 12.0;
     let mut truth = Vec::new();
     let mut i = 0;
     while i < n {
@@ -88,6 +115,8 @@ pub fn render(shapes: &[Shape], scenario: &Scenario, rng: &mut ChaCha8Rng) -> Si
             if let Some(shape) = shapes.get(id) {
                 let kind = TruthKind::of(shape);
                 let bearings: Vec<f64> = (i..=j).map(|k| bearing(&geometry, k)).collect();
+                let f2 = factor[i..=j].iter().map(|f| f * f).sum::<f64>() / bearings.len() as f64;
+                let sigma_eff = (sigma * sigma * f2 + quantum).sqrt();
                 truth.push(TruthFeature {
                     primitive: id,
                     first: i,
@@ -111,5 +140,8 @@ pub fn render(shapes: &[Shape], scenario: &Scenario, rng: &mut ChaCha8Rng) -> Si
         shapes: shapes.to_vec(),
         true_ranges_mm: true_r,
         sigma_r: sigma,
+        mm_per_unit: scenario.range_mode.mm_per_unit(),
+        sweeps: scenario.resolution.sweeps(),
+        odometry: scenario.odometry_given.then(|| scenario.motion()),
     }
 }

@@ -1,11 +1,11 @@
-//! What to simulate ([`Scenario`]: scene kind, seed, noise, resolution) and what comes out
-//! ([`SimScan`]).
+//! What to simulate ([`Scenario`]: scene kind, seed, noise, resolution, range mode, the
+//! robot's motion) and what comes out ([`SimScan`]).
 
-use pfe_core::{Point, ScanGeometry};
+use pfe_core::{BeamTiming, Motion, Point, ScanGeometry};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::generate::build_scene;
+use super::generate::{build_scene, long_corridor};
 use super::{render, Shape, TruthFeature};
 
 /// Kind of scene.
@@ -21,6 +21,9 @@ pub enum SceneKind {
     Corridor,
     /// One of the four above, chosen by the seed.
     Mixed,
+    /// A corridor 30–80 m long and 2–4 m wide with doors and recesses, for the 80 m (cm)
+    /// mode: walls seen far away at grazing incidence. Not part of `Mixed`.
+    LongCorridor,
 }
 
 impl SceneKind {
@@ -40,6 +43,7 @@ impl SceneKind {
             SceneKind::Pillars => "pillars",
             SceneKind::Corridor => "corridor",
             SceneKind::Mixed => "mixed",
+            SceneKind::LongCorridor => "long-corridor",
         }
     }
 }
@@ -53,8 +57,9 @@ impl std::str::FromStr for SceneKind {
             "pillars" => Ok(SceneKind::Pillars),
             "corridor" => Ok(SceneKind::Corridor),
             "mixed" => Ok(SceneKind::Mixed),
+            "long-corridor" => Ok(SceneKind::LongCorridor),
             o => Err(format!(
-                "unknown scene kind `{o}` (office, clutter, pillars, corridor, mixed)"
+                "unknown scene kind `{o}` (office, clutter, pillars, corridor, mixed, long-corridor)"
             )),
         }
     }
@@ -96,6 +101,49 @@ impl Resolution {
     }
 }
 
+/// Range unit and maximum range of the simulated LMS200.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RangeMode {
+    /// 8 m mode, ranges in mm (1 mm quantum).
+    Mm,
+    /// 80 m mode, ranges in cm (10 mm quantum), simulated up to 80 m.
+    Cm,
+}
+
+impl RangeMode {
+    /// mm per raw code unit (the quantum).
+    pub fn mm_per_unit(&self) -> f32 {
+        match self {
+            RangeMode::Mm => 1.0,
+            RangeMode::Cm => 10.0,
+        }
+    }
+
+    /// Maximum range, mm.
+    pub fn r_max(&self) -> f32 {
+        match self {
+            RangeMode::Mm => 8000.0,
+            RangeMode::Cm => 80000.0,
+        }
+    }
+}
+
+/// Range noise grows with the incidence angle β as `σ(β) = σ_r · min(1 + c · tan²β, cap)`
+/// with `c` = this constant (when [`Scenario::incidence_noise`] is on). The form and both
+/// constants are a model choice (a weaker, stretched return at oblique incidence), not a
+/// fitted LMS200 characteristic: σ grows by 30 % at 60°, doubles near 72°, and is capped at
+/// [`INCIDENCE_NOISE_CAP`] beyond 80°.
+pub const INCIDENCE_NOISE_C: f64 = 0.1;
+
+/// Cap of the incidence noise factor (see [`INCIDENCE_NOISE_C`]).
+pub const INCIDENCE_NOISE_CAP: f64 = 4.0;
+
+/// The factor by which the range noise grows at incidence angle `beta` (rad).
+pub fn incidence_noise_factor(beta: f64) -> f64 {
+    let t = beta.tan();
+    (1.0 + INCIDENCE_NOISE_C * t * t).min(INCIDENCE_NOISE_CAP)
+}
+
 /// One simulated scan's recipe. Equal scenarios give equal scans.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Scenario {
@@ -112,6 +160,17 @@ pub struct Scenario {
     /// Puts a mixed pixel (a range between foreground and background) at some depth jumps
     /// (default off).
     pub mixed_pixels: bool,
+    /// Forward speed of the robot during the scan, mm/s (default 0). Each beam is cast from
+    /// the pose at its time ([`Resolution::beam_time`]); the truth stays in the frame of beam 0.
+    pub v: f32,
+    /// Turn rate of the robot during the scan, rad/s (default 0, counter-clockwise positive).
+    pub omega: f32,
+    /// The extractors are told the motion ([`SimScan::odometry`]) (default off).
+    pub odometry_given: bool,
+    /// Range unit and maximum range (default [`RangeMode::Mm`]).
+    pub range_mode: RangeMode,
+    /// Noise grows with the incidence angle ([`incidence_noise_factor`]) (default off).
+    pub incidence_noise: bool,
 }
 
 /// One simulated scan with its ground truth.
@@ -121,8 +180,11 @@ pub struct SimScan {
     pub geometry: ScanGeometry,
     /// Measured ranges, mm (integers), NaN for no return.
     pub ranges_mm: Vec<f32>,
-    /// The same as raw LMS codes (mm mode), [`NO_RETURN_CODE`](super::NO_RETURN_CODE) for no return.
+    /// The same as raw LMS codes (units of `mm_per_unit`), [`NO_RETURN_CODE`](super::NO_RETURN_CODE)
+    /// for no return.
     pub raw: Vec<u16>,
+    /// mm per raw code (1 in mm mode, 10 in cm mode).
+    pub mm_per_unit: f32,
     /// Primitive hit by each beam (`None`: no return or a mixed pixel).
     pub beam_primitive: Vec<Option<usize>>,
     /// Ground-truth features, in scan order.
@@ -135,9 +197,15 @@ pub struct SimScan {
     pub true_ranges_mm: Vec<f64>,
     /// Range noise σ_r used, mm.
     pub sigma_r: f64,
+    /// Number of interleaved sweeps the scan is made of (1, 2 or 4).
+    pub sweeps: usize,
+    /// The robot's motion during the scan with the LMS2xx beam timing, when the scenario gives
+    /// odometry (`None` otherwise, also when it moves).
+    pub odometry: Option<Motion>,
 }
 impl Scenario {
-    /// Defaults: σ_r = 5 mm, 0.5°, no bias, no mixed pixels.
+    /// Defaults: σ_r = 5 mm, 0.5°, no bias, no mixed pixels, standing still, mm mode,
+    /// incidence-independent noise.
     pub fn new(kind: SceneKind, seed: u64) -> Self {
         Self {
             kind,
@@ -146,7 +214,44 @@ impl Scenario {
             resolution: Resolution::Half,
             bias: false,
             mixed_pixels: false,
+            v: 0.0,
+            omega: 0.0,
+            odometry_given: false,
+            range_mode: RangeMode::Mm,
+            incidence_noise: false,
         }
+    }
+
+    /// The same scenario with the robot moving at `v` mm/s and turning at `omega` rad/s.
+    pub fn with_motion(mut self, v: f32, omega: f32) -> Self {
+        self.v = v;
+        self.omega = omega;
+        self
+    }
+
+    /// The scan geometry: the resolution's, with the range mode's maximum range.
+    pub fn geometry(&self) -> ScanGeometry {
+        let mut g = self.resolution.geometry();
+        g.r_max = self.range_mode.r_max();
+        g
+    }
+
+    /// The robot's motion with the LMS2xx beam timing of the resolution.
+    pub fn motion(&self) -> Motion {
+        Motion {
+            v: self.v,
+            omega: self.omega,
+            timing: BeamTiming::lms2xx(self.resolution.degrees() as f32),
+        }
+    }
+
+    /// Scanner pose `[x, y, θ]` when beam `i` is taken, in the frame of beam 0.
+    pub fn pose(&self, i: usize) -> [f64; 3] {
+        super::motion::pose_at(
+            f64::from(self.v),
+            f64::from(self.omega),
+            self.resolution.beam_time(i),
+        )
     }
 
     /// The same scenario with range noise `sigma_r` (mm).
@@ -162,13 +267,25 @@ impl Scenario {
             SceneKind::Mixed => SceneKind::CONCRETE[rng.gen_range(0..4)],
             k => k,
         };
-        let scene = build_scene(kind, &mut rng);
+        let scene = match kind {
+            SceneKind::LongCorridor => long_corridor(&mut rng),
+            k => build_scene(k, &mut rng),
+        };
         let pose = scene.sample_pose(&mut rng);
         let shapes: Vec<Shape> = scene.shapes.iter().map(|s| s.to_frame(pose)).collect();
         render(&shapes, self, &mut rng)
     }
 }
 impl SimScan {
+    /// What an extractor may know about how the scan was taken: the odometry (when given) and
+    /// the number of sweeps.
+    pub fn context(&self) -> crate::methods::ScanContext {
+        crate::methods::ScanContext {
+            odometry: self.odometry,
+            sweeps: self.sweeps,
+        }
+    }
+
     /// Cartesian points of the measured ranges (`None`: no return).
     pub fn points(&self) -> Vec<Option<Point>> {
         self.ranges_mm

@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 use firmware::app::{App, ConfigChoice};
-use firmware::lms::driver::{Config, Driver, ScanData};
+use firmware::lms::driver::{Clock, Config, Driver, ScanData, SetBaud};
 use firmware::lms::types::Baud;
 use firmware::output::{self, Feed, FrameDecoder};
 pub mod qemu;
@@ -295,6 +295,35 @@ fn counters_of(c: &firmware::lms::driver::Counters) -> output::Counters {
     }
 }
 
+/// Takes the driver's next scan through `pipe` into `delivered` (`Ok(true)`), or counts its
+/// error in `errors` (`Ok(false)`).
+fn next_scan<U, D, C>(
+    lms: &mut Driver<U, D, C>,
+    pipe: &mut Pipeline,
+    delivered: &mut Vec<Delivered>,
+    errors: &mut BTreeMap<String, u32>,
+) -> Result<bool>
+where
+    U: embedded_io::Read + embedded_io::Write + embedded_io::ReadReady + SetBaud,
+    U::Error: std::fmt::Debug,
+    D: embedded_hal::delay::DelayNs,
+    C: Clock,
+{
+    match lms.next_scan() {
+        Ok(s) => {
+            let d = tag_and_copy(s)?;
+            let c = counters_of(&lms.counters());
+            pipe.run(lms.last_scan(), c)?;
+            delivered.push(d);
+            Ok(true)
+        }
+        Err(e) => {
+            *errors.entry(format!("{e:?}")).or_default() += 1;
+            Ok(false)
+        }
+    }
+}
+
 /// The in-process run; `Ok(true)` when the account balances.
 pub fn inproc(a: &Args) -> Result<bool> {
     let cfg = EmulatorConfig {
@@ -337,19 +366,10 @@ pub fn inproc(a: &Args) -> Result<bool> {
                 }
             })?;
         }
-        match lms.next_scan() {
-            Ok(s) => {
-                let d = tag_and_copy(s)?;
-                let c = counters_of(&lms.counters());
-                pipe.run(lms.last_scan(), c)?;
-                delivered.push(d);
-            }
-            Err(e) => {
-                *errors.entry(format!("{e:?}")).or_default() += 1;
-                if errors.values().sum::<u32>() as usize > 20 + a.scans / 100 {
-                    bail!("the driver keeps failing: {errors:?}");
-                }
-            }
+        if !next_scan(&mut lms, &mut pipe, &mut delivered, &mut errors)?
+            && errors.values().sum::<u32>() as usize > 20 + a.scans / 100
+        {
+            bail!("the driver keeps failing: {errors:?}");
         }
         if delivered.len() >= next_print {
             eprint!("\r  {} / {} scans", delivered.len(), a.scans);
@@ -504,20 +524,11 @@ pub fn pty(a: &Args) -> Result<bool> {
     let mut delivered = Vec::new();
     let mut errors: BTreeMap<String, u32> = BTreeMap::new();
     while delivered.len() < a.scans {
-        match lms.next_scan() {
-            Ok(s) => {
-                let d = tag_and_copy(s)?;
-                let c = counters_of(&lms.counters());
-                pipe.run(lms.last_scan(), c)?;
-                delivered.push(d);
-            }
-            Err(e) => {
-                *errors.entry(format!("{e:?}")).or_default() += 1;
-                if errors.values().sum::<u32>() > 20 {
-                    stop.store(true, Ordering::SeqCst);
-                    bail!("the driver keeps failing on the pty: {errors:?}");
-                }
-            }
+        if !next_scan(&mut lms, &mut pipe, &mut delivered, &mut errors)?
+            && errors.values().sum::<u32>() > 20
+        {
+            stop.store(true, Ordering::SeqCst);
+            bail!("the driver keeps failing on the pty: {errors:?}");
         }
     }
     let counters = format!("{:?}", lms.counters());

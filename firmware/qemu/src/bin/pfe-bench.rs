@@ -19,9 +19,10 @@ mod fw {
     use defmt_semihosting as _;
     use firmware::app::{RawScan, LMS_READINGS};
     use firmware::lms::{frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions};
-    use firmware::output::{self, Counters, Report, Stage};
+    use firmware::output::{Counters, Report, Stage};
+    use firmware_qemu::rt::{self, report};
     use firmware_qemu::{
-        rt, sys, time,
+        sys, time,
         uart::{Uart, UART1},
     };
     use pfe_core::{Config, ScanGeometry};
@@ -65,18 +66,9 @@ mod fw {
         (used, 0)
     }
 
-    fn report(out: &mut Uart, r: Report) {
-        if output::write_report(out, &r).is_err() {
-            sys::exit(sys::EXIT_OUTPUT);
-        }
-    }
-
     #[entry]
     fn main() -> ! {
-        let Some(cp) = cortex_m::Peripherals::take() else {
-            sys::exit(sys::EXIT_USAGE)
-        };
-        time::start(cp.SYST);
+        rt::start_clock();
         let mut out = Uart::new(UART1);
         if SCANS.is_empty() {
             defmt::error!(

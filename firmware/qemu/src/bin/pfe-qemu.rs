@@ -1,11 +1,16 @@
-//! The pfe firmware on QEMU `mps2-an386`: LMS200 on UART0 (initialised and streamed by the
-//! driver), pfe-core on every scan, one feature frame per scan on UART1
+//! The pfe firmware on QEMU `mps2-an386`: LMS200 on UART0 (received through the UART's
+//! interrupt into the firmware's receive ring, as on the board; initialised and streamed by
+//! the driver), pfe-core on every scan, one feature frame per scan on UART1
 //! (`firmware::output`), defmt logs on semihosting stdout.
 //!
-//! Semihosting arguments: `pfe <scans> [paper|default] [baud]` (`0` or none: run forever;
-//! baud 9600/19200/38400/500000, default 38400). At the
-//! end it sends `Report::Stack` (painted-stack high-water mark) and `Report::Done`, then
-//! exits QEMU with 0; 3 = scanner link failed, 4 = output failed, 101 = panic, 102 = fault.
+//! Semihosting arguments: `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every]` (`0` or
+//! none: run forever; baud 9600/19200/38400/500000, default 38400). `slow_ms` makes the
+//! extraction artificially slow: a busy-wait of that many ms after every `slow_every`-th
+//! scan (default every scan), to test the receive ring (`host-tests/tests/rx_slow_qemu.rs`).
+//! At the end it sends `Report::Stack` (painted-stack high-water mark) and `Report::Done`,
+//! writes the receive path's account to semihosting stderr (`rx: ring_full=… overruns=…
+//! line_errors=… peak=… capacity=… scan_errors=…`), then exits QEMU with 0; 3 = scanner link
+//! failed, 4 = output failed, 101 = panic, 102 = fault.
 #![cfg_attr(target_os = "none", no_std, no_main)]
 
 #[cfg(not(target_os = "none"))]
@@ -17,52 +22,53 @@ fn main() {
 mod fw {
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
+    use embedded_hal::delay::DelayNs;
     use firmware::app::{AppError, ConfigChoice};
     use firmware::lms::types::Baud;
     use firmware::lms::{Config, Driver};
-    use firmware::output::{self, Report};
-    use firmware_qemu::time::{self, Clock, Delay};
-    use firmware_qemu::uart::{Uart, UART0, UART1};
-    use firmware_qemu::{rt, sys};
+    use firmware::output::Report;
+    use firmware::rx_ring::RING_SLOTS;
+    use firmware_qemu::rt::{self, report};
+    use firmware_qemu::scanner_uart::{rx_counters, ScannerUart};
+    use firmware_qemu::sys;
+    use firmware_qemu::time::{Clock, Delay};
+    use firmware_qemu::uart::{Uart, UART1};
 
     /// Consecutive failed scans before giving up.
     const MAX_FAILURES: u32 = 5;
 
-    fn report(out: &mut Uart, r: Report) {
-        if output::write_report(out, &r).is_err() {
-            sys::exit(sys::EXIT_OUTPUT);
-        }
-    }
-
     #[entry]
     fn main() -> ! {
-        let Some(cp) = cortex_m::Peripherals::take() else {
-            sys::exit(sys::EXIT_USAGE)
-        };
-        time::start(cp.SYST);
+        rt::start_clock();
         let scans = sys::arg_u32(0).unwrap_or(0);
         let choice = if sys::arg_is(1, "paper") {
             ConfigChoice::Paper
         } else {
             ConfigChoice::Default
         };
+        let slow_ms = sys::arg_u32(3).unwrap_or(0);
+        let slow_every = sys::arg_u32(4).unwrap_or(1).max(1);
         // Room for every LMS200 variant (up to 401 values) and 48 features.
         let Some(app) = rt::take_app() else {
             sys::exit(sys::EXIT_USAGE)
         };
         app.set_choice(choice);
-        defmt::info!("pfe-qemu: {} scans (0 = forever), config {}", scans, choice);
+        defmt::info!(
+            "pfe-qemu: {} scans (0 = forever), config {}, slow {} ms every {} scans",
+            scans,
+            choice,
+            slow_ms,
+            slow_every
+        );
         let mut out = Uart::new(UART1);
         let baud = sys::arg_u32(2)
             .and_then(Baud::from_bps)
             .unwrap_or(Config::default().baud);
-        let mut lms = Driver::new(
-            Uart::new(UART0),
-            Delay,
-            Clock,
-            Config::default().with_baud(baud),
-        );
-        let mut failures = 0u32;
+        let Some(scanner) = ScannerUart::new() else {
+            sys::exit(sys::EXIT_USAGE)
+        };
+        let mut lms = Driver::new(scanner, Delay, Clock, Config::default().with_baud(baud));
+        let (mut failures, mut scan_errors) = (0u32, 0u32);
         while scans == 0 || app.seq() < scans {
             match app.step(&mut lms, &mut out) {
                 Ok(h) => {
@@ -74,9 +80,13 @@ mod fw {
                         h.n_features,
                         h.status
                     );
+                    if slow_ms > 0 && h.seq % slow_every == 0 {
+                        Delay.delay_ms(slow_ms);
+                    }
                 }
                 Err(AppError::Source(e)) => {
                     failures += 1;
+                    scan_errors += 1;
                     defmt::warn!("scanner: {} ({} in a row)", e, failures);
                     if failures >= MAX_FAILURES {
                         sys::exit(sys::EXIT_LINK);
@@ -90,6 +100,18 @@ mod fw {
         defmt::info!("done: stack high-water mark {} of {} bytes", used, size);
         report(&mut out, Report::Stack { used, size });
         report(&mut out, Report::Done { scans: app.seq() });
+        let rx = rx_counters();
+        sys::eprint_stats(
+            "rx:",
+            &[
+                ("ring_full", rx.ring_full()),
+                ("overruns", rx.overruns()),
+                ("line_errors", rx.line_errors()),
+                ("peak", rx.peak()),
+                ("capacity", RING_SLOTS as u32 - 1),
+                ("scan_errors", scan_errors),
+            ],
+        );
         sys::exit(sys::EXIT_OK)
     }
 }
