@@ -1,6 +1,7 @@
 //! Pre-processing (§2): readings to points, with the systematic range [`correction`] and
-//! motion de-skewing ([`deskew`]) when configured, and, for interleaved sweeps without
-//! motion, each sweep moved onto sweep 0 by its offset estimated from the scan ([`sweeps`]).
+//! motion de-skewing ([`deskew`]) when configured; for interleaved sweeps without motion, the
+//! extractor may move each sweep onto sweep 0 by its offset estimated from the scan
+//! ([`sweeps`]).
 //! Invalid readings (no return, reserved codes) are not points.
 
 pub mod correction;
@@ -52,12 +53,8 @@ pub(crate) fn load(
     stats.readings = n;
     stats.valid = n - invalid;
     if config.correction.is_some() || motion.is_some() {
-        let slots = (&mut *points, &mut *ranges, &mut *flags, dirs);
+        let slots = (points, ranges, flags, dirs);
         stats.valid -= adjust(slots, motion, scan, config);
-    }
-    if motion.is_none() && scan.sweeps > 1 {
-        let s = usize::from(scan.sweeps);
-        stats.sweeps_aligned = sweeps::align(points, ranges, flags, s, g.angle_step);
     }
 }
 

@@ -23,7 +23,9 @@
 
 use crate::flags::VALID;
 use crate::geometry::Point;
+use crate::mark::Rule;
 use crate::math;
+use crate::pass::Pass;
 
 /// Most rows (beams) one sweep's estimate uses: longer sweeps are subsampled evenly.
 pub const MAX_ROWS: usize = 64;
@@ -102,13 +104,16 @@ pub fn estimate(
     if sweep == 0 || sweep >= sweeps || !math::finite(angle_step) {
         return None;
     }
-    let mut rows = [[0.0f32; 5]; MAX_ROWS];
-    let (m, far) = collect(points, sweeps, sweep, angle_step, &mut rows);
-    let rows = rows.get(..m)?;
-    let first = normal(rows, None, 0.0)?;
+    let rows = Rows {
+        points,
+        sweeps,
+        sweep,
+        step: angle_step,
+    };
+    let first = normal(&rows, None, 0.0)?;
     let cut = 3.0 * first.sigma.max(SIGMA_FLOOR);
-    let sol = normal(rows, Some((&first.x, cut)), first.x[2] / ROT_SCALE)?;
-    Some(offset(&sol, far))
+    let sol = normal(&rows, Some((&first.x, cut)), first.x[2] / ROT_SCALE)?;
+    Some(offset(&sol, rows.far()))
 }
 
 /// Moves the points of every sweep `s ≥ 1` of a scan of `sweeps` interleaved sweeps onto
@@ -141,43 +146,60 @@ pub(crate) fn align(
     moved
 }
 
+/// Whether the default mode's walk over a scan of interleaved sweeps left the marks that
+/// sweeps out of place make: more segment starts than one in [`SUSPECT_EVERY`] valid points,
+/// or more neighbouring starts than the walk notes. The paper's mode is left as published.
+pub(crate) fn suspect(pass: &Pass<'_>, rule: &Rule) -> bool {
+    rule.noise().is_some()
+        && (pass.neighbours.is_none() || pass.starts * SUSPECT_EVERY > pass.stats.valid)
+}
+
+/// One segment start in this many valid points is more than a scan of sweeps in place makes.
+pub const SUSPECT_EVERY: usize = 18;
+
 /// Residual floor, mm (the 1 mm range quantum's standard deviation, about 0.3 mm).
 const SIGMA_FLOOR: f32 = 0.3;
 /// Scale of the rotation unknown: `x₃ = dθ · ROT_SCALE` is in mm at 1 m.
 const ROT_SCALE: f32 = 1000.0;
 
-/// Fills `rows` with the equations of sweep `s`'s beams on smooth surfaces (evenly subsampled
-/// to fit); returns how many, and the largest range among them, mm.
-fn collect(
-    points: &[Point],
+/// The equations of sweep `sweep`'s beams on smooth surfaces, evenly subsampled to at most
+/// [`MAX_ROWS`]: made again on every pass over them rather than stored (no stack for them).
+#[derive(Clone, Copy)]
+struct Rows<'a> {
+    points: &'a [Point],
     sweeps: usize,
-    s: usize,
+    sweep: usize,
     step: f32,
-    rows: &mut [Row; MAX_ROWS],
-) -> (usize, f32) {
-    let pairs = points.len().saturating_sub(1) / sweeps;
-    // Sweep-0 triples (a, b, c) need c = S·(j + 2): `pairs − 1` of them.
-    let triples = pairs.saturating_sub(1);
-    let stride = triples.div_ceil(MAX_ROWS).max(1);
-    let f = s as f32 / sweeps as f32;
-    let curve = f * (2.0 - f);
-    // A chord longer than this many times its length at normal incidence is a jump.
-    let reach = 16.0 * math::abs(step) * sweeps as f32;
-    let (mut m, mut far) = (0, 0.0f32);
-    for j in (0..triples).step_by(stride) {
+}
+
+impl Rows<'_> {
+    /// Calls `f` with every row and the range of its beam, mm.
+    fn each(&self, mut f: impl FnMut(&Row, f32)) {
+        let (points, sweeps, s) = (self.points, self.sweeps, self.sweep);
+        let pairs = points.len().saturating_sub(1) / sweeps;
+        // Sweep-0 triples (a, b, c) need c = S·(j + 2): `pairs − 1` of them.
+        let triples = pairs.saturating_sub(1);
+        let stride = triples.div_ceil(MAX_ROWS).max(1);
+        let f_s = s as f32 / sweeps as f32;
+        let curve = f_s * (2.0 - f_s);
+        // A chord longer than this many times its length at normal incidence is a jump.
+        let reach = 16.0 * math::abs(self.step) * sweeps as f32;
         let at = |k: usize| points.get(k).copied().unwrap_or(Point::INVALID);
-        let (a, q) = (at(sweeps * j), at(sweeps * j + s));
-        let (b, c) = (at(sweeps * (j + 1)), at(sweeps * (j + 2)));
-        let Some(row) = row(a, q, b, c, curve, reach) else {
-            continue;
-        };
-        if let Some(slot) = rows.get_mut(m) {
-            *slot = row;
-            m += 1;
-            far = far.max(math::hypot(q.x, q.y));
+        for j in (0..triples).step_by(stride) {
+            let (a, q) = (at(sweeps * j), at(sweeps * j + s));
+            let (b, c) = (at(sweeps * (j + 1)), at(sweeps * (j + 2)));
+            if let Some((row, range)) = row(a, q, b, c, curve, reach) {
+                f(&row, range);
+            }
         }
     }
-    (m, far)
+
+    /// The largest range among the rows' beams, mm.
+    fn far(&self) -> f32 {
+        let mut far = 0.0f32;
+        self.each(|_, r| far = far.max(r));
+        far
+    }
 }
 
 /// The row of beam `q` between sweep-0 beams `a` and `b` (and `c` after `b`), when the
@@ -185,7 +207,7 @@ fn collect(
 /// `e₀` of `b`. On a circle through `a`, `b`, `c`, `q` at fraction `f / 2` of the chord lies
 /// `f(2 − f)·e₀` from it, which the row removes.
 #[inline]
-fn row(a: Point, q: Point, b: Point, c: Point, curve: f32, reach: f32) -> Option<Row> {
+fn row(a: Point, q: Point, b: Point, c: Point, curve: f32, reach: f32) -> Option<(Row, f32)> {
     let (cx, cy) = (c.x - a.x, c.y - a.y);
     let len = math::hypot(cx, cy);
     let rq = math::hypot(q.x, q.y);
@@ -201,7 +223,7 @@ fn row(a: Point, q: Point, b: Point, c: Point, curve: f32, reach: f32) -> Option
         return None;
     }
     let j3 = (ny * q.x - nx * q.y) / ROT_SCALE;
-    Some([nx, ny, j3, rhs, nx * q.x + ny * q.y])
+    Some(([nx, ny, j3, rhs, nx * q.x + ny * q.y], rq))
 }
 
 /// The offset of a solution; `far` is the largest range of the sweep's rows, mm.
@@ -250,16 +272,15 @@ fn residual(row: &Row, x: &[f32; 3]) -> f32 {
 
 /// Solves the normal equations of `rows` (those within `cut` of the solution `x` when given),
 /// with the second-order term `(cos θ − 1)·n·q` of a rotation by about `theta` moved to `e`.
-fn normal(rows: &[Row], keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<Solution> {
+fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<Solution> {
     let bend = -0.5 * theta * theta;
+    let kept = |r: &Row| keep.is_none_or(|(x, cut)| math::abs(residual(r, x)) <= cut);
     let mut a = [0.0f32; 6];
     let mut g = [0.0f32; 3];
     let mut used = 0usize;
-    for r in rows {
-        if let Some((x, cut)) = keep {
-            if !(math::abs(residual(r, x)) <= cut) {
-                continue;
-            }
+    rows.each(|r, _| {
+        if !kept(r) {
+            return;
         }
         let [j0, j1, j2, e, nq] = *r;
         let e = e + bend * nq;
@@ -273,7 +294,7 @@ fn normal(rows: &[Row], keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<So
         ];
         g = [g[0] - j0 * e, g[1] - j1 * e, g[2] - j2 * e];
         used += 1;
-    }
+    });
     if used < 6 {
         return None;
     }
@@ -284,12 +305,12 @@ fn normal(rows: &[Row], keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<So
         inv[2] * g[0] + inv[4] * g[1] + inv[5] * g[2],
     ];
     let mut ss = 0.0f32;
-    for r in rows {
-        let res = residual(r, &x) + bend * r[4];
-        if keep.is_none_or(|(x0, cut)| math::abs(residual(r, x0)) <= cut) {
+    rows.each(|r, _| {
+        if kept(r) {
+            let res = residual(r, &x) + bend * r[4];
             ss += res * res;
         }
-    }
+    });
     let sigma = math::sqrt(ss / (used - 3) as f32);
     Some(Solution {
         x,
