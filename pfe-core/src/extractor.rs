@@ -8,10 +8,11 @@ use crate::check;
 use crate::config::Config;
 use crate::error::ExtractError;
 use crate::feature::Feature;
-use crate::flags::{END, START};
+use crate::flags::{END, START, VALID};
 use crate::geometry::Point;
 use crate::mark::{self, Rule};
 use crate::pass::Pass;
+use crate::preprocess::{self, sweeps};
 use crate::scan::Scan;
 use crate::segment;
 
@@ -36,6 +37,9 @@ pub struct Stats {
     pub dropped: usize,
     /// Predictions made (N + M in the paper's count).
     pub predictions: usize,
+    /// Interleaved sweeps moved onto sweep 0 by their estimated offset (scans of several
+    /// sweeps without motion, see [`crate::preprocess::sweeps`]).
+    pub sweeps_aligned: usize,
 }
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
@@ -123,6 +127,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     features: 0,
                     dropped: 0,
                     predictions: 0,
+                    sweeps_aligned: 0,
                 },
             },
         }
@@ -226,10 +231,39 @@ fn run(
     out: &mut dyn FeatureSink,
 ) -> Result<Stats, ExtractError> {
     // §2: readings to points (range correction, de-skew).
-    let mut pass = Pass::load(beams, slots, scan, config, stats);
-    let rule = Rule::new(config, scan.geometry.r_max, pass.beams.gap_factor);
+    let (points, ranges, flags) = slots;
+    let motion = scan.motion.filter(|m| m.is_valid());
+    preprocess::load(
+        (&mut *points, &mut *ranges, &mut *flags),
+        &beams,
+        motion,
+        scan,
+        config,
+        stats,
+    );
+    let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);
     // §3.1–3.2, §3.6: mark points by prediction.
-    mark::mark(&mut pass, &rule);
+    let sweeps = usize::from(scan.sweeps.max(1));
+    let (neighbours, suspect) = {
+        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+        mark::mark(&mut pass, &rule);
+        let suspect = sweeps > 1 && motion.is_none() && sweeps::suspect(&pass, &rule);
+        (pass.neighbours.take(), suspect)
+    };
+    // Interleaved sweeps out of place (no odometry): when the walk's marks say so, each sweep
+    // is moved onto sweep 0 by its offset estimated from the scan, and the points marked again.
+    let moved = suspect && {
+        let step = scan.geometry.angle_step;
+        stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
+        stats.sweeps_aligned > 0
+    };
+    let mut pass = Pass::over(beams, (points, ranges, flags), motion, stats);
+    if moved {
+        pass.flags.iter_mut().for_each(|f| *f &= VALID);
+        mark::mark(&mut pass, &rule);
+    } else {
+        pass.neighbours = neighbours;
+    }
     // §3.3: the check step.
     if config.check_step {
         check::check(&mut pass, &rule);

@@ -9,7 +9,7 @@
 //! | step | paper | module |
 //! |---|---|---|
 //! | readings and beam geometry | | [`scan`] |
-//! | readings to points: range correction, de-skew | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`]) |
+//! | readings to points: range correction, de-skew, interleaved sweeps | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`], [`preprocess::sweeps`]) |
 //! | prediction point and its error | §3.1 | [`predict`] |
 //! | mark points: the paper's threshold, or the default mode's walk with boundary refinement | §3.2, §3.6 | `mark` (`paper`, `noise`, `refine`) |
 //! | check step and pairing | §3.3 | `check` |
@@ -70,4 +70,5 @@ pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
 pub use preprocess::correction::RangeCorrection;
 pub use preprocess::deskew::{BeamTiming, Motion};
+pub use preprocess::sweeps::SweepOffset;
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

@@ -5,14 +5,13 @@
 use heapless::Vec;
 
 use crate::beams::Beams;
-use crate::config::Config;
 use crate::extractor::Stats;
 use crate::flags::{START, VALID};
 use crate::geometry::Point;
 use crate::predict::{Prediction, WindowLine};
-use crate::preprocess;
 use crate::preprocess::deskew::Motion;
-use crate::scan::Scan;
+#[cfg(test)]
+use crate::{config::Config, preprocess, scan::Scan};
 
 /// Most neighbouring segment starts the default mode's walk notes for its check step.
 pub(crate) const NEIGHBOURS: usize = 16;
@@ -33,6 +32,9 @@ pub(crate) struct Pass<'a> {
     /// order: the only places where its check step can act. `None` when not known (the
     /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
     pub neighbours: Option<Vec<u16, NEIGHBOURS>>,
+    /// Segment starts set through [`Self::start`] (the default mode's walk): with the noted
+    /// neighbours, its evidence of interleaved sweeps out of place.
+    pub starts: usize,
     /// What the extraction did so far.
     pub stats: &'a mut Stats,
 }
@@ -40,6 +42,7 @@ pub(crate) struct Pass<'a> {
 impl<'a> Pass<'a> {
     /// The work state of `scan` over the beam table `beams` and the slots (points, ranges,
     /// flags) of its readings, which it fills (§2: range correction, de-skew).
+    #[cfg(test)]
     pub(crate) fn load(
         beams: Beams<'a>,
         (points, ranges, flags): (&'a mut [Point], &'a mut [f32], &'a mut [u8]),
@@ -50,6 +53,16 @@ impl<'a> Pass<'a> {
         let motion = scan.motion.filter(|m| m.is_valid());
         let slots = (&mut *points, &mut *ranges, &mut *flags);
         preprocess::load(slots, &beams, motion, scan, config, stats);
+        Self::over(beams, (points, ranges, flags), motion, stats)
+    }
+
+    /// The work state over slots already loaded.
+    pub(crate) fn over(
+        beams: Beams<'a>,
+        (points, ranges, flags): (&'a [Point], &'a [f32], &'a mut [u8]),
+        motion: Option<Motion>,
+        stats: &'a mut Stats,
+    ) -> Self {
         Self {
             beams,
             points,
@@ -57,6 +70,7 @@ impl<'a> Pass<'a> {
             flags,
             motion,
             neighbours: None,
+            starts: 0,
             stats,
         }
     }
@@ -141,6 +155,7 @@ impl<'a> Pass<'a> {
     /// one too (see [`Self::neighbours`]).
     pub(crate) fn start(&mut self, i: usize) {
         self.set(i, START);
+        self.starts += 1;
         if i.checked_sub(1).is_some_and(|j| self.flag(j) & START != 0) {
             let noted = match (&mut self.neighbours, u16::try_from(i)) {
                 (Some(list), Ok(i)) => list.push(i).is_ok(),

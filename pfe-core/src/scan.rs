@@ -142,6 +142,11 @@ pub struct Scan<'a> {
     pub ranges: Ranges<'a>,
     /// Constant-velocity motion during the scan, for de-skewing.
     pub motion: Option<Motion>,
+    /// Number of interleaved sweeps (1: none; 0 counts as 1): beam `i` is in sweep
+    /// `i mod sweeps`. Without [`motion`](Self::motion), the sweeps' offset against sweep 0 is
+    /// estimated from the scan and removed ([`crate::preprocess::sweeps`]); with it, its
+    /// timing's sweeps rule.
+    pub sweeps: u8,
 }
 
 impl<'a> Scan<'a> {
@@ -158,6 +163,7 @@ impl<'a> Scan<'a> {
             geometry,
             ranges: Ranges::Mm(ranges),
             motion: None,
+            sweeps: 1,
         }
     }
 
@@ -171,6 +177,7 @@ impl<'a> Scan<'a> {
                 max_valid: LMS_MAX_VALID_8M,
             },
             motion: None,
+            sweeps: 1,
         }
     }
 
@@ -178,6 +185,27 @@ impl<'a> Scan<'a> {
     pub fn with_motion(mut self, motion: Motion) -> Self {
         self.motion = Some(motion);
         self
+    }
+
+    /// The same scan, made of `sweeps` interleaved sweeps (an LMS2xx at 0.5°: 2, at 0.25°: 4).
+    ///
+    /// ```
+    /// use pfe_core::{Scan, ScanGeometry};
+    /// let ranges = [1000.0_f32; 361];
+    /// let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges).with_sweeps(2);
+    /// assert_eq!(scan.sweep_count(), 2);
+    /// ```
+    pub fn with_sweeps(mut self, sweeps: u8) -> Self {
+        self.sweeps = sweeps;
+        self
+    }
+
+    /// Number of interleaved sweeps (at least 1): the motion's timing's when there is one.
+    pub fn sweep_count(&self) -> usize {
+        match self.motion {
+            Some(m) => m.timing.sweep_count(),
+            None => usize::from(self.sweeps.max(1)),
+        }
     }
 
     /// Cartesian point of beam `i` (without correction or de-skew), if valid.

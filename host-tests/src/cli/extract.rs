@@ -77,7 +77,8 @@ pub fn run(a: Args) -> Result<(), Failure> {
             }
         };
         let record = &scan.record;
-        let ex = method.extract(&record.geometry, &record.ranges_mm);
+        let context = a.method.context(&record.geometry);
+        let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
         scans += 1;
         features += ex.features.len() as u64;
         if scans % 256 == 0 {

@@ -54,6 +54,11 @@ pub struct MethodArgs {
     /// LaserScan topic of a ROS 2 bag (--format mcap); default: the bag's only LaserScan topic.
     #[arg(long)]
     pub topic: Option<String>,
+    /// Interleaved sweeps a scan is made of (1, 2 or 4; beam i in sweep i mod N), whose offset
+    /// a moving robot causes is then estimated from the scan and removed. Default: a SICK
+    /// LMS2xx's (--format lms200 or carmen): 2 at 0.5°, 4 at 0.25°, else 1; 1 for other formats.
+    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=4))]
+    pub sweeps: Option<u8>,
 }
 
 /// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).
@@ -73,6 +78,17 @@ impl MethodArgs {
     /// The extractor these arguments name.
     pub fn method(&self) -> Pfe {
         self.config.method(self.sigma_r, self.format)
+    }
+
+    /// What the extractor is told besides the ranges of a scan of `geometry`.
+    pub fn context(&self, geometry: &pfe_core::ScanGeometry) -> crate::methods::ScanContext {
+        crate::methods::ScanContext {
+            odometry: None,
+            sweeps: usize::from(
+                self.sweeps
+                    .unwrap_or_else(|| crate::formats::sweeps_of(self.format, geometry)),
+            ),
+        }
     }
 }
 

@@ -568,3 +568,24 @@ impl ScanJson {
         self
     }
 }
+
+/// The interleaved sweeps of a scan of `geometry` read as `format`: a SICK LMS2xx's (LMS200
+/// telegrams and CARMEN logs) at 0.5° are 2, at 0.25° 4 ([`pfe_core::BeamTiming::lms2xx`]);
+/// 1 otherwise, and for every other format (no interleaving known).
+///
+/// ```
+/// use host_tests::formats::{sweeps_of, Format};
+/// use pfe_core::ScanGeometry;
+/// assert_eq!(sweeps_of(Format::Carmen, &ScanGeometry::lms200(180.0, 0.5)), 2);
+/// assert_eq!(sweeps_of(Format::Lms200, &ScanGeometry::lms200(100.0, 0.25)), 4);
+/// assert_eq!(sweeps_of(Format::Carmen, &ScanGeometry::lms200(180.0, 1.0)), 1);
+/// assert_eq!(sweeps_of(Format::Csv, &ScanGeometry::lms200(180.0, 0.5)), 1);
+/// ```
+pub fn sweeps_of(format: Format, geometry: &pfe_core::ScanGeometry) -> u8 {
+    match format {
+        Format::Lms200 | Format::Carmen => {
+            pfe_core::BeamTiming::lms2xx(geometry.angle_step.abs().to_degrees()).sweeps
+        }
+        _ => 1,
+    }
+}

@@ -64,7 +64,7 @@ impl Method for Pfe {
         if let Some(odometry) = context.odometry {
             scan = scan.with_motion(odometry);
         }
-        // sweeps: scan = scan.with_sweeps(context.sweeps);
+        scan = scan.with_sweeps(u8::try_from(context.sweeps).unwrap_or(u8::MAX));
         // Scans longer than the capacity are an error value: no features, kept for
         // `last_result`.
         self.last = self.extractor.extract(&scan, &self.config).map(|_| ());

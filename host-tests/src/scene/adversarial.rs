@@ -58,6 +58,7 @@ impl AdversarialScan {
                 max_valid: LMS_MAX_VALID_8M,
             },
             motion: None,
+            sweeps: 1,
         };
         let mut ex = Extractor::<401, 48>::new();
         let _ = ex.extract(&scan, &Config::default());

@@ -1,9 +1,12 @@
 //! Pre-processing (§2): readings to points, with the systematic range [`correction`] and
-//! motion de-skewing ([`deskew`]) when configured. Invalid readings (no return, reserved codes)
-//! are not points.
+//! motion de-skewing ([`deskew`]) when configured; for interleaved sweeps without motion, the
+//! extractor may move each sweep onto sweep 0 by its offset estimated from the scan
+//! ([`sweeps`]).
+//! Invalid readings (no return, reserved codes) are not points.
 
 pub mod correction;
 pub mod deskew;
+pub mod sweeps;
 
 use crate::beams::Beams;
 use crate::config::Config;

@@ -1,0 +1,346 @@
+//! Interleaved sweeps without odometry: the rigid offset of each sweep against sweep 0,
+//! estimated from the scan itself, and its removal.
+//!
+//! A scan of `S` interleaved sweeps (an LMS2xx at 0.5°: `S = 2`, 0.25°: `S = 4`) has beam `i`
+//! in sweep `i mod S`, one mirror turn after the sweep before. A moving scanner takes sweep `s`
+//! from a pose `(dx, dy, dθ)` in the frame of sweep 0, so along a smooth surface its points
+//! lie off the surface that sweep 0 sees and the beams zigzag. For beam `q = S·j + s` between
+//! the sweep-0 beams `a = S·j` and `b = S·(j + 1)`, the signed distance `e` of `q` from the
+//! chord `ab` (unit normal `n`) is, to first order,
+//!
+//! `e − f(1 − f)·e₀ = −n·(d + dθ × q)`, `d = (dx, dy)`, `f = s / S`,
+//!
+//! where `e₀`, the distance of `b` from the chord of `a` and `c = S·(j + 2)` (all sweep 0),
+//! removes the surface's own curvature (on a circle of radius R the sagitta at fraction `f`
+//! of a chord `L` is `f(1 − f)·L²/2R`, and `e₀ = L²/2R`). A linear least-squares problem in
+//! `(dx, dy, dθ)` over such beams where the surface is smooth (no jump, a small `e₀`), solved
+//! again once without the rows beyond 3σ of the first solution (corners, edges).
+//!
+//! The extractor moves sweep `s`'s points by the estimate (rotation `dθ`, then translation `d`)
+//! when it is significant (χ² of the estimate against its covariance above
+//! [`SweepOffset::CHI2_SIGNIFICANT`]) and moves some point by more than
+//! [`SweepOffset::MIN_SHIFT_MM`]; otherwise the points stay as they are.
+
+use crate::flags::VALID;
+use crate::geometry::Point;
+use crate::mark::Rule;
+use crate::math;
+use crate::pass::Pass;
+
+/// Most rows (beams) one sweep's estimate uses: longer sweeps are subsampled evenly.
+pub const MAX_ROWS: usize = 64;
+
+/// The pose of one sweep's scanner in the frame of sweep 0, estimated from the scan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SweepOffset {
+    /// Translation along x, mm.
+    pub dx: f32,
+    /// Translation along y, mm.
+    pub dy: f32,
+    /// Rotation, rad (counter-clockwise positive).
+    pub dtheta: f32,
+    /// Standard errors of `dx`, `dy` (mm) and `dtheta` (rad).
+    pub sd: [f32; 3],
+    /// Residual standard deviation of the rows used, mm.
+    pub sigma: f32,
+    /// χ² of the estimate against zero with its covariance (3 degrees of freedom).
+    pub chi2: f32,
+    /// Rows (beams) used.
+    pub rows: u16,
+    /// Largest displacement the offset gives a point of the sweep, mm.
+    pub max_shift: f32,
+}
+
+impl SweepOffset {
+    /// χ² (3 degrees of freedom) above which an offset is significant (p ≈ 0.1 %).
+    pub const CHI2_SIGNIFICANT: f32 = 16.3;
+    /// Smallest point displacement worth applying, mm.
+    pub const MIN_SHIFT_MM: f32 = 1.0;
+
+    /// True when the extractor applies this offset.
+    pub fn is_significant(&self) -> bool {
+        self.chi2 > Self::CHI2_SIGNIFICANT && self.max_shift > Self::MIN_SHIFT_MM
+    }
+
+    /// Point `p` of the sweep in the frame of sweep 0: rotated by `dtheta`, then translated.
+    pub fn apply(&self, p: Point) -> Point {
+        let (s, c) = math::sin_cos(self.dtheta);
+        Point::new(c * p.x - s * p.y + self.dx, s * p.x + c * p.y + self.dy)
+    }
+}
+
+/// One row of the least-squares problem `J·x = −e`, `x = (dx, dy, sin dθ · 1000 mm)`: `J`,
+/// `e`, and `n·q` (for the second-order term of the rotation).
+type Row = [f32; 5];
+
+/// The offset of sweep `sweep` (1 ≤ `sweep` < `sweeps`) of `points` (one per beam, invalid
+/// ones not finite) against sweep 0; `angle_step` is the bearing step between beams, rad.
+/// `None` when too few beams are on smooth surfaces or the geometry does not fix the offset.
+///
+/// ```
+/// use pfe_core::preprocess::sweeps::estimate;
+/// use pfe_core::{Point, ScanGeometry};
+/// // A room 3 m × 4 m; the odd beams from a scanner 8 mm ahead.
+/// let g = ScanGeometry::LMS200_180_050;
+/// let points: Vec<Point> = (0..361)
+///     .map(|i| {
+///         let (b, o) = (g.bearing(i), if i % 2 == 1 { 8.0 } else { 0.0 });
+///         let (s, c) = (b.sin(), b.cos());
+///         let front = if c > 1e-6 { (3000.0 - o) / c } else { f32::INFINITY };
+///         let side = 2000.0 / s.abs();
+///         Point::new(front.min(side) * c, front.min(side) * s)
+///     })
+///     .collect();
+/// let e = estimate(&points, 2, 1, g.angle_step).unwrap();
+/// assert!((e.dx - 8.0).abs() < 0.3 && e.dy.abs() < 0.3 && e.dtheta.abs() < 1e-4);
+/// ```
+pub fn estimate(
+    points: &[Point],
+    sweeps: usize,
+    sweep: usize,
+    angle_step: f32,
+) -> Option<SweepOffset> {
+    if sweep == 0 || sweep >= sweeps || !math::finite(angle_step) {
+        return None;
+    }
+    let rows = Rows {
+        points,
+        sweeps,
+        sweep,
+        step: angle_step,
+    };
+    let first = normal(&rows, None, 0.0)?;
+    let cut = 3.0 * first.sigma.max(SIGMA_FLOOR);
+    let sol = normal(&rows, Some((&first.x, cut)), first.x[2] / ROT_SCALE)?;
+    Some(offset(&sol, rows.far()))
+}
+
+/// Moves the points of every sweep `s ≥ 1` of a scan of `sweeps` interleaved sweeps onto
+/// sweep 0 by its [`estimate`], where significant, and sets their `ranges` to their new
+/// distance from the origin. Returns the number of sweeps moved.
+pub(crate) fn align(
+    points: &mut [Point],
+    ranges: &mut [f32],
+    flags: &[u8],
+    sweeps: usize,
+    angle_step: f32,
+) -> usize {
+    let mut moved = 0;
+    for s in 1..sweeps.min(points.len()) {
+        let Some(offset) = estimate(points, sweeps, s, angle_step) else {
+            continue;
+        };
+        if !offset.is_significant() {
+            continue;
+        }
+        moved += 1;
+        let slots = points.iter_mut().zip(ranges.iter_mut()).zip(flags);
+        for ((p, r), f) in slots.skip(s).step_by(sweeps) {
+            if f & VALID != 0 {
+                *p = offset.apply(*p);
+                *r = math::hypot(p.x, p.y);
+            }
+        }
+    }
+    moved
+}
+
+/// Whether the default mode's walk over a scan of interleaved sweeps left the marks that
+/// sweeps out of place make: more segment starts than one in [`SUSPECT_EVERY`] valid points,
+/// or more neighbouring starts than the walk notes. The paper's mode is left as published.
+pub(crate) fn suspect(pass: &Pass<'_>, rule: &Rule) -> bool {
+    rule.noise().is_some()
+        && (pass.neighbours.is_none() || pass.starts * SUSPECT_EVERY > pass.stats.valid)
+}
+
+/// One segment start in this many valid points is more than a scan of sweeps in place makes.
+pub const SUSPECT_EVERY: usize = 18;
+
+/// Residual floor, mm (the 1 mm range quantum's standard deviation, about 0.3 mm).
+const SIGMA_FLOOR: f32 = 0.3;
+/// Scale of the rotation unknown: `x₃ = dθ · ROT_SCALE` is in mm at 1 m.
+const ROT_SCALE: f32 = 1000.0;
+
+/// The equations of sweep `sweep`'s beams on smooth surfaces, evenly subsampled to at most
+/// [`MAX_ROWS`]: made again on every pass over them rather than stored (no stack for them).
+#[derive(Clone, Copy)]
+struct Rows<'a> {
+    points: &'a [Point],
+    sweeps: usize,
+    sweep: usize,
+    step: f32,
+}
+
+impl Rows<'_> {
+    /// Calls `f` with every row and the range of its beam, mm.
+    fn each(&self, mut f: impl FnMut(&Row, f32)) {
+        let (points, sweeps, s) = (self.points, self.sweeps, self.sweep);
+        let pairs = points.len().saturating_sub(1) / sweeps;
+        // Sweep-0 triples (a, b, c) need c = S·(j + 2): `pairs − 1` of them.
+        let triples = pairs.saturating_sub(1);
+        let stride = triples.div_ceil(MAX_ROWS).max(1);
+        let f_s = s as f32 / sweeps as f32;
+        let curve = f_s * (2.0 - f_s);
+        // A chord longer than this many times its length at normal incidence is a jump.
+        let reach = 16.0 * math::abs(self.step) * sweeps as f32;
+        let at = |k: usize| points.get(k).copied().unwrap_or(Point::INVALID);
+        for j in (0..triples).step_by(stride) {
+            let (a, q) = (at(sweeps * j), at(sweeps * j + s));
+            let (b, c) = (at(sweeps * (j + 1)), at(sweeps * (j + 2)));
+            if let Some((row, range)) = row(a, q, b, c, curve, reach) {
+                f(&row, range);
+            }
+        }
+    }
+
+    /// The largest range among the rows' beams, mm.
+    fn far(&self) -> f32 {
+        let mut far = 0.0f32;
+        self.each(|_, r| far = far.max(r));
+        far
+    }
+}
+
+/// The row of beam `q` between sweep-0 beams `a` and `b` (and `c` after `b`), when the
+/// surface there is smooth: distances from the chord `ac` (unit normal `n`), `e` of `q` and
+/// `e₀` of `b`. On a circle through `a`, `b`, `c`, `q` at fraction `f / 2` of the chord lies
+/// `f(2 − f)·e₀` from it, which the row removes.
+#[inline]
+fn row(a: Point, q: Point, b: Point, c: Point, curve: f32, reach: f32) -> Option<(Row, f32)> {
+    let (cx, cy) = (c.x - a.x, c.y - a.y);
+    let len = math::hypot(cx, cy);
+    let rq = math::hypot(q.x, q.y);
+    // NaN (an invalid point) fails every comparison.
+    if !(len > 0.0 && len < reach * rq) {
+        return None;
+    }
+    let (nx, ny) = (-cy / len, cx / len);
+    let e = (q.x - a.x) * nx + (q.y - a.y) * ny;
+    let e0 = (b.x - a.x) * nx + (b.y - a.y) * ny;
+    let rhs = e - curve * e0;
+    if !(math::abs(e0) < 0.15 * len + 30.0 && math::abs(rhs) < 0.25 * len + 40.0) {
+        return None;
+    }
+    let j3 = (ny * q.x - nx * q.y) / ROT_SCALE;
+    Some(([nx, ny, j3, rhs, nx * q.x + ny * q.y], rq))
+}
+
+/// The offset of a solution; `far` is the largest range of the sweep's rows, mm.
+fn offset(sol: &Solution, far: f32) -> SweepOffset {
+    let [dx, dy, t] = sol.x;
+    let sigma = sol.sigma.max(SIGMA_FLOOR);
+    let [i00, _, _, i11, _, i22] = sol.inv;
+    // χ² = xᵀ A x / σ².
+    let [a00, a01, a02, a11, a12, a22] = sol.a;
+    let quad = dx * (a00 * dx + a01 * dy + a02 * t)
+        + dy * (a01 * dx + a11 * dy + a12 * t)
+        + t * (a02 * dx + a12 * dy + a22 * t);
+    let dtheta = t / ROT_SCALE;
+    SweepOffset {
+        dx,
+        dy,
+        dtheta,
+        sd: [
+            sigma * math::sqrt(i00),
+            sigma * math::sqrt(i11),
+            sigma * math::sqrt(i22) / ROT_SCALE,
+        ],
+        sigma,
+        chi2: quad / (sigma * sigma),
+        rows: u16::try_from(sol.rows).unwrap_or(u16::MAX),
+        max_shift: math::hypot(dx, dy) + math::abs(dtheta) * far,
+    }
+}
+
+/// A least-squares solution: the unknowns, the normal matrix and its inverse (upper
+/// triangles, row by row: 00 01 02 11 12 22), the residual standard deviation and the rows.
+struct Solution {
+    x: [f32; 3],
+    a: [f32; 6],
+    inv: [f32; 6],
+    sigma: f32,
+    rows: usize,
+}
+
+/// Residual of `row` at `x` (first order).
+#[inline]
+fn residual(row: &Row, x: &[f32; 3]) -> f32 {
+    let [j0, j1, j2, e, _] = *row;
+    e + j0 * x[0] + j1 * x[1] + j2 * x[2]
+}
+
+/// Solves the normal equations of `rows` (those within `cut` of the solution `x` when given),
+/// with the second-order term `(cos θ − 1)·n·q` of a rotation by about `theta` moved to `e`.
+fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<Solution> {
+    let bend = -0.5 * theta * theta;
+    let kept = |r: &Row| keep.is_none_or(|(x, cut)| math::abs(residual(r, x)) <= cut);
+    let mut a = [0.0f32; 6];
+    let mut g = [0.0f32; 3];
+    let mut used = 0usize;
+    rows.each(|r, _| {
+        if !kept(r) {
+            return;
+        }
+        let [j0, j1, j2, e, nq] = *r;
+        let e = e + bend * nq;
+        a = [
+            a[0] + j0 * j0,
+            a[1] + j0 * j1,
+            a[2] + j0 * j2,
+            a[3] + j1 * j1,
+            a[4] + j1 * j2,
+            a[5] + j2 * j2,
+        ];
+        g = [g[0] - j0 * e, g[1] - j1 * e, g[2] - j2 * e];
+        used += 1;
+    });
+    if used < 6 {
+        return None;
+    }
+    let inv = invert(&a)?;
+    let x = [
+        inv[0] * g[0] + inv[1] * g[1] + inv[2] * g[2],
+        inv[1] * g[0] + inv[3] * g[1] + inv[4] * g[2],
+        inv[2] * g[0] + inv[4] * g[1] + inv[5] * g[2],
+    ];
+    let mut ss = 0.0f32;
+    rows.each(|r, _| {
+        if kept(r) {
+            let res = residual(r, &x) + bend * r[4];
+            ss += res * res;
+        }
+    });
+    let sigma = math::sqrt(ss / (used - 3) as f32);
+    Some(Solution {
+        x,
+        a,
+        inv,
+        sigma,
+        rows: used,
+    })
+}
+
+/// Inverse of the symmetric 3 × 3 matrix `a` (upper triangle, row by row), `None` when it is
+/// (nearly) singular: the geometry does not fix all three unknowns.
+fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
+    let [a00, a01, a02, a11, a12, a22] = *a;
+    let c00 = a11 * a22 - a12 * a12;
+    let c01 = a02 * a12 - a01 * a22;
+    let c02 = a01 * a12 - a02 * a11;
+    let det = a00 * c00 + a01 * c01 + a02 * c02;
+    if !(det > 1e-4 * a00 * a11 * a22) {
+        return None;
+    }
+    let c11 = a00 * a22 - a02 * a02;
+    let c12 = a01 * a02 - a00 * a12;
+    let c22 = a00 * a11 - a01 * a01;
+    Some([
+        c00 / det,
+        c01 / det,
+        c02 / det,
+        c11 / det,
+        c12 / det,
+        c22 / det,
+    ])
+}

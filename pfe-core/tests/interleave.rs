@@ -1,0 +1,382 @@
+//! Interleaved sweeps without odometry (LMS200 at 0.5° and 0.25°) against analytic truth:
+//! rooms with a pillar ray-cast with sweep `s` taken from the pose a robot at 0.6 m/s turning
+//! at 0.45 rad/s reaches `s` mirror turns later (8 mm and 6 mrad a turn).
+#![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+
+mod common;
+
+use common::{cast, Noise, Prim};
+use pfe_core::preprocess::sweeps::estimate;
+use pfe_core::{
+    BeamTiming, Config, Extractor, Feature, Motion, Point, Scan, ScanGeometry, SweepOffset,
+};
+
+/// The robot's motion between sweeps: 0.6 m/s, 0.45 rad/s.
+fn motion(resolution_deg: f32) -> Motion {
+    Motion {
+        v: 600.0,
+        omega: 0.45,
+        timing: BeamTiming::lms2xx(resolution_deg),
+    }
+}
+
+/// A room `w × h` mm with a pillar, seen from (`x`, `y`) heading `th`: primitives in the
+/// frame of sweep 0. Walls as (ρ, α) too.
+struct Room {
+    prims: Vec<Prim>,
+    walls: Vec<(f64, f64)>,
+}
+
+fn room(noise: &mut Noise) -> Room {
+    let u = |n: &mut Noise| n.gauss().clamp(-2.0, 2.0) / 4.0 + 0.5;
+    let (w, h) = (5000.0 + 4000.0 * u(noise), 4000.0 + 3000.0 * u(noise));
+    let (x, y) = (w * (0.3 + 0.3 * u(noise)), h * (0.3 + 0.4 * u(noise)));
+    let th = 3.0 * (u(noise) - 0.5);
+    let (s, c) = th.sin_cos();
+    let local = |px: f64, py: f64| {
+        let (dx, dy) = (px - x, py - y);
+        (c * dx + s * dy, -s * dx + c * dy)
+    };
+    let corners = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)];
+    let mut prims = Vec::new();
+    let mut walls = Vec::new();
+    for k in 0..4 {
+        let (a, b) = (
+            local(corners[k].0, corners[k].1),
+            local(corners[(k + 1) % 4].0, corners[(k + 1) % 4].1),
+        );
+        prims.push(Prim::Seg(a.0, a.1, b.0, b.1));
+        // Normal from the origin to the wall.
+        let (ex, ey) = (b.0 - a.0, b.1 - a.1);
+        let len = ex.hypot(ey);
+        let (mut nx, mut ny) = (-ey / len, ex / len);
+        let mut rho = a.0 * nx + a.1 * ny;
+        if rho < 0.0 {
+            (nx, ny, rho) = (-nx, -ny, -rho);
+        }
+        walls.push((rho, ny.atan2(nx)));
+    }
+    let (px, py) = local(x + 0.5 * (w - x) * u(noise) + 800.0, y + 600.0);
+    prims.push(Prim::Circle(px, py, 150.0 + 150.0 * u(noise)));
+    Room { prims, walls }
+}
+
+/// Ranges of the scan of `prims` with beam `i` from the pose of sweep `i mod S`
+/// (`pose(s)` in the frame of sweep 0), σ_r Gaussian noise, and the primitive each hits.
+fn render(
+    prims: &[Prim],
+    g: ScanGeometry,
+    n: usize,
+    sweeps: usize,
+    pose: impl Fn(usize) -> (f64, f64, f64),
+    sigma: f64,
+    noise: &mut Noise,
+) -> (Vec<f32>, Vec<Option<usize>>) {
+    let moved: Vec<Vec<Prim>> = (0..sweeps)
+        .map(|s| {
+            let (ox, oy, th) = pose(s);
+            let (sn, cs) = th.sin_cos();
+            let to = |x: f64, y: f64| {
+                let (dx, dy) = (x - ox, y - oy);
+                (cs * dx + sn * dy, -sn * dx + cs * dy)
+            };
+            prims
+                .iter()
+                .map(|p| match *p {
+                    Prim::Seg(x0, y0, x1, y1) => {
+                        let (a, b) = (to(x0, y0), to(x1, y1));
+                        Prim::Seg(a.0, a.1, b.0, b.1)
+                    }
+                    Prim::Circle(cx, cy, r) => {
+                        let c = to(cx, cy);
+                        Prim::Circle(c.0, c.1, r)
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    (0..n)
+        .map(|i| {
+            let b = f64::from(g.bearing(i));
+            match cast(&moved[i % sweeps], b) {
+                Some((t, p)) if t < 7900.0 => ((t + sigma * noise.gauss()) as f32, Some(p)),
+                _ => (f32::NAN, None),
+            }
+        })
+        .unzip()
+}
+
+/// The LMS200 variant at `res` degrees: geometry, beams, sweeps.
+fn variant(res: f32) -> (ScanGeometry, usize, usize) {
+    if res < 0.375 {
+        (ScanGeometry::lms200(100.0, 0.25), 401, 4)
+    } else {
+        (ScanGeometry::LMS200_180_050, 361, 2)
+    }
+}
+
+/// Sweep `s`'s pose in the frame of sweep 0 under [`motion`].
+fn sweep_pose(res: f32) -> impl Fn(usize) -> (f64, f64, f64) {
+    let m = motion(res);
+    move |s| {
+        let p = m.pose_at(s as f32 * BeamTiming::LMS2XX_TURN);
+        (
+            f64::from(p.origin.x),
+            f64::from(p.origin.y),
+            f64::from(p.theta),
+        )
+    }
+}
+
+fn points(g: ScanGeometry, ranges: &[f32]) -> Vec<Point> {
+    (0..ranges.len())
+        .map(|i| Scan::from_mm(g, ranges).point(i).unwrap_or(Point::INVALID))
+        .collect()
+}
+
+/// Noise-free: every sweep's offset within 0.3 mm (0.7 mm at 0.25°, where
+/// sweeps are up to 24 mm and 18 mrad apart) and 0.3 mrad, at 0.5° and 0.25°.
+#[test]
+fn the_offset_is_recovered_without_noise() {
+    let mut noise = Noise::new(3);
+    for res in [0.5f32, 0.25] {
+        let (g, n, sweeps) = variant(res);
+        let truth = sweep_pose(res);
+        for k in 0..20 {
+            let room = room(&mut noise);
+            let (ranges, _) = render(&room.prims, g, n, sweeps, &truth, 0.0, &mut noise);
+            let pts = points(g, &ranges);
+            for s in 1..sweeps {
+                let e = estimate(&pts, sweeps, s, g.angle_step)
+                    .unwrap_or_else(|| panic!("{res}° room {k} sweep {s}: no estimate"));
+                let (x, y, th) = truth(s);
+                let err = (
+                    f64::from(e.dx) - x,
+                    f64::from(e.dy) - y,
+                    f64::from(e.dtheta) - th,
+                );
+                // At 0.25° sweeps are up to 24 mm and 18 mrad apart over a 100° field:
+                // second-order terms add a bit.
+                let tol = if sweeps == 4 { 0.7 } else { 0.3 };
+                assert!(
+                    err.0.abs() < tol && err.1.abs() < tol && err.2.abs() < 3e-4,
+                    "{res}° room {k} sweep {s}: error {err:?}, {e:?}"
+                );
+                assert!(e.is_significant(), "{e:?}");
+            }
+        }
+    }
+}
+
+/// σ_r = 5 mm, 300 rooms: the errors are unbiased and as large as the stated standard errors
+/// (RMS of error / sd between 0.7 and 1.5 for each unknown).
+#[test]
+fn the_offset_is_within_its_stated_error() {
+    let mut noise = Noise::new(11);
+    let (g, n, sweeps) = variant(0.5);
+    let truth = sweep_pose(0.5);
+    let (x, y, th) = truth(1);
+    let mut z2 = [0.0f64; 3];
+    let mut sum = [0.0f64; 3];
+    let mut count = 0;
+    for _ in 0..300 {
+        let room = room(&mut noise);
+        let (ranges, _) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
+        let Some(e) = estimate(&points(g, &ranges), sweeps, 1, g.angle_step) else {
+            continue;
+        };
+        let err = [
+            f64::from(e.dx) - x,
+            f64::from(e.dy) - y,
+            f64::from(e.dtheta) - th,
+        ];
+        for k in 0..3 {
+            z2[k] += (err[k] / f64::from(e.sd[k])).powi(2);
+            sum[k] += err[k] / f64::from(e.sd[k]);
+        }
+        count += 1;
+    }
+    assert!(count > 280, "{count} estimates");
+    for k in 0..3 {
+        let rms = (z2[k] / f64::from(count)).sqrt();
+        let mean = sum[k] / f64::from(count);
+        println!("unknown {k}: RMS error/sd {rms:.2}, mean {mean:.2}");
+        assert!((0.7..1.5).contains(&rms), "unknown {k}: RMS error/sd {rms}");
+        assert!(mean.abs() < 0.3, "unknown {k}: mean error/sd {mean}");
+    }
+}
+
+/// Marks and features of a scan, with the number of sweeps declared.
+fn extract(
+    ex: &mut Extractor<401, 128>,
+    g: ScanGeometry,
+    ranges: &[f32],
+    sweeps: u8,
+) -> (Vec<usize>, Vec<Feature>, pfe_core::Stats) {
+    let config = Config::default().with_sigma_r(5.0);
+    let stats = ex
+        .extract(&Scan::from_mm(g, ranges).with_sweeps(sweeps), &config)
+        .unwrap();
+    (ex.marks().collect(), ex.features().to_vec(), stats)
+}
+
+/// A static scan declared as 2 or 4 sweeps gives what it gives as one sweep, bit for bit.
+#[test]
+fn a_static_scan_is_unchanged() {
+    let mut noise = Noise::new(5);
+    let mut ex = Extractor::<401, 128>::new();
+    for res in [0.5f32, 0.25] {
+        let (g, n, sweeps) = variant(res);
+        for _ in 0..50 {
+            let room = room(&mut noise);
+            let (ranges, _) = render(&room.prims, g, n, 1, |_| (0.0, 0.0, 0.0), 5.0, &mut noise);
+            let one = extract(&mut ex, g, &ranges, 1);
+            let many = extract(&mut ex, g, &ranges, sweeps as u8);
+            assert_eq!(one, many);
+        }
+    }
+}
+
+/// Scores of one extraction against the truth: (false marks, valid points, truth runs
+/// missed, truth runs, spurious features, features).
+#[derive(Default, Debug)]
+struct Score {
+    false_marks: usize,
+    valid: usize,
+    missed: usize,
+    truth: usize,
+    spurious: usize,
+    features: usize,
+}
+
+/// Scores marks and features: a mark is false when no primitive change is within 2 beams; a
+/// truth run (≥ 10 beams on one primitive) is missed when no feature covers half of it; a
+/// feature is spurious when half of it is on no single run.
+fn score(hits: &[Option<usize>], marks: &[usize], features: &[Feature], s: &mut Score) {
+    let change = |i: usize| {
+        (i.saturating_sub(2)..=(i + 2).min(hits.len() - 1)).any(|k| {
+            k == 0 || k + 1 == hits.len() || hits[k] != hits[k - 1] || hits[k] != hits[k + 1]
+        })
+    };
+    s.valid += hits.iter().flatten().count();
+    s.false_marks += marks.iter().filter(|&&i| !change(i)).count();
+    let runs = common::runs(hits, 10);
+    let span = |f: &Feature| match f {
+        Feature::Line(l) => (usize::from(l.first), usize::from(l.last)),
+        Feature::Circle(c) => (usize::from(c.first), usize::from(c.last)),
+    };
+    let overlap =
+        |a: (usize, usize), b: (usize, usize)| (a.1.min(b.1) + 1).saturating_sub(a.0.max(b.0));
+    for r in &runs {
+        s.truth += 1;
+        let len = r.1 + 1 - r.0;
+        if !features
+            .iter()
+            .any(|f| 2 * overlap(span(f), (r.0, r.1)) >= len)
+        {
+            s.missed += 1;
+        }
+    }
+    for f in features {
+        s.features += 1;
+        let (a, b) = span(f);
+        if !runs
+            .iter()
+            .any(|r| 2 * overlap((a, b), (r.0, r.1)) >= b + 1 - a)
+        {
+            s.spurious += 1;
+        }
+    }
+}
+
+/// 8 mm / 6 mrad between sweeps, σ_r = 5 mm, no odometry: declared sweeps meet the issue's
+/// targets (false marks ≤ 2 %, missed ≤ 8 %, spurious ≤ 5 %) with fewer false marks than one
+/// sweep, and (for 95 % of them) every run of ≥ 30 beams on a wall gives one line, with ρ and
+/// α within 4 of its standard deviations (plus 1 mm / 1 mrad).
+#[test]
+fn declared_sweeps_hold_up_under_interleaving() {
+    let mut ex = Extractor::<401, 128>::new();
+    for res in [0.5f32, 0.25] {
+        let mut noise = Noise::new(21);
+        let (g, n, sweeps) = variant(res);
+        let truth = sweep_pose(res);
+        let (mut plain, mut declared) = (Score::default(), Score::default());
+        let (mut walls, mut bad_walls) = (0, 0);
+        for _ in 0..100 {
+            let room = room(&mut noise);
+            let (ranges, hits) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
+            let (marks, features, _) = extract(&mut ex, g, &ranges, 1);
+            score(&hits, &marks, &features, &mut plain);
+            let (marks, features, stats) = extract(&mut ex, g, &ranges, sweeps as u8);
+            assert_eq!(stats.sweeps_aligned, sweeps - 1);
+            score(&hits, &marks, &features, &mut declared);
+            for &(first, last, w) in &common::runs(&hits, 30) {
+                let Some(&(rho, alpha)) = room.walls.get(w) else {
+                    continue;
+                };
+                walls += 1;
+                let lines: Vec<_> = features
+                    .iter()
+                    .filter_map(|f| match f {
+                        Feature::Line(l)
+                            if 2 * (usize::from(l.last).min(last) + 1)
+                                .saturating_sub(usize::from(l.first).max(first))
+                                > usize::from(l.last - l.first) + 1 =>
+                        {
+                            Some(*l)
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                let ok = match lines.as_slice() {
+                    [l] => {
+                        let da = (f64::from(l.alpha) - alpha + std::f64::consts::PI)
+                            .rem_euclid(2.0 * std::f64::consts::PI)
+                            - std::f64::consts::PI;
+                        let dr = f64::from(l.rho) - rho;
+                        dr.abs() < 4.0 * f64::from(l.var_rho).sqrt() + 1.0
+                            && da.abs() < 4.0 * f64::from(l.var_alpha).sqrt() + 1e-3
+                    }
+                    _ => false,
+                };
+                bad_walls += usize::from(!ok);
+            }
+        }
+        let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
+        for (name, s) in [("1 sweep", &plain), ("declared", &declared)] {
+            println!(
+                "{res}° {name}: false marks {:.1} %, missed {:.1} %, spurious {:.1} %",
+                pct(s.false_marks, s.valid),
+                pct(s.missed, s.truth),
+                pct(s.spurious, s.features)
+            );
+        }
+        println!("{res}°: {bad_walls} of {walls} walls without exactly one good line");
+        assert!(
+            pct(declared.false_marks, declared.valid) <= 2.0,
+            "{declared:?}"
+        );
+        assert!(pct(declared.missed, declared.truth) <= 8.0, "{declared:?}");
+        assert!(
+            pct(declared.spurious, declared.features) <= 5.0,
+            "{declared:?}"
+        );
+        assert!(plain.false_marks > 2 * declared.false_marks, "{plain:?}");
+        assert!(bad_walls * 20 <= walls, "{bad_walls} of {walls} walls");
+    }
+}
+
+/// The estimate's χ² of a static noisy scan is mostly below the significance threshold.
+#[test]
+fn a_static_scan_has_no_significant_offset() {
+    let mut noise = Noise::new(8);
+    let (g, n, _) = variant(0.5);
+    let mut significant = 0;
+    for _ in 0..200 {
+        let room = room(&mut noise);
+        let (ranges, _) = render(&room.prims, g, n, 1, |_| (0.0, 0.0, 0.0), 5.0, &mut noise);
+        let e: Option<SweepOffset> = estimate(&points(g, &ranges), 2, 1, g.angle_step);
+        significant += usize::from(e.is_some_and(|e| e.is_significant()));
+    }
+    assert!(significant <= 4, "{significant} of 200");
+}
