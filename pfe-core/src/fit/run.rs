@@ -1,0 +1,88 @@
+//! Whether a run of sparse points lies on one line within the noise: the test that joins a
+//! distant wall seen at grazing incidence (points too far apart for the walk to predict one
+//! from the others) into one segment.
+
+use crate::fit::line::{centre, fit_line, major_axis};
+use crate::geometry::Point;
+use crate::math;
+
+/// Length of the longest prefix of `points` in which every point lies within `2 tol` of the
+/// line of the points before it (every prefix of two points does): a cheap screen, O(1) a
+/// point, before [`on_one_line`].
+pub(crate) fn line_prefix(points: &[Point], tol: f32) -> usize {
+    let Some(o) = points.first() else { return 0 };
+    let mut s = [0.0f32; 5];
+    for (m, p) in points.iter().enumerate() {
+        let (ex, ey) = (p.x - o.x, p.y - o.y);
+        if m >= 2 {
+            let ((mx, my), [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
+            let (_, tx, ty) = major_axis(sxx, syy, sxy);
+            let len = math::hypot(tx, ty);
+            let d = ((ey - my) * tx - (ex - mx) * ty) / len;
+            if !(math::abs(d) <= 2.0 * tol) {
+                return m;
+            }
+        }
+        s = [
+            s[0] + ex,
+            s[1] + ey,
+            s[2] + ex * ex,
+            s[3] + ey * ey,
+            s[4] + ex * ey,
+        ];
+    }
+    points.len()
+}
+
+/// Whether `points` (in beam order) lie on their least-squares line within the noise: every
+/// distance within `tol`, a residual sum of at most `2.25 var` a point (RMS 1.5 σ), and their
+/// positions along the line monotone (a wall seen beam by beam, not a zig-zag of objects).
+pub(crate) fn on_one_line(points: &[Point], tol: f32, var: f32) -> bool {
+    let Ok(line) = fit_line(points) else {
+        return false;
+    };
+    if !(line.sse() <= 2.25 * var * points.len() as f32) {
+        return false;
+    }
+    let (c, s) = line.normal();
+    let along = |p: &Point| p.y * c - p.x * s;
+    let mut dir = 0.0f32;
+    let mut prev: Option<f32> = None;
+    for p in points {
+        if !(math::abs(line.signed_distance(p)) <= tol) {
+            return false;
+        }
+        let t = along(p);
+        if let Some(q) = prev {
+            let step = t - q;
+            if dir == 0.0 {
+                dir = step;
+            }
+            if !(step * dir > 0.0) {
+                return false;
+            }
+        }
+        prev = Some(t);
+    }
+    true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_zig_zag_is_not_one_line() {
+        let line: [Point; 6] = core::array::from_fn(|i| Point::new(1000.0 * i as f32, 5.0));
+        assert_eq!(line_prefix(&line, 43.0), 6);
+        assert!(on_one_line(&line, 43.0, 100.0));
+        // The same points out of order along the line.
+        let mut back = line;
+        back.swap(2, 3);
+        assert!(!on_one_line(&back, 43.0, 100.0));
+        // Every other point 100 mm off.
+        let zig: [Point; 6] =
+            core::array::from_fn(|i| Point::new(1000.0 * i as f32, 100.0 * (i % 2) as f32));
+        assert!(line_prefix(&zig, 43.0) < 6 && !on_one_line(&zig, 43.0, 100.0));
+    }
+}
