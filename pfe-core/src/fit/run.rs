@@ -2,7 +2,7 @@
 //! distant wall seen at grazing incidence (points too far apart for the walk to predict one
 //! from the others) into one segment.
 
-use crate::fit::line::{centre, fit_line, major_axis};
+use crate::fit::line::{centre, fit_line, major_axis, smaller_eigenvalue, sums_about};
 use crate::geometry::Point;
 use crate::math;
 
@@ -67,6 +67,45 @@ pub(crate) fn on_one_line(points: &[Point], tol: f32, var: f32) -> bool {
     true
 }
 
+/// Smallest residual sum of two least-squares lines over `points` split in two runs of at
+/// least two points each (a corner, seen as one segment): O(n), from prefix sums. `None` for
+/// fewer than 4 points.
+pub(crate) fn best_split_sse(points: &[Point]) -> Option<f32> {
+    let n = points.len();
+    let o = *points.get(n / 2).filter(|_| n >= 4)?;
+    let total = sums_about(points, &o);
+    let sse = |s: [f32; 5], m: usize| {
+        let (_, [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
+        smaller_eigenvalue(sxx, syy, sxy)
+    };
+    let mut prefix = [0.0f32; 5];
+    let mut best = f32::INFINITY;
+    for (j, p) in points.iter().enumerate().take(n - 2) {
+        let (ex, ey) = (p.x - o.x, p.y - o.y);
+        prefix = [
+            prefix[0] + ex,
+            prefix[1] + ey,
+            prefix[2] + ex * ex,
+            prefix[3] + ey * ey,
+            prefix[4] + ex * ey,
+        ];
+        if j >= 1 {
+            let rest = [
+                total[0] - prefix[0],
+                total[1] - prefix[1],
+                total[2] - prefix[2],
+                total[3] - prefix[3],
+                total[4] - prefix[4],
+            ];
+            let both = sse(prefix, j + 1) + sse(rest, n - j - 1);
+            if both < best {
+                best = both;
+            }
+        }
+    }
+    math::finite(best).then_some(best)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -84,5 +123,20 @@ mod tests {
         let zig: [Point; 6] =
             core::array::from_fn(|i| Point::new(1000.0 * i as f32, 100.0 * (i % 2) as f32));
         assert!(line_prefix(&zig, 43.0) < 6 && !on_one_line(&zig, 43.0, 100.0));
+    }
+
+    #[test]
+    fn a_corner_splits_into_two_exact_lines() {
+        let corner: [Point; 9] = core::array::from_fn(|i| {
+            let t = i as f32 - 4.0;
+            Point::new(1000.0 + 100.0 * t.abs(), 100.0 * t)
+        });
+        let split = best_split_sse(&corner).unwrap_or(f32::NAN);
+        assert!(split < 1.0, "{split}");
+        let bent: [Point; 9] = core::array::from_fn(|i| {
+            let a = 0.3 * (i as f32 - 4.0);
+            Point::new(1000.0 - 300.0 * a.cos(), 300.0 * a.sin())
+        });
+        assert!(best_split_sse(&bent).unwrap_or(0.0) > 100.0);
     }
 }
