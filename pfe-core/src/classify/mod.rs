@@ -136,7 +136,7 @@ fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| is_arc(pts, c, *sse_c, 0.25 * chi2 * var))
+                .filter(|(c, sse_c)| is_arc(pts, c, *sse_c, 0.0))
         }
     }
 }
