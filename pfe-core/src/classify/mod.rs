@@ -51,14 +51,12 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
                 None => line_feature(pts, s, e, &line, origin, config.sigma_r),
             }?;
             if let (Feature::Line(lf), true) = (&mut f, honest) {
-                // Σ cos²β σ_r² (n − 2)/n: the residual sum range noise alone explains, β the
-                // incidence (Simpson's rule over the first, middle and last point).
-                let cos2 = |i: usize| {
-                    let (p, o, r) = (pass.point(i), pass.origin(i), pass.range(i));
-                    let c = ((p.x - o.x) * line.cos_alpha + (p.y - o.y) * line.sin_alpha) / r;
-                    c * c
-                };
-                let mean = (cos2(s) + 4.0 * cos2((s + e) / 2) + cos2(e)) / 6.0;
+                // A residual's variance under range noise: σ_r² cos²β, β the incidence at the
+                // middle point.
+                let m = (s + e) / 2;
+                let (p, o, r) = (pass.point(m), pass.origin(m), pass.range(m));
+                let c = ((p.x - o.x) * line.cos_alpha + (p.y - o.y) * line.sin_alpha) / r;
+                let mean = c * c;
                 let k = scatter_scale(line.sse(), var * mean, pts.len() as f32 - 2.0);
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
@@ -77,7 +75,9 @@ fn scatter_scale(sse: f32, var: f32, dof: f32) -> f32 {
         return 1.0;
     }
     let ratio = sse / (var * dof);
-    if ratio > 1.0 + 3.0 * math::sqrt(2.0 / dof) && math::finite(ratio) {
+    // ratio − 1 > 3 √(2/dof), squared.
+    let excess = ratio - 1.0;
+    if excess > 0.0 && excess * excess * dof > 18.0 && math::finite(ratio) {
         ratio
     } else {
         1.0

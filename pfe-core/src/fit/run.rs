@@ -2,7 +2,7 @@
 //! distant wall seen at grazing incidence (points too far apart for the walk to predict one
 //! from the others) into one segment.
 
-use crate::fit::line::{centre, fit_line, major_axis, smaller_eigenvalue, sums_about};
+use crate::fit::line::{centre, fit_line, major_axis, smaller_eigenvalue};
 use crate::geometry::Point;
 use crate::math;
 
@@ -67,40 +67,69 @@ pub(crate) fn on_one_line(points: &[Point], tol: f32, var: f32) -> bool {
     true
 }
 
-/// Smallest residual sum of two least-squares lines over `points` split in two runs of at
-/// least two points each (a corner, seen as one segment): O(n), from prefix sums. `None` for
-/// fewer than 4 points.
+/// Meeting points tried on either side of the apex.
+const REACH: usize = 3;
+
+/// Smallest residual sum of two least-squares lines over `points` (a corner, seen as one
+/// segment) that meet at a point within [`REACH`] of the one farthest from the chord (the
+/// apex; the meeting point in both runs or ending the first): O(n), two passes. `None` for fewer than 4
+/// points.
 pub(crate) fn best_split_sse(points: &[Point]) -> Option<f32> {
     let n = points.len();
-    let o = *points.get(n / 2).filter(|_| n >= 4)?;
-    let total = sums_about(points, &o);
+    let (a, b) = (*points.first().filter(|_| n >= 4)?, *points.last()?);
+    let (cx, cy) = (b.x - a.x, b.y - a.y);
+    let mut apex = (0usize, 0.0f32);
+    for (i, p) in points.iter().enumerate() {
+        let d = math::abs((p.x - a.x) * cy - (p.y - a.y) * cx);
+        if d > apex.1 {
+            apex = (i, d);
+        }
+    }
+    // Apex candidates j with at least two points on each side (j shared).
+    let lo = apex.0.saturating_sub(REACH).max(1);
+    let hi = (apex.0 + REACH).min(n - 2);
+    let o = *points.get(apex.0)?;
+    let mut sums = [[0.0f32; 5]; 2 * REACH + 2];
+    let mut s = [0.0f32; 5];
+    for (i, p) in points.iter().enumerate() {
+        let (ex, ey) = (p.x - o.x, p.y - o.y);
+        s = [
+            s[0] + ex,
+            s[1] + ey,
+            s[2] + ex * ex,
+            s[3] + ey * ey,
+            s[4] + ex * ey,
+        ];
+        // Prefix sums through lo − 1 ..= hi.
+        if i + 1 >= lo && i <= hi {
+            if let Some(slot) = sums.get_mut(i + 1 - lo) {
+                *slot = s;
+            }
+        }
+    }
     let sse = |s: [f32; 5], m: usize| {
         let (_, [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
         smaller_eigenvalue(sxx, syy, sxy)
     };
-    let mut prefix = [0.0f32; 5];
     let mut best = f32::INFINITY;
-    for (j, p) in points.iter().enumerate().take(n - 2) {
-        let (ex, ey) = (p.x - o.x, p.y - o.y);
-        prefix = [
-            prefix[0] + ex,
-            prefix[1] + ey,
-            prefix[2] + ex * ex,
-            prefix[3] + ey * ey,
-            prefix[4] + ex * ey,
-        ];
-        if j >= 1 {
-            let rest = [
-                total[0] - prefix[0],
-                total[1] - prefix[1],
-                total[2] - prefix[2],
-                total[3] - prefix[3],
-                total[4] - prefix[4],
-            ];
-            let both = sse(prefix, j + 1) + sse(rest, n - j - 1);
-            if both < best {
-                best = both;
-            }
+    for j in lo..=hi {
+        let (Some(&through), Some(&before)) = (sums.get(j + 1 - lo), sums.get(j - lo)) else {
+            continue;
+        };
+        let minus = |p: [f32; 5]| {
+            [
+                s[0] - p[0],
+                s[1] - p[1],
+                s[2] - p[2],
+                s[3] - p[3],
+                s[4] - p[4],
+            ]
+        };
+        // j shared by both runs, and j ending the first.
+        let shared = sse(through, j + 1) + sse(minus(before), n - j);
+        best = best.min(shared);
+        if j + 3 <= n {
+            best = best.min(sse(through, j + 1) + sse(minus(through), n - j - 1));
         }
     }
     math::finite(best).then_some(best)
