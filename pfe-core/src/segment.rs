@@ -69,17 +69,18 @@ pub(crate) fn segments(
     emitter.flush(pass, config, out);
 }
 
-/// Emits segments in order, holding back a run of consecutive short ones (default mode) to
+/// Emits segments in order, noting the last run of consecutive short ones (default mode) to
 /// join what of it lies on one line.
 struct Emitter<'r> {
-    /// The run of short segments held back: its first and last point.
+    /// The run of short segments since the last long one: its first and last point.
     chain: Option<(usize, usize)>,
     /// The default mode's rule (`None`: nothing is joined).
     join: Option<&'r NoiseRule>,
 }
 
 impl Emitter<'_> {
-    /// Emits the segment `s..=e` after the held-back run, or holds it back too.
+    /// Emits the segment `s..=e`, after joining the run of short segments before it when it is
+    /// long.
     fn emit(
         &mut self,
         pass: &mut Pass<'_>,
@@ -98,61 +99,63 @@ impl Emitter<'_> {
                     self.chain = Some((s, e));
                 }
             }
-            return;
+        } else {
+            self.flush(pass, config, out);
         }
-        self.flush(pass, config, out);
         emit(pass, s, e, config, out);
     }
 
-    /// Emits the held-back run: the parts of at least [`CHAIN_MIN`] points that lie on one
-    /// line as one segment each, the rest as the short segments they were.
+    /// Joins the parts of at least [`CHAIN_MIN`] points of the noted run that lie on one line
+    /// into one segment each (its short segments were emitted already: undone here).
     fn flush(&mut self, pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
-        let (Some((cs, ce)), Some(rule)) = (self.chain.take(), self.join) else {
-            return;
-        };
-        let tol = rule.k_sigma + rule.model.floor;
-        let var = rule.sigma_r * rule.sigma_r;
-        let (mut a, mut done) = (cs, cs);
-        while a + CHAIN_MIN <= ce + 1 {
-            let pts = pass.points.get(a..=ce).unwrap_or(&[]);
-            let n = line_prefix(pts, tol).max(1);
-            let joined = n >= CHAIN_MIN && pts.get(..n).is_some_and(|p| on_one_line(p, tol, var));
-            if joined {
-                let b = a + n - 1;
-                emit_marked(pass, done, a, config, out);
-                for i in a + 1..=b {
-                    pass.clear(i, START);
-                }
-                if b < ce {
-                    pass.set(b + 1, START);
-                }
-                emit(pass, a, b, config, out);
-                done = b + 1;
+        match (self.chain.take(), self.join) {
+            (Some((cs, ce)), Some(rule)) if ce + 1 - cs >= CHAIN_MIN => {
+                join_lines(pass, (cs, ce), rule, config, out);
             }
-            a += n;
+            _ => {}
         }
-        emit_marked(pass, done, ce + 1, config, out);
     }
 }
 
-/// Emits the segments of `from..to` as their starts delimit them.
-fn emit_marked(
+/// Joins the parts of the run `cs..=ce` of short segments that lie on one line.
+#[inline(never)]
+fn join_lines(
     pass: &mut Pass<'_>,
-    from: usize,
-    to: usize,
+    (cs, ce): (usize, usize),
+    rule: &NoiseRule,
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
-    let mut s = from;
-    while s < to {
-        let e = next_flag(pass.flags, s + 1, Seek::SegmentEnd)
-            .unwrap_or(to)
-            .min(to);
-        emit(pass, s, e - 1, config, out);
-        s = e;
+    let tol = rule.k_sigma + rule.model.floor;
+    let var = rule.sigma_r * rule.sigma_r;
+    let mut a = cs;
+    while a + CHAIN_MIN <= ce + 1 {
+        let pts = pass.points.get(a..=ce).unwrap_or(&[]);
+        let n = line_prefix(pts, tol).max(1);
+        if n >= CHAIN_MIN && pts.get(..n).is_some_and(|p| on_one_line(p, tol, var)) {
+            let b = a + n - 1;
+            // Undo the short segments inside: a is the start of one or ends the one before.
+            let mut undone = 0usize;
+            for i in a..=b {
+                undone += usize::from(pass.flag(i) & START != 0);
+                pass.clear(i, START | END);
+            }
+            if a > cs {
+                pass.set(a - 1, END);
+            }
+            let mut redone = 0usize;
+            if b < ce && pass.flag(b + 1) & START == 0 {
+                pass.set(b + 1, START);
+                redone = 1;
+            }
+            let stats = &mut *pass.stats;
+            stats.segments = (stats.segments + redone).saturating_sub(undone);
+            stats.short_segments = (stats.short_segments + redone).saturating_sub(undone);
+            emit(pass, a, b, config, out);
+        }
+        a += n;
     }
 }
-
 /// Marks, types and fits (when long enough) the segment `s..=e`.
 fn emit(pass: &mut Pass<'_>, s: usize, e: usize, config: &Config, out: &mut dyn FeatureSink) {
     pass.set(s, START);

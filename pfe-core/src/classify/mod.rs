@@ -52,12 +52,16 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
             }?;
             if let (Feature::Line(lf), true) = (&mut f, honest) {
                 // A residual's variance under range noise: σ_r² cos²β, β the incidence at the
-                // middle point.
+                // middle point: cos²β = ((p − o)·n)² / |p − o|².
                 let m = (s + e) / 2;
-                let (p, o, r) = (pass.point(m), pass.origin(m), pass.range(m));
-                let c = ((p.x - o.x) * line.cos_alpha + (p.y - o.y) * line.sin_alpha) / r;
-                let mean = c * c;
-                let k = scatter_scale(line.sse(), var * mean, pts.len() as f32 - 2.0);
+                let (p, o) = (
+                    pts.get(m - s).copied().unwrap_or(line.centroid),
+                    pass.origin(m),
+                );
+                let (dx, dy) = (p.x - o.x, p.y - o.y);
+                let c = dx * line.cos_alpha + dy * line.sin_alpha;
+                let dof = pts.len() as f32 - 2.0;
+                let k = scatter_scale(line.sse() * (dx * dx + dy * dy), var * c * c, dof);
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
@@ -69,15 +73,21 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
 
 /// Factor on a fit's covariance: its reduced χ², `sse / (var · dof)` (`var` the variance of a
 /// residual under the noise model), when that exceeds 1 by more than three standard deviations
-/// of its sampling spread √(2/dof); otherwise 1 (the noise model explains the scatter).
+/// of its sampling spread √(2/dof); otherwise 1 (the noise model explains the scatter). No
+/// division unless it scales.
 fn scatter_scale(sse: f32, var: f32, dof: f32) -> f32 {
-    if !(dof >= 1.0 && var > 0.0) {
+    let expected = var * dof;
+    // sse/expected − 1 > 3 √(2/dof), squared and times expected².
+    let excess = sse - expected;
+    if !(dof >= 1.0
+        && expected > 0.0
+        && excess > 0.0
+        && excess * excess * dof > 18.0 * expected * expected)
+    {
         return 1.0;
     }
-    let ratio = sse / (var * dof);
-    // ratio − 1 > 3 √(2/dof), squared.
-    let excess = ratio - 1.0;
-    if excess > 0.0 && excess * excess * dof > 18.0 && math::finite(ratio) {
+    let ratio = sse / expected;
+    if math::finite(ratio) {
         ratio
     } else {
         1.0

@@ -17,9 +17,9 @@ pub(crate) fn line_prefix(points: &[Point], tol: f32) -> usize {
         if m >= 2 {
             let ((mx, my), [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
             let (_, tx, ty) = major_axis(sxx, syy, sxy);
-            let len = math::hypot(tx, ty);
-            let d = ((ey - my) * tx - (ex - mx) * ty) / len;
-            if !(math::abs(d) <= 2.0 * tol) {
+            // Distance × |t| within 2 tol |t|, squared: no root, no division.
+            let d = (ey - my) * tx - (ex - mx) * ty;
+            if !(d * d <= 4.0 * tol * tol * (tx * tx + ty * ty)) {
                 return m;
             }
         }
@@ -68,7 +68,7 @@ pub(crate) fn on_one_line(points: &[Point], tol: f32, var: f32) -> bool {
 }
 
 /// Meeting points tried on either side of the apex.
-const REACH: usize = 3;
+const REACH: usize = 1;
 
 /// Smallest residual sum of two least-squares lines over `points` (a corner, seen as one
 /// segment) that meet at a point within [`REACH`] of the one farthest from the chord (the
