@@ -3,18 +3,26 @@
 //! and fitted ([`crate::classify`]). In the default mode, neighbouring segments (no gap, no
 //! jump between them) that together are one arc are merged first: a small or distant pillar,
 //! seen over a few beams at growing incidence, can fail the line prediction every few points
-//! before an arc window has formed.
+//! before an arc window has formed. Runs of consecutive short segments (a distant wall at
+//! grazing incidence, its points too far apart to predict one another) that together lie on
+//! one line within the noise are joined into one segment.
 
 use crate::classify::{self, arc::arc_fit};
 use crate::config::Config;
 use crate::extractor::FeatureSink;
+use crate::fit::run::{line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
-use crate::mark::Rule;
+use crate::mark::{NoiseRule, Rule};
 use crate::pass::Pass;
 
 /// Sizes of the union of two neighbouring segments tested for being one arc (fewer points do
 /// not show an arc above the noise).
 const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
+
+/// Fewest points of a run of short segments joined into one line.
+const CHAIN_MIN: usize = 5;
+/// Most points of a run of short segments tested at once.
+const CHAIN_MAX: usize = 64;
 
 /// Pairs the marks of `pass` into segments and emits the feature of each into `out`.
 pub(crate) fn segments(
@@ -24,6 +32,10 @@ pub(crate) fn segments(
     out: &mut dyn FeatureSink,
 ) {
     let merge = rule.noise().filter(|n| n.model.arc_window >= 5);
+    let mut emitter = Emitter {
+        chain: None,
+        join: rule.noise(),
+    };
     let len = pass.len();
     let mut pending: Option<(usize, usize)> = None;
     let mut k = 0usize;
@@ -47,15 +59,103 @@ pub(crate) fn segments(
             }
         }
         if let Some((ps, pe)) = pending {
-            emit(pass, ps, pe, config, out);
+            emitter.emit(pass, ps, pe, config, out);
         }
         pending = Some((s, e));
     }
     if let Some((ps, pe)) = pending {
-        emit(pass, ps, pe, config, out);
+        emitter.emit(pass, ps, pe, config, out);
+    }
+    emitter.flush(pass, config, out);
+}
+
+/// Emits segments in order, noting the last run of consecutive short ones (default mode) to
+/// join what of it lies on one line.
+struct Emitter<'r> {
+    /// The run of short segments since the last long one: its first and last point.
+    chain: Option<(usize, usize)>,
+    /// The default mode's rule (`None`: nothing is joined).
+    join: Option<&'r NoiseRule>,
+}
+
+impl Emitter<'_> {
+    /// Emits the segment `s..=e`, after joining the run of short segments before it when it is
+    /// long.
+    fn emit(
+        &mut self,
+        pass: &mut Pass<'_>,
+        s: usize,
+        e: usize,
+        config: &Config,
+        out: &mut dyn FeatureSink,
+    ) {
+        if self.join.is_some() && e + 1 - s < config.min_points {
+            match self.chain {
+                Some((cs, ce)) if ce + 1 == s && e + 1 - cs <= CHAIN_MAX => {
+                    self.chain = Some((cs, e));
+                }
+                _ => {
+                    self.flush(pass, config, out);
+                    self.chain = Some((s, e));
+                }
+            }
+        } else {
+            self.flush(pass, config, out);
+        }
+        emit(pass, s, e, config, out);
+    }
+
+    /// Joins the parts of at least [`CHAIN_MIN`] points of the noted run that lie on one line
+    /// into one segment each (its short segments were emitted already: undone here).
+    fn flush(&mut self, pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
+        match (self.chain.take(), self.join) {
+            (Some((cs, ce)), Some(rule)) if ce + 1 - cs >= CHAIN_MIN => {
+                join_lines(pass, (cs, ce), rule, config, out);
+            }
+            _ => {}
+        }
     }
 }
 
+/// Joins the parts of the run `cs..=ce` of short segments that lie on one line.
+#[inline(never)]
+fn join_lines(
+    pass: &mut Pass<'_>,
+    (cs, ce): (usize, usize),
+    rule: &NoiseRule,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+) {
+    let tol = rule.k_sigma + rule.model.floor;
+    let var = rule.sigma_r * rule.sigma_r;
+    let mut a = cs;
+    while a + CHAIN_MIN <= ce + 1 {
+        let pts = pass.points.get(a..=ce).unwrap_or(&[]);
+        let n = line_prefix(pts, tol).max(1);
+        if n >= CHAIN_MIN && pts.get(..n).is_some_and(|p| on_one_line(p, tol, var)) {
+            let b = a + n - 1;
+            // Undo the short segments inside: a is the start of one or ends the one before.
+            let mut undone = 0usize;
+            for i in a..=b {
+                undone += usize::from(pass.flag(i) & START != 0);
+                pass.clear(i, START | END);
+            }
+            if a > cs {
+                pass.set(a - 1, END);
+            }
+            let mut redone = 0usize;
+            if b < ce && pass.flag(b + 1) & START == 0 {
+                pass.set(b + 1, START);
+                redone = 1;
+            }
+            let stats = &mut *pass.stats;
+            stats.segments = (stats.segments + redone).saturating_sub(undone);
+            stats.short_segments = (stats.short_segments + redone).saturating_sub(undone);
+            emit(pass, a, b, config, out);
+        }
+        a += n;
+    }
+}
 /// Marks, types and fits (when long enough) the segment `s..=e`.
 fn emit(pass: &mut Pass<'_>, s: usize, e: usize, config: &Config, out: &mut dyn FeatureSink) {
     pass.set(s, START);

@@ -1,6 +1,9 @@
 //! Type and parameters of a segment (§3.5): a line or a circle, by the paper's mean distance
 //! to the fitted line or (default mode) by comparing the two fits; then the feature with its
-//! covariance. [`arc`]: the default mode's arc tests.
+//! covariance. [`arc`]: the default mode's arc tests. In the default mode a circle must also
+//! beat the best two-line (corner) split, cover enough points and arc angle, and every
+//! feature's covariance is scaled up by the reduced χ² of its fit when that shows more scatter
+//! than σ_r explains.
 
 pub(crate) mod arc;
 
@@ -8,16 +11,33 @@ use crate::config::{Config, Typing};
 use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
 use crate::fit::circle::{fit_circle, refine_circle, refine_from, Circle, NormalEquations};
 use crate::fit::line::{fit_line, LineFit};
+use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
+use crate::math;
 use crate::pass::Pass;
+
+/// Fewest points of a circle in the default mode.
+const CIRCLE_MIN_POINTS: usize = 6;
+/// Smallest arc a circle must cover in the default mode, as tan of its angle (30°): a short
+/// bent piece is not an arc.
+const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
 
 /// The feature of the segment `s..=e` (`None`: degenerate).
 pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<Feature> {
     let pts = pass.points.get(s..=e)?;
     let origin = pass.origin((s + e) / 2);
     let line = fit_line(pts).ok();
+    let honest = matches!(config.typing, Typing::CompareFits { .. });
+    let var = config.sigma_r * config.sigma_r;
     match circle_of(pts, line.as_ref(), config) {
-        Some(c) => circle_feature(pts, s, e, &c, origin, config.sigma_r),
+        Some((c, sse)) => {
+            let mut f = circle_feature(pts, s, e, &c, origin, config.sigma_r)?;
+            if let (Feature::Circle(cf), true) = (&mut f, honest) {
+                let k = scatter_scale(sse, var, pts.len() as f32 - 3.0);
+                cf.cov = cf.cov.map(|row| row.map(|v| v * k));
+            }
+            Some(f)
+        }
         None => {
             let line = line?;
             let ends = [pts.first()?, pts.last()?];
@@ -26,17 +46,57 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
                 .span(s, e)
                 .filter(|_| pass.motion.is_none())
                 .and_then(|beams| line.covariance_beams(&beams, ends, config.sigma_r));
-            match cov {
+            let mut f = match cov {
                 Some(cov) => line_feature_with(pts, s, e, &line, cov),
                 None => line_feature(pts, s, e, &line, origin, config.sigma_r),
+            }?;
+            if let (Feature::Line(lf), true) = (&mut f, honest) {
+                // A residual's variance under range noise: σ_r² cos²β, β the incidence at the
+                // middle point: cos²β = ((p − o)·n)² / |p − o|².
+                let m = (s + e) / 2;
+                let (p, o) = (
+                    pts.get(m - s).copied().unwrap_or(line.centroid),
+                    pass.origin(m),
+                );
+                let (dx, dy) = (p.x - o.x, p.y - o.y);
+                let c = dx * line.cos_alpha + dy * line.sin_alpha;
+                let dof = pts.len() as f32 - 2.0;
+                let k = scatter_scale(line.sse() * (dx * dx + dy * dy), var * c * c, dof);
+                lf.var_alpha *= k;
+                lf.var_rho *= k;
+                lf.cov_alpha_rho *= k;
             }
+            Some(f)
         }
     }
 }
 
+/// Factor on a fit's covariance: its reduced χ², `sse / (var · dof)` (`var` the variance of a
+/// residual under the noise model), when that exceeds 1 by more than three standard deviations
+/// of its sampling spread √(2/dof); otherwise 1 (the noise model explains the scatter). No
+/// division unless it scales.
+fn scatter_scale(sse: f32, var: f32, dof: f32) -> f32 {
+    let expected = var * dof;
+    // sse/expected − 1 > 3 √(2/dof), squared and times expected².
+    let excess = sse - expected;
+    if !(dof >= 1.0
+        && expected > 0.0
+        && excess > 0.0
+        && excess * excess * dof > 18.0 * expected * expected)
+    {
+        return 1.0;
+    }
+    let ratio = sse / expected;
+    if math::finite(ratio) {
+        ratio
+    } else {
+        1.0
+    }
+}
+
 /// The circle of `pts` when the configured typing says they are one (`line`: their line fit,
-/// if any).
-fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<Circle> {
+/// if any), with its residual sum (NaN where not computed).
+fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<(Circle, f32)> {
     let circle = || {
         let c = fit_circle(pts, config.circle_method).ok()?;
         if config.circle_refine > 0 {
@@ -44,6 +104,7 @@ fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<C
         } else {
             Some(c)
         }
+        .map(|c| (c, f32::NAN))
     };
     let Some(l) = line else { return circle() };
     match config.typing {
@@ -85,7 +146,23 @@ fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<C
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .map(|(c, _)| c)
+                .filter(|(c, sse_c)| is_arc(pts, c, *sse_c, 0.0))
         }
     }
+}
+
+/// Whether `circle` (residual sum `sse_c`) is an arc really there: enough points, an arc of
+/// at least 30° between the first and the last point, and a residual sum below the best
+/// two-line (corner) split's by `margin` (a corner, door frame or bend is two lines).
+fn is_arc(pts: &[Point], circle: &Circle, sse_c: f32, margin: f32) -> bool {
+    let (Some(a), Some(b)) = (pts.first(), pts.last()) else {
+        return false;
+    };
+    let c = circle.center;
+    let (ax, ay, bx, by) = (a.x - c.x, a.y - c.y, b.x - c.x, b.y - c.y);
+    let (dot, cross) = (ax * bx + ay * by, ax * by - ay * bx);
+    let wide = dot < 0.0 || math::abs(cross) >= CIRCLE_MIN_ARC_TAN * dot;
+    pts.len() >= CIRCLE_MIN_POINTS
+        && wide
+        && best_split_sse(pts).is_some_and(|split| split - sse_c > margin)
 }

@@ -3,3 +3,4 @@
 
 pub mod circle;
 pub mod line;
+pub(crate) mod run;

@@ -1,0 +1,171 @@
+//! Whether a run of sparse points lies on one line within the noise: the test that joins a
+//! distant wall seen at grazing incidence (points too far apart for the walk to predict one
+//! from the others) into one segment.
+
+use crate::fit::line::{centre, fit_line, major_axis, smaller_eigenvalue};
+use crate::geometry::Point;
+use crate::math;
+
+/// Length of the longest prefix of `points` in which every point lies within `2 tol` of the
+/// line of the points before it (every prefix of two points does): a cheap screen, O(1) a
+/// point, before [`on_one_line`].
+pub(crate) fn line_prefix(points: &[Point], tol: f32) -> usize {
+    let Some(o) = points.first() else { return 0 };
+    let mut s = [0.0f32; 5];
+    for (m, p) in points.iter().enumerate() {
+        let (ex, ey) = (p.x - o.x, p.y - o.y);
+        if m >= 2 {
+            let ((mx, my), [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
+            let (_, tx, ty) = major_axis(sxx, syy, sxy);
+            // Distance × |t| within 2 tol |t|, squared: no root, no division.
+            let d = (ey - my) * tx - (ex - mx) * ty;
+            if !(d * d <= 4.0 * tol * tol * (tx * tx + ty * ty)) {
+                return m;
+            }
+        }
+        s = [
+            s[0] + ex,
+            s[1] + ey,
+            s[2] + ex * ex,
+            s[3] + ey * ey,
+            s[4] + ex * ey,
+        ];
+    }
+    points.len()
+}
+
+/// Whether `points` (in beam order) lie on their least-squares line within the noise: every
+/// distance within `tol`, a residual sum of at most `2.25 var` a point (RMS 1.5 σ), and their
+/// positions along the line monotone (a wall seen beam by beam, not a zig-zag of objects).
+pub(crate) fn on_one_line(points: &[Point], tol: f32, var: f32) -> bool {
+    let Ok(line) = fit_line(points) else {
+        return false;
+    };
+    if !(line.sse() <= 2.25 * var * points.len() as f32) {
+        return false;
+    }
+    let (c, s) = line.normal();
+    let along = |p: &Point| p.y * c - p.x * s;
+    let mut dir = 0.0f32;
+    let mut prev: Option<f32> = None;
+    for p in points {
+        if !(math::abs(line.signed_distance(p)) <= tol) {
+            return false;
+        }
+        let t = along(p);
+        if let Some(q) = prev {
+            let step = t - q;
+            if dir == 0.0 {
+                dir = step;
+            }
+            if !(step * dir > 0.0) {
+                return false;
+            }
+        }
+        prev = Some(t);
+    }
+    true
+}
+
+/// Meeting points tried on either side of the apex.
+const REACH: usize = 1;
+
+/// Smallest residual sum of two least-squares lines over `points` (a corner, seen as one
+/// segment) that meet at a point within [`REACH`] of the one farthest from the chord (the
+/// apex; the meeting point in both runs or ending the first): O(n), two passes. `None` for fewer than 4
+/// points.
+pub(crate) fn best_split_sse(points: &[Point]) -> Option<f32> {
+    let n = points.len();
+    let (a, b) = (*points.first().filter(|_| n >= 4)?, *points.last()?);
+    let (cx, cy) = (b.x - a.x, b.y - a.y);
+    let mut apex = (0usize, 0.0f32);
+    for (i, p) in points.iter().enumerate() {
+        let d = math::abs((p.x - a.x) * cy - (p.y - a.y) * cx);
+        if d > apex.1 {
+            apex = (i, d);
+        }
+    }
+    // Apex candidates j with at least two points on each side (j shared).
+    let lo = apex.0.saturating_sub(REACH).max(1);
+    let hi = (apex.0 + REACH).min(n - 2);
+    let o = *points.get(apex.0)?;
+    let mut sums = [[0.0f32; 5]; 2 * REACH + 2];
+    let mut s = [0.0f32; 5];
+    for (i, p) in points.iter().enumerate() {
+        let (ex, ey) = (p.x - o.x, p.y - o.y);
+        s = [
+            s[0] + ex,
+            s[1] + ey,
+            s[2] + ex * ex,
+            s[3] + ey * ey,
+            s[4] + ex * ey,
+        ];
+        // Prefix sums through lo − 1 ..= hi.
+        if i + 1 >= lo && i <= hi {
+            if let Some(slot) = sums.get_mut(i + 1 - lo) {
+                *slot = s;
+            }
+        }
+    }
+    let sse = |s: [f32; 5], m: usize| {
+        let (_, [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
+        smaller_eigenvalue(sxx, syy, sxy)
+    };
+    let mut best = f32::INFINITY;
+    for j in lo..=hi {
+        let (Some(&through), Some(&before)) = (sums.get(j + 1 - lo), sums.get(j - lo)) else {
+            continue;
+        };
+        let minus = |p: [f32; 5]| {
+            [
+                s[0] - p[0],
+                s[1] - p[1],
+                s[2] - p[2],
+                s[3] - p[3],
+                s[4] - p[4],
+            ]
+        };
+        // j shared by both runs, and j ending the first.
+        let shared = sse(through, j + 1) + sse(minus(before), n - j);
+        best = best.min(shared);
+        if j + 3 <= n {
+            best = best.min(sse(through, j + 1) + sse(minus(through), n - j - 1));
+        }
+    }
+    math::finite(best).then_some(best)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_zig_zag_is_not_one_line() {
+        let line: [Point; 6] = core::array::from_fn(|i| Point::new(1000.0 * i as f32, 5.0));
+        assert_eq!(line_prefix(&line, 43.0), 6);
+        assert!(on_one_line(&line, 43.0, 100.0));
+        // The same points out of order along the line.
+        let mut back = line;
+        back.swap(2, 3);
+        assert!(!on_one_line(&back, 43.0, 100.0));
+        // Every other point 100 mm off.
+        let zig: [Point; 6] =
+            core::array::from_fn(|i| Point::new(1000.0 * i as f32, 100.0 * (i % 2) as f32));
+        assert!(line_prefix(&zig, 43.0) < 6 && !on_one_line(&zig, 43.0, 100.0));
+    }
+
+    #[test]
+    fn a_corner_splits_into_two_exact_lines() {
+        let corner: [Point; 9] = core::array::from_fn(|i| {
+            let t = i as f32 - 4.0;
+            Point::new(1000.0 + 100.0 * t.abs(), 100.0 * t)
+        });
+        let split = best_split_sse(&corner).unwrap_or(f32::NAN);
+        assert!(split < 1.0, "{split}");
+        let bent: [Point; 9] = core::array::from_fn(|i| {
+            let a = 0.3 * (i as f32 - 4.0);
+            Point::new(1000.0 - 300.0 * a.cos(), 300.0 * a.sin())
+        });
+        assert!(best_split_sse(&bent).unwrap_or(0.0) > 100.0);
+    }
+}
