@@ -93,6 +93,12 @@ pub struct Config {
     pub sigma_r: f32,
     /// Systematic range correction applied to every reading.
     pub correction: Option<RangeCorrection>,
+    /// The default mode's checks for real scans: runs of short segments that lie on one line
+    /// within the noise are joined (distant walls at grazing incidence); a circle must cover
+    /// at least 6 points and 30° of arc and beat the best two-line (corner) split; line and
+    /// circle covariances grow with the fit's reduced χ² where the scatter exceeds σ_r. They
+    /// cost about 5 instructions a point on a Cortex-M4F (docs/PERFORMANCE.md).
+    pub scrutiny: bool,
 }
 
 /// Points in the prediction window (paper: Np = 3).
@@ -113,6 +119,7 @@ impl Config {
             circle_refine: 0,
             sigma_r: 5.0,
             correction: None,
+            scrutiny: false,
         }
     }
 
@@ -142,7 +149,14 @@ impl Config {
             circle_refine: 5,
             sigma_r: 5.0,
             correction: None,
+            scrutiny: true,
         }
+    }
+
+    /// The same configuration with the checks for real scans ([`Self::scrutiny`]) on or off.
+    pub const fn with_scrutiny(mut self, on: bool) -> Self {
+        self.scrutiny = on;
+        self
     }
 
     /// The same configuration for a scanner with range noise `sigma_r` mm.

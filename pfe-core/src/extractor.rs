@@ -89,11 +89,16 @@ struct Output<const M: usize> {
 pub(crate) trait FeatureSink {
     /// Stores `f`; false when there is no room.
     fn push(&mut self, f: Feature) -> bool;
+    /// Removes every feature.
+    fn clear(&mut self);
 }
 
 impl<const M: usize> FeatureSink for Vec<Feature, M> {
     fn push(&mut self, f: Feature) -> bool {
         Vec::push(self, f).is_ok()
+    }
+    fn clear(&mut self) {
+        Vec::clear(self);
     }
 }
 
@@ -242,36 +247,63 @@ fn run(
         stats,
     );
     let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);
-    // §3.1–3.2, §3.6: mark points by prediction.
+    // Interleaved sweeps without odometry are moved onto sweep 0 (by their offset estimated
+    // from the scan) when the marks or the fits show them out of place, and extracted again.
     let sweeps = usize::from(scan.sweeps.max(1));
-    let (neighbours, suspect) = {
+    let interleaved = sweeps > 1 && motion.is_none() && rule.noise().is_some();
+    let marks_say = {
         let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+        // §3.1–3.2, §3.6: mark points by prediction.
         mark::mark(&mut pass, &rule);
-        let suspect = sweeps > 1 && motion.is_none() && sweeps::suspect(&pass, &rule);
-        (pass.neighbours.take(), suspect)
+        // The marks' evidence (many segment starts): no fit is made before aligning.
+        let marks_say = interleaved && sweeps::suspect(&pass, &rule);
+        if !marks_say {
+            fit(&mut pass, &rule, config, out);
+            // The fits' evidence: long lines scattered far beyond σ_r.
+            if !(interleaved && pass.scattered.get() > 0) {
+                return outcome(pass.stats);
+            }
+        }
+        marks_say
     };
-    // Interleaved sweeps out of place (no odometry): when the walk's marks say so, each sweep
-    // is moved onto sweep 0 by its offset estimated from the scan, and the points marked again.
-    let moved = suspect && {
-        let step = scan.geometry.angle_step;
-        stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
-        stats.sweeps_aligned > 0
-    };
-    let mut pass = Pass::over(beams, (points, ranges, flags), motion, stats);
-    if moved {
-        pass.flags.iter_mut().for_each(|f| *f &= VALID);
-        mark::mark(&mut pass, &rule);
-    } else {
-        pass.neighbours = neighbours;
+    let step = scan.geometry.angle_step;
+    stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
+    if stats.sweeps_aligned == 0 {
+        if marks_say {
+            // Nothing to move: the marks stand (the check step reads every flag).
+            let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+            fit(&mut pass, &rule, config, out);
+        }
+        return outcome(stats);
     }
-    // §3.3: the check step.
+    out.clear();
+    *stats = Stats {
+        readings: stats.readings,
+        valid: stats.valid,
+        predictions: stats.predictions,
+        sweeps_aligned: stats.sweeps_aligned,
+        ..Stats::default()
+    };
+    flags.iter_mut().for_each(|f| *f &= VALID);
+    let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    mark::mark(&mut pass, &rule);
+    fit(&mut pass, &rule, config, out);
+    outcome(pass.stats)
+}
+
+/// §3.3: the check step; §3.4–3.5: segments and pairing, merges, type and fit of each.
+#[inline(always)]
+fn fit(pass: &mut Pass<'_>, rule: &Rule, config: &Config, out: &mut dyn FeatureSink) {
     if config.check_step {
-        check::check(&mut pass, &rule);
+        check::check(pass, rule);
     }
-    // §3.4–3.5: segments and pairing, merges, type and fit of each.
-    segment::segments(&mut pass, &rule, config, out);
-    match pass.stats.dropped {
-        0 => Ok(*pass.stats),
+    segment::segments(pass, rule, config, out);
+}
+
+/// The extraction's result from its statistics.
+fn outcome(stats: &Stats) -> Result<Stats, ExtractError> {
+    match stats.dropped {
+        0 => Ok(*stats),
         dropped => Err(ExtractError::FeatureCapacity { dropped }),
     }
 }

@@ -2,6 +2,8 @@
 //! points, ranges and flags, and the statistics. Every step is a function of it, compiled
 //! once in this crate.
 
+use core::cell::Cell;
+
 use heapless::Vec;
 
 use crate::beams::Beams;
@@ -35,9 +37,19 @@ pub(crate) struct Pass<'a> {
     /// Segment starts set through [`Self::start`] (the default mode's walk): with the noted
     /// neighbours, its evidence of interleaved sweeps out of place.
     pub starts: usize,
+    /// Lines of at least [`SCATTERED_POINTS`] points whose scatter is more than
+    /// [`SCATTERED_CHI2`] times what σ_r explains (counted by the typing step under
+    /// `Config::scrutiny`): with [`Self::starts`], the evidence of interleaved sweeps out of
+    /// place.
+    pub scattered: Cell<u16>,
     /// What the extraction did so far.
     pub stats: &'a mut Stats,
 }
+
+/// Fewest points of a line whose scatter counts as evidence (see [`Pass::scattered`]).
+pub(crate) const SCATTERED_POINTS: usize = 10;
+/// Reduced χ² above which a line's scatter counts as evidence (see [`Pass::scattered`]).
+pub(crate) const SCATTERED_CHI2: f32 = 2.0;
 
 impl<'a> Pass<'a> {
     /// The work state of `scan` over the beam table `beams` and the slots (points, ranges,
@@ -71,6 +83,7 @@ impl<'a> Pass<'a> {
             motion,
             neighbours: None,
             starts: 0,
+            scattered: Cell::new(0),
             stats,
         }
     }

@@ -34,7 +34,7 @@ pub(crate) fn segments(
     let merge = rule.noise().filter(|n| n.model.arc_window >= 5);
     let mut emitter = Emitter {
         chain: None,
-        join: rule.noise(),
+        join: rule.noise().filter(|_| config.scrutiny),
     };
     let len = pass.len();
     let mut pending: Option<(usize, usize)> = None;

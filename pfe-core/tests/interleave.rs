@@ -301,14 +301,16 @@ fn declared_sweeps_hold_up_under_interleaving() {
         let (g, n, sweeps) = variant(res);
         let truth = sweep_pose(res);
         let (mut plain, mut declared) = (Score::default(), Score::default());
-        let (mut walls, mut bad_walls) = (0, 0);
+        let (mut walls, mut bad_walls, mut aligned) = (0, 0, 0);
         for _ in 0..100 {
             let room = room(&mut noise);
             let (ranges, hits) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
             let (marks, features, _) = extract(&mut ex, g, &ranges, 1);
             score(&hits, &marks, &features, &mut plain);
             let (marks, features, stats) = extract(&mut ex, g, &ranges, sweeps as u8);
-            assert_eq!(stats.sweeps_aligned, sweeps - 1);
+            // Aligned when the walk's marks asked for it: all sweeps or none.
+            assert!([0, sweeps - 1].contains(&stats.sweeps_aligned));
+            aligned += usize::from(stats.sweeps_aligned > 0);
             score(&hits, &marks, &features, &mut declared);
             for &(first, last, w) in &common::runs(&hits, 30) {
                 let Some(&(rho, alpha)) = room.walls.get(w) else {
@@ -351,7 +353,7 @@ fn declared_sweeps_hold_up_under_interleaving() {
                 pct(s.spurious, s.features)
             );
         }
-        println!("{res}°: {bad_walls} of {walls} walls without exactly one good line");
+        println!("{res}°: {bad_walls} of {walls} walls without exactly one good line, {aligned} of 100 scans aligned");
         assert!(
             pct(declared.false_marks, declared.valid) <= 2.0,
             "{declared:?}"

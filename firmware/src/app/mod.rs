@@ -54,7 +54,9 @@ pub use source::ScanSource;
 pub enum ConfigChoice {
     /// `Config::paper()`: the method as published.
     Paper,
-    /// `Config::default()`: noise-model threshold, boundary localisation, fit comparison.
+    /// `Config::default()` without its checks for real scans (`Config::scrutiny`, about
+    /// 5 instructions a point): noise-model threshold, boundary localisation, fit comparison,
+    /// within the board's budget of 200 instructions a point.
     Default,
 }
 
@@ -63,7 +65,7 @@ impl ConfigChoice {
     pub const fn config(self) -> Config {
         match self {
             ConfigChoice::Paper => Config::paper(),
-            ConfigChoice::Default => Config::default_config(),
+            ConfigChoice::Default => Config::default_config().with_scrutiny(false),
         }
     }
 }
@@ -136,7 +138,7 @@ impl ConfigSlot {
 }
 
 /// What [`ConfigSlot::Default`] and [`ConfigSlot::Paper`] stand for.
-static DEFAULT: Config = Config::default_config();
+static DEFAULT: Config = ConfigChoice::Default.config();
 static PAPER: Config = Config::paper();
 
 impl<const N: usize, const M: usize> App<N, M> {

@@ -1,7 +1,7 @@
 //! The one bridge from LMS scans to pfe-core: [`RawScan`] (raw range codes with their
 //! geometry and unit) from the driver's [`ScanData`], and from it the pfe-core [`Scan`].
 
-use pfe_core::{BeamTiming, Ranges, Scan, ScanGeometry};
+use pfe_core::{Ranges, Scan, ScanGeometry};
 
 use crate::lms::driver::ScanData;
 use crate::lms::types::MeasuringMode;
@@ -33,8 +33,7 @@ impl<'a> RawScan<'a> {
         }
     }
 
-    /// The pfe-core input for this scan, with the interleaved sweeps of the variant's
-    /// resolution (0.5°: 2, 0.25°: 4; see `sweeps_of`).
+    /// The pfe-core input for this scan.
     pub fn to_pfe(&self) -> Scan<'a> {
         Scan {
             geometry: self.geometry,
@@ -44,16 +43,11 @@ impl<'a> RawScan<'a> {
                 max_valid: self.max_valid,
             },
             motion: None,
-            sweeps: sweeps_of(&self.geometry),
+            // One sweep: the interleaved sweeps' alignment (`Scan::with_sweeps`, host side)
+            // does not fit the board's budget of 200 instructions a point (docs/PERFORMANCE.md).
+            sweeps: 1,
         }
     }
-}
-
-/// The number of sweeps an LMS2xx interleaves at the resolution of `geometry`: 1 at 1°, 2 at
-/// 0.5°, 4 at 0.25°.
-pub fn sweeps_of(geometry: &ScanGeometry) -> u8 {
-    let degrees = geometry.angle_step.abs() * (180.0 / core::f32::consts::PI);
-    BeamTiming::lms2xx(degrees).sweeps
 }
 
 /// The geometry of the scan's variant and the scan as

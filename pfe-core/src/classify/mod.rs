@@ -14,7 +14,7 @@ use crate::fit::line::{fit_line, LineFit};
 use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
 use crate::math;
-use crate::pass::Pass;
+use crate::pass::{Pass, SCATTERED_CHI2, SCATTERED_POINTS};
 
 /// Fewest points of a circle in the default mode.
 const CIRCLE_MIN_POINTS: usize = 6;
@@ -27,7 +27,7 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
     let pts = pass.points.get(s..=e)?;
     let origin = pass.origin((s + e) / 2);
     let line = fit_line(pts).ok();
-    let honest = matches!(config.typing, Typing::CompareFits { .. });
+    let honest = config.scrutiny && matches!(config.typing, Typing::CompareFits { .. });
     let var = config.sigma_r * config.sigma_r;
     match circle_of(pts, line.as_ref(), config) {
         Some((c, sse)) => {
@@ -62,6 +62,9 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
                 let c = dx * line.cos_alpha + dy * line.sin_alpha;
                 let dof = pts.len() as f32 - 2.0;
                 let k = scatter_scale(line.sse() * (dx * dx + dy * dy), var * c * c, dof);
+                if k > SCATTERED_CHI2 && pts.len() >= SCATTERED_POINTS {
+                    pass.scattered.set(pass.scattered.get().saturating_add(1));
+                }
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
@@ -146,7 +149,7 @@ fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| is_arc(pts, c, *sse_c, 0.0))
+                .filter(|(c, sse_c)| !config.scrutiny || is_arc(pts, c, *sse_c, 0.0))
         }
     }
 }
