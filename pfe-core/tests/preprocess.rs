@@ -191,12 +191,7 @@ fn deskew_with_interleaved_timing_puts_both_sweeps_on_the_wall() {
         "{l:?}"
     );
     // Every point of both sweeps on the wall.
-    let worst = ex
-        .points()
-        .iter()
-        .filter(|p| p.is_valid())
-        .map(|p| (p.x - 5000.0).abs())
-        .fold(0.0f32, f32::max);
+    let worst = farthest_from_wall(&ex, 5000.0);
     assert!(worst < 0.5, "{worst} mm");
     // The same motion taken as one sweep (beam i at i × 26.7 ms / 361) leaves the odd beams
     // off the wall.
@@ -206,11 +201,15 @@ fn deskew_with_interleaved_timing_puts_both_sweeps_on_the_wall() {
         &Config::default(),
     )
     .unwrap();
-    let worst = ex
-        .points()
+    let worst = farthest_from_wall(&ex, 5000.0);
+    assert!(worst > 10.0, "{worst} mm");
+}
+
+/// The largest distance of the last extraction's valid points from the wall `x = wall`, mm.
+fn farthest_from_wall<const N: usize, const M: usize>(ex: &Extractor<N, M>, wall: f32) -> f32 {
+    ex.points()
         .iter()
         .filter(|p| p.is_valid())
-        .map(|p| (p.x - 5000.0).abs())
-        .fold(0.0f32, f32::max);
-    assert!(worst > 10.0, "{worst} mm");
+        .map(|p| (p.x - wall).abs())
+        .fold(0.0f32, f32::max)
 }
