@@ -79,7 +79,10 @@ fn variant_is_set_only_when_not_known_to_be_right() {
     let mut d = driver(38400, Config::default());
     d.init().unwrap();
     let (uart, _, _) = d.release();
-    assert!(uart.sent(0x3B).is_empty(), "3B sent though B1 named 180/0.5");
+    assert!(
+        uart.sent(0x3B).is_empty(),
+        "3B sent though B1 named 180/0.5"
+    );
 
     let t = Time::default();
     let mut lms = Lms::new(t.clone(), 38400);
@@ -152,7 +155,11 @@ fn silence_limit_is_two_telegram_times_at_9600() {
     for _ in 0..6 {
         d.next_scan().unwrap();
     }
-    assert_eq!(d.counters().reinits, 0, "re-initialised a device that kept sending");
+    assert_eq!(
+        d.counters().reinits,
+        0,
+        "re-initialised a device that kept sending"
+    );
 }
 
 /// A scan with the restart bit re-initialises; after normal scans, the next one does again
@@ -169,4 +176,55 @@ fn restart_bit_reinitialises_again_after_normal_scans() {
     }
     assert_eq!(d.counters().reinits, 2);
     assert_eq!(d.counters().device_resets, 2);
+}
+
+/// The driver's counters carry the decoder's: one good telegram per answered command, and a
+/// NAK, a bad CRC, a zero LEN or line noise in place of one reply each counted once (the
+/// decoder skips every byte of a rejected candidate, its STX included, and the noise).
+#[test]
+fn counters_carry_the_decoders_counts() {
+    let bad_crc = {
+        let mut t = common::lms::device_telegram(&[0xA0, 0x00, 0x10]);
+        t[8] ^= 1;
+        t
+    };
+    // (replacement of the reply to `3A`, naks, crc errors, bad length, bytes skipped)
+    let cases: [(Vec<u8>, u32, u32, u32, u32); 4] = [
+        (vec![0x15], 1, 0, 0, 0),
+        (bad_crc, 0, 1, 0, 9),
+        (vec![0x02, 0x80, 0x00, 0x00], 0, 0, 1, 4),
+        (vec![0x55, 0x55, 0x55], 0, 0, 0, 3),
+    ];
+    for (bytes, naks, crc, len, skipped) in cases {
+        let t = Time::default();
+        let mut lms = Lms::new(t.clone(), 38400);
+        lms.replace_reply = Some((1, bytes.clone()));
+        let mut d = Driver::new(lms, t.clone(), t, Config::default());
+        d.init().unwrap();
+        let c = d.counters();
+        let commands = d.release().0.commands.len() as u32;
+        assert_eq!(c.telegrams_ok, commands - 1, "{bytes:02x?}");
+        assert_eq!(c.naks, naks, "{bytes:02x?}");
+        assert_eq!(c.crc_errors, crc, "{bytes:02x?}");
+        assert_eq!(c.bad_length, len, "{bytes:02x?}");
+        assert_eq!(c.bytes_skipped, skipped, "{bytes:02x?}");
+        assert_eq!(c.retries, 1, "{bytes:02x?}");
+    }
+}
+
+/// A device that keeps sending scans in another unit than configured (cm here) after the
+/// re-initialisation is used with the unit its scans carry (§7: count bits 14–15).
+#[test]
+fn scans_in_another_unit_are_used_with_their_unit() {
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 38400);
+    lms.scan_unit_bits = Some(0);
+    let mut d = Driver::new(lms, t.clone(), t, Config::default());
+    for _ in 0..3 {
+        let s = d.next_scan().unwrap();
+        assert_eq!(s.unit(), firmware::lms::Unit::Cm);
+        assert_eq!(s.range_mm(0), Some(10_000.0));
+    }
+    assert_eq!(d.device().unit, Some(firmware::lms::Unit::Cm));
+    assert_eq!(d.counters().reinits, 1);
 }

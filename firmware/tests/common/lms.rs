@@ -86,6 +86,10 @@ pub struct Lms {
     pub power_on_next: bool,
     /// Scans (by number) sent with the restart bit (0x20) in their status byte.
     pub restart_scans: Vec<u32>,
+    /// Bytes sent instead of the ACK and reply to command number `.0` (0 = first).
+    pub replace_reply: Option<(usize, Vec<u8>)>,
+    /// Unit bits (14–15 of the count word) of the scans, when not the configured unit's.
+    pub scan_unit_bits: Option<u16>,
     /// Times (µs) at which the host polled `read_ready` and nothing had arrived, with its rate.
     pub idle_polls: Vec<(u64, u32)>,
 }
@@ -115,6 +119,8 @@ impl Lms {
             answer_status: true,
             power_on_next: false,
             restart_scans: Vec::new(),
+            replace_reply: None,
+            scan_unit_bits: None,
             idle_polls: Vec::new(),
         }
     }
@@ -155,7 +161,7 @@ impl Lms {
         while self.streaming && self.next_scan_at <= self.now() {
             self.scans_sent += 1;
             let n = self.values();
-            let unit = u16::from(self.config[6]) << 14;
+            let unit = self.scan_unit_bits.unwrap_or(u16::from(self.config[6])) << 14;
             let count = unit | u16::try_from(n).unwrap_or(0);
             let mut p = vec![0xB0];
             p.extend_from_slice(&count.to_le_bytes());
@@ -173,6 +179,14 @@ impl Lms {
 
     fn handle(&mut self, p: Vec<u8>) {
         self.commands.push(p.clone());
+        if let Some((i, bytes)) = self.replace_reply.take() {
+            if i + 1 == self.commands.len() {
+                let start = self.now() + 1000;
+                self.send(&bytes, start);
+                return;
+            }
+            self.replace_reply = Some((i, bytes));
+        }
         if std::mem::take(&mut self.power_on_next) {
             self.streaming = false;
             let mut r = vec![0x90];
