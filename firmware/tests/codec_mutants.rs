@@ -152,3 +152,54 @@ fn variant_resolution_and_rate_limit() {
         assert_eq!(75.0 / v.max_rate_hz(), 1.0 / v.resolution_deg(), "{v:?}");
     }
 }
+
+/// The largest scan, 100° at 0.25° (401 values), makes the largest telegram, 2 × 401 + 10 =
+/// 812 bytes (§1, §7): the decoder delivers it.
+#[test]
+fn the_largest_scan_telegram_decodes() {
+    let mut p = vec![0xB0];
+    p.extend_from_slice(&((1u16 << 14) | 401).to_le_bytes());
+    p.extend((0..401u16).flat_map(|i| (2000 + i).to_le_bytes()));
+    p.push(0x10);
+    let mut raw = vec![0u8; 900];
+    let n = encode_telegram(0x80, &p, &mut raw).unwrap();
+    assert_eq!(n, 812);
+    let mut dec = Decoder::<MAX_TELEGRAM>::new();
+    let (used, ev) = dec.feed(&raw[..n]);
+    assert_eq!(used, 812);
+    let Some(Event::Telegram(t)) = ev else {
+        panic!("no telegram: {ev:?}")
+    };
+    let Reply::Values(v) = parse_reply(t.payload(), ReplyOptions::default())
+        .unwrap()
+        .reply
+    else {
+        panic!("not a B0")
+    };
+    assert_eq!(v.len(), 401);
+    assert_eq!(v.word(400), Some(2400));
+}
+
+/// B2 is `n × (type, code)` (§4): one pair parses, an odd data length does not.
+#[test]
+fn error_log_is_pairs() {
+    let r = parse_reply(&[0xB2, 0x03, 0x41, 0x10], ReplyOptions::default()).unwrap();
+    let Reply::ErrorLog(log) = r.reply else {
+        panic!("not an error log")
+    };
+    assert_eq!(log.entries().collect::<Vec<_>>(), vec![(0x03, 0x41)]);
+    let empty = parse_reply(&[0xB2, 0x10], ReplyOptions::default()).unwrap();
+    assert!(matches!(empty.reply, Reply::ErrorLog(l) if l.is_empty()));
+    assert!(parse_reply(&[0xB2, 0x03, 0x10], ReplyOptions::default()).is_err());
+}
+
+/// Count-word unit bits 14–15 (§7): 00 cm, 01 mm, 10 dm (CARMEN), 11 undefined.
+#[test]
+fn count_word_unit_bits() {
+    use firmware::lms::types::Unit;
+    assert_eq!(Unit::from_count_bits(0), Some(Unit::Cm));
+    assert_eq!(Unit::from_count_bits(1), Some(Unit::Mm));
+    assert_eq!(Unit::from_count_bits(2), Some(Unit::Dm));
+    assert_eq!(Unit::from_count_bits(3), None);
+    assert_eq!(Unit::Dm.mm_per_unit(), 100.0);
+}

@@ -228,3 +228,25 @@ fn scans_in_another_unit_are_used_with_their_unit() {
     assert_eq!(d.device().unit, Some(firmware::lms::Unit::Cm));
     assert_eq!(d.counters().reinits, 1);
 }
+
+/// An unrequested power-on message (`90`, §4) while streaming means the device restarted: the
+/// driver re-initialises at once, not after the silence timeout, and delivers scans again.
+#[test]
+fn a_power_on_message_while_streaming_reinitialises_at_once() {
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 38400);
+    lms.power_on_scans = vec![3];
+    let mut d = Driver::new(lms, t.clone(), t.clone(), Config::default());
+    assert!(d.last_scan().is_empty(), "a scan before the first");
+    let mut times = Vec::new();
+    for _ in 0..4 {
+        let s = d.next_scan().unwrap();
+        assert!(!s.is_empty());
+        times.push(s.time_ms);
+    }
+    assert_eq!(d.counters().device_resets, 1);
+    assert_eq!(d.counters().reinits, 1);
+    // Scan 2 → (power-on) → re-init → next scan: well under the 1 s silence timeout.
+    let gap = times[2] - times[1];
+    assert!(gap < 900, "{gap} ms between the scans around the restart");
+}

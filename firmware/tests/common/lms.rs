@@ -86,6 +86,9 @@ pub struct Lms {
     pub power_on_next: bool,
     /// Scans (by number) sent with the restart bit (0x20) in their status byte.
     pub restart_scans: Vec<u32>,
+    /// Scans (by number) replaced by a power-on message `90`: the device restarted, in
+    /// request mode.
+    pub power_on_scans: Vec<u32>,
     /// Bytes sent instead of the ACK and reply to command number `.0` (0 = first).
     pub replace_reply: Option<(usize, Vec<u8>)>,
     /// Unit bits (14–15 of the count word) of the scans, when not the configured unit's.
@@ -120,6 +123,7 @@ impl Lms {
             power_on_next: false,
             restart_scans: Vec::new(),
             replace_reply: None,
+            power_on_scans: Vec::new(),
             scan_unit_bits: None,
             idle_polls: Vec::new(),
         }
@@ -160,6 +164,13 @@ impl Lms {
     fn generate(&mut self) {
         while self.streaming && self.next_scan_at <= self.now() {
             self.scans_sent += 1;
+            if self.power_on_scans.contains(&self.scans_sent) {
+                self.streaming = false;
+                let t = device_telegram(&[&[0x90][..], b"LMS200", &[STATUS]].concat());
+                let at = self.next_scan_at;
+                self.send(&t, at);
+                return;
+            }
             let n = self.values();
             let unit = self.scan_unit_bits.unwrap_or(u16::from(self.config[6])) << 14;
             let count = unit | u16::try_from(n).unwrap_or(0);
