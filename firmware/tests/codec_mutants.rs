@@ -84,7 +84,7 @@ fn wrong_address_is_rejected_at_its_byte_in_any_chunking() {
     }
 }
 
-/// Status byte bits (§3): bit 5 restart, bit 6 implausible, bit 7 pollution; real devices send
+/// Status byte bits (§3): bits 0–2 the error level, bit 5 restart, bit 6 implausible, bit 7 pollution; real devices send
 /// 0x10, which sets none of them.
 #[test]
 fn status_bits_follow_the_protocol() {
@@ -97,6 +97,17 @@ fn status_bits_follow_the_protocol() {
     assert_eq!(flags(0x40), (false, true, false));
     assert_eq!(flags(0x80), (false, false, true));
     assert_eq!(flags(0xF0), (true, true, true));
+    // Bits 0–2: 0 ok, 1 info, 2 warning, 3 error, 4 fatal error.
+    for (s, error) in [
+        (0x10, false),
+        (0x11, false),
+        (0x12, false),
+        (0x13, true),
+        (0x14, true),
+    ] {
+        assert_eq!(Status(s).general(), s & 7);
+        assert_eq!(Status(s).is_error(), error, "{s:#04x}");
+    }
 }
 
 /// B1 byte 8 is the operating mode (§6).
