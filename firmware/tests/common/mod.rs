@@ -22,3 +22,4 @@ impl Clock for Time {
         (self.0.get() / 1000) as u32
     }
 }
+pub mod lms;
