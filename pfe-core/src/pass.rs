@@ -34,12 +34,9 @@ pub(crate) struct Pass<'a> {
     /// order: the only places where its check step can act. `None` when not known (the
     /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
     pub neighbours: Option<Vec<u16, NEIGHBOURS>>,
-    /// Segment starts set through [`Self::start`] (the default mode's walk): with the noted
-    /// neighbours, its evidence of interleaved sweeps out of place.
-    pub starts: usize,
     /// Lines of at least [`SCATTERED_POINTS`] points whose scatter is more than
     /// [`SCATTERED_CHI2`] times what σ_r explains (counted by the typing step under
-    /// `Config::scrutiny`): with [`Self::starts`], the evidence of interleaved sweeps out of
+    /// `Config::scrutiny`): with the segment starts, the evidence of interleaved sweeps out of
     /// place.
     pub scattered: Cell<u16>,
     /// What the extraction did so far.
@@ -82,7 +79,6 @@ impl<'a> Pass<'a> {
             flags,
             motion,
             neighbours: None,
-            starts: 0,
             scattered: Cell::new(0),
             stats,
         }
@@ -168,7 +164,6 @@ impl<'a> Pass<'a> {
     /// one too (see [`Self::neighbours`]).
     pub(crate) fn start(&mut self, i: usize) {
         self.set(i, START);
-        self.starts += 1;
         if i.checked_sub(1).is_some_and(|j| self.flag(j) & START != 0) {
             let noted = match (&mut self.neighbours, u16::try_from(i)) {
                 (Some(list), Ok(i)) => list.push(i).is_ok(),

@@ -31,10 +31,26 @@ pub(crate) fn segments(
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
+    // Compiled once with and once without `Config::scrutiny`: without, no check of it is left
+    // in the per-segment path.
+    if config.scrutiny {
+        segments_with::<true>(pass, rule, config, out);
+    } else {
+        segments_with::<false>(pass, rule, config, out);
+    }
+}
+
+/// [`segments`] with `Config::scrutiny == SCRUTINY`.
+fn segments_with<const SCRUTINY: bool>(
+    pass: &mut Pass<'_>,
+    rule: &Rule,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+) {
     let merge = rule.noise().filter(|n| n.model.arc_window >= 5);
     let mut emitter = Emitter {
         chain: None,
-        join: rule.noise().filter(|_| config.scrutiny),
+        join: rule.noise().filter(|_| SCRUTINY),
     };
     let len = pass.len();
     let mut pending: Option<(usize, usize)> = None;
@@ -59,14 +75,16 @@ pub(crate) fn segments(
             }
         }
         if let Some((ps, pe)) = pending {
-            emitter.emit(pass, ps, pe, config, out);
+            emitter.emit::<SCRUTINY>(pass, ps, pe, config, out);
         }
         pending = Some((s, e));
     }
     if let Some((ps, pe)) = pending {
-        emitter.emit(pass, ps, pe, config, out);
+        emitter.emit::<SCRUTINY>(pass, ps, pe, config, out);
     }
-    emitter.flush(pass, config, out);
+    if emitter.join.is_some() {
+        emitter.flush(pass, config, out);
+    }
 }
 
 /// Emits segments in order, noting the last run of consecutive short ones (default mode) to
@@ -81,7 +99,7 @@ struct Emitter<'r> {
 impl Emitter<'_> {
     /// Emits the segment `s..=e`, after joining the run of short segments before it when it is
     /// long.
-    fn emit(
+    fn emit<const SCRUTINY: bool>(
         &mut self,
         pass: &mut Pass<'_>,
         s: usize,
@@ -89,7 +107,12 @@ impl Emitter<'_> {
         config: &Config,
         out: &mut dyn FeatureSink,
     ) {
-        if self.join.is_some() && e + 1 - s < config.min_points {
+        if !SCRUTINY || self.join.is_none() {
+            // Nothing is joined: the plain path.
+            emit::<SCRUTINY>(pass, s, e, config, out);
+            return;
+        }
+        if e + 1 - s < config.min_points {
             match self.chain {
                 Some((cs, ce)) if ce + 1 == s && e + 1 - cs <= CHAIN_MAX => {
                     self.chain = Some((cs, e));
@@ -102,7 +125,7 @@ impl Emitter<'_> {
         } else {
             self.flush(pass, config, out);
         }
-        emit(pass, s, e, config, out);
+        emit::<SCRUTINY>(pass, s, e, config, out);
     }
 
     /// Joins the parts of at least [`CHAIN_MIN`] points of the noted run that lie on one line
@@ -151,18 +174,24 @@ fn join_lines(
             let stats = &mut *pass.stats;
             stats.segments = (stats.segments + redone).saturating_sub(undone);
             stats.short_segments = (stats.short_segments + redone).saturating_sub(undone);
-            emit(pass, a, b, config, out);
+            emit::<true>(pass, a, b, config, out);
         }
         a += n;
     }
 }
 /// Marks, types and fits (when long enough) the segment `s..=e`.
-fn emit(pass: &mut Pass<'_>, s: usize, e: usize, config: &Config, out: &mut dyn FeatureSink) {
+fn emit<const SCRUTINY: bool>(
+    pass: &mut Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+) {
     pass.set(s, START);
     pass.set(e, END);
     pass.stats.segments += 1;
     if e + 1 - s >= config.min_points {
-        match classify::feature(pass, s, e, config) {
+        match classify::feature::<SCRUTINY>(pass, s, e, config) {
             Some(f) => {
                 if out.push(f) {
                     pass.stats.features += 1;

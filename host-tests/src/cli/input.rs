@@ -54,11 +54,27 @@ pub struct MethodArgs {
     /// LaserScan topic of a ROS 2 bag (--format mcap); default: the bag's only LaserScan topic.
     #[arg(long)]
     pub topic: Option<String>,
-    /// Interleaved sweeps a scan is made of (1, 2 or 4; beam i in sweep i mod N), whose offset
-    /// a moving robot causes is then estimated from the scan and removed. Default: a SICK
-    /// LMS2xx's (--format lms200 or carmen): 2 at 0.5°, 4 at 0.25°, else 1; 1 for other formats.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(1..=4))]
-    pub sweeps: Option<u8>,
+    /// Interleaved sweeps a scan is made of (1, 2 or 4: beam i in sweep i mod N), whose
+    /// offset (a moving robot's) is then estimated from the scan and removed; `auto`: a SICK
+    /// LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4 at 0.25°), else 1. Default 1: on the
+    /// shared CARMEN logs the alignment does not yet help (docs/REALDATA.md).
+    #[arg(long, default_value = "1", value_parser = sweeps_arg)]
+    pub sweeps: Sweeps,
+}
+
+/// `--sweeps`: a number of sweeps, or `None` for `auto`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Sweeps(pub Option<u8>);
+
+/// `--sweeps N|auto`: 1 to 4 sweeps, or `auto`.
+pub fn sweeps_arg(s: &str) -> Result<Sweeps, String> {
+    match s.trim() {
+        "auto" => Ok(Sweeps(None)),
+        n => match n.parse::<u8>() {
+            Ok(v @ 1..=4) => Ok(Sweeps(Some(v))),
+            _ => Err(format!("sweeps are 1 to 4, or auto (got {s:?})")),
+        },
+    }
 }
 
 /// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).
@@ -86,6 +102,7 @@ impl MethodArgs {
             odometry: None,
             sweeps: usize::from(
                 self.sweeps
+                    .0
                     .unwrap_or_else(|| crate::formats::sweeps_of(self.format, geometry)),
             ),
         }

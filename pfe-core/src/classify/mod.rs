@@ -23,16 +23,22 @@ const CIRCLE_MIN_POINTS: usize = 6;
 const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
 
 /// The feature of the segment `s..=e` (`None`: degenerate).
-pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<Feature> {
+pub(crate) fn feature<const SCRUTINY: bool>(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> Option<Feature> {
     let pts = pass.points.get(s..=e)?;
     let origin = pass.origin((s + e) / 2);
     let line = fit_line(pts).ok();
-    let honest = config.scrutiny && matches!(config.typing, Typing::CompareFits { .. });
+    let honest = SCRUTINY && matches!(config.typing, Typing::CompareFits { .. });
     let var = config.sigma_r * config.sigma_r;
-    match circle_of(pts, line.as_ref(), config) {
+    match circle_of::<SCRUTINY>(pts, line.as_ref(), config) {
+        Some((c, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
         Some((c, sse)) => {
             let mut f = circle_feature(pts, s, e, &c, origin, config.sigma_r)?;
-            if let (Feature::Circle(cf), true) = (&mut f, honest) {
+            if let Feature::Circle(cf) = &mut f {
                 let k = scatter_scale(sse, var, pts.len() as f32 - 3.0);
                 cf.cov = cf.cov.map(|row| row.map(|v| v * k));
             }
@@ -46,11 +52,15 @@ pub(crate) fn feature(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> O
                 .span(s, e)
                 .filter(|_| pass.motion.is_none())
                 .and_then(|beams| line.covariance_beams(&beams, ends, config.sigma_r));
-            let mut f = match cov {
+            let f = match cov {
                 Some(cov) => line_feature_with(pts, s, e, &line, cov),
                 None => line_feature(pts, s, e, &line, origin, config.sigma_r),
-            }?;
-            if let (Feature::Line(lf), true) = (&mut f, honest) {
+            };
+            if !honest {
+                return f;
+            }
+            let mut f = f?;
+            if let Feature::Line(lf) = &mut f {
                 // A residual's variance under range noise: σ_r² cos²β, β the incidence at the
                 // middle point: cos²β = ((p − o)·n)² / |p − o|².
                 let m = (s + e) / 2;
@@ -99,7 +109,11 @@ fn scatter_scale(sse: f32, var: f32, dof: f32) -> f32 {
 
 /// The circle of `pts` when the configured typing says they are one (`line`: their line fit,
 /// if any), with its residual sum (NaN where not computed).
-fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<(Circle, f32)> {
+fn circle_of<const SCRUTINY: bool>(
+    pts: &[Point],
+    line: Option<&LineFit>,
+    config: &Config,
+) -> Option<(Circle, f32)> {
     let circle = || {
         let c = fit_circle(pts, config.circle_method).ok()?;
         if config.circle_refine > 0 {
@@ -149,7 +163,7 @@ fn circle_of(pts: &[Point], line: Option<&LineFit>, config: &Config) -> Option<(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| !config.scrutiny || is_arc(pts, c, *sse_c, 0.0))
+                .filter(|(c, sse_c)| !SCRUTINY || is_arc(pts, c, *sse_c, 0.0))
         }
     }
 }

@@ -21,7 +21,7 @@
 //! [`SweepOffset::CHI2_SIGNIFICANT`]) and moves some point by more than
 //! [`SweepOffset::MIN_SHIFT_MM`]; otherwise the points stay as they are.
 
-use crate::flags::VALID;
+use crate::flags::{START, VALID};
 use crate::geometry::Point;
 use crate::mark::Rule;
 use crate::math;
@@ -151,7 +151,9 @@ pub(crate) fn align(
 /// or more neighbouring starts than the walk notes. The paper's mode is left as published.
 pub(crate) fn suspect(pass: &Pass<'_>, rule: &Rule) -> bool {
     rule.noise().is_some()
-        && (pass.neighbours.is_none() || pass.starts * SUSPECT_EVERY > pass.stats.valid)
+        && (pass.neighbours.is_none()
+            || pass.flags.iter().filter(|f| **f & START != 0).count() * SUSPECT_EVERY
+                > pass.stats.valid)
 }
 
 /// One segment start in this many valid points is more than a scan of sweeps in place makes.

@@ -171,16 +171,8 @@ pub fn run_records(
         let pose = record
             .pose
             .map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t] as Pose);
-        // The logs are a SICK LMS2xx's: at 0.5° each scan is two interleaved sweeps.
-        let context = crate::methods::ScanContext {
-            odometry: None,
-            sweeps: usize::from(crate::formats::sweeps_of(
-                crate::formats::Format::Carmen,
-                &record.geometry,
-            )),
-        };
         for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
-            let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
+            let ex = method.extract(&record.geometry, &record.ranges_mm);
             tally.scans += 1;
             tally.coverage.add(&Coverage::of(
                 &record.geometry,
