@@ -8,6 +8,8 @@
     clippy::panic
 )]
 
+mod common;
+
 use firmware::lms::command::{Command, PASSWORD};
 use firmware::lms::frame::{encode_parts, encode_telegram, Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::{parse_reply, Reply, ReplyOptions, Status};
@@ -168,12 +170,8 @@ fn variant_resolution_and_rate_limit() {
 /// 812 bytes (§1, §7): the decoder delivers it.
 #[test]
 fn the_largest_scan_telegram_decodes() {
-    let mut p = vec![0xB0];
-    p.extend_from_slice(&((1u16 << 14) | 401).to_le_bytes());
-    p.extend((0..401u16).flat_map(|i| (2000 + i).to_le_bytes()));
-    p.push(0x10);
-    let mut raw = vec![0u8; 900];
-    let n = encode_telegram(0x80, &p, &mut raw).unwrap();
+    let raw = common::b0_telegram(401, 2000);
+    let n = raw.len();
     assert_eq!(n, 812);
     let mut dec = Decoder::<MAX_TELEGRAM>::new();
     let (used, ev) = dec.feed(&raw[..n]);

@@ -173,14 +173,8 @@ impl SetBaud for Chatty {
 /// does not keep a command's wait going: init gives up after its tries, in bounded time.
 #[test]
 fn a_line_that_never_falls_quiet_does_not_hold_a_wait() {
-    use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
-    let mut payload = vec![0xB0];
-    payload.extend_from_slice(&((0b01u16 << 14) | 361).to_le_bytes());
-    payload.extend((0..361u16).flat_map(|i| (1000 + i).to_le_bytes()));
-    payload.push(0x10);
-    let mut telegram = vec![0u8; 812];
-    let n = encode_telegram(DEVICE_ADDRESS, &payload, &mut telegram).unwrap();
-    telegram.truncate(n);
+    let telegram = common::b0_telegram(361, 1000);
+    assert_eq!(telegram.len(), 732);
     let t = Time::default();
     let uart = Chatty {
         time: t.clone(),

@@ -23,3 +23,16 @@ impl Clock for Time {
     }
 }
 pub mod lms;
+
+/// A B0 telegram (address 0x80, status 0x10, unit mm) of `count` values `first`, `first + 1`,
+/// …, encoded by the firmware's encoder.
+pub fn b0_telegram(count: u16, first: u16) -> Vec<u8> {
+    let mut payload = vec![0xB0];
+    payload.extend_from_slice(&((0b01u16 << 14) | count).to_le_bytes());
+    payload.extend((0..count).flat_map(|i| (first + i).to_le_bytes()));
+    payload.push(0x10);
+    let mut raw = vec![0u8; 2 * usize::from(count) + 16];
+    let n = firmware::lms::frame::encode_telegram(0x80, &payload, &mut raw).unwrap_or(0);
+    raw.truncate(n);
+    raw
+}
