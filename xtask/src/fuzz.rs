@@ -8,9 +8,10 @@
 //! `../shared/data`. A crash fails the command and names the reproducer in
 //! `fuzz/artifacts/<target>/`; copy it to `fuzz/regressions/<target>/` once fixed so that
 //! `cargo test --manifest-path fuzz/Cargo.toml` (a step of `cargo xtask test`) replays it
-//! forever. Each target is given both directories: its corpus (where libFuzzer adds what it
-//! finds) and its committed regressions (read only), so every run starts from the inputs that
-//! once crashed.
+//! forever. Each target is given three directories: its corpus (where libFuzzer adds what it
+//! finds), then, read only, its committed minimised campaign corpus (`fuzz/corpus-min/<target>/`)
+//! and its committed regressions, so every run starts from the campaign's coverage and from the
+//! inputs that once crashed.
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -158,10 +159,12 @@ fn seeds(fuzz: &Path) -> Result<()> {
 }
 
 /// The corpus directories libFuzzer is given for `target`: the corpus it writes to first,
-/// then the committed regression inputs.
-fn corpus_dirs(fuzz: &Path, target: &str) -> [std::path::PathBuf; 2] {
+/// then the committed minimised campaign corpus and regression inputs (libFuzzer only reads
+/// those: it adds new inputs to the first directory).
+fn corpus_dirs(fuzz: &Path, target: &str) -> [std::path::PathBuf; 3] {
     [
         fuzz.join("corpus").join(target),
+        fuzz.join("corpus-min").join(target),
         fuzz.join("regressions").join(target),
     ]
 }
@@ -279,25 +282,25 @@ mod tests {
     use std::path::Path;
 
     #[test]
-    fn every_target_gets_its_corpus_and_its_regressions() {
+    fn every_target_gets_its_corpus_its_minimised_corpus_and_its_regressions() {
         let fuzz = Path::new("/f");
         for t in TARGETS {
             assert_eq!(
                 corpus_dirs(fuzz, t),
                 [
                     fuzz.join("corpus").join(t),
+                    fuzz.join("corpus-min").join(t),
                     fuzz.join("regressions").join(t)
                 ]
             );
         }
-        // The committed regressions exist for every target (the fuzz harness's test checks
+        // The committed directories exist for every target (the fuzz harness's test checks
         // that each holds at least one input).
         let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
         for t in TARGETS {
-            assert!(
-                corpus_dirs(&root, t)[1].is_dir(),
-                "fuzz/regressions/{t} is missing"
-            );
+            for d in &corpus_dirs(&root, t)[1..] {
+                assert!(d.is_dir(), "{} is missing", d.display());
+            }
         }
     }
 }

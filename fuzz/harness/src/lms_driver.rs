@@ -202,10 +202,15 @@ pub fn config(s: &[u8; SETTINGS]) -> Config {
 /// idle, one telegram's transmission).
 const OVERSHOOT_MS: u64 = 64 + 2;
 
+/// Line time of the longest command the driver sends (48 bytes with its framing, 10 bits a
+/// byte) at the slowest rate, 9600 Bd, ms: the mock UART's writes take their line time on the
+/// script's clock, before the wait for the reply starts.
+const SEND_MS: u64 = 48 * 10 * 1000 / 9600;
+
 /// Time budget of the driver calls under `c`, ms: `(init, next_scan, one command)`.
 pub fn budget_ms(c: &Config) -> (u64, u64, u64) {
     let tries = u64::from(c.tries.max(1));
-    let wait = u64::from(c.reply_timeout_ms.max(c.config_timeout_ms)) + OVERSHOOT_MS;
+    let wait = u64::from(c.reply_timeout_ms.max(c.config_timeout_ms)) + SEND_MS + OVERSHOOT_MS;
     let command = tries * wait;
     // Probe: every rate (≤ 4 distinct) `tries` times with one try each; then at most 12
     // commands (baud switch and its check, type, status, configuration, variant, installation

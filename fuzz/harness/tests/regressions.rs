@@ -1,5 +1,7 @@
-//! Replays, without libFuzzer, every committed regression input (`fuzz/regressions/<target>/`)
-//! and freshly generated seeds through the fuzz targets' bodies: a fixed crash stays fixed.
+//! Replays, without libFuzzer, every committed regression input (`fuzz/regressions/<target>/`),
+//! the committed minimised campaign corpora (`fuzz/corpus-min/<target>/`) and freshly generated
+//! seeds through the fuzz targets' bodies: a fixed crash stays fixed, and what the campaign
+//! reached is re-checked on every run.
 use std::path::{Path, PathBuf};
 
 /// The fuzz targets (as `xtask::fuzz::TARGETS`).
@@ -64,6 +66,19 @@ fn committed_regressions_pass() {
     assert!(
         empty.is_empty(),
         "fuzz/regressions/<target>/ is missing or empty for {empty:?}: commit at least one input each"
+    );
+}
+
+/// Every target has a committed minimised corpus (`cargo +nightly fuzz cmin` of a campaign, see
+/// docs/TESTING.md) and every input of it passes the target's checks.
+#[test]
+fn committed_minimised_corpora_pass() {
+    let counts = replay(&fuzz_dir().join("corpus-min"));
+    eprintln!("minimised corpus inputs replayed: {counts:?}");
+    let empty = empty_targets(&counts);
+    assert!(
+        empty.is_empty(),
+        "fuzz/corpus-min/<target>/ is missing or empty for {empty:?}: commit the minimised corpus of each"
     );
 }
 
