@@ -5,7 +5,7 @@
 //! Every scan is LMS range codes (as a B0 telegram carries them) with its unit: 361 values
 //! (180° at 0.5°) unless stated, 401 values for 100° at 0.25°.
 
-use pfe_core::{Config, Extractor, Feature, Ranges, Scan, ScanGeometry, Stats, LMS_MAX_VALID_8M};
+use pfe_core::{Extractor, Feature, Ranges, Scan, ScanGeometry, Stats, LMS_MAX_VALID_8M};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -48,7 +48,8 @@ impl AdversarialScan {
         }
     }
 
-    /// The host's [`Work`] of pfe-core's default configuration on this scan.
+    /// The host's [`Work`] of the board's default configuration on this scan
+    /// (`ConfigChoice::Default`: the worst case is the board's).
     pub fn stats(&self) -> Work {
         let scan = Scan {
             geometry: self.geometry(),
@@ -61,7 +62,7 @@ impl AdversarialScan {
             sweeps: 1,
         };
         let mut ex = Extractor::<401, 48>::new();
-        let _ = ex.extract(&scan, &Config::default());
+        let _ = ex.extract(&scan, &firmware::app::ConfigChoice::Default.config());
         let circles = ex
             .features()
             .iter()
