@@ -178,7 +178,11 @@ impl Rows<'_> {
     /// Calls `f` with every row and the range of its beam, mm.
     fn each(&self, mut f: impl FnMut(&Row, f32)) {
         let (points, sweeps, s) = (self.points, self.sweeps, self.sweep);
-        let pairs = points.len().saturating_sub(1).checked_div(sweeps).unwrap_or(0);
+        let pairs = points
+            .len()
+            .saturating_sub(1)
+            .checked_div(sweeps)
+            .unwrap_or(0);
         // Sweep-0 triples (a, b, c) need c = S·(j + 2): `pairs − 1` of them.
         let triples = pairs.saturating_sub(1);
         let stride = triples.div_ceil(MAX_ROWS).max(1);
