@@ -1,5 +1,5 @@
-//! `cargo xtask fuzz [--seconds S] [--target NAME]…`: builds and runs every cargo-fuzz target
-//! (`fuzz/`, libFuzzer, nightly) for S seconds each (default 60) and prints a table of
+//! `cargo xtask fuzz [--seconds S] [--runs N] [--target NAME]…`: builds and runs every cargo-fuzz target
+//! (`fuzz/`, libFuzzer, nightly) for S seconds each (default 60), or until N executions if sooner, and prints a table of
 //! executions, exec/s, coverage (`cov`) and features (`ft`) from libFuzzer's final lines.
 //!
 //! Installs cargo-fuzz (`cargo install cargo-fuzz --locked`) and the nightly toolchain when
@@ -184,6 +184,7 @@ pub fn replay_regressions(skips: &Path) -> Result<()> {
 /// Entry point.
 pub fn run_cmd(args: &[String]) -> Result<()> {
     let mut seconds = 60u64;
+    let mut runs: Option<u64> = None;
     let mut only: Vec<String> = Vec::new();
     let mut it = args.iter();
     while let Some(a) = it.next() {
@@ -195,8 +196,16 @@ pub fn run_cmd(args: &[String]) -> Result<()> {
                     .parse()
                     .context("--seconds needs a whole number")?;
             }
+            "--runs" => {
+                runs = Some(
+                    it.next()
+                        .context("--runs needs a value")?
+                        .parse()
+                        .context("--runs needs a whole number")?,
+                );
+            }
             "--target" => only.push(it.next().context("--target needs a name")?.clone()),
-            other => bail!("unknown argument {other:?} (usage: cargo xtask fuzz [--seconds S] [--target NAME]…)"),
+            other => bail!("unknown argument {other:?} (usage: cargo xtask fuzz [--seconds S] [--runs N] [--target NAME]…)"),
         }
     }
     let targets: Vec<&str> = TARGETS
@@ -226,6 +235,10 @@ pub fn run_cmd(args: &[String]) -> Result<()> {
             .arg("-max_len=8192")
             .arg("-timeout=10")
             .arg("-rss_limit_mb=2048");
+        if let Some(n) = runs {
+            // The campaign's stop: N executions (or the time limit, whichever comes first).
+            c.arg(format!("-runs={n}"));
+        }
         eprintln!("$ {c:?}");
         let out = c.output().with_context(|| format!("cannot run {c:?}"))?;
         let stderr = String::from_utf8_lossy(&out.stderr);
