@@ -12,7 +12,7 @@ use crate::flags::{END, START, VALID};
 use crate::geometry::Point;
 use crate::mark::{self, Rule};
 use crate::pass::Pass;
-use crate::preprocess::{self, sweeps};
+use crate::preprocess::{self, scatter, sweeps};
 use crate::scan::Scan;
 use crate::segment;
 
@@ -40,6 +40,9 @@ pub struct Stats {
     /// Interleaved sweeps moved onto sweep 0 by their estimated offset (scans of several
     /// sweeps without motion, see [`crate::preprocess::sweeps`]).
     pub sweeps_aligned: usize,
+    /// The scan's own σ_r in µm, when it scattered well beyond the configured one and the
+    /// extraction used it ([`crate::preprocess::scatter`], with `Config::scrutiny`); else 0.
+    pub scan_sigma_um: u32,
 }
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
@@ -133,6 +136,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     dropped: 0,
                     predictions: 0,
                     sweeps_aligned: 0,
+                    scan_sigma_um: 0,
                 },
             },
         }
@@ -246,11 +250,35 @@ fn run(
         config,
         stats,
     );
+    let sweeps = usize::from(scan.sweeps.max(1));
+    let step = scan.geometry.angle_step;
+    let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
+    let mut interleaved = sweeps > 1 && motion.is_none() && noise_rule;
+    // With scrutiny: declared sweeps whose offset shows (the scatter at one beam beyond that
+    // at two) are moved onto sweep 0 first; then a scan that scatters well beyond σ_r is
+    // extracted with its own σ.
+    let own;
+    let config = match config.scrutiny {
+        true => {
+            if interleaved && scatter::sweeps_apart(points, sweeps, config.sigma_r) {
+                stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
+                interleaved = false;
+            }
+            match scatter::sigma(points, config.sigma_r) {
+                Some(sigma) => {
+                    stats.scan_sigma_um = (sigma * 1000.0) as u32;
+                    own = config.with_sigma_r(sigma);
+                    &own
+                }
+                None => config,
+            }
+        }
+        false => config,
+    };
     let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);
     // Interleaved sweeps without odometry are moved onto sweep 0 (by their offset estimated
     // from the scan) when the marks or the fits show them out of place, and extracted again.
-    let sweeps = usize::from(scan.sweeps.max(1));
-    let interleaved = sweeps > 1 && motion.is_none() && rule.noise().is_some();
+    let interleaved = interleaved && rule.noise().is_some();
     let marks_say = {
         let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
         // §3.1–3.2, §3.6: mark points by prediction.
@@ -266,7 +294,6 @@ fn run(
         }
         marks_say
     };
-    let step = scan.geometry.angle_step;
     stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
     if stats.sweeps_aligned == 0 {
         if marks_say {
@@ -282,6 +309,7 @@ fn run(
         valid: stats.valid,
         predictions: stats.predictions,
         sweeps_aligned: stats.sweeps_aligned,
+        scan_sigma_um: stats.scan_sigma_um,
         ..Stats::default()
     };
     flags.iter_mut().for_each(|f| *f &= VALID);

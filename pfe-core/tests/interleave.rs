@@ -290,9 +290,9 @@ fn score(hits: &[Option<usize>], marks: &[usize], features: &[Feature], s: &mut 
 }
 
 /// 8 mm / 6 mrad between sweeps, σ_r = 5 mm, no odometry: declared sweeps meet the issue's
-/// targets (false marks ≤ 2 %, missed ≤ 8 %, spurious ≤ 5 %) with fewer false marks than one
-/// sweep, and (for 95 % of them) every run of ≥ 30 beams on a wall gives one line, with ρ and
-/// α within 4 of its standard deviations (plus 1 mm / 1 mrad).
+/// targets (false marks ≤ 2 %, missed ≤ 8 %, spurious ≤ 5 %), and (for 95 % of them) every
+/// run of ≥ 30 beams on a wall gives one line, with ρ and α within 4 of its standard
+/// deviations (plus 1 mm / 1 mrad), less than half as many failing as with one sweep.
 #[test]
 fn declared_sweeps_hold_up_under_interleaving() {
     let mut ex = Extractor::<401, 128>::new();
@@ -301,48 +301,21 @@ fn declared_sweeps_hold_up_under_interleaving() {
         let (g, n, sweeps) = variant(res);
         let truth = sweep_pose(res);
         let (mut plain, mut declared) = (Score::default(), Score::default());
-        let (mut walls, mut bad_walls, mut aligned) = (0, 0, 0);
+        let (mut walls, mut bad_walls, mut plain_bad, mut aligned) = (0, 0, 0, 0);
         for _ in 0..100 {
             let room = room(&mut noise);
             let (ranges, hits) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
-            let (marks, features, _) = extract(&mut ex, g, &ranges, 1);
-            score(&hits, &marks, &features, &mut plain);
+            let (marks, plain_features, _) = extract(&mut ex, g, &ranges, 1);
+            score(&hits, &marks, &plain_features, &mut plain);
             let (marks, features, stats) = extract(&mut ex, g, &ranges, sweeps as u8);
-            // Aligned when the walk's marks asked for it: all sweeps or none.
+            // Aligned when the scatter or the walk's marks asked for it: all sweeps or none.
             assert!([0, sweeps - 1].contains(&stats.sweeps_aligned));
             aligned += usize::from(stats.sweeps_aligned > 0);
             score(&hits, &marks, &features, &mut declared);
-            for &(first, last, w) in &common::runs(&hits, 30) {
-                let Some(&(rho, alpha)) = room.walls.get(w) else {
-                    continue;
-                };
-                walls += 1;
-                let lines: Vec<_> = features
-                    .iter()
-                    .filter_map(|f| match f {
-                        Feature::Line(l)
-                            if 2 * (usize::from(l.last).min(last) + 1)
-                                .saturating_sub(usize::from(l.first).max(first))
-                                > usize::from(l.last - l.first) + 1 =>
-                        {
-                            Some(*l)
-                        }
-                        _ => None,
-                    })
-                    .collect();
-                let ok = match lines.as_slice() {
-                    [l] => {
-                        let da = (f64::from(l.alpha) - alpha + std::f64::consts::PI)
-                            .rem_euclid(2.0 * std::f64::consts::PI)
-                            - std::f64::consts::PI;
-                        let dr = f64::from(l.rho) - rho;
-                        dr.abs() < 4.0 * f64::from(l.var_rho).sqrt() + 1.0
-                            && da.abs() < 4.0 * f64::from(l.var_alpha).sqrt() + 1e-3
-                    }
-                    _ => false,
-                };
-                bad_walls += usize::from(!ok);
-            }
+            let (w, bad) = wall_lines(&room, &hits, &features);
+            walls += w;
+            bad_walls += bad;
+            plain_bad += wall_lines(&room, &hits, &plain_features).1;
         }
         let pct = |a: usize, b: usize| 100.0 * a as f64 / b.max(1) as f64;
         for (name, s) in [("1 sweep", &plain), ("declared", &declared)] {
@@ -353,7 +326,7 @@ fn declared_sweeps_hold_up_under_interleaving() {
                 pct(s.spurious, s.features)
             );
         }
-        println!("{res}°: {bad_walls} of {walls} walls without exactly one good line, {aligned} of 100 scans aligned");
+        println!("{res}°: {bad_walls} of {walls} walls without exactly one good line ({plain_bad} as 1 sweep), {aligned} of 100 scans aligned");
         assert!(
             pct(declared.false_marks, declared.valid) <= 2.0,
             "{declared:?}"
@@ -363,9 +336,50 @@ fn declared_sweeps_hold_up_under_interleaving() {
             pct(declared.spurious, declared.features) <= 5.0,
             "{declared:?}"
         );
-        assert!(plain.false_marks > 2 * declared.false_marks, "{plain:?}");
+        // As one sweep, the scan's scatter (the sweeps' offset counted as noise) keeps the
+        // marks right, but the lines sit between the sweeps, off by half their offset.
+        assert!(plain_bad > 2 * bad_walls, "{plain_bad} vs {bad_walls}");
         assert!(bad_walls * 20 <= walls, "{bad_walls} of {walls} walls");
     }
+}
+
+/// Of the runs of ≥ 30 beams on a wall of `room`: how many, and how many have not exactly one
+/// line of `features` over most of them with ρ and α within 4 standard deviations of the
+/// wall's (plus 1 mm / 1 mrad).
+fn wall_lines(room: &Room, hits: &[Option<usize>], features: &[Feature]) -> (usize, usize) {
+    let (mut walls, mut bad) = (0, 0);
+    for &(first, last, w) in &common::runs(hits, 30) {
+        let Some(&(rho, alpha)) = room.walls.get(w) else {
+            continue;
+        };
+        walls += 1;
+        let lines: Vec<_> = features
+            .iter()
+            .filter_map(|f| match f {
+                Feature::Line(l)
+                    if 2 * (usize::from(l.last).min(last) + 1)
+                        .saturating_sub(usize::from(l.first).max(first))
+                        > usize::from(l.last - l.first) + 1 =>
+                {
+                    Some(*l)
+                }
+                _ => None,
+            })
+            .collect();
+        let ok = match lines.as_slice() {
+            [l] => {
+                let da = (f64::from(l.alpha) - alpha + std::f64::consts::PI)
+                    .rem_euclid(2.0 * std::f64::consts::PI)
+                    - std::f64::consts::PI;
+                let dr = f64::from(l.rho) - rho;
+                dr.abs() < 4.0 * f64::from(l.var_rho).sqrt() + 1.0
+                    && da.abs() < 4.0 * f64::from(l.var_alpha).sqrt() + 1e-3
+            }
+            _ => false,
+        };
+        bad += usize::from(!ok);
+    }
+    (walls, bad)
 }
 
 /// The estimate's χ² of a static noisy scan is mostly below the significance threshold.

@@ -6,6 +6,7 @@
 
 pub mod correction;
 pub mod deskew;
+pub mod scatter;
 pub mod sweeps;
 
 use crate::beams::Beams;

@@ -1,0 +1,359 @@
+//! The scan's own range scatter: a robust estimate of σ_r from how far each point lies from
+//! the chord of its neighbours, measured along its beam.
+//!
+//! Real surfaces (rough walls, glass, foliage) and interleaved sweeps out of place scatter
+//! beyond the configured σ_r; with [`Config::scrutiny`](crate::Config::scrutiny) the extractor
+//! then uses the scan's own σ for its marks, fits and covariances. The estimate comes from the
+//! residuals |r_i − r̂_i|, where r̂_i is where beam i meets the chord of points i − s and i + s:
+//! on any straight surface, at any incidence, that residual is noise only, with variance about
+//! 1.5 σ_r² (the point's own and half of each neighbour's). Corners, edges and clutter make
+//! large residuals: a first σ from the residuals' lower quartile sets a 3σ cut, and the median
+//! of the residuals within it gives σ (twice). A scan whose residuals are mostly beyond the cut
+//! (clutter) has no estimate. It is taken at s = 1 and s = 2, the larger: real roughness is
+//! correlated over neighbouring beams (so it shows more at two beams), an offset between two
+//! interleaved sweeps shows at one beam only (the walk's predictions see both).
+//!
+//! ```
+//! use pfe_core::geometry::Point;
+//! use pfe_core::preprocess::scatter;
+//! // A wall 2 m ahead at 0.5° steps, its ranges off by `off(i)` mm.
+//! let wall = |off: &dyn Fn(usize) -> f32| -> Vec<Point> {
+//!     (0..181)
+//!         .map(|i| {
+//!             let b = (i as f32 - 90.0).to_radians() * 0.5;
+//!             let r = 2000.0 / b.cos() + off(i);
+//!             Point::new(r * b.cos(), r * b.sin())
+//!         })
+//!         .collect()
+//! };
+//! // Rough: ±30 mm, uniform (σ 17 mm), well above the configured 5 mm.
+//! let mut seed = 7u32;
+//! let off: Vec<f32> = (0..181)
+//!     .map(|_| {
+//!         seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+//!         (seed >> 8) as f32 / 16_777_216.0 * 60.0 - 30.0
+//!     })
+//!     .collect();
+//! let sigma = scatter::sigma(&wall(&|i| off[i]), 5.0).unwrap();
+//! assert!(sigma > 12.0 && sigma < 25.0, "{sigma}");
+//! // Within the configured noise: the configured σ_r stands.
+//! assert_eq!(scatter::sigma(&wall(&|i| off[i] / 10.0), 5.0), None);
+//! ```
+
+use crate::geometry::Point;
+use crate::math;
+
+/// Histogram bins per σ_r of |residual|.
+const PER_SIGMA: f32 = 16.0;
+/// Bins of the histogram: residuals up to 32 σ_r; larger ones count in the last (never an
+/// inlier).
+const BINS: usize = 512;
+/// Fewest chord residuals for an estimate.
+pub const MIN_SAMPLES: usize = 24;
+/// The estimate replaces σ_r only above `1 + SIGNIFICANT / √n` times it, n the residuals it
+/// came from. Over 1 000 walls of 181 points with normal noise at σ_r, the estimate was at
+/// most 1.53 σ_r (n ≈ 177: the bound is 1.75), with 361 points at most 1.41 (bound 1.53);
+/// a pillar of 25 beams gives the median of few residuals, curvature included (bound 3).
+pub const SIGNIFICANT: f32 = 10.0;
+/// The largest σ the scan may claim, as a multiple of σ_r (a scan of clutter is not a wall
+/// with a large noise).
+pub const MAX_FACTOR: f32 = 8.0;
+/// Residual σ per σ_r: √1.5.
+const RESIDUAL_PER_SIGMA: f32 = 1.224_745;
+/// σ_r from the lower quartile of |residual|: a normal residual has |e| below 0.3186 σ a
+/// quarter of the time.
+const QUARTILE_TO_SIGMA: f32 = 1.0 / (0.318_64 * RESIDUAL_PER_SIGMA);
+/// σ_r from the median |residual| (0.6745 σ).
+const MEDIAN_TO_SIGMA: f32 = 1.0 / (0.674_49 * RESIDUAL_PER_SIGMA);
+/// Inliers: residuals within this many residual σ.
+const INLIER: f32 = 3.0;
+/// Beams meeting the chord at less than this sine of the angle between them (grazing beyond
+/// about 84°) give no residual: the intersection is ill-conditioned.
+const MIN_SINE: f32 = 0.1;
+
+/// The scan's σ_r, mm, when it is significantly above `sigma_r` (at most [`MAX_FACTOR`] times
+/// it); `None` when the scan is consistent with `sigma_r` or has fewer than [`MIN_SAMPLES`]
+/// residuals. `points` are one per beam, [`Point::INVALID`] (or any non-finite point) where a
+/// beam has no return; only triples of valid points count. `sweeps`: the scan's interleaved
+/// sweeps ([`crate::Scan::sweeps`]); the chords span 4 beams either side for 3 or more, else 2.
+pub fn sigma(points: &[Point], sigma_r: f32) -> Option<f32> {
+    // The scatter at the scale of one beam and of two (the larger: real roughness is
+    // correlated over neighbouring beams; interleaved sweeps' offsets show at one beam only).
+    match (at_span(points, 1, sigma_r), at_span(points, 2, sigma_r)) {
+        (Some(a), Some(b)) => Some(if a > b { a } else { b }),
+        (a, b) => a.or(b),
+    }
+}
+
+/// Whether the scan's `sweeps` interleaved sweeps show out of place: its scatter at one beam
+/// (or two, for four sweeps) significantly beyond `sigma_r` and beyond [`APART`] times that at
+/// `sweeps` beams (points of one sweep), which rough surfaces and noise do not give. (Four
+/// sweeps drifting by equal steps leave every other one-beam residual near zero; at two beams
+/// they all show.)
+///
+/// ```
+/// use pfe_core::geometry::Point;
+/// use pfe_core::preprocess::scatter;
+/// // A wall 3 m ahead at 0.5° steps, the odd sweep 20 mm farther.
+/// let points: Vec<Point> = (0..181)
+///     .map(|i| {
+///         let b = (i as f32 - 90.0).to_radians() * 0.5;
+///         let r = 3000.0 / b.cos() + if i % 2 == 1 { 20.0 } else { 0.0 };
+///         Point::new(r * b.cos(), r * b.sin())
+///     })
+///     .collect();
+/// assert!(scatter::sweeps_apart(&points, 2, 5.0));
+/// ```
+pub fn sweeps_apart(points: &[Point], sweeps: usize, sigma_r: f32) -> bool {
+    let across = (1..sweeps.min(3))
+        .filter_map(|span| at_span(points, span, sigma_r))
+        .fold(None, |m: Option<f32>, s| Some(m.map_or(s, |m| m.max(s))));
+    match (across, at_span(points, sweeps, sigma_r)) {
+        (Some(across), Some(within)) => across > APART * within,
+        (Some(across), None) => across > APART * sigma_r,
+        (None, _) => false,
+    }
+}
+
+/// The factor of [`sweeps_apart`].
+pub const APART: f32 = 1.5;
+
+/// [`sigma`] from the chords of points `span` beams before and after each point.
+fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
+    let mut hist = [0u16; BINS];
+    let mut total = 0usize;
+    let scale = PER_SIGMA / sigma_r;
+    for w in points.windows(2 * span + 1) {
+        let (Some(&a), Some(&m), Some(&b)) = (w.first(), w.get(span), w.last()) else {
+            continue;
+        };
+        if !(a.is_valid() && m.is_valid() && b.is_valid()) {
+            continue;
+        }
+        if let Some(e) = chord_residual(a, m, b) {
+            let bin = (math::abs(e) * scale) as usize;
+            if let Some(h) = hist.get_mut(bin.min(BINS - 1)) {
+                *h = h.saturating_add(1);
+                total += 1;
+            }
+        }
+    }
+    if total < MIN_SAMPLES {
+        return None;
+    }
+    // A first σ from the lower quartile of all residuals (too large where edges and clutter
+    // add large ones), then twice the median of those within 3 σ of the last.
+    let to_mm = sigma_r / PER_SIGMA;
+    let mut s = quantile_bin(&hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
+    let mut inliers = 0;
+    for _ in 0..2 {
+        let within = INLIER * RESIDUAL_PER_SIGMA * s / to_mm;
+        let bins = (within as usize).clamp(1, BINS - 1);
+        inliers = hist.iter().take(bins).map(|&h| usize::from(h)).sum();
+        s = quantile_bin(&hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
+    }
+    // Noise explains the scan only when most residuals are within 3 σ of it (a scan of
+    // clutter, edges and posts has a quartile but no noise level).
+    let noise = 2 * inliers >= total && inliers >= MIN_SAMPLES;
+    let bound = 1.0 + SIGNIFICANT / math::sqrt(inliers as f32);
+    (noise && s > bound * sigma_r).then_some(s.min(MAX_FACTOR * sigma_r))
+}
+
+/// Range residual of `m` from the chord `a`–`b` along `m`'s direction from the origin.
+fn chord_residual(a: Point, m: Point, b: Point) -> Option<f32> {
+    let r = math::sqrt(m.x * m.x + m.y * m.y);
+    let (cx, cy) = (b.x - a.x, b.y - a.y);
+    let chord = math::sqrt(cx * cx + cy * cy);
+    // The sine of the beam's angle to the chord, times r·chord.
+    let den = m.x * cy - m.y * cx;
+    if !(math::abs(den) > MIN_SINE * r * chord) {
+        return None;
+    }
+    // Beam direction m / r meets the chord at s = (a × b) / (d × c).
+    let s = (a.x * b.y - a.y * b.x) * r / den;
+    let e = r - s;
+    math::finite(e).then_some(e)
+}
+
+/// Where the histogram's cumulative count reaches `half`, in bins (linear within a bin).
+fn quantile_bin(hist: &[u16; BINS], half: f32) -> f32 {
+    let mut below = 0.0f32;
+    for (i, &h) in hist.iter().enumerate() {
+        let h = f32::from(h);
+        if below + h >= half && h > 0.0 {
+            return i as f32 + (half - below) / h;
+        }
+        below += h;
+    }
+    BINS as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points of a wall `rho` mm ahead, bearings ±45° at 0.5°, with range offsets `off(i)`.
+    fn wall(rho: f32, off: impl Fn(usize) -> f32) -> [Point; 181] {
+        core::array::from_fn(|i| {
+            let b = (i as f32 - 90.0) * 0.5f32.to_radians();
+            let (s, c) = math::sin_cos(b);
+            let r = rho / c + off(i);
+            Point::new(r * c, r * s)
+        })
+    }
+
+    /// Deterministic standard normal samples (Box–Muller over an LCG).
+    fn normals(seed: u32) -> impl FnMut() -> f32 {
+        let mut s = seed;
+        move || {
+            let mut u = || {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                ((s >> 8) as f32 + 0.5) / 16_777_216.0
+            };
+            let (u1, u2) = (u(), u());
+            libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(core::f32::consts::TAU * u2)
+        }
+    }
+
+    #[test]
+    fn noise_at_the_configured_sigma_keeps_it() {
+        for seed in 0..50 {
+            let mut n = normals(seed);
+            let noise: [f32; 181] = core::array::from_fn(|_| 5.0 * n());
+            let p = wall(3000.0, |i| noise[i]);
+            assert_eq!(sigma(&p, 5.0), None, "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn larger_noise_is_measured() {
+        // One scan's estimate within 40 %, the mean of 20 within 5 %.
+        for true_sigma in [8.0f32, 12.0, 16.0] {
+            let mut sum = 0.0;
+            for seed in 0..20 {
+                let mut n = normals(seed);
+                let noise: [f32; 181] = core::array::from_fn(|_| true_sigma * n());
+                let p = wall(4000.0, |i| noise[i]);
+                let s = sigma(&p, 2.5).unwrap_or(0.0) / true_sigma;
+                assert!((s - 1.0).abs() < 0.4, "σ {true_sigma}, seed {seed}: {s}");
+                sum += s;
+            }
+            assert!(
+                (sum / 20.0 - 1.0).abs() < 0.05,
+                "σ {true_sigma}: {}",
+                sum / 20.0
+            );
+        }
+    }
+
+    #[test]
+    fn a_noise_free_wall_at_any_incidence_has_no_scatter() {
+        // Bearings to ±45° on a wall at 1 m: incidence up to 45°, ranges 1000–1414 mm.
+        let p = wall(1000.0, |_| 0.0);
+        assert_eq!(sigma(&p, 1.0), None);
+        let mut worst = 0.0f32;
+        for w in p.windows(5) {
+            if let [a, _, m, _, b] = *w {
+                worst = worst.max(math::abs(chord_residual(a, m, b).unwrap_or(1e9)));
+            }
+        }
+        assert!(worst < 0.01, "{worst}");
+    }
+
+    #[test]
+    fn corners_and_gaps_are_a_minority_the_median_ignores() {
+        // Alternate 40-beam runs on walls at 2 m and 3 m: an edge every 40 beams; every tenth
+        // beam invalid.
+        let mut n = normals(9);
+        let noise: [f32; 181] = core::array::from_fn(|_| 5.0 * n());
+        let mut p = wall(2000.0, |i| {
+            noise[i] + if i / 40 % 2 == 0 { 0.0 } else { 1000.0 }
+        });
+        for q in p.iter_mut().step_by(10) {
+            *q = Point::INVALID;
+        }
+        assert_eq!(sigma(&p, 5.0), None);
+    }
+
+    #[test]
+    fn offsets_between_interleaved_sweeps_count_as_scatter() {
+        let mut n = normals(5);
+        let noise: [f32; 181] = core::array::from_fn(|_| 5.0 * n());
+        // Two sweeps 20 mm apart: each point 20 mm off its neighbours' chord.
+        let two = wall(3000.0, |i| noise[i] + if i % 2 == 0 { 20.0 } else { 0.0 });
+        let s = sigma(&two, 5.0).unwrap_or(0.0);
+        // |residual| ≈ 20 mm each: the median's σ is 20 mm / (0.6745 √1.5), noise aside.
+        let expected = 20.0 * MEDIAN_TO_SIGMA;
+        assert!((s / expected - 1.0).abs() < 0.15, "{s} vs {expected}");
+        // 4 mm apart: within the noise.
+        let close = wall(3000.0, |i| noise[i] + if i % 2 == 0 { 4.0 } else { 0.0 });
+        assert_eq!(sigma(&close, 5.0), None);
+    }
+
+    #[test]
+    fn sweeps_apart_only_when_one_beam_scatters_beyond_two() {
+        let mut n = normals(7);
+        let noise: [f32; 181] = core::array::from_fn(|_| n());
+        // Noise at σ_r, rough (white, 4 σ_r): not apart; the odd sweep 20 mm away: apart.
+        assert!(!sweeps_apart(&wall(3000.0, |i| 5.0 * noise[i]), 2, 5.0));
+        assert!(!sweeps_apart(&wall(3000.0, |i| 20.0 * noise[i]), 2, 5.0));
+        assert!(!sweeps_apart(&wall(3000.0, |i| 20.0 * noise[i]), 4, 5.0));
+        let odd = |i: usize| if i % 2 == 1 { 20.0 } else { 0.0 };
+        assert!(sweeps_apart(
+            &wall(3000.0, |i| 5.0 * noise[i] + odd(i)),
+            2,
+            5.0
+        ));
+        // Also on a rough wall, when the offset dominates.
+        let far = |i: usize| if i % 2 == 1 { 60.0 } else { 0.0 };
+        assert!(sweeps_apart(
+            &wall(3000.0, |i| 10.0 * noise[i] + far(i)),
+            2,
+            5.0
+        ));
+        // Four sweeps: points two beams apart are of different sweeps.
+        let four = |i: usize| [0.0, 20.0, -15.0, 30.0][i % 4];
+        let p = wall(3000.0, |i| 5.0 * noise[i] + four(i));
+        assert!(sweeps_apart(&p, 4, 5.0));
+        // Drifting by equal steps: 8 mm a sweep.
+        let p = wall(3000.0, |i| 5.0 * noise[i] + 8.0 * (i % 4) as f32);
+        assert!(sweeps_apart(&p, 4, 5.0));
+    }
+
+    #[test]
+    fn roughness_correlated_over_two_beams_shows_at_the_wider_chord() {
+        // Each pair of beams shares one offset (σ 20 mm): the one-beam chords see it only
+        // at every other point, the two-beam chords at every point.
+        let mut n = normals(6);
+        let noise: [f32; 181] = core::array::from_fn(|_| 20.0 * n());
+        let p = wall(3000.0, |i| noise[i / 2 * 2]);
+        let (one, two) = (at_span(&p, 1, 2.0), at_span(&p, 2, 2.0));
+        let two = two.unwrap_or(0.0);
+        assert!(one.unwrap_or(0.0) < two, "{one:?} {two}");
+        assert_eq!(sigma(&p, 2.0), Some(two));
+    }
+
+    #[test]
+    fn clutter_is_capped_or_refused_and_few_points_give_nothing() {
+        // 12 σ_r is capped at MAX_FACTOR; 100 σ_r is clutter, not noise.
+        let mut n = normals(4);
+        let noise: [f32; 181] = core::array::from_fn(|_| n());
+        let p = wall(4000.0, |i| 60.0 * noise[i]);
+        assert_eq!(sigma(&p, 5.0), Some(MAX_FACTOR * 5.0));
+        let p = wall(4000.0, |i| 500.0 * noise[i]);
+        assert_eq!(sigma(&p, 5.0), None);
+        // Every other pair of beams 6 mm nearer: every two-beam residual 12 mm; MIN_SAMPLES - 1
+        // triples give nothing.
+        let p = wall(2000.0, |i| if i / 2 % 2 == 0 { 6.0 } else { -6.0 });
+        let few = MIN_SAMPLES + 3;
+        assert_eq!(at_span(&p[..few], 2, 1.0), None);
+        assert_eq!(at_span(&p[..few + 1], 2, 1.0), Some(MAX_FACTOR));
+        let s = at_span(&p[..few + 1], 2, 4.0).unwrap_or(0.0);
+        // Within the histogram's bin (σ_r / 16 of median, 0.3 mm of σ here; the bound for
+        // 24 residuals is 3.04 σ_r).
+        assert!((s - 12.0 * MEDIAN_TO_SIGMA).abs() < 0.4, "{s}");
+        // Non-finite points never count.
+        let nan = [Point::new(f32::NAN, 0.0); 40];
+        assert_eq!(sigma(&nan, 5.0), None);
+    }
+}
