@@ -253,32 +253,13 @@ fn run(
     let sweeps = usize::from(scan.sweeps.max(1));
     let step = scan.geometry.angle_step;
     let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
-    let mut interleaved = sweeps > 1 && motion.is_none() && noise_rule;
-    // With scrutiny: declared sweeps whose offset shows (the scatter at one beam beyond that
-    // at two) are moved onto sweep 0 first; then a scan that scatters well beyond σ_r is
-    // extracted with its own σ.
-    let own;
-    let config = match config.scrutiny {
-        true => {
-            if interleaved && scatter::sweeps_apart(points, sweeps, config.sigma_r) {
-                stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
-                interleaved = false;
-            }
-            match scatter::sigma(points, config.sigma_r) {
-                Some(sigma) => {
-                    stats.scan_sigma_um = (sigma * 1000.0) as u32;
-                    own = config.with_sigma_r(sigma);
-                    &own
-                }
-                None => config,
-            }
-        }
-        false => config,
-    };
+    let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
+    if config.scrutiny {
+        return scrutinised(beams, (points, ranges, flags), scan, config, stats, out);
+    }
     let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);
     // Interleaved sweeps without odometry are moved onto sweep 0 (by their offset estimated
     // from the scan) when the marks or the fits show them out of place, and extracted again.
-    let interleaved = interleaved && rule.noise().is_some();
     let marks_say = {
         let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
         // §3.1–3.2, §3.6: mark points by prediction.
@@ -316,6 +297,66 @@ fn run(
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
     mark::mark(&mut pass, &rule);
     fit(&mut pass, &rule, config, out);
+    outcome(pass.stats)
+}
+
+/// [`run`] after the pre-processing, with [`Config::scrutiny`]: the walk marks the points with
+/// the scan's own σ when it scatters well beyond σ_r ([`scatter`]); declared sweeps whose
+/// offset shows (the scatter at one beam beyond that within one sweep) are then moved onto
+/// sweep 0 before the fits (and, for more than two sweeps, walked again), so that the lines
+/// lie where sweep 0 saw them rather than between the sweeps; the fits use the σ of the moved
+/// points.
+fn scrutinised(
+    beams: Beams<'_>,
+    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    scan: &Scan<'_>,
+    config: &Config,
+    stats: &mut Stats,
+    out: &mut dyn FeatureSink,
+) -> Result<Stats, ExtractError> {
+    let motion = scan.motion.filter(|m| m.is_valid());
+    let sweeps = usize::from(scan.sweeps.max(1));
+    let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
+    let apart = sweeps > 1
+        && motion.is_none()
+        && noise_rule
+        && scatter::sweeps_apart(points, sweeps, config.sigma_r);
+    let own = |points: &[Point], stats: &mut Stats| match scatter::sigma(points, config.sigma_r) {
+        Some(sigma) => {
+            stats.scan_sigma_um = (sigma * 1000.0) as u32;
+            config.with_sigma_r(sigma)
+        }
+        None => {
+            stats.scan_sigma_um = 0;
+            *config
+        }
+    };
+    let walk_config = own(points, stats);
+    let rule = Rule::new(&walk_config, scan.geometry.r_max, beams.gap_factor);
+    let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    mark::mark(&mut pass, &rule);
+    if !apart {
+        fit(&mut pass, &rule, &walk_config, out);
+        return outcome(pass.stats);
+    }
+    // With more than two sweeps, the walk's marks on the unmoved points cut segment starts
+    // into pieces of one period (measured: four sweeps drifting apart), so the moved points
+    // are walked again; so are they when the marks show the sweeps apart (many starts).
+    let walk_again = sweeps > 2 || sweeps::suspect(&pass, &rule);
+    let step = scan.geometry.angle_step;
+    stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
+    let fit_config = own(points, stats);
+    let rule = Rule::new(&fit_config, scan.geometry.r_max, beams.gap_factor);
+    if walk_again {
+        flags.iter_mut().for_each(|f| *f &= VALID);
+    }
+    // A new pass over the moved points: the walk's noted neighbours are gone, the check step
+    // reads every flag (the same outcome).
+    let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    if walk_again {
+        mark::mark(&mut pass, &rule);
+    }
+    fit(&mut pass, &rule, &fit_config, out);
     outcome(pass.stats)
 }
 

@@ -20,6 +20,10 @@ pub struct Args {
     /// Also write this Markdown report, with its plots (SVG) next to it.
     #[arg(long)]
     md: Option<PathBuf>,
+    /// Interleaved sweeps each scan is declared to be made of (1 to 4), or `auto`: a SICK
+    /// LMS2xx's (2 at 0.5°, 4 at 0.25°). pfe aligns declared sweeps whose offset shows.
+    #[arg(long, default_value = "1", value_parser = crate::cli::input::sweeps_arg)]
+    sweeps: crate::cli::input::Sweeps,
     /// The command named in the Markdown report.
     #[arg(long, default_value = "pfe realdata")]
     command: String,
@@ -29,7 +33,7 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let mut reports = Vec::new();
     for log in &args.logs {
-        let r = run_log(log, args.sigma_r, args.max_scans)?;
+        let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0)?;
         println!("{}", report::table(&r));
         reports.push(r);
     }

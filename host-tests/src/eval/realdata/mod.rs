@@ -31,7 +31,7 @@ use serde::Serialize;
 use crate::eval::score::quantile;
 use crate::formats::{InputError, Record};
 use crate::methods::baselines::{Acf, SplitMerge};
-use crate::methods::{Method, Pfe};
+use crate::methods::{Method, Pfe, ScanContext};
 
 pub use compare::{PairTally, Seen};
 pub use coverage::Coverage;
@@ -147,12 +147,14 @@ pub struct LogReport {
     pub methods: Vec<Summary>,
 }
 
-/// Runs `methods` over `records` (at most `max_scans`, 0 = all).
+/// Runs `methods` over `records` (at most `max_scans`, 0 = all), each scan declared as `sweeps`
+/// interleaved sweeps (`None`: a SICK LMS2xx's for its resolution).
 pub fn run_records(
     log: &str,
     records: impl Iterator<Item = Result<Record, InputError>>,
     methods: &mut [Box<dyn Method>],
     max_scans: usize,
+    sweeps: Option<u8>,
 ) -> anyhow::Result<LogReport> {
     let limit = if max_scans == 0 {
         usize::MAX
@@ -172,7 +174,13 @@ pub fn run_records(
             .pose
             .map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t] as Pose);
         for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
-            let ex = method.extract(&record.geometry, &record.ranges_mm);
+            let context = ScanContext {
+                odometry: None,
+                sweeps: usize::from(sweeps.unwrap_or_else(|| {
+                    crate::formats::sweeps_of(crate::formats::Format::Carmen, &record.geometry)
+                })),
+            };
+            let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
             tally.scans += 1;
             tally.coverage.add(&Coverage::of(
                 &record.geometry,
@@ -201,7 +209,12 @@ pub fn run_records(
 }
 
 /// Runs the four [`methods`] (σ_r = `sigma_r` mm) on the CARMEN log `path`.
-pub fn run_log(path: &Path, sigma_r: f32, max_scans: usize) -> anyhow::Result<LogReport> {
+pub fn run_log(
+    path: &Path,
+    sigma_r: f32,
+    max_scans: usize,
+    sweeps: Option<u8>,
+) -> anyhow::Result<LogReport> {
     let input = crate::formats::open_for(path, crate::formats::Format::Carmen, |r| r)
         .with_context(|| format!("opening {}", path.display()))?;
     let name = path
@@ -214,5 +227,5 @@ pub fn run_log(path: &Path, sigma_r: f32, max_scans: usize) -> anyhow::Result<Lo
         .trim_end_matches("-corrected")
         .to_string();
     let reader = crate::formats::carmen::Reader::new(input);
-    run_records(&name, reader, &mut methods(sigma_r), max_scans)
+    run_records(&name, reader, &mut methods(sigma_r), max_scans, sweeps)
 }
