@@ -6,7 +6,7 @@
 //! static RAM (data + bss + uninit) + stack high-water mark ≤ 32 KiB, with a 361-point scan
 //! capacity. Refreshes the `size` section of docs/PERFORMANCE.md.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use anyhow::{bail, Context, Result};
@@ -19,27 +19,6 @@ const RAM_BUDGET: u64 = 32 * 1024;
 /// Initialised statics, bytes: the extractor and the application start as all zeros (.bss),
 /// so only small driver and HAL statics belong here.
 const DATA_LIMIT: u64 = 1024;
-
-/// `llvm-size` from rustup's llvm-tools (installed on demand).
-fn llvm_size() -> Result<PathBuf> {
-    let find = || -> Option<PathBuf> {
-        let out = Command::new("rustc")
-            .args(["--print", "sysroot"])
-            .output()
-            .ok()?;
-        let sysroot = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
-        std::fs::read_dir(sysroot.join("lib/rustlib"))
-            .ok()?
-            .flatten()
-            .map(|e| e.path().join("bin").join("llvm-size"))
-            .find(|p| p.is_file())
-    };
-    if let Some(p) = find() {
-        return Ok(p);
-    }
-    util::run(Command::new("rustup").args(["component", "add", "llvm-tools"]))?;
-    find().context("llvm-size not found after `rustup component add llvm-tools`")
-}
 
 /// Section sizes of an ELF: (flash, static RAM, .data, a description).
 fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64, String)> {
@@ -102,7 +81,7 @@ pub fn run(args: &[String]) -> Result<()> {
     util::ensure_target()?;
     util::ensure_flip_link()?;
     util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
-    let tool = llvm_size()?;
+    let tool = util::llvm_tool("llvm-size")?;
     let base = target_dir().join("size");
     // Separate builds: the board's PAC turns on cortex-m-rt's `device` feature, which the
     // QEMU binary must not get.
