@@ -14,6 +14,7 @@ mod realdata;
 mod run_qemu;
 mod size;
 mod soak;
+mod stack;
 mod test;
 #[allow(dead_code)]
 mod util;
@@ -28,7 +29,9 @@ const HELP: &str = "cargo xtask <command> [args]
   eval          PFE paper/default vs ACF and split-and-merge on simulated scans -> docs/EVALUATION.md
   conformance   MRPT's CSickLaserSerial against the emulator on a pseudo-terminal
   bench-mcu     instruction counts on mps2-an386 under QEMU (budgets enforced)
-  size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced)
+  size          flash/RAM of both firmware binaries and the stack high-water mark (budgets enforced),
+                beside the static stack bound
+  stack         static worst-case stack bound of pfe-qemu (call graph of -Z emit-stack-sizes build)
   fuzz          every cargo-fuzz target for --seconds S
   mutants       cargo-mutants on pfe-core (--firmware: lms and output) [--shard K/N]
   no-panic      firmware build whose link fails if a panic path survives
@@ -55,6 +58,7 @@ fn main() -> Result<()> {
         "conformance" => conformance::run(rest),
         "bench-mcu" => bench_mcu::run(rest),
         "size" => size::run(rest),
+        "stack" => stack::run(rest),
         "fuzz" => fuzz::run(rest),
         "mutants" => mutants::run(rest),
         "no-panic" => no_panic::run(rest),

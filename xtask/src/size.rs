@@ -5,8 +5,12 @@
 //! Budgets (exit non-zero when broken): flash (vector table + text + rodata + data) ≤ 64 KiB;
 //! static RAM (data + bss + uninit) + stack high-water mark ≤ 32 KiB, with a 361-point scan
 //! capacity. Refreshes the `size` section of docs/PERFORMANCE.md.
+//!
+//! Also runs `cargo xtask stack` (its own `-Z emit-stack-sizes` build of pfe-qemu, about a
+//! minute) and prints the static worst-case stack bound beside the painted mark; a bound below
+//! the mark, or a `.text` that differs from the measured binary's, breaks the budgets.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use anyhow::{bail, Context, Result};
@@ -19,27 +23,6 @@ const RAM_BUDGET: u64 = 32 * 1024;
 /// Initialised statics, bytes: the extractor and the application start as all zeros (.bss),
 /// so only small driver and HAL statics belong here.
 const DATA_LIMIT: u64 = 1024;
-
-/// `llvm-size` from rustup's llvm-tools (installed on demand).
-fn llvm_size() -> Result<PathBuf> {
-    let find = || -> Option<PathBuf> {
-        let out = Command::new("rustc")
-            .args(["--print", "sysroot"])
-            .output()
-            .ok()?;
-        let sysroot = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
-        std::fs::read_dir(sysroot.join("lib/rustlib"))
-            .ok()?
-            .flatten()
-            .map(|e| e.path().join("bin").join("llvm-size"))
-            .find(|p| p.is_file())
-    };
-    if let Some(p) = find() {
-        return Ok(p);
-    }
-    util::run(Command::new("rustup").args(["component", "add", "llvm-tools"]))?;
-    find().context("llvm-size not found after `rustup component add llvm-tools`")
-}
 
 /// Section sizes of an ELF: (flash, static RAM, .data, a description).
 fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64, String)> {
@@ -77,6 +60,22 @@ fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64, String)> {
     Ok((flash, ram, data, detail.join(", ")))
 }
 
+/// Size of the section `name` of `elf` (0 when absent).
+fn section_size(tool: &Path, elf: &Path, name: &str) -> Result<u64> {
+    let out = Command::new(tool)
+        .arg("-A")
+        .arg(elf)
+        .output()
+        .with_context(|| format!("running {}", tool.display()))?;
+    Ok(String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find_map(|l| {
+            let mut it = l.split_whitespace();
+            (it.next() == Some(name)).then(|| it.next()?.parse().ok())?
+        })
+        .unwrap_or(0))
+}
+
 /// Replaces (or appends) the section between `<!-- name:start -->` and `<!-- name:end -->`.
 pub fn write_section(path: &Path, name: &str, body: &str) -> Result<()> {
     write_section_titled(path, name, &format!("`cargo xtask {name}`"), name, body)
@@ -102,7 +101,7 @@ pub fn run(args: &[String]) -> Result<()> {
     util::ensure_target()?;
     util::ensure_flip_link()?;
     util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
-    let tool = llvm_size()?;
+    let tool = util::llvm_tool("llvm-size")?;
     let base = target_dir().join("size");
     // Separate builds: the board's PAC turns on cortex-m-rt's `device` feature, which the
     // QEMU binary must not get.
@@ -153,6 +152,14 @@ pub fn run(args: &[String]) -> Result<()> {
             .unwrap_or_default()
     };
     let (equal, compared) = (field("equal="), field("compared="));
+    let mut broken = Vec::new();
+    // The static bound of the same firmware (its own -Z emit-stack-sizes build, about a
+    // minute), beside the painted mark: a bound below the mark would be a bug in the walk.
+    let (bound_elf, bound) = crate::stack::refresh()?;
+    let (text_measured, text_bound) = (
+        section_size(&tool, &qemu, ".text")?,
+        section_size(&tool, &bound_elf, ".text")?,
+    );
     let mut md = format!(
         "Release profile with `opt-level = \"{FIRMWARE_OPT_LEVEL}\"` (pfe-core at 3; LTO, 1 codegen unit), \
          `App<401, 48>` (extractor for every LMS200 variant) in a static, all zeros at start (.bss). Flash = vector table + text + rodata + data; \
@@ -162,7 +169,6 @@ pub fn run(args: &[String]) -> Result<()> {
          | binary | flash (bytes) | static RAM (bytes) | stack high-water (bytes) | RAM + stack | sections |\n\
          |---|---:|---:|---:|---:|---|\n"
     );
-    let mut broken = Vec::new();
     for (name, elf) in [
         ("pfe-qemu (mps2-an386)", &qemu),
         ("pfe-board (STM32F411)", &board),
@@ -192,6 +198,33 @@ pub fn run(args: &[String]) -> Result<()> {
                 ram + stack
             ));
         }
+    }
+    println!(
+        "pfe-qemu stack: painted high-water mark {stack} B, static worst-case bound {} B \
+         ({} B main path, {} B with an interrupt, then a HardFault)",
+        bound.total(),
+        bound.main.total,
+        bound.with_interrupt()
+    );
+    md.push_str(&format!(
+        "\nStatic worst-case stack bound of pfe-qemu (`cargo xtask stack`, section below): {} B \
+         ({} B on `main`'s path, {} B with an interrupt, then a HardFault on top), against the \
+         painted high-water mark of {stack} B.\n",
+        bound.total(),
+        bound.main.total,
+        bound.with_interrupt()
+    ));
+    if stack > bound.total() {
+        broken.push(format!(
+            "pfe-qemu: painted stack {stack} B above the static bound {} B (the walk missed a path)",
+            bound.total()
+        ));
+    }
+    if text_measured != text_bound {
+        broken.push(format!(
+            "pfe-qemu: .text of the -Z emit-stack-sizes build ({text_bound} B) differs from the \
+             measured binary's ({text_measured} B): the static bound is not of this binary"
+        ));
     }
     md.push_str(&format!(
         "\nThe same run compares the features the firmware sent (Cortex-M4F, QEMU) with pfe-core \

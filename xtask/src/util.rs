@@ -109,3 +109,24 @@ pub fn ensure_apt(program: &str, package: &str) -> Result<()> {
     }
     Ok(())
 }
+
+/// An LLVM tool of the rustup `llvm-tools` component (installed on demand).
+pub fn llvm_tool(name: &str) -> Result<PathBuf> {
+    let find = || -> Option<PathBuf> {
+        let out = Command::new("rustc")
+            .args(["--print", "sysroot"])
+            .output()
+            .ok()?;
+        let sysroot = PathBuf::from(String::from_utf8_lossy(&out.stdout).trim());
+        std::fs::read_dir(sysroot.join("lib/rustlib"))
+            .ok()?
+            .flatten()
+            .map(|e| e.path().join("bin").join(name))
+            .find(|p| p.is_file())
+    };
+    if let Some(p) = find() {
+        return Ok(p);
+    }
+    run(Command::new("rustup").args(["component", "add", "llvm-tools"]))?;
+    find().with_context(|| format!("{name} not found after `rustup component add llvm-tools`"))
+}

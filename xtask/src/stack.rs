@@ -1,0 +1,1148 @@
+//! `cargo xtask stack`: the static worst-case stack bound of the `pfe-qemu` firmware.
+//!
+//! Builds `pfe-qemu` as shipped (release, opt-level s) with `-Z emit-stack-sizes` into
+//! `target/stack`, reads each function's frame from `llvm-readobj --stack-sizes` and the call
+//! edges from `llvm-objdump -d`, and walks the call graph for the costliest path:
+//!
+//! - edges: `bl`, and `b`/`b<cond>`/`cbz`/`cbnz` into another function (tail calls);
+//! - a function without a `.stack_sizes` entry (precompiled `compiler_builtins`, a few that
+//!   lost theirs in LTO, hand-written assembly) gets the sum of every stack decrement in its
+//!   body: `push` (4 B per register), `vpush` (4 per s-, 8 per d-register),
+//!   `str rN, [sp, #-n]!`, `sub sp, #imm` (the prologue in practice; a sum over every path is an
+//!   upper bound);
+//! - errors, because the bound would not be sound: an indirect call or jump (`blx rN`,
+//!   `bx rN` other than `bx lr`, a load or move into `pc` that is not a return), a stack
+//!   adjusted by a register amount in a function without an entry, a branch into the middle
+//!   of another function, and a cycle (recursion), all only when reachable from a root;
+//! - exceptions on top of `main`'s path: the device interrupts and SysTick share one
+//!   priority (the firmware sets none, so all are 0 and none preempts another): the costlier
+//!   of their paths, plus the exception frame (104 B with the FPU context, + 4 B of alignment
+//!   the core may insert); then a HardFault (priority -1) on top, with its frame too.
+//!
+//! Writes the "Static worst-case stack bound" section of docs/PERFORMANCE.md.
+//! `cargo xtask size` calls [`refresh`] to print the bound beside the painted high-water mark.
+
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{bail, Context, Result};
+
+use crate::bench_mcu::{target_dir, FIRMWARE_OPT_LEVEL};
+use crate::util;
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+const BIN: &str = "pfe-qemu";
+/// Where `main`'s path starts (cortex-m-rt's `Reset` calls it with an empty stack).
+const MAIN: &str = "main";
+/// Handlers at the one priority every exception and interrupt of the firmware has (none is
+/// set): SysTick and the device interrupts (`DefaultHandler`, UART0's receive interrupt).
+const SAME_PRIORITY: [&str; 2] = ["SysTick", "DefaultHandler"];
+/// cortex-m-rt's HardFault entry (the trampoline that calls the user's handler).
+const HARD_FAULT: &str = "HardFault";
+/// Exception frame of a Cortex-M4F with the FPU context stacked: r0-r3, r12, lr, pc, xPSR,
+/// s0-s15, FPSCR and a reserved word (26 words).
+pub const EXCEPTION_FRAME: u64 = 104;
+/// With CCR.STKALIGN (reset value 1 on the Cortex-M4) the core aligns the frame to 8 bytes,
+/// inserting 4 bytes when `sp` was only 4-aligned (between two pushes of a prologue).
+pub const FRAME_ALIGNMENT: u64 = 4;
+
+/// One instruction of `llvm-objdump -d`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Insn {
+    pub addr: u32,
+    /// Encoding as printed (`b580`, `f002 fc96`).
+    pub bytes: String,
+    pub mnemonic: String,
+    pub operands: String,
+}
+
+/// A symbol's code as `llvm-objdump -d` prints it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Function {
+    pub addr: u32,
+    pub name: String,
+    pub insns: Vec<Insn>,
+}
+
+/// Parses `llvm-objdump -d` output: functions (symbol headers `0000abcd <name>:`) and their
+/// instructions.
+pub fn parse_disassembly(text: &str) -> Result<Vec<Function>> {
+    let mut out: Vec<Function> = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let ctx = || format!("objdump line {}: {line:?}", n + 1);
+        if let Some((addr, rest)) = line.split_once(" <") {
+            if !addr.starts_with(' ') && !addr.is_empty() {
+                if let (Ok(addr), Some(name)) =
+                    (u32::from_str_radix(addr, 16), rest.strip_suffix(">:"))
+                {
+                    out.push(Function {
+                        addr,
+                        name: name.to_string(),
+                        insns: Vec::new(),
+                    });
+                    continue;
+                }
+            }
+        }
+        let trimmed = line.trim_start();
+        let Some((addr, rest)) = trimmed.split_once(':') else {
+            continue;
+        };
+        if line.len() == trimmed.len() || addr.is_empty() {
+            continue; // headers such as "Disassembly of section .text:"
+        }
+        let Ok(addr) = u32::from_str_radix(addr, 16) else {
+            continue;
+        };
+        let mut fields = rest.split('\t');
+        let bytes = fields.next().unwrap_or("").trim().to_string();
+        let mnemonic = fields.next().unwrap_or("").trim().to_string();
+        let operands = fields.collect::<Vec<_>>().join(" ").trim().to_string();
+        let Some(f) = out.last_mut() else {
+            bail!("instruction before any symbol: {}", ctx());
+        };
+        f.insns.push(Insn {
+            addr,
+            bytes,
+            mnemonic,
+            operands,
+        });
+    }
+    // lld fills the gaps between functions with 0xd4d4 (a trap pattern that decodes as
+    // `bmi`); objdump lists it under the function before the gap.
+    for f in &mut out {
+        while f.insns.last().is_some_and(|i| i.bytes == "d4d4") {
+            f.insns.pop();
+        }
+    }
+    Ok(out)
+}
+
+/// Parses `llvm-objdump -t`: every symbol name of a function (`F`) with its address.
+pub fn parse_symbols(text: &str) -> HashMap<String, u32> {
+    let mut out = HashMap::new();
+    for line in text.lines() {
+        let Some((left, right)) = line.split_once('\t') else {
+            continue;
+        };
+        let mut l = left.split_whitespace();
+        let Some(Ok(addr)) = l.next().map(|a| u32::from_str_radix(a, 16)) else {
+            continue;
+        };
+        if !l.any(|flag| flag == "F") {
+            continue;
+        }
+        // "<size> [.hidden ]<name>"
+        let mut r = right.split_whitespace();
+        let _size = r.next();
+        let Some(name) = r.rfind(|w| *w != ".hidden") else {
+            continue;
+        };
+        out.insert(name.to_string(), addr & !1);
+    }
+    out
+}
+
+/// Parses `llvm-readobj --stack-sizes`: each entry's function names (aliases) and frame size.
+pub fn parse_stack_sizes(text: &str) -> Result<Vec<(Vec<String>, u64)>> {
+    let mut out = Vec::new();
+    let mut names: Option<Vec<String>> = None;
+    for line in text.lines() {
+        let line = line.trim();
+        if let Some(list) = line.strip_prefix("Functions:") {
+            let list = list.trim().trim_start_matches('[').trim_end_matches(']');
+            names = Some(list.split(',').map(|s| s.trim().to_string()).collect());
+        } else if let Some(size) = line.strip_prefix("Size:") {
+            let Some(n) = names.take() else {
+                bail!("readobj: a Size without Functions: {line:?}");
+            };
+            let size = size.trim();
+            let value = match size.strip_prefix("0x") {
+                Some(hex) => u64::from_str_radix(hex, 16),
+                None => size.parse(),
+            }
+            .with_context(|| format!("readobj: size {size:?}"))?;
+            out.push((n, value));
+        }
+    }
+    Ok(out)
+}
+
+/// How a function's frame was found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// Its `.stack_sizes` entry.
+    StackSizes,
+    /// The stack decrements of its code (no entry).
+    Prologue,
+}
+
+/// How a function reaches a callee.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Edge {
+    Call,
+    TailCall,
+}
+
+/// A function of the call graph.
+#[derive(Debug, Clone)]
+pub struct Node {
+    pub name: String,
+    pub addr: u32,
+    pub frame: u64,
+    pub source: Source,
+    /// Callees (node indices), each once, in code order.
+    pub callees: Vec<(usize, Edge)>,
+    /// Why a bound through this function would not be sound (reported when reachable).
+    pub problems: Vec<String>,
+}
+
+/// The call graph of a binary.
+#[derive(Debug, Clone)]
+pub struct Graph {
+    pub nodes: Vec<Node>,
+    /// Every function symbol's address (objdump names one symbol per address).
+    pub symbols: HashMap<String, u32>,
+}
+
+/// ARM condition codes (the suffixes of a conditional branch).
+const CONDS: [&str; 16] = [
+    "eq", "ne", "cs", "hs", "cc", "lo", "mi", "pl", "vs", "vc", "hi", "ls", "ge", "lt", "gt", "le",
+];
+
+/// `m` without a `.w`/`.n` width suffix.
+fn base(m: &str) -> &str {
+    m.strip_suffix(".w")
+        .or_else(|| m.strip_suffix(".n"))
+        .unwrap_or(m)
+}
+
+/// `m` is `op` or `op<cond>` (`op` + condition code).
+fn is_op(m: &str, op: &str) -> bool {
+    let m = base(m);
+    m.strip_prefix(op)
+        .is_some_and(|c| c.is_empty() || CONDS.contains(&c))
+}
+
+/// The first `0x…` number of a branch's operands (the target).
+fn target(operands: &str) -> Option<u32> {
+    let hex = operands.split("0x").nth(1)?;
+    let digits: String = hex.chars().take_while(char::is_ascii_hexdigit).collect();
+    u32::from_str_radix(&digits, 16).ok()
+}
+
+/// `#12`, `#0x4`, `#-0x4` → the number.
+fn imm(s: &str) -> Option<i64> {
+    let s = s.trim().strip_prefix('#')?;
+    let (neg, s) = match s.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, s),
+    };
+    let v = match s.strip_prefix("0x") {
+        Some(hex) => i64::from_str_radix(hex, 16).ok()?,
+        None => s.parse().ok()?,
+    };
+    Some(if neg { -v } else { v })
+}
+
+/// Bytes of a register list `{r4, r5, lr}` / `{d8-d10}` / `{s16, s17}`.
+fn reg_list_bytes(operands: &str) -> Result<u64> {
+    let inner = operands
+        .split_once('{')
+        .and_then(|(_, r)| r.split_once('}'))
+        .map(|(l, _)| l)
+        .with_context(|| format!("no register list in {operands:?}"))?;
+    let mut total = 0;
+    for reg in inner.split(',').map(str::trim).filter(|r| !r.is_empty()) {
+        let size = if reg.starts_with('d') { 8 } else { 4 };
+        let count = match reg.split_once('-') {
+            Some((a, b)) => {
+                let n = |r: &str| r.trim().get(1..).and_then(|d| d.parse::<u64>().ok());
+                match (n(a), n(b)) {
+                    (Some(a), Some(b)) if b >= a => b - a + 1,
+                    _ => bail!("register range {reg:?}"),
+                }
+            }
+            None => 1,
+        };
+        total += size * count;
+    }
+    Ok(total)
+}
+
+/// `pc` written from anything but the stack (a return pops it): `mov pc, rN`,
+/// `ldr pc, [rN]`, `ldm rN, {…, pc}`.
+fn loads_pc_indirectly(i: &Insn) -> bool {
+    let (m, ops) = (i.mnemonic.as_str(), i.operands.as_str());
+    if is_op(m, "pop") {
+        return false;
+    }
+    let first = ops.split([',', ' ']).next().unwrap_or("");
+    (first == "pc" && !ops.contains("[sp"))
+        || (m.starts_with("ldm") && ops.contains("pc}") && !first.starts_with("sp"))
+}
+
+/// Bytes the instruction takes off the stack (for functions without an entry); `Err` when
+/// the amount is not a constant.
+fn stack_decrement(i: &Insn) -> Result<u64> {
+    let m = base(&i.mnemonic);
+    let ops = i.operands.as_str();
+    if is_op(m, "push") || is_op(m, "vpush") {
+        return reg_list_bytes(ops);
+    }
+    if (m.starts_with("stmdb") || m.starts_with("vstmdb")) && ops.starts_with("sp!") {
+        return reg_list_bytes(ops);
+    }
+    if m.starts_with("str") || m.starts_with("vstr") {
+        // `str r11, [sp, #-4]!`, `strd r4, r5, [sp, #-8]!`
+        if let Some((_, addr)) = ops.split_once("[sp, ") {
+            if let Some(off) = addr.strip_suffix("]!").and_then(imm) {
+                return Ok(u64::try_from(-off).unwrap_or(0));
+            }
+        }
+        return Ok(0);
+    }
+    if m.starts_with("sub") || m.starts_with("add") {
+        let parts: Vec<&str> = ops.split(',').map(str::trim).collect();
+        let amount = match parts.as_slice() {
+            ["sp", x] | ["sp", "sp", x] => *x,
+            _ => return Ok(0), // sp is not the destination, or restored from a frame pointer
+        };
+        let Some(v) = imm(amount) else {
+            bail!("sp adjusted by a register: `{} {}`", i.mnemonic, i.operands);
+        };
+        let v = if m.starts_with("sub") { v } else { -v };
+        return Ok(u64::try_from(v).unwrap_or(0));
+    }
+    Ok(0)
+}
+
+/// Builds the call graph from the functions, their symbols' addresses and the stack-size
+/// entries.
+pub fn build(
+    functions: &[Function],
+    symbols: &HashMap<String, u32>,
+    sizes: &[(Vec<String>, u64)],
+) -> Graph {
+    let mut frame_at: HashMap<u32, u64> = HashMap::new();
+    for (names, size) in sizes {
+        if let Some(addr) = names.iter().find_map(|n| symbols.get(n)) {
+            frame_at.insert(*addr, *size);
+        }
+    }
+    let starts: BTreeMap<u32, usize> = functions
+        .iter()
+        .enumerate()
+        .map(|(k, f)| (f.addr, k))
+        .collect();
+    // The function holding `addr` (the last one starting at or before it).
+    let holder = |addr: u32| starts.range(..=addr).next_back().map(|(a, k)| (*a, *k));
+    let mut nodes = Vec::with_capacity(functions.len());
+    for (me, f) in functions.iter().enumerate() {
+        let end = functions.get(me + 1).map_or(u32::MAX, |n| n.addr);
+        let mut callees: Vec<(usize, Edge)> = Vec::new();
+        let mut problems = Vec::new();
+        let mut decrement = 0u64;
+        for i in &f.insns {
+            let m = i.mnemonic.as_str();
+            let shown = || format!("{:x}: `{} {}`", i.addr, i.mnemonic, i.operands);
+            let first_op = i.operands.split([',', ' ']).next().unwrap_or("");
+            if is_op(m, "blx") {
+                problems.push(format!("indirect call {}", shown()));
+            } else if is_op(m, "bx") {
+                if first_op != "lr" {
+                    problems.push(format!("indirect jump {}", shown()));
+                }
+            } else if is_op(m, "bl") || is_op(m, "b") || is_op(m, "cbz") || is_op(m, "cbnz") {
+                let Some(t) = target(&i.operands) else {
+                    problems.push(format!("branch without a target address {}", shown()));
+                    continue;
+                };
+                let call = is_op(m, "bl");
+                if !call && (f.addr..end).contains(&t) {
+                    continue; // within the function
+                }
+                match holder(t) {
+                    Some((start, k)) if start == t => {
+                        let edge = if call { Edge::Call } else { Edge::TailCall };
+                        if !callees.iter().any(|(c, _)| *c == k) {
+                            callees.push((k, edge));
+                        }
+                    }
+                    Some((start, k)) => problems.push(format!(
+                        "branch into {} at +{:#x} {}",
+                        functions.get(k).map_or("?", |g| g.name.as_str()),
+                        t - start,
+                        shown()
+                    )),
+                    None => problems.push(format!("branch outside every function {}", shown())),
+                }
+            } else if loads_pc_indirectly(i) {
+                problems.push(format!("indirect jump {}", shown()));
+            }
+            if !frame_at.contains_key(&f.addr) {
+                match stack_decrement(i) {
+                    Ok(n) => decrement += n,
+                    Err(e) => problems.push(format!("{e} at {:x}", i.addr)),
+                }
+            }
+        }
+        let (frame, source) = match frame_at.get(&f.addr) {
+            Some(s) => (*s, Source::StackSizes),
+            None => (decrement, Source::Prologue),
+        };
+        nodes.push(Node {
+            name: f.name.clone(),
+            addr: f.addr,
+            frame,
+            source,
+            callees,
+            problems,
+        });
+    }
+    Graph {
+        nodes,
+        symbols: symbols.clone(),
+    }
+}
+
+/// One function of a worst path: its node and how its caller reached it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Step {
+    pub node: usize,
+    pub edge: Option<Edge>,
+}
+
+/// The costliest path from a root.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WorstPath {
+    /// The name the walk started from (it may be an alias of the first step's function).
+    pub root: String,
+    pub steps: Vec<Step>,
+    pub total: u64,
+}
+
+impl Graph {
+    /// The node named `name`.
+    /// The node named `name`, or at the address of the symbol `name` (an alias).
+    pub fn find(&self, name: &str) -> Result<usize> {
+        let addr = self.symbols.get(name);
+        self.nodes
+            .iter()
+            .position(|n| n.name == name || Some(&n.addr) == addr)
+            .with_context(|| format!("no function `{name}` in the disassembly"))
+    }
+
+    /// The costliest path from the function (or alias) `name`.
+    pub fn worst_from(&self, name: &str) -> Result<WorstPath> {
+        let mut p = self.worst(self.find(name)?)?;
+        p.root = name.to_string();
+        Ok(p)
+    }
+
+    /// The costliest path from `root`; an error for a cycle or a problem on any reachable
+    /// function.
+    pub fn worst(&self, root: usize) -> Result<WorstPath> {
+        #[derive(Clone, Copy, PartialEq)]
+        enum State {
+            New,
+            Open,
+            Done,
+        }
+        struct Walk<'a> {
+            g: &'a Graph,
+            state: Vec<State>,
+            /// Costliest total from a node, and the callee it goes through.
+            best: Vec<(u64, Option<(usize, Edge)>)>,
+            stack: Vec<usize>,
+        }
+        impl Walk<'_> {
+            fn visit(&mut self, n: usize) -> Result<u64> {
+                match self.state.get(n) {
+                    Some(State::Done) => return Ok(self.best.get(n).map_or(0, |b| b.0)),
+                    Some(State::Open) => {
+                        let from = self.stack.iter().position(|s| *s == n).unwrap_or(0);
+                        let cycle: Vec<&str> = self
+                            .stack
+                            .get(from..)
+                            .unwrap_or(&[])
+                            .iter()
+                            .chain([&n])
+                            .map(|k| self.g.name(*k))
+                            .collect();
+                        bail!("recursion, no static bound: cycle {}", cycle.join(" -> "));
+                    }
+                    _ => {}
+                }
+                let node = self.g.nodes.get(n).context("node index")?;
+                if let Some(p) = node.problems.first() {
+                    let path: Vec<&str> = self
+                        .stack
+                        .iter()
+                        .chain([&n])
+                        .map(|k| self.g.name(*k))
+                        .collect();
+                    bail!(
+                        "no sound static bound: {p} in `{}` (reached by {})",
+                        node.name,
+                        path.join(" -> ")
+                    );
+                }
+                if let Some(s) = self.state.get_mut(n) {
+                    *s = State::Open;
+                }
+                self.stack.push(n);
+                let mut best: (u64, Option<(usize, Edge)>) = (node.frame, None);
+                for &(c, e) in &node.callees {
+                    let t = node.frame + self.visit(c)?;
+                    if t > best.0 {
+                        best = (t, Some((c, e)));
+                    }
+                }
+                self.stack.pop();
+                if let (Some(s), Some(b)) = (self.state.get_mut(n), self.best.get_mut(n)) {
+                    *s = State::Done;
+                    *b = best;
+                }
+                Ok(best.0)
+            }
+        }
+        let mut w = Walk {
+            g: self,
+            state: vec![State::New; self.nodes.len()],
+            best: vec![(0, None); self.nodes.len()],
+            stack: Vec::new(),
+        };
+        let total = w.visit(root)?;
+        let mut steps = vec![Step {
+            node: root,
+            edge: None,
+        }];
+        let mut at = root;
+        while let Some((c, e)) = w.best.get(at).and_then(|b| b.1) {
+            steps.push(Step {
+                node: c,
+                edge: Some(e),
+            });
+            at = c;
+        }
+        Ok(WorstPath {
+            root: self.name(root).to_string(),
+            steps,
+            total,
+        })
+    }
+
+    fn name(&self, n: usize) -> &str {
+        self.nodes.get(n).map_or("?", |x| x.name.as_str())
+    }
+}
+
+/// The bound: `main`'s path, the costliest handler at the shared priority, the HardFault.
+#[derive(Debug, Clone)]
+pub struct Bound {
+    pub graph: Graph,
+    pub main: WorstPath,
+    pub handler: WorstPath,
+    /// Each handler at the shared priority: name and path total.
+    pub handlers: Vec<(String, u64)>,
+    pub hard_fault: WorstPath,
+}
+
+impl Bound {
+    /// Computes the three paths.
+    pub fn of(graph: Graph) -> Result<Bound> {
+        let main = graph.worst_from(MAIN)?;
+        let mut handler: Option<WorstPath> = None;
+        let mut handlers = Vec::new();
+        for h in SAME_PRIORITY {
+            let p = graph.worst_from(h)?;
+            handlers.push((h.to_string(), p.total));
+            if handler.as_ref().is_none_or(|b| p.total > b.total) {
+                handler = Some(p);
+            }
+        }
+        let handler = handler.context("no interrupt handler")?;
+        let hard_fault = graph.worst_from(HARD_FAULT)?;
+        Ok(Bound {
+            graph,
+            main,
+            handler,
+            handlers,
+            hard_fault,
+        })
+    }
+
+    /// Bytes an exception adds: its handler's path and its frame.
+    fn exception(p: &WorstPath) -> u64 {
+        p.total + EXCEPTION_FRAME + FRAME_ALIGNMENT
+    }
+
+    /// `main`'s path plus the handler at the shared priority.
+    pub fn with_interrupt(&self) -> u64 {
+        self.main.total + Self::exception(&self.handler)
+    }
+
+    /// The bound: with a HardFault on top.
+    pub fn total(&self) -> u64 {
+        self.with_interrupt() + Self::exception(&self.hard_fault)
+    }
+
+    fn node(&self, s: &Step) -> Option<&Node> {
+        self.graph.nodes.get(s.node)
+    }
+
+    /// A path as terminal lines: frame, source, name.
+    fn lines(&self, p: &WorstPath, out: &mut String) {
+        for (k, s) in p.steps.iter().enumerate() {
+            let Some(n) = self.node(s) else { continue };
+            let how = match s.edge {
+                Some(Edge::TailCall) => "tail call ",
+                _ => "",
+            };
+            let src = match n.source {
+                Source::StackSizes => "",
+                Source::Prologue => " (frame from the prologue)",
+            };
+            let name = Self::shown(p, k, n);
+            let _ = writeln!(out, "  {:>6}  {how}{name} @ {:#x}{src}", n.frame, n.addr);
+        }
+    }
+
+    /// The terminal report.
+    pub fn text(&self) -> String {
+        let mut s = String::from("main path:\n");
+        self.lines(&self.main, &mut s);
+        let _ = writeln!(s, "  {:>6}  main path total", self.main.total);
+        let hname = self.handler_name();
+        let _ = writeln!(
+            s,
+            "\ninterrupt (one priority, none preempts another: {}; costliest: {hname}):",
+            self.handler_totals()
+        );
+        self.lines(&self.handler, &mut s);
+        let _ = writeln!(
+            s,
+            "  {:>6}  exception frame: {EXCEPTION_FRAME} (FPU context) + {FRAME_ALIGNMENT} (alignment)",
+            EXCEPTION_FRAME + FRAME_ALIGNMENT
+        );
+        let _ = writeln!(s, "  {:>6}  with {hname}", self.with_interrupt());
+        s.push_str("\nHardFault on top:\n");
+        self.lines(&self.hard_fault, &mut s);
+        let _ = writeln!(
+            s,
+            "  {:>6}  exception frame: {EXCEPTION_FRAME} (FPU context) + {FRAME_ALIGNMENT} (alignment)",
+            EXCEPTION_FRAME + FRAME_ALIGNMENT
+        );
+        let _ = writeln!(s, "  {:>6}  static worst-case stack bound", self.total());
+        s
+    }
+
+    /// `SysTick 8 B, DefaultHandler 40 B`.
+    fn handler_totals(&self) -> String {
+        self.handlers
+            .iter()
+            .map(|(n, t)| format!("{n} {t} B"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    fn handler_name(&self) -> &str {
+        &self.handler.root
+    }
+
+    /// The name a step is shown with: the root's own for the first.
+    fn shown<'a>(p: &'a WorstPath, k: usize, n: &'a Node) -> &'a str {
+        if k == 0 {
+            &p.root
+        } else {
+            &n.name
+        }
+    }
+
+    /// A path as one Markdown cell: `a` (frame) → `b` (frame) ….
+    fn cell(&self, p: &WorstPath) -> String {
+        p.steps
+            .iter()
+            .enumerate()
+            .filter_map(|(k, s)| {
+                let n = self.node(s)?;
+                let tail = if s.edge == Some(Edge::TailCall) {
+                    ", tail call"
+                } else {
+                    ""
+                };
+                let src = if n.source == Source::Prologue {
+                    ", prologue"
+                } else {
+                    ""
+                };
+                let name = short(Self::shown(p, k, n));
+                Some(format!("`{name}` ({}{src}{tail})", n.frame))
+            })
+            .collect::<Vec<_>>()
+            .join(" → ")
+    }
+
+    /// The docs section (without the heading).
+    pub fn markdown(&self, elf_note: &str) -> String {
+        let hname = self.handler_name();
+        format!(
+            "Static worst-case stack bound of the `pfe-qemu` firmware ({elf_note}), the binary \
+             whose painted high-water mark `cargo xtask size` measures (table above; `cargo \
+             xtask size` prints both).\n\n\
+             ```sh\n\
+             RUSTC_BOOTSTRAP=1 RUSTFLAGS=\"-Z emit-stack-sizes -C linker=flip-link\" \\\n  \
+             CARGO_PROFILE_RELEASE_OPT_LEVEL={FIRMWARE_OPT_LEVEL} CARGO_TARGET_DIR=target/stack \\\n  \
+             cargo build --release -p firmware-qemu --bin {BIN} --target {TARGET}\n\
+             llvm-readobj --stack-sizes …/{BIN}   # frame per function\n\
+             llvm-objdump -t …/{BIN}              # symbol addresses (aliases)\n\
+             llvm-objdump -d -C …/{BIN}           # call edges\n\
+             ```\n\n\
+             Walk: call edges are the `bl` instructions and the `b`/`b<cond>`/`cbz`/`cbnz` \
+             branches into another function (tail calls); the bound is the costliest path \
+             (frame sizes summed). A function without a `.stack_sizes` entry (the precompiled \
+             `compiler_builtins`, functions whose entry did not survive LTO, cortex-m-rt's \
+             assembly) gets the sum of the stack decrements in its code (`push`, `vpush`, \
+             `str rN, [sp, #-n]!`, `sub sp, #imm`): marked *prologue* below. The command fails \
+             on anything that would make the bound unsound when it is reachable: an indirect \
+             call or jump (`blx rN`, `bx rN`), `sp` adjusted by a register, a branch into the \
+             middle of a function, a cycle (recursion). None is reachable here. \
+             Exceptions: the firmware sets no priority, so SysTick and the device interrupts \
+             (`DefaultHandler`, UART0's receive interrupt) share priority 0 and do not preempt \
+             one another: the costlier of the two is stacked on `main`'s path, then a \
+             HardFault (priority -1), each with its exception frame ({EXCEPTION_FRAME} B with \
+             the FPU context, + {FRAME_ALIGNMENT} B the core may insert to align it to 8).\n\n\
+             | path | bytes |\n|---|---:|\n\
+             | {} | **{}** |\n\
+             | + {hname} (the costliest at priority 0: {}): {} + exception frame {EXCEPTION_FRAME} + {FRAME_ALIGNMENT} | {} |\n\
+             | + HardFault on top: {} + exception frame {EXCEPTION_FRAME} + {FRAME_ALIGNMENT} | **{}** |\n{}",
+            self.cell(&self.main),
+            self.main.total,
+            self.handler_totals(),
+            self.cell(&self.handler),
+            self.with_interrupt(),
+            self.cell(&self.hard_fault),
+            self.total(),
+            self.notes(),
+        )
+    }
+
+    /// Remarks on the main path's costliest known frames.
+    fn notes(&self) -> String {
+        let on_path = |what: &str| {
+            self.main.steps.iter().find_map(|s| {
+                let n = self.node(s)?;
+                n.name.contains(what).then_some(n.frame)
+            })
+        };
+        let mut s = String::new();
+        if let Some(frame) = on_path("rem_pio2f") {
+            let _ = write!(
+                s,
+                "\nThe {frame} B of libm's `rem_pio2f` are its large-argument reduction, which \
+                 runs only for |x| ≥ 2^28·π/2, an angle no scan produces: one reason the painted \
+                 high-water mark stays below the bound.\n"
+            );
+        }
+        s
+    }
+}
+
+/// A short form of a demangled name for the docs: generic arguments and `<… as …>` dropped,
+/// the last two path segments kept (`<firmware::lms::driver::Driver<…>>::init` →
+/// `Driver::init`).
+pub fn short(name: &str) -> String {
+    // Drop generic arguments: a `<` that follows an identifier character or `::`.
+    let mut out = String::new();
+    let mut depth = 0usize;
+    let mut prev = ' ';
+    for c in name.chars() {
+        if depth > 0 {
+            match c {
+                '<' => depth += 1,
+                '>' => depth -= 1,
+                _ => {}
+            }
+            continue;
+        }
+        if c == '<' && (prev.is_alphanumeric() || prev == '_' || prev == ':') {
+            depth = 1;
+            continue;
+        }
+        out.push(c);
+        prev = c;
+    }
+    let out = out.replace("::::", "::");
+    let out = out.trim_end_matches("::");
+    // `<A as B>::f` → `A::f`, `<A>::f` → `A::f`
+    let out = match out.strip_prefix('<').and_then(|r| r.split_once(">::")) {
+        Some((ty, f)) => format!("{}::{f}", ty.split(" as ").next().unwrap_or(ty)),
+        None => out.to_string(),
+    };
+    let segs: Vec<&str> = out.split("::").collect();
+    segs.get(segs.len().saturating_sub(2)..)
+        .unwrap_or(&[])
+        .join("::")
+}
+
+/// Runs `tool args elf`, returns its standard output.
+fn output(tool: &Path, args: &[&str], elf: &Path) -> Result<String> {
+    let out = Command::new(tool)
+        .args(args)
+        .arg(elf)
+        .output()
+        .with_context(|| format!("running {}", tool.display()))?;
+    if !out.status.success() {
+        bail!(
+            "{} {args:?} failed: {}",
+            tool.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// Builds `pfe-qemu` with `-Z emit-stack-sizes` into `$CARGO_TARGET_DIR/stack`; the ELF.
+pub fn build_elf() -> Result<PathBuf> {
+    util::ensure_target()?;
+    util::ensure_flip_link()?;
+    let dir = target_dir().join("stack");
+    let mut c = util::cargo();
+    c.args(["build", "--release", "-p", "firmware-qemu", "--bin", BIN])
+        .args(["--target", TARGET])
+        .env("RUSTC_BOOTSTRAP", "1")
+        .env("RUSTFLAGS", "-Z emit-stack-sizes -C linker=flip-link")
+        .env_remove("CARGO_ENCODED_RUSTFLAGS")
+        .env("CARGO_PROFILE_RELEASE_OPT_LEVEL", FIRMWARE_OPT_LEVEL)
+        .env("CARGO_TARGET_DIR", &dir)
+        .env("DEFMT_LOG", "info");
+    util::run(&mut c)?;
+    Ok(dir.join(TARGET).join("release").join(BIN))
+}
+
+/// The bound of `elf` (built with `-Z emit-stack-sizes`).
+pub fn analyse(elf: &Path) -> Result<Bound> {
+    let objdump = util::llvm_tool("llvm-objdump")?;
+    let readobj = util::llvm_tool("llvm-readobj")?;
+    let sizes = parse_stack_sizes(&output(&readobj, &["--stack-sizes"], elf)?)?;
+    if sizes.is_empty() {
+        bail!(
+            "{} has no .stack_sizes entries (built without -Z emit-stack-sizes?)",
+            elf.display()
+        );
+    }
+    let symbols = parse_symbols(&output(&objdump, &["-t"], elf)?);
+    let functions = parse_disassembly(&output(&objdump, &["-d", "-C"], elf)?)?;
+    Bound::of(build(&functions, &symbols, &sizes))
+}
+
+/// Builds, analyses, prints the report and rewrites the docs section; the ELF and its bound.
+pub fn refresh() -> Result<(PathBuf, Bound)> {
+    let elf = build_elf()?;
+    let bound = analyse(&elf)?;
+    println!(
+        "static worst-case stack bound of {}:\n\n{}",
+        elf.display(),
+        bound.text()
+    );
+    crate::size::write_section_titled(
+        &util::root().join("docs").join("PERFORMANCE.md"),
+        "stack",
+        "Static worst-case stack bound",
+        "stack",
+        &bound.markdown(&format!(
+            "release, opt-level {FIRMWARE_OPT_LEVEL}, {TARGET}"
+        )),
+    )?;
+    Ok((elf, bound))
+}
+
+/// Entry point: `cargo xtask stack [--functions]` (`--functions` also lists every function's
+/// frame, its source and its callees).
+pub fn run(args: &[String]) -> Result<()> {
+    let functions = match args {
+        [] => false,
+        [f] if f == "--functions" => true,
+        _ => bail!("usage: cargo xtask stack [--functions]"),
+    };
+    let (_, bound) = refresh()?;
+    if functions {
+        println!("\nevery function (frame, source, callees; ~ marks a tail call):");
+        for n in &bound.graph.nodes {
+            let callees: Vec<String> = n
+                .callees
+                .iter()
+                .filter_map(|(c, e)| {
+                    let c = bound.graph.nodes.get(*c)?;
+                    let tail = if *e == Edge::TailCall { "~" } else { "" };
+                    Some(format!("{tail}{}", short(&c.name)))
+                })
+                .collect();
+            let src = match n.source {
+                Source::StackSizes => "entry",
+                Source::Prologue => "prologue",
+            };
+            println!(
+                "  {:>6} {src:<8} {:#07x} {}{}{}",
+                n.frame,
+                n.addr,
+                n.name,
+                if callees.is_empty() { "" } else { " -> " },
+                callees.join(", ")
+            );
+            for p in &n.problems {
+                println!("         problem: {p}");
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `main` calls `work` (entry 16) and tail-calls `helper`; `work` calls `__aeabi_dmul`
+    /// (no entry: push 8 + vpush {d8, d9} 16 + sub 24 = 48); lld padding after `helper`.
+    const DIS: &str = "
+fw:	file format elf32-littlearm
+
+Disassembly of section .text:
+
+00000100 <main>:
+     100: b580         	push	{r7, lr}
+     102: f000 f805    	bl	0x110 <work>            @ imm = #0xa
+     106: 2800         	cmp	r0, #0x0
+     108: d0fc         	beq	0x104 <main+0x4>        @ imm = #-0x8
+     10a: e8bd 4080    	pop.w	{r7, lr}
+     10e: f000 b809    	b.w	0x124 <helper>          @ imm = #0x12
+
+00000110 <work>:
+     110: b580         	push	{r7, lr}
+     112: f000 f80b    	bl	0x12c <__aeabi_dmul>    @ imm = #0x16
+     116: bd80         	pop	{r7, pc}
+     118: 18 43 00 20  	.word	0x20004318
+     11c: bf00         	nop
+     11e: bf00         	nop
+     120: bf00         	nop
+     122: bf00         	nop
+
+00000124 <helper>:
+     124: b082         	sub	sp, #0x8
+     126: b002         	add	sp, #0x8
+     128: 4770         	bx	lr
+     12a: d4d4         	bmi	0xd6 <foo+0x2>          @ imm = #-0x58
+
+0000012c <__aeabi_dmul>:
+     12c: b580         	push	{r7, lr}
+     12e: ed2d 8b04    	vpush	{d8, d9}
+     132: b086         	sub	sp, #0x18
+     134: f84d bd04    	str	r11, [sp, #-4]!
+     138: b006         	add	sp, #0x18
+     13a: bd80         	pop	{r7, pc}
+";
+
+    /// `helper` is an alias of the entry that also names `other`.
+    const SYMS: &str = "
+SYMBOL TABLE:
+00000100 g     F .text	00000010 main
+00000111 l     F .text	00000014 _ZN4work17h0123456789abcdefE
+00000124 l     F .text	00000008 .hidden helper_alias
+0000012c l     F .text	00000010 __aeabi_dmul
+00000124 l       .text	00000000 $t
+";
+
+    const SIZES: &str = "
+StackSizes [
+  Entry {
+    Functions: [main]
+    Size: 0x8
+  }
+  Entry {
+    Functions: [_ZN4work17h0123456789abcdefE]
+    Size: 0x10
+  }
+  Entry {
+    Functions: [other, helper_alias]
+    Size: 0x8
+  }
+]
+";
+
+    fn graph(dis: &str) -> Graph {
+        let functions = parse_disassembly(dis).unwrap();
+        let sizes = parse_stack_sizes(SIZES).unwrap();
+        build(&functions, &parse_symbols(SYMS), &sizes)
+    }
+
+    #[test]
+    fn parses_readobj_and_symbols() {
+        let sizes = parse_stack_sizes(SIZES).unwrap();
+        assert_eq!(sizes.len(), 3);
+        assert_eq!(
+            sizes[2],
+            (vec!["other".to_string(), "helper_alias".to_string()], 8)
+        );
+        let syms = parse_symbols(SYMS);
+        assert_eq!(syms.get("_ZN4work17h0123456789abcdefE"), Some(&0x110));
+        assert_eq!(syms.get("helper_alias"), Some(&0x124));
+        assert_eq!(syms.get("$t"), None);
+    }
+
+    #[test]
+    fn parses_objdump_and_drops_lld_padding() {
+        let f = parse_disassembly(DIS).unwrap();
+        let names: Vec<&str> = f.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(names, ["main", "work", "helper", "__aeabi_dmul"]);
+        assert_eq!(f[0].insns.len(), 6);
+        assert_eq!(f[0].insns[1].mnemonic, "bl");
+        assert_eq!(f[0].insns[1].bytes, "f000 f805");
+        assert!(f[0].insns[1].operands.starts_with("0x110 <work>"));
+        assert_eq!(f[2].insns.len(), 3, "the d4d4 padding is not code");
+    }
+
+    #[test]
+    fn tail_call_and_prologue_frame() {
+        let g = graph(DIS);
+        let main = g.find("main").unwrap();
+        let callees: Vec<(&str, Edge)> = g.nodes[main]
+            .callees
+            .iter()
+            .map(|(c, e)| (g.nodes[*c].name.as_str(), *e))
+            .collect();
+        assert_eq!(
+            callees,
+            [("work", Edge::Call), ("helper", Edge::TailCall)],
+            "the beq inside main is no edge, the b.w to helper is a tail call"
+        );
+        let dmul = &g.nodes[g.find("__aeabi_dmul").unwrap()];
+        assert_eq!(dmul.source, Source::Prologue);
+        assert_eq!(dmul.frame, 8 + 16 + 24 + 4);
+        let helper = &g.nodes[g.find("helper").unwrap()];
+        assert_eq!((helper.frame, helper.source), (8, Source::StackSizes));
+        let p = g.worst(main).unwrap();
+        assert_eq!(p.total, 8 + 16 + 52);
+        let names: Vec<&str> = p
+            .steps
+            .iter()
+            .map(|s| g.nodes[s.node].name.as_str())
+            .collect();
+        assert_eq!(names, ["main", "work", "__aeabi_dmul"]);
+    }
+
+    #[test]
+    fn indirect_call_is_an_error_when_reachable() {
+        let dis = DIS.replace(
+            "     112: f000 f80b    	bl	0x12c <__aeabi_dmul>    @ imm = #0x16",
+            "     112: 4798         	blx	r3",
+        );
+        let g = graph(&dis);
+        let err = g.worst(g.find("main").unwrap()).unwrap_err().to_string();
+        assert!(
+            err.contains("indirect call") && err.contains("blx r3"),
+            "{err}"
+        );
+        assert!(err.contains("main -> work"), "{err}");
+        // Not reachable from __aeabi_dmul: fine.
+        assert!(g.worst(g.find("__aeabi_dmul").unwrap()).is_ok());
+        let bx = DIS.replace(
+            "     128: 4770         	bx	lr",
+            "     128: 4718         	bx	r3",
+        );
+        let g = graph(&bx);
+        assert!(g.worst(g.find("main").unwrap()).is_err());
+    }
+
+    #[test]
+    fn recursion_is_an_error() {
+        // __aeabi_dmul tail-calls work, which calls __aeabi_dmul.
+        let dis = DIS.replace(
+            "     13a: bd80         	pop	{r7, pc}",
+            "     13a: f7ff bfe9    	b.w	0x110 <work>",
+        );
+        let g = graph(&dis);
+        let err = g.worst(g.find("main").unwrap()).unwrap_err().to_string();
+        assert!(err.contains("cycle work -> __aeabi_dmul -> work"), "{err}");
+    }
+
+    #[test]
+    fn register_sp_adjustment_and_mid_function_branch_are_errors() {
+        let dis = DIS.replace(
+            "     132: b086         	sub	sp, #0x18",
+            "     132: ebad 0d03    	sub.w	sp, sp, r3",
+        );
+        let g = graph(&dis);
+        let err = g.worst(g.find("main").unwrap()).unwrap_err().to_string();
+        assert!(err.contains("sp adjusted by a register"), "{err}");
+        let dis = DIS.replace("b.w	0x124 <helper>", "b.w	0x126 <helper+0x2>");
+        let g = graph(&dis);
+        let err = g.worst(g.find("main").unwrap()).unwrap_err().to_string();
+        assert!(err.contains("branch into helper at +0x2"), "{err}");
+    }
+
+    #[test]
+    fn mnemonics() {
+        assert!(is_op("bl", "bl") && is_op("blne", "bl"));
+        assert!(!is_op("bls", "bl") && is_op("bls", "b"));
+        assert!(!is_op("blo", "bl") && is_op("blo", "b") && is_op("blt.w", "b"));
+        assert!(!is_op("blx", "bl") && is_op("blx", "blx") && !is_op("bic", "b"));
+        assert!(is_op("bxne", "bx") && !is_op("bx", "b"));
+        assert_eq!(reg_list_bytes("{r4, r5, r6, r7, lr}").unwrap(), 20);
+        assert_eq!(reg_list_bytes("{d8-d11}").unwrap(), 32);
+        assert_eq!(reg_list_bytes("{s16, s17}").unwrap(), 8);
+        let insn = |m: &str, o: &str| Insn {
+            addr: 0,
+            bytes: String::new(),
+            mnemonic: m.into(),
+            operands: o.into(),
+        };
+        assert!(loads_pc_indirectly(&insn("ldr.w", "pc, [r3, r0, lsl #2]")));
+        assert!(loads_pc_indirectly(&insn("mov", "pc, r2")));
+        assert!(loads_pc_indirectly(&insn("ldm.w", "r3, {r4, pc}")));
+        assert!(!loads_pc_indirectly(&insn("ldr", "pc, [sp], #4")));
+        assert!(!loads_pc_indirectly(&insn("ldm.w", "sp!, {r4, pc}")));
+        assert!(!loads_pc_indirectly(&insn("pop.w", "{r4, r5, pc}")));
+        assert!(!loads_pc_indirectly(&insn("ldr", "r0, [pc, #0x48]")));
+        assert_eq!(imm("#0xf38"), Some(0xf38));
+        assert_eq!(imm("#-4"), Some(-4));
+    }
+
+    #[test]
+    fn short_names() {
+        assert_eq!(
+            short("<firmware::lms::driver::Driver<firmware_qemu::scanner_uart::ScannerUart, firmware_qemu::time::Delay>>::init"),
+            "Driver::init"
+        );
+        assert_eq!(
+            short("pfe_qemu::fw::__cortex_m_rt_main"),
+            "fw::__cortex_m_rt_main"
+        );
+        assert_eq!(
+            short("<semihosting::io::stdio::Stdout as semihosting::io::Write>::write_all"),
+            "Stdout::write_all"
+        );
+        assert_eq!(short("defmt::export::fmt::<u32>"), "export::fmt");
+        assert_eq!(short("__aeabi_dmul"), "__aeabi_dmul");
+    }
+
+    #[test]
+    fn bound_adds_the_exception_frames() {
+        let g = graph(DIS);
+        let main = g.worst(g.find("main").unwrap()).unwrap();
+        let helper = g.worst(g.find("helper").unwrap()).unwrap();
+        let b = Bound {
+            graph: g.clone(),
+            main: main.clone(),
+            handler: helper.clone(),
+            handlers: vec![("helper".into(), 8)],
+            hard_fault: helper,
+        };
+        assert_eq!(b.with_interrupt(), 76 + 8 + 108);
+        assert_eq!(b.total(), 76 + 8 + 108 + 8 + 108);
+        assert!(b.text().contains("static worst-case stack bound"));
+        assert!(b.markdown("test").contains("| **76** |"));
+    }
+}
