@@ -10,7 +10,7 @@
 use pfe_core::Feature;
 
 use super::frame::{nis, FrameChange, LineObs, Pose};
-use super::refit::{refit_nis, Innovation};
+use super::refit::{correction, refit_nis, Innovation};
 use super::CircleObs;
 
 /// Shortest line counted, points.
@@ -104,6 +104,9 @@ pub struct PairTally {
     pub circles_matched: usize,
     /// Centre NIS of matched circles.
     pub circle_nis: Vec<f64>,
+    /// Centre NIS of matched circles after the pair's pose refit from its lines (pairs with
+    /// a refit only).
+    pub circle_nis_refit: Vec<f64>,
 }
 
 impl PairTally {
@@ -140,6 +143,8 @@ impl PairTally {
             self.refits += 1;
             self.nis_refit.extend(v);
         }
+        // The lines' pose correction, applied to the moved circle centres too.
+        let delta = correction(&innovations);
         for c in &a.circles {
             self.circles += 1;
             let moved = change.circle(c);
@@ -154,8 +159,18 @@ impl PairTally {
                 .min_by(|x, y| x.0.total_cmp(&y.0));
             if let Some((_, d, o)) = best {
                 self.circles_matched += 1;
-                self.circle_nis
-                    .extend(nis(d, &super::frame::add(&moved.cov, &o.cov)));
+                let s = super::frame::add(&moved.cov, &o.cov);
+                self.circle_nis.extend(nis(d, &s));
+                if let Some([dx, dy, dth]) = delta {
+                    // The extra motion δ of frame k+1 moves a point p to R(δθ) p + (δx, δy).
+                    let (sin, cos) = dth.sin_cos();
+                    let [mx, my] = moved.center;
+                    let r = [
+                        cos * mx - sin * my + dx - o.center[0],
+                        sin * mx + cos * my + dy - o.center[1],
+                    ];
+                    self.circle_nis_refit.extend(nis(r, &s));
+                }
             }
         }
     }

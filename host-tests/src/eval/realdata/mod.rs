@@ -102,6 +102,8 @@ pub struct Summary {
     pub circles_matched: usize,
     /// Median centre NIS of matched circles.
     pub circle_nis: f64,
+    /// Median centre NIS of matched circles after the pose refit of their pair's lines.
+    pub circle_nis_refit: f64,
 }
 
 impl Tally {
@@ -132,6 +134,7 @@ impl Tally {
             circles_reappear_pct: pct(p.circles_matched, p.circles),
             circles_matched: p.circles_matched,
             circle_nis: quantile(&p.circle_nis, 0.5),
+            circle_nis_refit: quantile(&p.circle_nis_refit, 0.5),
         }
     }
 }

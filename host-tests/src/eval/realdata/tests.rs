@@ -175,3 +175,27 @@ fn the_pose_refit_removes_a_pose_error() {
         "{refit_exact}"
     );
 }
+
+#[test]
+fn the_lines_pose_refit_removes_a_pose_error_from_the_circles() {
+    let exact = tally(&simulate(150, [0.0; 3]), 1.0);
+    let off = tally(&simulate(150, [30.0, -20.0, 0.01]), 1.0);
+    let raw = quantile(&off.circle_nis, 0.5);
+    let (refit, refit_exact) = (
+        quantile(&off.circle_nis_refit, 0.5),
+        quantile(&exact.circle_nis_refit, 0.5),
+    );
+    assert!(raw > 20.0, "a 36 mm / 10 mrad pose error must show: {raw}");
+    assert!(!off.circle_nis_refit.is_empty());
+    assert_eq!(off.circle_nis_refit.len(), exact.circle_nis_refit.len());
+    // The refit is fitted to the lines, whose noise it carries into the circles (not in
+    // their covariance): near the exact poses' figure, a little above the χ²₂ median.
+    assert!(
+        (refit / refit_exact - 1.0).abs() < 0.25,
+        "refit {refit} vs {refit_exact} with exact poses"
+    );
+    assert!(
+        refit_exact > CHI2_2_MEDIAN && refit_exact < 1.5 * CHI2_2_MEDIAN,
+        "{refit_exact}"
+    );
+}
