@@ -177,8 +177,9 @@ fn pose64(v: f64, omega: f64, t: f64) -> (f64, f64, f64) {
 /// A wall seen while the robot drives at 1 m/s and turns at 1 rad/s (the skew made large:
 /// beams 2.666 ms apart, 0.96 s a scan). The extracted line's variances are those of range
 /// noise along each beam from where the scanner was when it took it: f64 first-order
-/// propagation by finite differences of an f64 line fit (within 15 %: the extractor
-/// takes one scanner position for the segment).
+/// propagation by finite differences of an f64 line fit, within 4 % (the extractor takes one
+/// scanner position, its middle beam's, for the whole segment: 1 % off here; the position of
+/// another beam is up to 10 % off).
 #[test]
 fn a_deskewed_line_has_the_covariance_of_its_beams() {
     let g = ScanGeometry::LMS200_180_050;
@@ -236,7 +237,7 @@ fn a_deskewed_line_has_the_covariance_of_its_beams() {
     }
     let (ra, rr) = (f64::from(l.var_alpha) / va, f64::from(l.var_rho) / vr);
     assert!(
-        (0.85..1.15).contains(&ra) && (0.85..1.15).contains(&rr),
+        (0.96..1.04).contains(&ra) && (0.96..1.04).contains(&rr),
         "var_alpha {} vs {va:.3e} (×{ra:.3}), var_rho {} vs {vr:.3e} (×{rr:.3})",
         l.var_alpha,
         l.var_rho
