@@ -182,7 +182,18 @@ fn lm_step(pts: &[P64], c: (f64, f64, f64), lambda: f64) -> (f64, f64, f64) {
 /// accepted step (lower residual sum, positive radius) lowers λ to 0.3 λ (not below 10⁻⁷) and
 /// ends the refinement when it gained less than 10⁻⁵ of the sum.
 fn refine64(pts: &[P64], start: (f64, f64, f64), iterations: usize) -> (f64, f64, f64) {
+    refine64_counted(pts, start, iterations).0
+}
+
+/// [`refine64`] with the number of rejected tries (λ raised) and the length of the last
+/// accepted step.
+fn refine64_counted(
+    pts: &[P64],
+    start: (f64, f64, f64),
+    iterations: usize,
+) -> ((f64, f64, f64), usize, f64) {
     let (mut best, mut lambda) = (start, 1e-3f64);
+    let (mut rejected, mut last) = (0usize, 0.0f64);
     for _ in 0..iterations {
         let mut improved = false;
         for _ in 0..4 {
@@ -196,17 +207,19 @@ fn refine64(pts: &[P64], start: (f64, f64, f64), iterations: usize) -> (f64, f64
             let (old, new) = (sse64(pts, best), sse64(pts, cand));
             if new < old && cand.2 > 0.0 {
                 best = cand;
+                last = step;
                 lambda = (0.3 * lambda).max(1e-7);
                 improved = old - new > new * 1e-5;
                 break;
             }
+            rejected += 1;
             lambda *= 10.0;
         }
         if !improved {
             break;
         }
     }
-    best
+    (best, rejected, last)
 }
 
 fn max_err(a: (f64, f64, f64), b: (f64, f64, f64)) -> f64 {
@@ -271,6 +284,66 @@ fn refinement_takes_levenberg_marquardt_steps() {
     assert!(f64::from(geometric_sse(&pts, &refined)) <= best * (1.0 + 1e-4) + 1e-3);
     for d in [(0.5, 0.0, 0.0), (0.0, -0.5, 0.0), (0.0, 0.0, 0.5)] {
         assert!(sse64(&p64, (g.0 + d.0, g.1 + d.1, g.2 + d.2)) > best);
+    }
+}
+
+/// Starts from which the first Gauss–Newton step overshoots (the residual sum grows): the
+/// refinement must raise λ tenfold and try again, as the f64 reference does; and a scatter so
+/// large (σ = 50 mm, residual sum ~10⁵ mm²) that a gain measured as a ratio instead of a
+/// difference would stop it after one step.
+#[test]
+fn refinement_damps_a_failed_step_and_measures_its_gain() {
+    let mut noise = Noise::new(67);
+    let pts = f32s(&arc(
+        (3000.0, -400.0),
+        300.0,
+        (2.6, 3.4),
+        30,
+        2.0,
+        &mut noise,
+    ));
+    let p64 = f64s(&pts);
+    let mut damped = 0;
+    for start in [
+        (2800.0, -700.0, 200.0),
+        (2900.0, -700.0, 400.0),
+        (2800.0, -100.0, 400.0),
+        (3200.0, -700.0, 600.0),
+        (2900.0, -100.0, 200.0),
+        (3100.0, -100.0, 400.0),
+    ] {
+        let initial = circle(start.0, start.1, start.2);
+        for it in 1..=4 {
+            let (want, rejected, _) = refine64_counted(&p64, start, it);
+            damped += usize::from(it == 4 && rejected > 0);
+            let got = c64(&refine_circle(&pts, initial, it).unwrap());
+            assert!(
+                max_err(got, want) < 0.05,
+                "from {start:?}, {it} steps: {got:?}, want {want:?} ({rejected} rejected)"
+            );
+        }
+    }
+    assert!(damped >= 4, "{damped} starts made the reference raise λ");
+    let pts = f32s(&arc(
+        (1000.0, 2500.0),
+        1500.0,
+        (-2.0, -1.0),
+        60,
+        50.0,
+        &mut noise,
+    ));
+    let p64 = f64s(&pts);
+    let start = (1100.0, 2400.0, 1400.0);
+    assert!(sse64(&p64, start) > 1.5e5);
+    let (_, _, second) = refine64_counted(&p64, start, 2);
+    assert!(second > 0.1, "the second step moves {second} mm");
+    for it in 1..=4 {
+        let got = c64(&refine_circle(&pts, circle(start.0, start.1, start.2), it).unwrap());
+        let want = refine64(&p64, start, it);
+        assert!(
+            max_err(got, want) < 0.02,
+            "{it} steps: {got:?}, want {want:?}"
+        );
     }
 }
 
