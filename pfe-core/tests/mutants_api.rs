@@ -1,0 +1,414 @@
+//! Small public contracts that cargo-mutants found untested (docs/TESTING.md, "Mutation
+//! testing"), each against closed-form or counted truth: the scanner pose of a constant-
+//! velocity motion (the exact arc `x = v/ω sin ωt`, `y = v/ω (1 − cos ωt)`, in f64), a de-skewed
+//! point, `Point::norm`, which configurations are valid, a range corrected to zero, and the
+//! statistics of a scan whose interleaved sweeps were moved and extracted again.
+#![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
+
+mod common;
+
+use common::{cast, scan, Noise, Prim};
+use pfe_core::predict::WindowLine;
+use pfe_core::{
+    BeamTiming, Config, Extractor, Feature, Motion, NoiseModel, Point, RangeCorrection, Scan,
+    ScanGeometry, Threshold, Typing,
+};
+
+/// The exact pose in f64: heading ωt and the arc of radius v/ω (a straight line for ω = 0).
+fn pose64(v: f64, omega: f64, t: f64) -> (f64, f64, f64) {
+    let th = omega * t;
+    if omega == 0.0 {
+        (v * t, 0.0, 0.0)
+    } else {
+        (v / omega * th.sin(), v / omega * (1.0 - th.cos()), th)
+    }
+}
+
+#[test]
+fn pose_is_the_exact_arc_of_a_constant_velocity_motion() {
+    // Headings from 0 through the series range (|ωt| < 10⁻³) to well beyond it, both turn
+    // directions, forwards and backwards.
+    for &(v, omega) in &[
+        (1000.0f32, 0.0f32),
+        (1000.0, 1e-4),
+        (-700.0, 4e-4),
+        (1000.0, -9e-4),
+        (2000.0, 9.9e-4),
+        (500.0, 1.5e-3),
+        (800.0, 0.45),
+        (-300.0, -2.0),
+        (1200.0, 3.0),
+    ] {
+        for t in [0.0f32, 0.3, 1.0] {
+            let p = Motion::uniform(v, omega, 0.001).pose_at(t);
+            let (x, y, th) = pose64(f64::from(v), f64::from(omega), f64::from(t));
+            // f32 rounding: relative 5 × 10⁻⁷ of the distance travelled, and where the exact
+            // branch runs (|ωt| ≥ 10⁻³) the cancellation in 1 − cos of ~10⁻⁷ v/ω.
+            let travel = f64::from(v * t).abs();
+            let cancel = if (omega * t).abs() >= 1e-3 {
+                2e-7 * f64::from(v / omega).abs()
+            } else {
+                0.0
+            };
+            // (5 × 10⁻⁷: the series' θ²/6 term is 1.6 × 10⁻⁷ of x near |ωt| = 10⁻³, a
+            // term θ² instead 10⁻⁶.)
+            let tol = 5e-7 * travel + 1e-6;
+            let what = format!("v {v} ω {omega} t {t}: {p:?} vs ({x}, {y}, {th})");
+            assert!((f64::from(p.origin.x) - x).abs() <= tol, "x: {what}");
+            // y is second order in ωt: relative to itself.
+            assert!(
+                (f64::from(p.origin.y) - y).abs() <= 1e-5 * y.abs() + 1e-6 + cancel,
+                "y: {what}"
+            );
+            assert!(
+                (f64::from(p.theta) - th).abs() <= 1e-6 * th.abs() + 1e-9,
+                "θ: {what}"
+            );
+        }
+    }
+}
+
+#[test]
+fn pose_of_a_beam_is_the_pose_at_its_time_and_deskew_moves_the_point_with_it() {
+    // 0.5° LMS2xx: beam i at (i mod 2)·turn + (i div 2)·turn/360.
+    let m = Motion {
+        v: 600.0,
+        omega: 0.45,
+        timing: BeamTiming::lms2xx(0.5),
+    };
+    let turn = 1.0 / 75.0;
+    for i in [0usize, 1, 2, 7, 180, 361] {
+        let t = (i % 2) as f64 * turn + (i / 2) as f64 * turn / 360.0;
+        let (x, y, th) = pose64(600.0, 0.45, t);
+        let p = m.pose(i);
+        assert!(
+            (f64::from(p.origin.x) - x).abs() < 1e-3
+                && (f64::from(p.origin.y) - y).abs() < 1e-3
+                && (f64::from(p.theta) - th).abs() < 1e-6,
+            "beam {i}: {p:?} vs ({x}, {y}, {th})"
+        );
+        // The reading (range, bearing) of beam i: rotated by the heading, from the origin.
+        let (range, bearing) = (3000.0f32, -0.7f32 + 0.01 * i as f32);
+        let (point, origin) = m.deskew(i, range, bearing);
+        let b = f64::from(bearing) + th;
+        let want = (x + 3000.0 * b.cos(), y + 3000.0 * b.sin());
+        assert!(
+            (f64::from(point.x) - want.0).abs() < 2e-3
+                && (f64::from(point.y) - want.1).abs() < 2e-3,
+            "beam {i}: {point:?} vs {want:?}"
+        );
+        assert_eq!(origin, p.origin);
+    }
+}
+
+#[test]
+fn norm_is_the_distance_from_the_origin() {
+    for (x, y) in [(3.0f32, 4.0f32), (-5.0, 12.0), (0.0, -7.5), (1e-3, 0.0)] {
+        let want = f64::from(x).hypot(f64::from(y));
+        let got = f64::from(Point::new(x, y).norm());
+        assert!((got - want).abs() <= 1e-6 * want, "({x}, {y}): {got}");
+    }
+    assert_eq!(Point::new(0.0, 0.0).norm(), 0.0);
+}
+
+/// The default configuration with its noise model changed by `f`.
+fn with_model(f: impl Fn(&mut NoiseModel)) -> Config {
+    let mut c = Config::default();
+    let Threshold::Noise(mut m) = c.threshold else {
+        panic!("the default threshold is the noise model")
+    };
+    f(&mut m);
+    c.threshold = Threshold::Noise(m);
+    c
+}
+
+#[test]
+fn a_configuration_is_valid_only_when_every_parameter_is() {
+    assert!(Config::default().is_valid() && Config::paper().is_valid());
+    // Each noise-model parameter alone out of its range makes the configuration invalid.
+    let bad: [(&str, Config); 9] = [
+        ("k NaN", with_model(|m| m.k = f32::NAN)),
+        ("k ≤ 0", with_model(|m| m.k = 0.0)),
+        ("k_locate ∞", with_model(|m| m.k_locate = f32::INFINITY)),
+        ("floor NaN", with_model(|m| m.floor = f32::NAN)),
+        ("floor < 0", with_model(|m| m.floor = -1.0)),
+        ("window < 2", with_model(|m| m.window = 1)),
+        ("min_span NaN", with_model(|m| m.min_span = f32::NAN)),
+        ("arc_chi2 ∞", with_model(|m| m.arc_chi2 = f32::INFINITY)),
+        ("arc_max_radius 0", with_model(|m| m.arc_max_radius = 0.0)),
+    ];
+    for (what, c) in bad {
+        assert!(!c.is_valid(), "{what}");
+    }
+    // The edges of the ranges are valid.
+    assert!(with_model(|m| m.floor = 0.0).is_valid());
+    assert!(with_model(|m| m.window = 2).is_valid());
+    // The paper's threshold, the typing and the shared parameters.
+    let mut c = Config::paper();
+    c.threshold = Threshold::Paper {
+        d0: 0.0,
+        lambda: 2.0,
+    };
+    assert!(!c.is_valid());
+    c.threshold = Threshold::Paper {
+        d0: 50.0,
+        lambda: f32::NAN,
+    };
+    assert!(!c.is_valid());
+    let mut c = Config::paper();
+    c.typing = Typing::MeanDistance { d_f: -1.0 };
+    assert!(!c.is_valid());
+    let mut c = Config::default();
+    c.typing = Typing::CompareFits {
+        chi2: 25.0,
+        ratio: f32::NAN,
+        max_radius: 2000.0,
+    };
+    assert!(!c.is_valid());
+    assert!(!Config::default().with_sigma_r(0.0).is_valid());
+    let mut c = Config::default();
+    c.min_points = 1;
+    assert!(!c.is_valid());
+}
+
+#[test]
+fn a_reading_corrected_to_zero_range_is_dropped() {
+    // The correction subtracts 100 mm: a reading of 100 mm is at the scanner, one of 60 mm
+    // behind it; neither is a point. The rest of the wall stays.
+    let g = ScanGeometry::LMS200_180_050;
+    let mut ranges: Vec<f32> = (0..361)
+        .map(|i| {
+            let b = g.bearing(i);
+            if b.abs() < 1.0 {
+                100.0 + 3000.0 / b.cos()
+            } else {
+                f32::NAN
+            }
+        })
+        .collect();
+    let valid = ranges.iter().filter(|r| r.is_finite()).count();
+    ranges[180] = 100.0;
+    ranges[181] = 60.0;
+    let corr = RangeCorrection {
+        coeffs: [100.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        scale: 8000.0,
+    };
+    let mut ex = Extractor::<361, 8>::new();
+    let stats = ex
+        .extract(
+            &Scan::from_mm(g, &ranges),
+            &Config::default().with_correction(corr),
+        )
+        .unwrap();
+    assert_eq!(stats.valid, valid - 2);
+    assert!(!ex.points()[180].is_valid() && !ex.points()[181].is_valid());
+    assert!(ex.points()[179].is_valid() && ex.points()[182].is_valid());
+}
+
+#[test]
+fn statistics_survive_the_alignment_of_interleaved_sweeps() {
+    // A room 6 m × 5 m seen by an LMS200 at 0.5° (two sweeps), the odd sweep from 8 mm further
+    // forward and turned 6 mrad: the sweeps are out of place, the extractor moves the odd one
+    // and extracts again. Its statistics still count every reading and valid point.
+    let g = ScanGeometry::LMS200_180_050;
+    let room = |ox: f64, oy: f64, th: f64| {
+        let (s, c) = th.sin_cos();
+        let to = |x: f64, y: f64| {
+            let (dx, dy) = (x - ox, y - oy);
+            (c * dx + s * dy, -s * dx + c * dy)
+        };
+        let corners = [
+            to(-1500.0, -2000.0),
+            to(4500.0, -2000.0),
+            to(4500.0, 3000.0),
+            to(-1500.0, 3000.0),
+        ];
+        (0..4)
+            .map(|k| {
+                let (a, b) = (corners[k], corners[(k + 1) % 4]);
+                Prim::Seg(a.0, a.1, b.0, b.1)
+            })
+            .collect::<Vec<_>>()
+    };
+    let sweeps = [room(0.0, 0.0, 0.0), room(8.0, 0.0, 0.006)];
+    let ranges: Vec<f32> = (0..361)
+        .map(|i| match cast(&sweeps[i % 2], f64::from(g.bearing(i))) {
+            // Beams past 7.9 m (none here) and one beam in ten missing.
+            Some((t, _)) if t < 7900.0 && i % 10 != 3 => t as f32,
+            _ => f32::NAN,
+        })
+        .collect();
+    let valid = ranges.iter().filter(|r| r.is_finite()).count();
+    // Without the check step every prediction is the walk's: the count is the marking passes'.
+    let mut config = Config::default();
+    config.check_step = false;
+    let mut ex = Extractor::<361, 128>::new();
+    let stats = ex
+        .extract(&Scan::from_mm(g, &ranges).with_sweeps(2), &config)
+        .unwrap();
+    assert_eq!(stats.sweeps_aligned, 1, "{stats:?}");
+    assert_eq!((stats.readings, stats.valid), (361, valid), "{stats:?}");
+    // Its predictions are the first marking's (the same readings taken as one sweep) and the
+    // second's, on points in place (about those of the room seen from one pose).
+    let first = ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+    let still: Vec<f32> = (0..361)
+        .map(|i| match cast(&sweeps[0], f64::from(g.bearing(i))) {
+            Some((t, _)) if t < 7900.0 && i % 10 != 3 => t as f32,
+            _ => f32::NAN,
+        })
+        .collect();
+    let second = ex.extract(&Scan::from_mm(g, &still), &config).unwrap();
+    let extra = stats.predictions as f64 - first.predictions as f64;
+    assert!(
+        (extra - second.predictions as f64).abs() <= 0.1 * second.predictions as f64,
+        "{stats:?}\nfirst {first:?}\nin place {second:?}"
+    );
+}
+
+/// The variance factor of a prediction in f64 from its definition,
+/// `1 + (1/n + u²/S_uu) sin²ϕ̄ / sin²ϕ`: the window's principal axis, the beam from `origin`
+/// through `target`, u the meeting point's position along the axis from the centroid, ϕ̄ the
+/// incidence at the window's last point, ϕ the beam's.
+fn var_factor64(window: &[(f64, f64)], origin: (f64, f64), target: (f64, f64)) -> f64 {
+    let n = window.len() as f64;
+    let cx = window.iter().map(|p| p.0).sum::<f64>() / n;
+    let cy = window.iter().map(|p| p.1).sum::<f64>() / n;
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in window {
+        sxx += (p.0 - cx).powi(2);
+        syy += (p.1 - cy).powi(2);
+        sxy += (p.0 - cx) * (p.1 - cy);
+    }
+    let th = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let (tx, ty) = (th.cos(), th.sin());
+    let (nx, ny) = (-ty, tx);
+    let (bx, by) = (target.0 - origin.0, target.1 - origin.1);
+    let r = bx.hypot(by);
+    let (dx, dy) = (bx / r, by / r);
+    let dn = dx * nx + dy * ny;
+    let t = ((cx - origin.0) * nx + (cy - origin.1) * ny) / dn;
+    let u = (origin.0 + t * dx - cx) * tx + (origin.1 + t * dy - cy) * ty;
+    let suu: f64 = window
+        .iter()
+        .map(|p| ((p.0 - cx) * tx + (p.1 - cy) * ty).powi(2))
+        .sum();
+    let last = window[window.len() - 1];
+    let (lx, ly) = (last.0 - origin.0, last.1 - origin.1);
+    let sin_last = (lx * nx + ly * ny).abs() / lx.hypot(ly);
+    1.0 + (1.0 / n + u * u / suu) * sin_last.powi(2) / dn.powi(2)
+}
+
+#[test]
+fn a_window_line_predicts_from_a_moved_scanner_as_from_the_origin() {
+    // Windows of 3..=6 points on a wall, the scanner away from the origin (a de-skewed scan):
+    // the variance factor is the definition's, from that scanner.
+    let mut noise = Noise::new(61);
+    for &(origin, x0, y0, ang) in &[
+        ((400.0f64, -250.0f64), 2500.0f64, 300.0f64, 1.9f64),
+        ((-600.0, 900.0), 1200.0, 2600.0, -0.3),
+        ((1500.0, 1500.0), 3000.0, -1000.0, 2.4),
+    ] {
+        for n in 3..=6usize {
+            let window: Vec<(f64, f64)> = (0..n)
+                .map(|i| {
+                    let (s, e) = (70.0 * i as f64, 3.0 * noise.gauss());
+                    (
+                        x0 + s * ang.cos() - e * ang.sin(),
+                        y0 + s * ang.sin() + e * ang.cos(),
+                    )
+                })
+                .collect();
+            let s = 70.0 * n as f64;
+            let target = (
+                x0 + s * ang.cos() - 25.0 * ang.sin(),
+                y0 + s * ang.sin() + 25.0 * ang.cos(),
+            );
+            let w32: Vec<Point> = window
+                .iter()
+                .map(|p| Point::new(p.0 as f32, p.1 as f32))
+                .collect();
+            let o32 = Point::new(origin.0 as f32, origin.1 as f32);
+            let line = WindowLine::fit(&w32, o32).unwrap();
+            let (bx, by) = (target.0 - origin.0, target.1 - origin.1);
+            let p = line.predict(o32, bx as f32, by as f32, bx.hypot(by) as f32);
+            let want = var_factor64(&window, origin, target);
+            let got = f64::from(p.var_factor);
+            assert!(
+                (got - want).abs() <= 2e-3 * want,
+                "origin {origin:?}, n {n}: var_factor {got} vs {want}"
+            );
+        }
+    }
+}
+
+/// Stated over empirical (var_rho, cov_alpha_rho) of the line of a wall 2.5 m ahead, off-centre
+/// (ρ and α correlated), range noise 9 mm told as 5 mm, over 400 scans.
+fn stated_over_spread(config: &Config) -> [f64; 2] {
+    let g = ScanGeometry::LMS200_180_050;
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let mut ex = Extractor::<361, 64>::new();
+    let wall = [Prim::Seg(2500.0, -300.0, 2200.0, 1500.0)];
+    let (exact, _) = scan(&wall, start, step, 361, 8000.0);
+    let mut noise = Noise::new(2025);
+    let (mut fits, mut stated) = (Vec::new(), [0.0f64; 2]);
+    for _ in 0..400 {
+        let ranges: Vec<f32> = exact
+            .iter()
+            .map(|&r| (f64::from(r) + 9.0 * noise.gauss()) as f32)
+            .collect();
+        ex.extract(&Scan::from_mm(g, &ranges), config).unwrap();
+        if let [Feature::Line(l)] = ex.features() {
+            fits.push((f64::from(l.alpha), f64::from(l.rho)));
+            stated[0] += f64::from(l.var_rho);
+            stated[1] += f64::from(l.cov_alpha_rho);
+        }
+    }
+    let n = fits.len() as f64;
+    assert!(n >= 250.0, "{n} scans one line");
+    let (ma, mr) = (
+        fits.iter().map(|f| f.0).sum::<f64>() / n,
+        fits.iter().map(|f| f.1).sum::<f64>() / n,
+    );
+    let var_rho = fits.iter().map(|f| (f.1 - mr).powi(2)).sum::<f64>() / (n - 1.0);
+    let cov = fits.iter().map(|f| (f.0 - ma) * (f.1 - mr)).sum::<f64>() / (n - 1.0);
+    [stated[0] / n / var_rho, stated[1] / n / cov]
+}
+
+#[test]
+fn a_line_covariance_follows_the_real_scatter_in_rho_too() {
+    // With scrutiny (the default) the stated var_rho and cov_alpha_rho, scaled by the fit's
+    // reduced χ², match the spread within a factor 1.5; without, they are the 5 mm model's:
+    // (5/9)² = 0.31 of it (documented: the scaling is one of scrutiny's checks).
+    for (what, ratio) in ["var_rho", "cov_alpha_rho"]
+        .into_iter()
+        .zip(stated_over_spread(&Config::default()))
+    {
+        assert!(
+            (1.0 / 1.5..=1.5).contains(&ratio),
+            "{what}: stated / spread {ratio:.2}"
+        );
+    }
+    for (what, ratio) in ["var_rho", "cov_alpha_rho"]
+        .into_iter()
+        .zip(stated_over_spread(&Config::default().with_scrutiny(false)))
+    {
+        assert!(
+            (0.2..0.45).contains(&ratio),
+            "without scrutiny, {what}: stated / spread {ratio:.2}"
+        );
+    }
+}
+
+#[test]
+fn a_scan_geometry_needs_a_positive_maximum_range() {
+    let mut g = ScanGeometry::LMS200_180_050;
+    assert!(g.is_valid());
+    g.r_max = 0.0;
+    assert!(!g.is_valid());
+    let ranges = [1000.0f32; 361];
+    let mut ex = Extractor::<361, 8>::new();
+    assert_eq!(
+        ex.extract(&Scan::from_mm(g, &ranges), &Config::default()),
+        Err(pfe_core::ExtractError::InvalidGeometry)
+    );
+}
