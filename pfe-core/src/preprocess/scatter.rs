@@ -321,6 +321,40 @@ mod tests {
     }
 
     #[test]
+    fn the_larger_scale_wins_and_both_sides_of_apart_are_seen() {
+        let mut n = normals(11);
+        let noise: [f32; 181] = core::array::from_fn(|_| n());
+        // Sweeps 30 mm apart over 10 mm of noise, σ_r 3 mm: both scales significant, the
+        // one-beam scatter far larger.
+        let p = wall(3000.0, |i| {
+            10.0 * noise[i] + if i % 2 == 0 { 30.0 } else { 0.0 }
+        });
+        let (one, two) = (at_span(&p, 1, 3.0), at_span(&p, 2, 3.0));
+        let (Some(one), Some(two)) = (one, two) else {
+            panic!("{one:?} {two:?}");
+        };
+        assert!(one > 1.5 * two, "{one} {two}");
+        assert_eq!(sigma(&p, 3.0), Some(one));
+        assert!(sweeps_apart(&p, 2, 3.0));
+    }
+
+    #[test]
+    fn a_chord_along_the_beam_gives_no_residual() {
+        // Three points on a line through (0, 3000) at angle φ to the beam along +y.
+        let along = |phi: f32, e: f32| {
+            let (s, c) = math::sin_cos(phi);
+            let at = |t: f32| Point::new(t * s, 3000.0 + t * c);
+            chord_residual(at(-100.0), Point::new(0.0, 3000.0 + e), at(100.0))
+        };
+        // sin 3° = 0.052 < 0.1: refused; at 10°, 30° and 90° the residual is the offset.
+        assert_eq!(along(3f32.to_radians(), 5.0), None);
+        for deg in [10.0f32, 30.0, 90.0] {
+            let e = along(deg.to_radians(), 5.0).unwrap_or(f32::NAN);
+            assert!((e - 5.0).abs() < 0.01, "{deg}°: {e}");
+        }
+    }
+
+    #[test]
     fn roughness_correlated_over_two_beams_shows_at_the_wider_chord() {
         // Each pair of beams shares one offset (σ 20 mm): the one-beam chords see it only
         // at every other point, the two-beam chords at every point.
