@@ -7,10 +7,14 @@
 //! grazing incidence, its points too far apart to predict one another) that together lie on
 //! one line within the noise are joined into one segment.
 
+use heapless::Vec;
+
 use crate::classify::{self, arc::arc_fit};
-use crate::config::Config;
+use crate::config::{Config, Typing};
 use crate::extractor::FeatureSink;
-use crate::fit::run::{line_prefix, on_one_line};
+use crate::feature::Feature;
+use crate::fit::line::fit_line;
+use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::mark::{NoiseRule, Rule};
 use crate::pass::Pass;
@@ -179,7 +183,12 @@ fn join_lines(
         a += n;
     }
 }
-/// Marks, types and fits (when long enough) the segment `s..=e`.
+/// Most pieces waiting while a segment is split at corners the walk left unmarked.
+const PIECES: usize = 8;
+
+/// Marks, types and fits (when long enough) the segment `s..=e`. In the default mode a line
+/// that two lines explain far better (a corner the walk did not mark, e.g. a rounded one it
+/// followed as an arc) is split there first, each piece typed again.
 fn emit<const SCRUTINY: bool>(
     pass: &mut Pass<'_>,
     s: usize,
@@ -187,21 +196,72 @@ fn emit<const SCRUTINY: bool>(
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
+    if !SCRUTINY {
+        let feature = typed::<false>(pass, s, e, config);
+        place(pass, s, e, feature, out);
+        return;
+    }
+    let mut todo: Vec<(usize, usize), PIECES> = Vec::new();
+    let _ = todo.push((s, e));
+    while let Some((s, e)) = todo.pop() {
+        let feature = typed::<true>(pass, s, e, config);
+        if todo.len() + 2 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
+            if let Some(k) = corner(pass, s, e, config) {
+                // Second piece first: the first is emitted first.
+                let _ = todo.push((s + k, e));
+                let _ = todo.push((s, s + k - 1));
+                continue;
+            }
+        }
+        place(pass, s, e, feature, out);
+    }
+}
+
+/// The feature of the segment `s..=e`: `None` when it is short, `Some(None)` when its fit
+/// failed.
+fn typed<const SCRUTINY: bool>(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> Option<Option<Feature>> {
+    (e + 1 - s >= config.min_points).then(|| classify::feature::<SCRUTINY>(pass, s, e, config))
+}
+
+/// Marks the segment `s..=e` and stores its feature, counting what happened.
+fn place(
+    pass: &mut Pass<'_>,
+    s: usize,
+    e: usize,
+    feature: Option<Option<Feature>>,
+    out: &mut dyn FeatureSink,
+) {
     pass.set(s, START);
     pass.set(e, END);
     pass.stats.segments += 1;
-    if e + 1 - s >= config.min_points {
-        match classify::feature::<SCRUTINY>(pass, s, e, config) {
-            Some(f) => {
-                if out.push(f) {
-                    pass.stats.features += 1;
-                } else {
-                    pass.stats.dropped += 1;
-                }
+    match feature {
+        None => pass.stats.short_segments += 1,
+        Some(Some(f)) => {
+            if out.push(f) {
+                pass.stats.features += 1;
+            } else {
+                pass.stats.dropped += 1;
             }
-            None => pass.stats.degenerate += 1,
         }
-    } else {
-        pass.stats.short_segments += 1;
+        Some(None) => pass.stats.degenerate += 1,
     }
+}
+
+/// Where the line segment `s..=e` is two lines: the points of the first, when the best split
+/// near its apex lowers the residual sum by more than the typing's `chi2 · σ_r²` and below
+/// `ratio` times the line's (the test a circle must pass against the line).
+fn corner(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<usize> {
+    let Typing::CompareFits { chi2, ratio, .. } = config.typing else {
+        return None;
+    };
+    let pts = pass.points.get(s..=e)?;
+    let sse_l = fit_line(pts).ok()?.sse();
+    let var = config.sigma_r * config.sigma_r;
+    let (k, sse_2) = corner_split(pts)?;
+    (sse_l - sse_2 > chi2 * var && sse_2 < ratio * sse_l).then_some(k)
 }

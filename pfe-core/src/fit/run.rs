@@ -75,6 +75,20 @@ const REACH: usize = 1;
 /// apex; the meeting point in both runs or ending the first): O(n), two passes. `None` for fewer than 4
 /// points.
 pub(crate) fn best_split_sse(points: &[Point]) -> Option<f32> {
+    two_lines(points).map(|(best, _)| best)
+}
+
+/// The best split of `points` into two runs that share no point, near the apex as in
+/// [`best_split_sse`]: the points of the first run (at least two, and two left) and the two
+/// lines' residual sum. `None` for fewer than 4 points.
+pub(crate) fn corner_split(points: &[Point]) -> Option<(usize, f32)> {
+    two_lines(points)
+        .map(|(_, disjoint)| disjoint)
+        .filter(|(_, sse)| math::finite(*sse))
+}
+
+/// [`best_split_sse`] and [`corner_split`] from one pass over the sums.
+fn two_lines(points: &[Point]) -> Option<(f32, (usize, f32))> {
     let n = points.len();
     let (a, b) = (*points.first().filter(|_| n >= 4)?, *points.last()?);
     let (cx, cy) = (b.x - a.x, b.y - a.y);
@@ -112,6 +126,7 @@ pub(crate) fn best_split_sse(points: &[Point]) -> Option<f32> {
         smaller_eigenvalue(sxx, syy, sxy)
     };
     let mut best = f32::INFINITY;
+    let mut disjoint = (0usize, f32::INFINITY);
     for j in lo..=hi {
         let (Some(&through), Some(&before)) = (sums.get(j + 1 - lo), sums.get(j - lo)) else {
             continue;
@@ -129,10 +144,14 @@ pub(crate) fn best_split_sse(points: &[Point]) -> Option<f32> {
         let shared = sse(through, j + 1) + sse(minus(before), n - j);
         best = best.min(shared);
         if j + 3 <= n {
-            best = best.min(sse(through, j + 1) + sse(minus(through), n - j - 1));
+            let apart = sse(through, j + 1) + sse(minus(through), n - j - 1);
+            best = best.min(apart);
+            if apart < disjoint.1 {
+                disjoint = (j + 1, apart);
+            }
         }
     }
-    math::finite(best).then_some(best)
+    math::finite(best).then_some((best, disjoint))
 }
 
 #[cfg(test)]
@@ -162,6 +181,17 @@ mod tests {
         });
         let split = best_split_sse(&corner).unwrap_or(f32::NAN);
         assert!(split < 1.0, "{split}");
+        // Apart: the apex (index 4, on both lines) ends the first run or starts the second.
+        let (k, apart) = corner_split(&corner).unwrap_or((0, f32::NAN));
+        assert!((4..=5).contains(&k) && apart < 1.0, "{k} {apart}");
+        // Off-centre: the corner at index 2 of 9.
+        let early: [Point; 9] = core::array::from_fn(|i| {
+            let t = i as f32 - 2.0;
+            Point::new(1000.0 + 100.0 * t.abs(), 100.0 * t)
+        });
+        let (k, apart) = corner_split(&early).unwrap_or((0, f32::NAN));
+        assert!((2..=3).contains(&k) && apart < 1.0, "{k} {apart}");
+        assert_eq!(corner_split(&early[..3]), None);
         let bent: [Point; 9] = core::array::from_fn(|i| {
             let a = 0.3 * (i as f32 - 4.0);
             Point::new(1000.0 - 300.0 * a.cos(), 300.0 * a.sin())
