@@ -95,7 +95,8 @@ pub struct Config {
     pub correction: Option<RangeCorrection>,
     /// The default mode's checks for real scans: runs of short segments that lie on one line
     /// within the noise are joined (distant walls at grazing incidence); a circle must cover
-    /// at least 6 points and 30° of arc and beat the best two-line (corner) split; line and
+    /// at least 6 points and 30° of arc and beat the best two-line (corner) split; a line that
+    /// two lines explain far better (a corner the walk followed) is split there; line and
     /// circle covariances grow with the fit's reduced χ² where the scatter exceeds σ_r. They
     /// cost about 5 instructions a point on a Cortex-M4F (docs/PERFORMANCE.md).
     pub scrutiny: bool,

@@ -197,8 +197,17 @@ fn emit<const SCRUTINY: bool>(
     out: &mut dyn FeatureSink,
 ) {
     if !SCRUTINY {
-        let feature = typed::<false>(pass, s, e, config);
-        place(pass, s, e, feature, out);
+        // The board's path: typed and stored in place, no split.
+        pass.set(s, START);
+        pass.set(e, END);
+        pass.stats.segments += 1;
+        if e + 1 - s < config.min_points {
+            pass.stats.short_segments += 1;
+        } else if let Some(f) = classify::feature::<false>(pass, s, e, config) {
+            store(pass, f, out);
+        } else {
+            pass.stats.degenerate += 1;
+        }
         return;
     }
     let mut todo: Vec<(usize, usize), PIECES> = Vec::new();
@@ -241,20 +250,25 @@ fn place(
     pass.stats.segments += 1;
     match feature {
         None => pass.stats.short_segments += 1,
-        Some(Some(f)) => {
-            if out.push(f) {
-                pass.stats.features += 1;
-            } else {
-                pass.stats.dropped += 1;
-            }
-        }
+        Some(Some(f)) => store(pass, f, out),
         Some(None) => pass.stats.degenerate += 1,
     }
 }
 
-/// Where the line segment `s..=e` is two lines: the points of the first, when the best split
-/// near its apex lowers the residual sum by more than the typing's `chi2 · σ_r²` and below
-/// `ratio` times the line's (the test a circle must pass against the line).
+/// Stores `f`, counting it as stored or dropped.
+#[inline(always)]
+fn store(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
+    if out.push(f) {
+        pass.stats.features += 1;
+    } else {
+        pass.stats.dropped += 1;
+    }
+}
+
+/// Where the line segment `s..=e` is two lines: the points of the first, when its residual sum
+/// exceeds the noise's and the best split near its apex (both pieces of at least `min_points`)
+/// lowers it by more than the typing's `chi2 · σ_r²` and below `ratio` times the line's (the
+/// test a circle must pass against the line).
 fn corner(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<usize> {
     let Typing::CompareFits { chi2, ratio, .. } = config.typing else {
         return None;
@@ -262,6 +276,11 @@ fn corner(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<usize>
     let pts = pass.points.get(s..=e)?;
     let sse_l = fit_line(pts).ok()?.sse();
     let var = config.sigma_r * config.sigma_r;
+    // A line within the noise (at most σ_r² a degree of freedom) is not split.
+    if !(sse_l > var * (pts.len() as f32 - 2.0) && sse_l > chi2 * var) {
+        return None;
+    }
     let (k, sse_2) = corner_split(pts)?;
-    (sse_l - sse_2 > chi2 * var && sse_2 < ratio * sse_l).then_some(k)
+    let long = k >= config.min_points && pts.len() - k >= config.min_points;
+    (long && sse_l - sse_2 > chi2 * var && sse_2 < ratio * sse_l).then_some(k)
 }
