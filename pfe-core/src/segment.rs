@@ -16,6 +16,7 @@ use crate::feature::Feature;
 use crate::fit::line::fit_line;
 use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
+use crate::geometry::Point;
 use crate::mark::{NoiseRule, Rule};
 use crate::pass::Pass;
 
@@ -215,7 +216,7 @@ fn emit<const SCRUTINY: bool>(
     while let Some((s, e)) = todo.pop() {
         let feature = typed::<true>(pass, s, e, config);
         if todo.len() + 2 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
-            if let Some(k) = corner(pass, s, e, config) {
+            if let Some(k) = pass.points.get(s..=e).and_then(|pts| corner(pts, config)) {
                 // Second piece first: the first is emitted first.
                 let _ = todo.push((s + k, e));
                 let _ = todo.push((s, s + k - 1));
@@ -265,15 +266,14 @@ fn store(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
     }
 }
 
-/// Where the line segment `s..=e` is two lines: the points of the first, when its residual sum
+/// Where the line segment `pts` is two lines: the points of the first, when its residual sum
 /// exceeds the noise's and the best split near its apex (both pieces of at least `min_points`)
 /// lowers it by more than the typing's `chi2 · σ_r²` and below `ratio` times the line's (the
 /// test a circle must pass against the line).
-fn corner(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<usize> {
+fn corner(pts: &[Point], config: &Config) -> Option<usize> {
     let Typing::CompareFits { chi2, ratio, .. } = config.typing else {
         return None;
     };
-    let pts = pass.points.get(s..=e)?;
     let sse_l = fit_line(pts).ok()?.sse();
     let var = config.sigma_r * config.sigma_r;
     // A line within the noise (at most σ_r² a degree of freedom) is not split.
@@ -283,4 +283,112 @@ fn corner(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<usize>
     let (k, sse_2) = corner_split(pts)?;
     let long = k >= config.min_points && pts.len() - k >= config.min_points;
     (long && sse_l - sse_2 > chi2 * var && sse_2 < ratio * sse_l).then_some(k)
+}
+
+// The f64 references need libm (the default feature).
+#[cfg(all(test, feature = "libm"))]
+#[allow(clippy::indexing_slicing)]
+mod tests {
+    use super::*;
+
+    /// A V of `n` points (apex at index `m`, legs ±`slope` mm a point) with `zig` mm added to
+    /// and taken from every other point, and its residual sums in f64: one line, and the best
+    /// two lines over every split (runs of ≥ 4).
+    fn v(n: usize, m: usize, slope: f64, zig: f64) -> (Vec<Point, 64>, f64, f64) {
+        let mut pts = [(0.0f64, 0.0f64); 64];
+        for (i, q) in pts.iter_mut().enumerate().take(n) {
+            let t = i as f64 - m as f64;
+            let z = if i % 2 == 0 { zig } else { -zig };
+            *q = (100.0 * t, slope * if t < 0.0 { -t } else { t } + z);
+        }
+        let pts = &pts[..n];
+        let sse = |p: &[(f64, f64)]| {
+            let k = p.len() as f64;
+            let (mx, my) = p
+                .iter()
+                .fold((0.0, 0.0), |a, q| (a.0 + q.0 / k, a.1 + q.1 / k));
+            let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+            for q in p {
+                let (dx, dy) = (q.0 - mx, q.1 - my);
+                sxx += dx * dx;
+                syy += dy * dy;
+                sxy += dx * dy;
+            }
+            let h = 0.5 * (sxx - syy);
+            0.5 * (sxx + syy) - libm::sqrt(h * h + sxy * sxy)
+        };
+        let two = (4..=n - 4)
+            .map(|k| sse(&pts[..k]) + sse(&pts[k..]))
+            .fold(f64::INFINITY, f64::min);
+        let one = sse(pts);
+        let out = pts
+            .iter()
+            .map(|q| Point::new(q.0 as f32, q.1 as f32))
+            .collect();
+        (out, one, two)
+    }
+
+    /// The default configuration with σ_r² = `var`.
+    fn with_var(var: f64) -> Config {
+        Config::default().with_sigma_r(libm::sqrt(var) as f32)
+    }
+
+    #[test]
+    fn a_corner_splits_at_its_apex_when_two_lines_explain_it_far_better() {
+        // An exact V: two lines leave nothing.
+        let (pts, one, two) = v(16, 9, 20.0, 0.0);
+        assert!(two < 1e-6 * one);
+        // σ_r² = one/30: the line is beyond the noise (14 degrees of freedom) and the split
+        // gains 30 σ_r² > chi2 25.
+        assert_eq!(corner(&pts, &with_var(one / 30.0)), Some(9));
+        // σ_r² = one/20: 20 σ_r² < 25, not split.
+        assert_eq!(corner(&pts, &with_var(one / 20.0)), None);
+        // The paper's typing never splits.
+        let paper = Config::paper().with_sigma_r(libm::sqrt(one / 30.0) as f32);
+        assert_eq!(corner(&pts, &paper), None);
+    }
+
+    #[test]
+    fn the_gain_and_the_ratio_both_decide() {
+        // A shallow V under a zig-zag: two lines keep the zig-zag. Find the zig-zag that leaves
+        // 45 % of the line's residual sum to two lines (bisection in f64).
+        let at = |target: f64| {
+            let (mut lo, mut hi) = (0.0f64, 50.0f64);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                let (_, one, two) = v(20, 10, 10.0, mid);
+                if two / one < target {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            v(20, 10, 10.0, lo)
+        };
+        let (pts, one, two) = at(0.45);
+        assert!(libm::fabs(two / one - 0.45) < 0.01, "{}", two / one);
+        // Gain 0.55·60 = 33 σ_r² > 25 and ratio 0.45 < 0.5: split (near the apex).
+        let k = corner(&pts, &with_var(one / 60.0));
+        assert!(k.is_some_and(|k| (9..=11).contains(&k)), "{k:?}");
+        // Gain 0.55·40 = 22 σ_r² < 25: not split (the line is still beyond the noise: 40 > 18).
+        assert_eq!(corner(&pts, &with_var(one / 40.0)), None);
+        // Ratio 0.6 > 0.5 with a gain of 0.4·100 = 40 σ_r²: not split.
+        let (pts, one, two) = at(0.6);
+        assert!(libm::fabs(two / one - 0.6) < 0.01, "{}", two / one);
+        assert_eq!(corner(&pts, &with_var(one / 100.0)), None);
+    }
+
+    #[test]
+    fn a_line_within_the_noise_is_not_split() {
+        // 60 points of a V whose line leaves 0.9 σ_r² a degree of freedom: within the noise,
+        // though two lines would explain it all (gain 52 σ_r² > 25, ratio 0).
+        let (pts, one, two) = v(60, 30, 2.0, 0.0);
+        assert!(two < 1e-6 * one);
+        assert_eq!(corner(&pts, &with_var(one / (0.9 * 58.0))), None);
+        // 1.1 σ_r² a degree of freedom: split.
+        assert_eq!(corner(&pts, &with_var(one / (1.1 * 58.0))), Some(30));
+        // Runs of fewer than `min_points` are not cut off: the apex at index 2.
+        let (pts, one, _) = v(16, 2, 20.0, 0.0);
+        assert_eq!(corner(&pts, &with_var(one / 30.0)), None);
+    }
 }
