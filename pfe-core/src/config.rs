@@ -91,6 +91,12 @@ pub struct Config {
     pub circle_refine: usize,
     /// Range noise σ_r, mm, for the covariances (and the `Noise` threshold).
     pub sigma_r: f32,
+    /// Systematic range error σ_sys, mm, that differs from beam to beam but not from scan to
+    /// scan (a SICK LMS200's data sheet gives ±15 mm typical in mm mode): what a feature's beams
+    /// share of it moves the feature between scans, seen by other beams. With `scrutiny`, a
+    /// line of length L gets σ_sys² on ρ and 2σ_sys²/L² on α (its two ends independent), a
+    /// circle σ_sys² on its centre along the beam to it. 0 (the default): none.
+    pub sigma_sys: f32,
     /// Systematic range correction applied to every reading.
     pub correction: Option<RangeCorrection>,
     /// The default mode's checks for real scans: runs of short segments that lie on one line
@@ -119,6 +125,7 @@ impl Config {
             circle_method: CircleMethod::Kasa,
             circle_refine: 0,
             sigma_r: 5.0,
+            sigma_sys: 0.0,
             correction: None,
             scrutiny: false,
         }
@@ -149,6 +156,7 @@ impl Config {
             circle_method: CircleMethod::Hyper,
             circle_refine: 5,
             sigma_r: 5.0,
+            sigma_sys: 0.0,
             correction: None,
             scrutiny: true,
         }
@@ -163,6 +171,13 @@ impl Config {
     /// The same configuration for a scanner with range noise `sigma_r` mm.
     pub const fn with_sigma_r(mut self, sigma_r: f32) -> Self {
         self.sigma_r = sigma_r;
+        self
+    }
+
+    /// The same configuration for a scanner with a beam-to-beam systematic range error of
+    /// `sigma_sys` mm (see [`Self::sigma_sys`]).
+    pub const fn with_sigma_sys(mut self, sigma_sys: f32) -> Self {
+        self.sigma_sys = sigma_sys;
         self
     }
 
@@ -198,7 +213,12 @@ impl Config {
                 max_radius,
             } => math::finite(chi2) && math::finite(ratio) && max_radius > 0.0,
         };
-        t && ty && math::finite(self.sigma_r) && self.sigma_r > 0.0 && self.min_points >= 2
+        t && ty
+            && math::finite(self.sigma_r)
+            && self.sigma_r > 0.0
+            && math::finite(self.sigma_sys)
+            && self.sigma_sys >= 0.0
+            && self.min_points >= 2
     }
 }
 

@@ -54,6 +54,10 @@ fn a_rounded_corner_gives_the_two_walls() {
                 .map(|&x| ((f64::from(x) + 3.0 * noise.gauss()) / 10.0).round() as f32 * 10.0)
                 .collect();
             ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+            // The pieces of a split segment neither overlap nor leave a point out of order.
+            for (a, b) in ex.features().iter().zip(ex.features().iter().skip(1)) {
+                assert!(a.last() < b.first(), "r {r} seed {seed}: {a:?} then {b:?}");
+            }
             for f in ex.features() {
                 let Feature::Line(l) = f else { continue };
                 if l.points < 10 {

@@ -79,3 +79,45 @@ fn every_segment_is_counted_once_on_every_path() {
         );
     }
 }
+
+#[test]
+fn a_post_of_min_points_beams_is_a_feature_on_every_path() {
+    let g = ScanGeometry::LMS200_180_050;
+    // A post face 45 mm wide at 1.5 m, square to the beams about bearing 0: 4 beams.
+    let prims = [
+        Prim::Seg(3000.0, -6000.0, 3000.0, 6000.0),
+        Prim::Seg(1500.0, -27.0, 1500.0, 19.0),
+    ];
+    let (exact, hits) = scan(
+        &prims,
+        f64::from(g.start_angle),
+        f64::from(g.angle_step),
+        361,
+        f64::from(g.r_max),
+    );
+    let post: Vec<usize> = (0..361).filter(|&i| hits[i] == Some(1)).collect();
+    assert_eq!(post.len(), 4, "{post:?}");
+    let (first, last) = (post[0], post[3]);
+    let configs = [
+        ("board", Config::default().with_scrutiny(false)),
+        ("host", Config::default()),
+        ("paper", Config::paper()),
+    ];
+    let mut ex = Extractor::<361, 64>::new();
+    for (name, config) in configs {
+        assert_eq!(config.min_points, 4);
+        let mut noise = Noise::new(3);
+        let ranges: Vec<f32> = exact
+            .iter()
+            .map(|&r| (f64::from(r) + 1.0 * noise.gauss()) as f32)
+            .collect();
+        ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+        assert!(
+            ex.features()
+                .iter()
+                .any(|f| f.first() == first && f.last() == last),
+            "{name}: no feature on beams {first}..={last}: {:?}",
+            ex.features()
+        );
+    }
+}

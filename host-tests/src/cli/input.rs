@@ -28,11 +28,22 @@ pub enum ConfigName {
 impl ConfigName {
     /// The extractor for a scanner with range noise `sigma_r` mm, or the format's default
     /// noise (the paper's thresholds do not depend on it; its covariances do).
-    pub fn method(self, sigma_r: Option<f32>, format: Format) -> Pfe {
+    pub fn method(self, sigma_r: Option<f32>, sigma_sys: Option<f32>, format: Format) -> Pfe {
         let sigma_r = sigma_r.unwrap_or(format.sigma_r());
+        let sigma_sys = sigma_sys.unwrap_or(format.sigma_sys());
         match self {
-            ConfigName::Paper => Pfe::new("pfe-paper", Config::paper().with_sigma_r(sigma_r)),
-            ConfigName::Default => Pfe::new("pfe-default", Config::default().with_sigma_r(sigma_r)),
+            ConfigName::Paper => Pfe::new(
+                "pfe-paper",
+                Config::paper()
+                    .with_sigma_r(sigma_r)
+                    .with_sigma_sys(sigma_sys),
+            ),
+            ConfigName::Default => Pfe::new(
+                "pfe-default",
+                Config::default()
+                    .with_sigma_r(sigma_r)
+                    .with_sigma_sys(sigma_sys),
+            ),
         }
     }
 }
@@ -51,6 +62,11 @@ pub struct MethodArgs {
     /// whose range noise is of that order).
     #[arg(long, value_parser = sigma_mm)]
     pub sigma_r: Option<f32>,
+    /// Beam-to-beam systematic range error, mm, finite and ≥ 0, added to the default
+    /// configuration's covariances (default: 5 for real scanners' formats, from the LMS200
+    /// data sheet's ±15 mm; 0 for csv, the simulator's).
+    #[arg(long, value_parser = sigma_sys_mm)]
+    pub sigma_sys: Option<f32>,
     /// LaserScan topic of a ROS 2 bag (--format mcap); default: the bag's only LaserScan topic.
     #[arg(long)]
     pub topic: Option<String>,
@@ -90,10 +106,24 @@ pub fn sigma_mm(s: &str) -> Result<f32, String> {
     }
 }
 
+/// `--sigma-sys MM`: a finite systematic range error of at least zero.
+pub fn sigma_sys_mm(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("not a number of mm: {s:?}"))?;
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite systematic error ≥ 0 mm, got {s}"))
+    }
+}
+
 impl MethodArgs {
     /// The extractor these arguments name.
     pub fn method(&self) -> Pfe {
-        self.config.method(self.sigma_r, self.format)
+        self.config
+            .method(self.sigma_r, self.sigma_sys, self.format)
     }
 
     /// What the extractor is told besides the ranges of a scan of `geometry`.

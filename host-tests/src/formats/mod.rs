@@ -62,6 +62,20 @@ impl Format {
     }
 }
 
+impl Format {
+    /// Beam-to-beam systematic range error assumed for this format's data, mm
+    /// (`pfe_core::Config::sigma_sys`): 5 mm for a real scanner's data (a SICK LMS200's data
+    /// sheet: ±15 mm typical, taken as 3σ; the Hokuyo URG-04LX's ±10 mm accuracy is of that
+    /// order too); 0 for csv, the simulator's format, whose scans have none. The `pfe` CLI's
+    /// default for `--sigma-sys`.
+    pub fn sigma_sys(self) -> f32 {
+        match self {
+            Format::Csv => 0.0,
+            Format::Lms200 | Format::Carmen | Format::Hokuyo | Format::Mcap => 5.0,
+        }
+    }
+}
+
 impl fmt::Display for Format {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {

@@ -8,7 +8,9 @@
 pub(crate) mod arc;
 
 use crate::config::{Config, Typing};
-use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
+use crate::feature::{
+    circle_feature, line_feature, line_feature_with, CircleFeature, Feature, LineFeature,
+};
 use crate::fit::circle::{fit_circle, refine_circle, refine_from, Circle, NormalEquations};
 use crate::fit::line::{fit_line, LineFit};
 use crate::fit::run::best_split_sse;
@@ -41,6 +43,7 @@ pub(crate) fn feature<const SCRUTINY: bool>(
             if let Feature::Circle(cf) = &mut f {
                 let k = scatter_scale(sse, var, pts.len() as f32 - 3.0);
                 cf.cov = cf.cov.map(|row| row.map(|v| v * k));
+                systematic_circle(cf, origin, config.sigma_sys);
             }
             Some(f)
         }
@@ -78,10 +81,50 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
+                systematic_line(lf, config.sigma_sys);
             }
             Some(f)
         }
     }
+}
+
+/// Adds the share of a beam-to-beam systematic range error σ_sys (`s`, mm) to a line's
+/// covariance: an offset σ_sys along the normal (ρ) and a tilt about the line's middle M of
+/// variance 2σ_sys²/L² (its two ends independent), which moves ρ by the tilt times M's position
+/// along the line.
+fn systematic_line(lf: &mut LineFeature, s: f32) {
+    if !(s > 0.0) {
+        return;
+    }
+    let (dx, dy) = (lf.end.x - lf.start.x, lf.end.y - lf.start.y);
+    let len2 = dx * dx + dy * dy;
+    if !(len2 > 0.0) {
+        return;
+    }
+    let tilt = 2.0 * s * s / len2;
+    let (sin, cos) = math::sin_cos(lf.alpha);
+    // M · t, t = (−sin α, cos α) the line's direction.
+    let along = 0.5 * ((lf.start.x + lf.end.x) * -sin + (lf.start.y + lf.end.y) * cos);
+    lf.var_alpha += tilt;
+    lf.cov_alpha_rho += tilt * along;
+    lf.var_rho += s * s + tilt * along * along;
+}
+
+/// Adds the share of a beam-to-beam systematic range error σ_sys (`s`, mm) to a circle's
+/// centre covariance: σ_sys² along the beam from the scanner (`origin`) to the centre (an
+/// offset common to its beams moves every point, and so the centre, that way).
+fn systematic_circle(cf: &mut CircleFeature, origin: Point, s: f32) {
+    let (dx, dy) = (cf.center.x - origin.x, cf.center.y - origin.y);
+    let d2 = dx * dx + dy * dy;
+    if !(s > 0.0 && d2 > 0.0) {
+        return;
+    }
+    let k = s * s / d2;
+    let [[xx, xy, _], [yx, yy, _], _] = &mut cf.cov;
+    *xx += k * dx * dx;
+    *xy += k * dx * dy;
+    *yx += k * dx * dy;
+    *yy += k * dy * dy;
 }
 
 /// Factor on a fit's covariance: its reduced χ², `sse / (var · dof)` (`var` the variance of a

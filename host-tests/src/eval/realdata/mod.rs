@@ -38,12 +38,16 @@ pub use coverage::Coverage;
 pub use frame::{CircleObs, FrameChange, LineObs, Pose};
 
 /// The four methods, told the data's range noise `sigma_r` (mm): pfe `default` and `paper`,
-/// split-and-merge and ACF.
+/// split-and-merge and ACF. pfe `default` is also told the LMS200's systematic range error
+/// (CARMEN logs: [`Format::sigma_sys`](crate::formats::Format::sigma_sys)).
 pub fn methods(sigma_r: f32) -> Vec<Box<dyn Method>> {
+    let sigma_sys = crate::formats::Format::Carmen.sigma_sys();
     vec![
         Box::new(Pfe::new(
             "pfe-default",
-            pfe_core::Config::default().with_sigma_r(sigma_r),
+            pfe_core::Config::default()
+                .with_sigma_r(sigma_r)
+                .with_sigma_sys(sigma_sys),
         )),
         Box::new(Pfe::new(
             "pfe-paper",

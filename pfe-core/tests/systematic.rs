@@ -1,0 +1,126 @@
+//! The beam-to-beam systematic range error (`Config::sigma_sys`): what it adds to a line's and
+//! a circle's covariance, against the model written out here in f64 — a line's offset σ_sys
+//! along its normal and a tilt about its middle of variance 2σ_sys²/L², whose effect on ρ is
+//! found by rotating the line numerically; a circle centre's σ_sys² along the beam to it.
+//! Truth is the analytic ray casting of `common`.
+#![allow(
+    clippy::unwrap_used,
+    clippy::panic,
+    clippy::indexing_slicing,
+    clippy::needless_range_loop
+)]
+
+mod common;
+
+use common::{scan, Noise, Prim};
+use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
+
+const SYS: f64 = 5.0;
+
+/// A wall at an angle and a pillar of radius 150 mm.
+fn features(config: Config) -> Vec<Feature> {
+    let g = ScanGeometry::LMS200_180_050;
+    let prims = [
+        Prim::Seg(2500.0, -3000.0, 4000.0, 2000.0),
+        Prim::Circle(1500.0, 800.0, 150.0),
+    ];
+    let (exact, _) = scan(
+        &prims,
+        f64::from(g.start_angle),
+        f64::from(g.angle_step),
+        361,
+        f64::from(g.r_max),
+    );
+    let mut noise = Noise::new(11);
+    let ranges: Vec<f32> = exact
+        .iter()
+        .map(|&r| (f64::from(r) + 5.0 * noise.gauss()) as f32)
+        .collect();
+    let mut ex = Extractor::<361, 32>::new();
+    ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+    ex.features().to_vec()
+}
+
+#[test]
+fn the_systematic_error_adds_its_share_to_every_feature() {
+    let plain = features(Config::default());
+    let sys = features(Config::default().with_sigma_sys(SYS as f32));
+    assert_eq!(plain.len(), sys.len());
+    let (mut lines, mut circles) = (0, 0);
+    for (a, b) in plain.iter().zip(&sys) {
+        match (a, b) {
+            (Feature::Line(a), Feature::Line(b)) => {
+                assert_eq!(
+                    (a.alpha, a.rho, a.start, a.end),
+                    (b.alpha, b.rho, b.start, b.end)
+                );
+                let (alpha, rho) = (f64::from(a.alpha), f64::from(a.rho));
+                let (s, e) = (a.start, a.end);
+                let len2 = f64::from(e.x - s.x).powi(2) + f64::from(e.y - s.y).powi(2);
+                let tilt = 2.0 * SYS * SYS / len2;
+                // dρ/dδ of the line turned by δ about its middle M, numerically: the turned
+                // line through M has ρ(δ) = M · n(α + δ).
+                let m = (0.5 * f64::from(s.x + e.x), 0.5 * f64::from(s.y + e.y));
+                let rho_at = |d: f64| m.0 * (alpha + d).cos() + m.1 * (alpha + d).sin();
+                assert!((rho_at(0.0) - rho).abs() < 0.5, "M on the line");
+                let h = 1e-6;
+                let along = (rho_at(h) - rho_at(-h)) / (2.0 * h);
+                let want = [tilt, tilt * along, SYS * SYS + tilt * along * along];
+                let got = [
+                    f64::from(b.var_alpha - a.var_alpha),
+                    f64::from(b.cov_alpha_rho - a.cov_alpha_rho),
+                    f64::from(b.var_rho - a.var_rho),
+                ];
+                for (w, g) in want.iter().zip(got) {
+                    assert!(
+                        (g - w).abs() <= 1e-3 * w.abs() + 1e-9,
+                        "{got:?} vs {want:?}"
+                    );
+                }
+                lines += 1;
+            }
+            (Feature::Circle(a), Feature::Circle(b)) => {
+                assert_eq!((a.center, a.radius), (b.center, b.radius));
+                let (cx, cy) = (f64::from(a.center.x), f64::from(a.center.y));
+                let d = cx.hypot(cy);
+                let u = (cx / d, cy / d);
+                let want = [
+                    [SYS * SYS * u.0 * u.0, SYS * SYS * u.0 * u.1],
+                    [SYS * SYS * u.0 * u.1, SYS * SYS * u.1 * u.1],
+                ];
+                for r in 0..2 {
+                    for c in 0..2 {
+                        let g = f64::from(b.cov[r][c] - a.cov[r][c]);
+                        assert!((g - want[r][c]).abs() < 0.01 * SYS * SYS, "{r}{c}: {g}");
+                    }
+                }
+                // The radius's variance is untouched.
+                assert_eq!(a.cov[2][2], b.cov[2][2]);
+                circles += 1;
+            }
+            _ => panic!("{a:?} vs {b:?}"),
+        }
+    }
+    assert!(
+        lines >= 1 && circles == 1,
+        "{lines} lines, {circles} circles"
+    );
+}
+
+#[test]
+fn only_a_usable_systematic_error_is_accepted() {
+    assert!(Config::default().with_sigma_sys(0.0).is_valid());
+    assert!(Config::default().with_sigma_sys(15.0).is_valid());
+    assert!(!Config::default().with_sigma_sys(-1.0).is_valid());
+    assert!(!Config::default().with_sigma_sys(f32::NAN).is_valid());
+    assert!(!Config::default().with_sigma_sys(f32::INFINITY).is_valid());
+    assert_eq!(Config::default().sigma_sys, 0.0);
+    assert_eq!(Config::paper().sigma_sys, 0.0);
+}
+
+#[test]
+fn without_scrutiny_the_covariances_stay_as_they_were() {
+    for base in [Config::paper(), Config::default().with_scrutiny(false)] {
+        assert_eq!(features(base), features(base.with_sigma_sys(SYS as f32)));
+    }
+}
