@@ -13,7 +13,7 @@
 mod common;
 
 use common::{scan, Noise, Prim};
-use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
+use pfe_core::{Config, Extractor, Feature, Motion, Scan, ScanGeometry};
 
 const SYS: f64 = 5.0;
 
@@ -122,5 +122,44 @@ fn only_a_usable_systematic_error_is_accepted() {
 fn without_scrutiny_the_covariances_stay_as_they_were() {
     for base in [Config::paper(), Config::default().with_scrutiny(false)] {
         assert_eq!(features(base), features(base.with_sigma_sys(SYS as f32)));
+    }
+}
+
+#[test]
+fn a_moving_scanners_circle_gets_it_along_the_beam_from_where_it_was() {
+    // 2 m/s and 1 ms a beam: the scanner is ~0.25 m along when it sees the pillar.
+    let g = ScanGeometry::LMS200_180_050;
+    let motion = Motion::uniform(2000.0, 0.0, 1e-3);
+    let (exact, _) = scan(
+        &[Prim::Circle(1500.0, 800.0, 150.0)],
+        f64::from(g.start_angle),
+        f64::from(g.angle_step),
+        361,
+        f64::from(g.r_max),
+    );
+    let mut ex = Extractor::<361, 32>::new();
+    let mut cov = Vec::new();
+    for sys in [0.0, SYS as f32] {
+        let scan = Scan::from_mm(g, &exact).with_motion(motion);
+        ex.extract(&scan, &Config::default().with_sigma_sys(sys))
+            .unwrap();
+        let [Feature::Circle(c)] = ex.features() else {
+            panic!("{:?}", ex.features())
+        };
+        cov.push((*c, c.cov));
+    }
+    let (c, _) = cov[0];
+    let o = motion.pose((c.first as usize + c.last as usize) / 2).origin;
+    assert!(o.x > 200.0, "{o:?}");
+    let (dx, dy) = (f64::from(c.center.x - o.x), f64::from(c.center.y - o.y));
+    let d = dx.hypot(dy);
+    let u = (dx / d, dy / d);
+    let want = [[u.0 * u.0, u.0 * u.1], [u.0 * u.1, u.1 * u.1]];
+    for r in 0..2 {
+        for k in 0..2 {
+            let got = f64::from(cov[1].1[r][k] - cov[0].1[r][k]);
+            let w = SYS * SYS * want[r][k];
+            assert!((got - w).abs() < 0.01 * SYS * SYS, "{r}{k}: {got} vs {w}");
+        }
     }
 }
