@@ -387,8 +387,16 @@ mod tests {
         assert_eq!(corner(&pts, &with_var(one / (0.98 * 58.0))), None);
         // 1.03 σ_r² a degree of freedom: split.
         assert_eq!(corner(&pts, &with_var(one / (1.03 * 58.0))), Some(30));
-        // Runs of fewer than `min_points` are not cut off: the apex at index 2.
-        let (pts, one, _) = v(16, 2, 20.0, 0.0);
-        assert_eq!(corner(&pts, &with_var(one / 30.0)), None);
+        // Runs of fewer than `min_points` are not cut off: the apex at index 2, or 13 of 16.
+        for m in [2, 13] {
+            let (pts, one, _) = v(16, m, 20.0, 0.0);
+            assert_eq!(corner(&pts, &with_var(one / 30.0)), None, "apex {m}");
+        }
+        // At index 4 and 12 both runs have 4 points: split.
+        for m in [4, 12] {
+            let (pts, one, _) = v(16, m, 20.0, 0.0);
+            let k = corner(&pts, &with_var(one / 30.0));
+            assert!(k.is_some_and(|k| k == m || k == m + 1), "apex {m}: {k:?}");
+        }
     }
 }
