@@ -20,16 +20,18 @@ fn scene(posts: usize) -> Vec<Prim> {
     prims
 }
 
+/// The board's path (`scrutiny` off), the host's and the paper's.
+const PATHS: [(&str, Config); 3] = [
+    ("board", Config::default_config().with_scrutiny(false)),
+    ("host", Config::default_config()),
+    ("paper", Config::paper()),
+];
+
 #[test]
 fn every_segment_is_counted_once_on_every_path() {
     let g = ScanGeometry::LMS200_180_050;
-    let configs = [
-        ("board", Config::default().with_scrutiny(false)),
-        ("host", Config::default()),
-        ("paper", Config::paper()),
-    ];
     let mut ex = Extractor::<361, 64>::new();
-    for (name, config) in configs {
+    for (name, config) in PATHS {
         let mut shorts = 0;
         for seed in 0..10u64 {
             let (exact, hits) = scan(
@@ -98,13 +100,8 @@ fn a_post_of_min_points_beams_is_a_feature_on_every_path() {
     let post: Vec<usize> = (0..361).filter(|&i| hits[i] == Some(1)).collect();
     assert_eq!(post.len(), 4, "{post:?}");
     let (first, last) = (post[0], post[3]);
-    let configs = [
-        ("board", Config::default().with_scrutiny(false)),
-        ("host", Config::default()),
-        ("paper", Config::paper()),
-    ];
     let mut ex = Extractor::<361, 64>::new();
-    for (name, config) in configs {
+    for (name, config) in PATHS {
         assert_eq!(config.min_points, 4);
         let mut noise = Noise::new(3);
         let ranges: Vec<f32> = exact
