@@ -10,7 +10,7 @@
 use pfe_core::Feature;
 
 use super::frame::{nis, FrameChange, LineObs, Pose};
-use super::refit::{correction, refit_nis, Innovation};
+use super::refit::{correction, correction_covariance, refit_nis, Innovation};
 use super::CircleObs;
 
 /// Shortest line counted, points.
@@ -143,8 +143,9 @@ impl PairTally {
             self.refits += 1;
             self.nis_refit.extend(v);
         }
-        // The lines' pose correction, applied to the moved circle centres too.
-        let delta = correction(&innovations);
+        // The lines' pose correction, applied to the moved circle centres too, with its own
+        // uncertainty.
+        let delta = correction(&innovations).zip(correction_covariance(&innovations));
         for c in &a.circles {
             self.circles += 1;
             let moved = change.circle(c);
@@ -161,14 +162,24 @@ impl PairTally {
                 self.circles_matched += 1;
                 let s = super::frame::add(&moved.cov, &o.cov);
                 self.circle_nis.extend(nis(d, &s));
-                if let Some([dx, dy, dth]) = delta {
-                    // The extra motion δ of frame k+1 moves a point p to R(δθ) p + (δx, δy).
+                if let Some(([dx, dy, dth], p)) = delta {
+                    // The extra motion δ of frame k+1 moves a point p to R(δθ) p + (δx, δy);
+                    // δ's covariance P enters through J = ∂/∂δ = [[1, 0, −y], [0, 1, x]].
                     let (sin, cos) = dth.sin_cos();
                     let [mx, my] = moved.center;
                     let r = [
                         cos * mx - sin * my + dx - o.center[0],
                         sin * mx + cos * my + dy - o.center[1],
                     ];
+                    let j = [[1.0, 0.0, -my], [0.0, 1.0, mx]];
+                    let mut s = s;
+                    for (a, ja) in j.iter().enumerate() {
+                        for (b, jb) in j.iter().enumerate() {
+                            s[a][b] += (0..3)
+                                .map(|k| (0..3).map(|l| ja[k] * p[k][l] * jb[l]).sum::<f64>())
+                                .sum::<f64>();
+                        }
+                    }
                     self.circle_nis_refit.extend(nis(r, &s));
                 }
             }

@@ -31,6 +31,29 @@ pub const MIN_SPREAD: f64 = 0.05;
 /// The correction δ = (δx mm, δy mm, δθ rad), `None` with fewer than [`MIN_LINES`] lines,
 /// (nearly) parallel normals or a singular system.
 pub fn correction(pairs: &[Innovation]) -> Option<[f64; 3]> {
+    let (a, b) = normal_equations(pairs)?;
+    let x = solve3(a, b)?;
+    Some([-x[0], -x[1], -x[2]])
+}
+
+/// The covariance of [`correction`]'s δ from the lines' covariances: the inverse of the
+/// normal matrix `Σ Hᵀ S⁻¹ H` (`None` when there is no correction).
+pub fn correction_covariance(pairs: &[Innovation]) -> Option<[[f64; 3]; 3]> {
+    let (a, _) = normal_equations(pairs)?;
+    let mut inv = [[0.0f64; 3]; 3];
+    for c in 0..3 {
+        let mut e = [0.0; 3];
+        e[c] = 1.0;
+        let col = solve3(a, e)?;
+        for r in 0..3 {
+            inv[r][c] = col[r];
+        }
+    }
+    Some(inv)
+}
+
+/// `(Σ Hᵀ S⁻¹ H, Σ Hᵀ S⁻¹ d)` over the pairs, when a refit is possible.
+fn normal_equations(pairs: &[Innovation]) -> Option<([[f64; 3]; 3], [f64; 3])> {
     if pairs.len() < MIN_LINES || spread(pairs) < MIN_SPREAD {
         return None;
     }
@@ -53,8 +76,7 @@ pub fn correction(pairs: &[Innovation]) -> Option<[f64; 3]> {
             b[r] += hw[r][0] * p.d[0] + hw[r][1] * p.d[1];
         }
     }
-    let x = solve3(a, b)?;
-    Some([-x[0], -x[1], -x[2]])
+    Some((a, b))
 }
 
 /// The NIS of every pair after removing the refit correction (`None` when no refit).
@@ -152,6 +174,53 @@ mod tests {
             .unwrap_or_default()
             .iter()
             .all(|v| *v < 1e-12));
+    }
+
+    /// The covariance of δ over 5 000 trials of noisy lines: each variance within 8 % (four
+    /// standard deviations of a variance estimated from 5 000 draws).
+    #[test]
+    fn the_corrections_covariance_is_its_spread_over_trials() {
+        use rand::{Rng, SeedableRng};
+        use rand_distr::StandardNormal;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let alphas = [0.1, 1.7, -2.9, 0.9, 2.2];
+        let s: Cov2 = [[4e-6, 1e-4], [1e-4, 25.0]];
+        let (l00, l10) = (s[0][0].sqrt(), s[1][0] / s[0][0].sqrt());
+        let l11 = (s[1][1] - l10 * l10).sqrt();
+        let clean: Vec<_> = alphas.iter().map(|&a| pair(a, [0.0; 3])).collect();
+        let want = correction_covariance(
+            &clean
+                .iter()
+                .map(|p| Innovation { s, ..*p })
+                .collect::<Vec<_>>(),
+        )
+        .unwrap_or_default();
+        let n = 5000;
+        let mut sum = [[0.0f64; 3]; 3];
+        for _ in 0..n {
+            let pairs: Vec<_> = alphas
+                .iter()
+                .map(|&alpha| {
+                    let (z0, z1): (f64, f64) =
+                        (rng.sample(StandardNormal), rng.sample(StandardNormal));
+                    Innovation {
+                        d: [l00 * z0, l10 * z0 + l11 * z1],
+                        s,
+                        alpha,
+                    }
+                })
+                .collect();
+            let d = correction(&pairs).unwrap_or_default();
+            for r in 0..3 {
+                for c in 0..3 {
+                    sum[r][c] += d[r] * d[c] / n as f64;
+                }
+            }
+        }
+        for i in 0..3 {
+            let ratio = sum[i][i] / want[i][i];
+            assert!((ratio - 1.0).abs() < 0.08, "δ{i}: {ratio}");
+        }
     }
 
     #[test]

@@ -135,7 +135,8 @@ m = 10), so the median lies below {CHI2_2_MEDIAN:.2}.\n\
 **circ NIS**: median centre NIS with both 2×2 centre covariances (k's turned with the frame), \
 χ²₂ median {CHI2_2_MEDIAN:.2} when consistent; **circ NIS refit**: the same after moving k's \
 centres by the pair's pose refit from its lines (pairs with a refit; the refit is fitted to \
-the lines only, so it costs the circles no degree of freedom).\n\n\
+the lines only, so it costs the circles no degree of freedom; its own uncertainty, the inverse \
+of its normal matrix, is added to the centres' covariance).\n\n\
 Figures are over the whole log; `–` = nothing to measure.\n\n",
         f64::from(SMOOTH_STEP_MM) / 1000.0,
         GATE_RHO_MM / 1000.0,
