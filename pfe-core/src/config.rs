@@ -104,7 +104,9 @@ pub struct Config {
     /// at least 6 points and 30° of arc and beat the best two-line (corner) split; a line that
     /// two lines explain far better (a corner the walk followed) is split there; line and
     /// circle covariances grow with the fit's reduced χ² where the scatter exceeds σ_r. They
-    /// cost about 5 instructions a point on a Cortex-M4F (docs/PERFORMANCE.md).
+    /// cost about 5 instructions a point on a Cortex-M4F (docs/PERFORMANCE.md). A build
+    /// without the `scrutiny` feature leaves them out and refuses this on (not
+    /// [`Config::is_valid`]).
     pub scrutiny: bool,
 }
 
@@ -187,7 +189,8 @@ impl Config {
         self
     }
 
-    /// True when every parameter is usable.
+    /// True when every parameter is usable (and `scrutiny` is off in a build without the
+    /// `scrutiny` feature).
     pub fn is_valid(&self) -> bool {
         let t = match self.threshold {
             Threshold::Paper { d0, lambda } => {
@@ -219,6 +222,7 @@ impl Config {
             && math::finite(self.sigma_sys)
             && self.sigma_sys >= 0.0
             && self.min_points >= 2
+            && (cfg!(feature = "scrutiny") || !self.scrutiny)
     }
 }
 

@@ -254,34 +254,27 @@ fn run(
     let step = scan.geometry.angle_step;
     let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
     let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
-    if config.scrutiny {
+    if cfg!(feature = "scrutiny") && config.scrutiny {
         return scrutinised(beams, (points, ranges, flags), scan, config, stats, out);
     }
     let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);
     // Interleaved sweeps without odometry are moved onto sweep 0 (by their offset estimated
-    // from the scan) when the marks or the fits show them out of place, and extracted again.
-    let marks_say = {
+    // from the scan) when the marks show them out of place, and extracted again.
+    {
         let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
         // §3.1–3.2, §3.6: mark points by prediction.
         mark::mark(&mut pass, &rule);
         // The marks' evidence (many segment starts): no fit is made before aligning.
-        let marks_say = interleaved && sweeps::suspect(&pass, &rule);
-        if !marks_say {
+        if !(interleaved && sweeps::suspect(&pass, &rule)) {
             fit(&mut pass, &rule, config, out);
-            // The fits' evidence: long lines scattered far beyond σ_r.
-            if !(interleaved && pass.scattered.get() > 0) {
-                return outcome(pass.stats);
-            }
+            return outcome(pass.stats);
         }
-        marks_say
-    };
+    }
     stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
     if stats.sweeps_aligned == 0 {
-        if marks_say {
-            // Nothing to move: the marks stand (the check step reads every flag).
-            let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-            fit(&mut pass, &rule, config, out);
-        }
+        // Nothing to move: the marks stand (the check step reads every flag).
+        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+        fit(&mut pass, &rule, config, out);
         return outcome(stats);
     }
     out.clear();
@@ -301,11 +294,16 @@ fn run(
 }
 
 /// [`run`] after the pre-processing, with [`Config::scrutiny`]: the walk marks the points with
-/// the scan's own σ when it scatters well beyond σ_r ([`scatter`]); declared sweeps whose
-/// offset shows (the scatter at one beam beyond that within one sweep) are then moved onto
-/// sweep 0 before the fits (and, for more than two sweeps, walked again with the walk's σ),
-/// so that the lines lie where sweep 0 saw them rather than between the sweeps; the fits use
-/// the σ of the moved points.
+/// the scan's own σ when it scatters well beyond σ_r ([`scatter`]). Declared sweeps (without
+/// odometry) with a significant offset ([`sweeps`]) are then moved onto sweep 0, so that the
+/// lines lie where sweep 0 saw them rather than between the sweeps, and fitted with the moved
+/// points' σ:
+/// - when their scatter shows them apart: two sweeps keep the first walk's marks; more are
+///   walked again with its σ (its marks cut segments into pieces of one period, four sweeps
+///   drifting apart);
+/// - otherwise (two sweeps) the moved points are walked again with their own σ, and kept only
+///   if that walk leaves fewer marks: a turn between the sweeps moves points across the beams,
+///   which the scatter shows only where beams graze a surface, and there the walk marks them.
 fn scrutinised(
     beams: Beams<'_>,
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
@@ -317,10 +315,8 @@ fn scrutinised(
     let motion = scan.motion.filter(|m| m.is_valid());
     let sweeps = usize::from(scan.sweeps.max(1));
     let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
-    let apart = sweeps > 1
-        && motion.is_none()
-        && noise_rule
-        && scatter::sweeps_apart(points, sweeps, config.sigma_r);
+    let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
+    let apart = interleaved && scatter::sweeps_apart(points, sweeps, config.sigma_r);
     let own = |points: &[Point], stats: &mut Stats| match scatter::sigma(points, config.sigma_r) {
         Some(sigma) => {
             stats.scan_sigma_um = (sigma * 1000.0) as u32;
@@ -331,34 +327,52 @@ fn scrutinised(
             *config
         }
     };
+    let (r_max, gap) = (scan.geometry.r_max, beams.gap_factor);
     let walk_config = own(points, stats);
-    let walk_rule = Rule::new(&walk_config, scan.geometry.r_max, beams.gap_factor);
+    let walk_sigma_um = stats.scan_sigma_um;
+    let walk_rule = Rule::new(&walk_config, r_max, gap);
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
     mark::mark(&mut pass, &walk_rule);
-    if !apart {
+    let offsets = match interleaved && (apart || sweeps == 2) {
+        true => sweeps::Offsets::of(points, sweeps, scan.geometry.angle_step),
+        false => sweeps::Offsets::default(),
+    };
+    if offsets.moved() == 0 {
         fit(&mut pass, &walk_rule, &walk_config, out);
         return outcome(pass.stats);
     }
-    // With more than two sweeps, the walk's marks on the unmoved points cut segment starts
-    // into pieces of one period (four sweeps drifting apart), so the moved points are walked
-    // again, with the walk's σ. (Measured on the simulated 8 mm / 6 mrad scans: walking the
-    // moved points of two sweeps instead gives more false marks, the offset estimated from a
-    // cluttered scan being imperfect; docs/EVALUATION.md.)
-    let walk_again = sweeps > 2;
-    let step = scan.geometry.angle_step;
-    stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
-    let fit_config = own(points, stats);
-    let rule = Rule::new(&fit_config, scan.geometry.r_max, beams.gap_factor);
-    if walk_again {
-        flags.iter_mut().for_each(|f| *f &= VALID);
+    let unmoved = starts(pass.flags);
+    // Walks the points again with `rule`, from the flags of the pre-processing; returns the
+    // marks (every walk's predictions are counted).
+    let walk_again =
+        |(points, ranges, flags): (&[Point], &[f32], &mut [u8]), stats: &mut Stats, rule: &Rule| {
+            flags.iter_mut().for_each(|f| *f &= VALID);
+            let mut pass = Pass::over(beams, (points, ranges, flags), motion, stats);
+            mark::mark(&mut pass, rule);
+            starts(pass.flags)
+        };
+    offsets.apply(points, ranges, flags);
+    let moved_config = own(points, stats);
+    let moved_sigma_um = stats.scan_sigma_um;
+    let moved_rule = Rule::new(&moved_config, r_max, gap);
+    if sweeps > 2 {
+        walk_again((points, ranges, flags), stats, &walk_rule);
+    } else if !apart && walk_again((points, ranges, flags), stats, &moved_rule) >= unmoved {
+        // The first walk stands: the points are loaded again (exactly as they were) and walked
+        // again (its flags are not kept).
+        preprocess::load((points, ranges, flags), &beams, motion, scan, config, stats);
+        walk_again((points, ranges, flags), stats, &walk_rule);
+        stats.scan_sigma_um = walk_sigma_um;
+        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+        fit(&mut pass, &walk_rule, &walk_config, out);
+        return outcome(pass.stats);
     }
+    stats.scan_sigma_um = moved_sigma_um;
+    stats.sweeps_aligned = offsets.moved();
     // A new pass over the moved points: the walk's noted neighbours are gone, the check step
     // reads every flag (the same outcome).
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-    if walk_again {
-        mark::mark(&mut pass, &walk_rule);
-    }
-    fit(&mut pass, &rule, &fit_config, out);
+    fit(&mut pass, &moved_rule, &moved_config, out);
     outcome(pass.stats)
 }
 
@@ -369,6 +383,11 @@ fn fit(pass: &mut Pass<'_>, rule: &Rule, config: &Config, out: &mut dyn FeatureS
         check::check(pass, rule);
     }
     segment::segments(pass, rule, config, out);
+}
+
+/// Segment starts among `flags` (the marks of a walk).
+fn starts(flags: &[u8]) -> usize {
+    flags.iter().filter(|f| **f & START != 0).count()
 }
 
 /// The extraction's result from its statistics.

@@ -2,8 +2,6 @@
 //! points, ranges and flags, and the statistics. Every step is a function of it, compiled
 //! once in this crate.
 
-use core::cell::Cell;
-
 use heapless::Vec;
 
 use crate::beams::Beams;
@@ -34,19 +32,9 @@ pub(crate) struct Pass<'a> {
     /// order: the only places where its check step can act. `None` when not known (the
     /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
     pub neighbours: Option<Vec<u16, NEIGHBOURS>>,
-    /// Lines of at least [`SCATTERED_POINTS`] points whose scatter is more than
-    /// [`SCATTERED_CHI2`] times what σ_r explains (counted by the typing step under
-    /// `Config::scrutiny`): with the segment starts, the evidence of interleaved sweeps out of
-    /// place.
-    pub scattered: Cell<u16>,
     /// What the extraction did so far.
     pub stats: &'a mut Stats,
 }
-
-/// Fewest points of a line whose scatter counts as evidence (see [`Pass::scattered`]).
-pub(crate) const SCATTERED_POINTS: usize = 10;
-/// Reduced χ² above which a line's scatter counts as evidence (see [`Pass::scattered`]).
-pub(crate) const SCATTERED_CHI2: f32 = 2.0;
 
 impl<'a> Pass<'a> {
     /// The work state of `scan` over the beam table `beams` and the slots (points, ranges,
@@ -79,7 +67,6 @@ impl<'a> Pass<'a> {
             flags,
             motion,
             neighbours: None,
-            scattered: Cell::new(0),
             stats,
         }
     }

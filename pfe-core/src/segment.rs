@@ -38,7 +38,7 @@ pub(crate) fn segments(
 ) {
     // Compiled once with and once without `Config::scrutiny`: without, no check of it is left
     // in the per-segment path.
-    if config.scrutiny {
+    if cfg!(feature = "scrutiny") && config.scrutiny {
         segments_with::<true>(pass, rule, config, out);
     } else {
         segments_with::<false>(pass, rule, config, out);

@@ -100,11 +100,14 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
         sh(&mut c)
     })?;
     step(
-        "pfe-core's micromath build against its error budget",
+        "pfe-core's micromath build against its error budget; its build without scrutiny",
         || {
             sh(cargo()
                 .args(["test", "-p", "pfe-core", "--no-default-features"])
-                .args(["--features", "micromath", "--test", "micromath"]))
+                .args(["--features", "micromath,scrutiny", "--test", "micromath"]))?;
+            sh(cargo()
+                .args(["test", "-p", "pfe-core", "--no-default-features"])
+                .args(["--features", "libm", "--test", "lean"]))
         },
     )?;
     step("unit tests of the examples (the demo's checks)", || {

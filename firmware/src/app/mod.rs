@@ -147,7 +147,9 @@ impl<const N: usize, const M: usize> App<N, M> {
         Self::with_slot(ConfigSlot::named(choice))
     }
 
-    /// A new application with any configuration.
+    /// A new application with any configuration (one with `Config::scrutiny` on is refused by
+    /// every extraction when pfe-core is built without its `scrutiny` feature, as the firmware
+    /// binaries build it).
     pub const fn with_config(config: Config) -> Self {
         Self::with_slot(ConfigSlot::Custom(config))
     }

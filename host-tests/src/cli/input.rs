@@ -71,10 +71,9 @@ pub struct MethodArgs {
     #[arg(long)]
     pub topic: Option<String>,
     /// Interleaved sweeps a scan is made of (1, 2 or 4: beam i in sweep i mod N), whose
-    /// offset (a moving robot's) is then estimated from the scan and removed; `auto`: a SICK
-    /// LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4 at 0.25°), else 1. Default 1: on the
-    /// shared CARMEN logs the alignment does not yet help (docs/REALDATA.md).
-    #[arg(long, default_value = "1", value_parser = sweeps_arg)]
+    /// offset (a moving robot's) is then estimated from the scan and removed where it shows;
+    /// `auto`: a SICK LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4 at 0.25°), else 1.
+    #[arg(long, default_value = "auto", value_parser = sweeps_arg)]
     pub sweeps: Sweeps,
 }
 

@@ -22,7 +22,7 @@ pub struct Args {
     md: Option<PathBuf>,
     /// Interleaved sweeps each scan is declared to be made of (1 to 4), or `auto`: a SICK
     /// LMS2xx's (2 at 0.5°, 4 at 0.25°). pfe aligns declared sweeps whose offset shows.
-    #[arg(long, default_value = "1", value_parser = crate::cli::input::sweeps_arg)]
+    #[arg(long, default_value = "auto", value_parser = crate::cli::input::sweeps_arg)]
     sweeps: crate::cli::input::Sweeps,
     /// The command named in the Markdown report.
     #[arg(long, default_value = "pfe realdata")]

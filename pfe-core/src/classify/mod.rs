@@ -16,7 +16,7 @@ use crate::fit::line::{fit_line, LineFit};
 use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
 use crate::math;
-use crate::pass::{Pass, SCATTERED_CHI2, SCATTERED_POINTS};
+use crate::pass::Pass;
 
 /// Fewest points of a circle in the default mode.
 const CIRCLE_MIN_POINTS: usize = 6;
@@ -75,9 +75,6 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 let c = dx * line.cos_alpha + dy * line.sin_alpha;
                 let dof = pts.len() as f32 - 2.0;
                 let k = scatter_scale(line.sse() * (dx * dx + dy * dy), var * c * c, dof);
-                if k > SCATTERED_CHI2 && pts.len() >= SCATTERED_POINTS {
-                    pass.scattered.set(pass.scattered.get().saturating_add(1));
-                }
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;

@@ -126,24 +126,53 @@ pub(crate) fn align(
     sweeps: usize,
     angle_step: f32,
 ) -> usize {
-    let mut moved = 0;
-    for s in 1..sweeps.min(points.len()) {
-        let Some(offset) = estimate(points, sweeps, s, angle_step) else {
-            continue;
-        };
-        if !offset.is_significant() {
-            continue;
+    let offsets = Offsets::of(points, sweeps, angle_step);
+    offsets.apply(points, ranges, flags);
+    offsets.moved()
+}
+
+/// The significant offsets of sweeps 1 to 3 of one scan (four sweeps at most).
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Offsets {
+    sweeps: usize,
+    of: [Option<SweepOffset>; 3],
+}
+
+impl Offsets {
+    /// Each sweep's [`estimate`] where it is significant.
+    pub(crate) fn of(points: &[Point], sweeps: usize, angle_step: f32) -> Offsets {
+        let mut of = [None; 3];
+        for (s, slot) in of.iter_mut().enumerate() {
+            let sweep = s + 1;
+            if sweep < sweeps.min(points.len()) {
+                *slot =
+                    estimate(points, sweeps, sweep, angle_step).filter(SweepOffset::is_significant);
+            }
         }
-        moved += 1;
-        let slots = points.iter_mut().zip(ranges.iter_mut()).zip(flags);
-        for ((p, r), f) in slots.skip(s).step_by(sweeps) {
-            if f & VALID != 0 {
-                *p = offset.apply(*p);
-                *r = math::hypot(p.x, p.y);
+        Offsets { sweeps, of }
+    }
+
+    /// Sweeps with a significant offset.
+    pub(crate) fn moved(&self) -> usize {
+        self.of.iter().flatten().count()
+    }
+
+    /// Moves each sweep's valid points by its offset and sets their `ranges` to their new
+    /// distance from the origin.
+    pub(crate) fn apply(&self, points: &mut [Point], ranges: &mut [f32], flags: &[u8]) {
+        for (s, offset) in self.of.iter().enumerate() {
+            let Some(offset) = offset else {
+                continue;
+            };
+            let slots = points.iter_mut().zip(ranges.iter_mut()).zip(flags);
+            for ((p, r), f) in slots.skip(s + 1).step_by(self.sweeps.max(1)) {
+                if f & VALID != 0 {
+                    *p = offset.apply(*p);
+                    *r = math::hypot(p.x, p.y);
+                }
             }
         }
     }
-    moved
 }
 
 /// Whether the default mode's walk over a scan of interleaved sweeps left the marks that
