@@ -49,7 +49,8 @@ pub enum ExtractError {
     },
     /// The scan geometry is unusable (non-finite or zero angular step, r_max ≤ 0).
     InvalidGeometry,
-    /// The configuration is unusable (a non-finite or non-positive parameter).
+    /// The configuration is unusable (a non-finite or non-positive parameter, or `scrutiny` on
+    /// in a build without the `scrutiny` feature).
     InvalidConfig,
     /// More features than the capacity `M`: the first `M` are kept, `dropped` were not stored.
     FeatureCapacity {
@@ -74,3 +75,51 @@ impl fmt::Display for ExtractError {
 }
 
 impl core::error::Error for ExtractError {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use core::fmt::Write;
+
+    /// The message of `e`.
+    fn text(e: &dyn fmt::Display) -> heapless::String<96> {
+        let mut s = heapless::String::new();
+        // 96 bytes hold every message below.
+        let _ = write!(s, "{e}");
+        s
+    }
+
+    #[test]
+    fn every_error_says_what_went_wrong() {
+        let cases: [(&dyn fmt::Display, &str); 7] = [
+            (
+                &FitError::TooFewPoints { got: 2, need: 3 },
+                "too few points for the fit: 2 < 3",
+            ),
+            (&FitError::NonFinite, "a point is not finite"),
+            (
+                &FitError::Degenerate,
+                "degenerate point set: the fit is undetermined",
+            ),
+            (
+                &ExtractError::TooManyReadings {
+                    got: 800,
+                    capacity: 721,
+                },
+                "scan has 800 readings, capacity is 721",
+            ),
+            (&ExtractError::InvalidGeometry, "invalid scan geometry"),
+            (
+                &ExtractError::InvalidConfig,
+                "invalid extractor configuration",
+            ),
+            (
+                &ExtractError::FeatureCapacity { dropped: 3 },
+                "feature buffer full: 3 features dropped",
+            ),
+        ];
+        for (e, want) in cases {
+            assert_eq!(text(e).as_str(), want);
+        }
+    }
+}

@@ -169,6 +169,24 @@ fn a_configuration_is_valid_only_when_every_parameter_is() {
     let mut c = Config::default();
     c.min_points = 1;
     assert!(!c.is_valid());
+    // The zero edges that are out: λ of the paper's threshold, the typing's largest radius.
+    let mut c = Config::paper();
+    c.threshold = Threshold::Paper {
+        d0: 50.0,
+        lambda: 0.0,
+    };
+    assert!(!c.is_valid());
+    let mut c = Config::default();
+    c.typing = Typing::CompareFits {
+        chi2: 25.0,
+        ratio: 0.5,
+        max_radius: 0.0,
+    };
+    assert!(!c.is_valid());
+    // σ_sys: zero is valid, below or not finite is not.
+    assert!(Config::default().with_sigma_sys(0.0).is_valid());
+    assert!(!Config::default().with_sigma_sys(-0.1).is_valid());
+    assert!(!Config::default().with_sigma_sys(f32::NAN).is_valid());
 }
 
 #[test]

@@ -91,8 +91,14 @@ pub fn run(args: &[String]) -> Result<()> {
         &accuracy()?,
     )?;
     let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
-    let libm = build_fw("pfe-bench", &[], &env, &base.join("libm"))?;
-    let mm = build_fw("pfe-bench", &["micromath"], &env, &base.join("micromath"))?;
+    // With pfe-core's `scrutiny`: the `Config::default()` row runs the host's configuration.
+    let libm = build_fw("pfe-bench", &["scrutiny"], &env, &base.join("libm"))?;
+    let mm = build_fw(
+        "pfe-bench",
+        &["micromath", "scrutiny"],
+        &env,
+        &base.join("micromath"),
+    )?;
     demo_host(&[
         "bench".as_ref(),
         "--elf".as_ref(),
@@ -120,7 +126,7 @@ fn worst() -> Result<()> {
     ])?;
     let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
     // The libm build's directory: only the bench binary rebuilds.
-    let elf = build_fw("pfe-bench", &[], &env, &base.join("libm"))?;
+    let elf = build_fw("pfe-bench", &["scrutiny"], &env, &base.join("libm"))?;
     let md = util::root().join("docs").join("PERFORMANCE.md");
     demo_host(&[
         "worst".as_ref(),

@@ -218,8 +218,12 @@ fn is_arc(pts: &[Point], circle: &Circle, sse_c: f32, margin: f32) -> bool {
     let c = circle.center;
     let (ax, ay, bx, by) = (a.x - c.x, a.y - c.y, b.x - c.x, b.y - c.y);
     let (dot, cross) = (ax * bx + ay * by, ax * by - ay * bx);
-    let wide = dot < 0.0 || math::abs(cross) >= CIRCLE_MIN_ARC_TAN * dot;
+    // Beyond 90° (dot < 0) this holds whatever the cross product.
+    let wide = math::abs(cross) >= CIRCLE_MIN_ARC_TAN * dot;
     pts.len() >= CIRCLE_MIN_POINTS
         && wide
         && best_split_sse(pts).is_some_and(|split| split - sse_c > margin)
 }
+
+#[cfg(test)]
+mod tests;

@@ -25,7 +25,7 @@ mod fw {
         sys, time,
         uart::{Uart, UART1},
     };
-    use pfe_core::{Config, ScanGeometry};
+    use pfe_core::{Config, ExtractError, ScanGeometry};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
     /// Values a telegram may hold (the bench's scans have 361).
@@ -97,11 +97,23 @@ mod fw {
             let values = codes.get(..n).unwrap_or(&[]);
             let scan = RawScan::lms_8m(g, values, 1.0).to_pfe();
             let t0 = time::ticks();
-            let _ = core::hint::black_box(ex.extract(&scan, &paper));
+            let r_paper = core::hint::black_box(ex.extract(&scan, &paper));
             let t_paper = time::ticks() - t0;
             let t0 = time::ticks();
-            let _ = core::hint::black_box(ex.extract(&scan, &default));
+            let r_default = core::hint::black_box(ex.extract(&scan, &default));
             let t_default = time::ticks() - t0;
+            // An extraction refused outright measures nothing (a full feature buffer is fine).
+            for r in [r_paper, r_default] {
+                if let Err(
+                    ExtractError::InvalidConfig
+                    | ExtractError::InvalidGeometry
+                    | ExtractError::TooManyReadings { .. },
+                ) = r
+                {
+                    defmt::error!("bench: an extraction was refused");
+                    sys::exit(sys::EXIT_USAGE);
+                }
+            }
             // Whole pipeline: bytes → codes → features → frame.
             let t0 = time::ticks();
             let (_, n2) = decode(&mut dec, rest, &mut codes);
