@@ -404,6 +404,55 @@ fn sweeps_turned_against_each_other_are_walked_again() {
     );
 }
 
+/// The board's configuration (no `scrutiny`): 8 mm / 6 mrad between sweeps, σ_r = 5 mm, no
+/// odometry. Declared sweeps are moved when the walk's marks show them out of place and the
+/// scan is extracted again from scratch: fewer false marks and fewer walls without one good line
+/// than as one sweep, and the statistics and features of the second extraction only (readings,
+/// valid points, features as stored, both walks' predictions).
+#[test]
+fn the_boards_configuration_aligns_sweeps_its_marks_show_apart() {
+    let mut ex = Extractor::<401, 128>::new();
+    let mut noise = Noise::new(29);
+    let (g, n, sweeps) = variant(0.5);
+    let truth = sweep_pose(0.5);
+    let config = Config::default().with_scrutiny(false).with_sigma_r(5.0);
+    let (mut plain, mut declared) = (Score::default(), Score::default());
+    let (mut walls, mut bad_walls, mut plain_bad, mut aligned) = (0, 0, 0, 0);
+    for _ in 0..100 {
+        let room = room(&mut noise);
+        let (ranges, hits) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
+        let (marks, plain_features, one) = extract_with(&mut ex, g, &ranges, 1, &config);
+        score(&hits, &marks, &plain_features, &mut plain);
+        let (marks, features, stats) = extract_with(&mut ex, g, &ranges, 2, &config);
+        score(&hits, &marks, &features, &mut declared);
+        assert_eq!(stats, ex.stats());
+        assert_eq!(stats.readings, n);
+        assert_eq!(stats.valid, ranges.iter().filter(|r| r.is_finite()).count());
+        assert_eq!(stats.features, features.len());
+        assert!(stats.sweeps_aligned <= 1);
+        if stats.sweeps_aligned == 1 {
+            aligned += 1;
+            assert!(stats.predictions > one.predictions, "{stats:?} vs {one:?}");
+        } else {
+            assert_eq!(features, plain_features);
+        }
+        let (w, bad) = wall_lines(&room, &hits, &features);
+        walls += w;
+        bad_walls += bad;
+        plain_bad += wall_lines(&room, &hits, &plain_features).1;
+    }
+    println!(
+        "false marks {} (1 sweep {}), {bad_walls} of {walls} walls bad (1 sweep {plain_bad}), {aligned} aligned",
+        declared.false_marks, plain.false_marks
+    );
+    assert!(aligned >= 20, "{aligned} of 100 scans aligned");
+    assert!(
+        declared.false_marks < plain.false_marks,
+        "{declared:?} vs {plain:?}"
+    );
+    assert!(bad_walls < plain_bad, "{bad_walls} vs {plain_bad}");
+}
+
 /// Of the runs of ≥ 30 beams on a wall of `room`: how many, and how many have not exactly one
 /// line of `features` over most of them with ρ and α within 4 standard deviations of the
 /// wall's (plus 1 mm / 1 mrad).

@@ -431,3 +431,47 @@ fn a_scan_geometry_needs_a_positive_maximum_range() {
         Err(pfe_core::ExtractError::InvalidGeometry)
     );
 }
+
+/// `stats()` is what the last extraction returned; `is_mark(i)` is `marks()` membership, and
+/// false past the last scan's readings although a longer scan before left marks there.
+#[test]
+fn the_extractor_reports_its_last_extraction() {
+    // A square room 4 m × 4 m around the scanner: walls and corners over 360 beams of 1°, then
+    // the first 100 beams of it.
+    let half = 2000.0;
+    let prims = [
+        Prim::Seg(half, -half, half, half),
+        Prim::Seg(half, half, -half, half),
+        Prim::Seg(-half, half, -half, -half),
+        Prim::Seg(-half, -half, half, -half),
+    ];
+    let step = 1f64.to_radians();
+    let (long, _) = scan(&prims, 0.0, step, 360, 7900.0);
+    let g = ScanGeometry {
+        start_angle: 0.0,
+        angle_step: 1f32.to_radians(),
+        r_max: 8000.0,
+    };
+    let mut ex = Extractor::<400, 32>::new();
+    let config = Config::default();
+    let first = ex.extract(&Scan::from_mm(g, &long), &config).unwrap();
+    assert_eq!(first, ex.stats());
+    let marks: Vec<usize> = ex.marks().collect();
+    assert!(marks.iter().any(|&m| m >= 100), "{marks:?}");
+    for i in 0..400 {
+        assert_eq!(ex.is_mark(i), marks.contains(&i), "beam {i}");
+    }
+    let second = ex
+        .extract(&Scan::from_mm(g, &long[..100]), &config)
+        .unwrap();
+    assert_eq!(second, ex.stats());
+    assert_ne!(first, second);
+    let marks: Vec<usize> = ex.marks().collect();
+    assert!(
+        marks.iter().all(|&m| m < 100) && !marks.is_empty(),
+        "{marks:?}"
+    );
+    for i in 0..400 {
+        assert_eq!(ex.is_mark(i), marks.contains(&i), "beam {i}");
+    }
+}
