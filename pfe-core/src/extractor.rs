@@ -296,14 +296,16 @@ fn run(
 /// [`run`] after the pre-processing, with [`Config::scrutiny`]: the walk marks the points with
 /// the scan's own σ when it scatters well beyond σ_r ([`scatter`]). Declared sweeps (without
 /// odometry) with a significant offset ([`sweeps`]) are then moved onto sweep 0, so that the
-/// lines lie where sweep 0 saw them rather than between the sweeps, and fitted with the moved
-/// points' σ:
-/// - when their scatter shows them apart: two sweeps keep the first walk's marks; more are
-///   walked again with its σ (its marks cut segments into pieces of one period, four sweeps
-///   drifting apart);
-/// - otherwise (two sweeps) the moved points are walked again with their own σ, and kept only
-///   if that walk leaves fewer marks: a turn between the sweeps moves points across the beams,
-///   which the scatter shows only where beams graze a surface, and there the walk marks them.
+/// lines lie where sweep 0 saw them rather than between the sweeps, and walked again:
+/// - two sweeps: with the first walk's σ when their scatter shows them apart, else with the
+///   moved points' own σ (a turn between the sweeps moves points across the beams, which the
+///   scatter shows only where beams graze a surface, and there the walk marks them). The new
+///   walk is kept when it leaves fewer marks; otherwise the first walk's marks stand, fitted on
+///   the moved points when the sweeps showed apart and on the points as they were if not;
+/// - more sweeps, when apart: with the first walk's σ (its marks on the unmoved points cut
+///   segments into pieces of one period, four sweeps drifting apart).
+///
+/// The fits of moved points use their own σ.
 fn scrutinised(
     beams: Beams<'_>,
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
@@ -357,15 +359,21 @@ fn scrutinised(
     let moved_rule = Rule::new(&moved_config, r_max, gap);
     if sweeps > 2 {
         walk_again((points, ranges, flags), stats, &walk_rule);
-    } else if !apart && walk_again((points, ranges, flags), stats, &moved_rule) >= unmoved {
-        // The first walk stands: the points are loaded again (exactly as they were) and walked
-        // again (its flags are not kept).
-        preprocess::load((points, ranges, flags), &beams, motion, scan, config, stats);
-        walk_again((points, ranges, flags), stats, &walk_rule);
-        stats.scan_sigma_um = walk_sigma_um;
-        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-        fit(&mut pass, &walk_rule, &walk_config, out);
-        return outcome(pass.stats);
+    } else {
+        let rule = if apart { &walk_rule } else { &moved_rule };
+        if walk_again((points, ranges, flags), stats, rule) >= unmoved {
+            // The first walk stands: the points are loaded again (exactly as they were) and
+            // walked again (its flags are not kept), then moved again when apart.
+            preprocess::load((points, ranges, flags), &beams, motion, scan, config, stats);
+            walk_again((points, ranges, flags), stats, &walk_rule);
+            if !apart {
+                stats.scan_sigma_um = walk_sigma_um;
+                let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+                fit(&mut pass, &walk_rule, &walk_config, out);
+                return outcome(pass.stats);
+            }
+            offsets.apply(points, ranges, flags);
+        }
     }
     stats.scan_sigma_um = moved_sigma_um;
     stats.sweeps_aligned = offsets.moved();
