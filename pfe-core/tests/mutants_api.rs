@@ -365,13 +365,19 @@ fn a_window_line_predicts_from_a_moved_scanner_as_from_the_origin() {
 /// Stated over empirical (var_rho, cov_alpha_rho) of the line of a wall 2.5 m ahead, off-centre
 /// (ρ and α correlated), range noise 9 mm told as 5 mm, over 400 scans.
 fn stated_over_spread(config: &Config) -> [f64; 2] {
+    let [_, rho, cov] = stated_over_spread_of(config, Prim::Seg(2500.0, -300.0, 2200.0, 1500.0));
+    [rho, cov]
+}
+
+/// Stated over observed (α, ρ) variances and covariance of the one line fitted to `wall`
+/// under range noise of 9 mm (400 scans), the configuration told 5 mm.
+fn stated_over_spread_of(config: &Config, wall: Prim) -> [f64; 3] {
     let g = ScanGeometry::LMS200_180_050;
     let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
     let mut ex = Extractor::<361, 64>::new();
-    let wall = [Prim::Seg(2500.0, -300.0, 2200.0, 1500.0)];
-    let (exact, _) = scan(&wall, start, step, 361, 8000.0);
+    let (exact, _) = scan(&[wall], start, step, 361, 8000.0);
     let mut noise = Noise::new(2025);
-    let (mut fits, mut stated) = (Vec::new(), [0.0f64; 2]);
+    let (mut fits, mut stated) = (Vec::new(), [0.0f64; 3]);
     for _ in 0..400 {
         let ranges: Vec<f32> = exact
             .iter()
@@ -380,8 +386,9 @@ fn stated_over_spread(config: &Config) -> [f64; 2] {
         ex.extract(&Scan::from_mm(g, &ranges), config).unwrap();
         if let [Feature::Line(l)] = ex.features() {
             fits.push((f64::from(l.alpha), f64::from(l.rho)));
-            stated[0] += f64::from(l.var_rho);
-            stated[1] += f64::from(l.cov_alpha_rho);
+            stated[0] += f64::from(l.var_alpha);
+            stated[1] += f64::from(l.var_rho);
+            stated[2] += f64::from(l.cov_alpha_rho);
         }
     }
     let n = fits.len() as f64;
@@ -390,9 +397,72 @@ fn stated_over_spread(config: &Config) -> [f64; 2] {
         fits.iter().map(|f| f.0).sum::<f64>() / n,
         fits.iter().map(|f| f.1).sum::<f64>() / n,
     );
+    let var_alpha = fits.iter().map(|f| (f.0 - ma).powi(2)).sum::<f64>() / (n - 1.0);
     let var_rho = fits.iter().map(|f| (f.1 - mr).powi(2)).sum::<f64>() / (n - 1.0);
     let cov = fits.iter().map(|f| (f.0 - ma) * (f.1 - mr)).sum::<f64>() / (n - 1.0);
-    [stated[0] / n / var_rho, stated[1] / n / cov]
+    [
+        stated[0] / n / var_alpha,
+        stated[1] / n / var_rho,
+        stated[2] / n / cov,
+    ]
+}
+
+/// A rough wall seen at 45°–68° of incidence (x − y = 3000 mm, range noise 12 mm) beside a
+/// smooth wall with 5 mm (x = 2000 mm, which keeps the scan's own σ at 5 mm): the rough line's
+/// covariance is scaled by its reduced χ², whose residuals are compared with the range noise's
+/// share along the normal (σ_r² cos²β at the middle point): its stated variances are 0.68 of
+/// the spread (seed 2026; the middle point's incidence stands for 45°–68°), inside 0.5–1.5,
+/// where a wrong incidence term (the normal's sine turned) states 0.30.
+#[test]
+fn a_rough_line_covariance_follows_its_scatter_at_oblique_incidence() {
+    let g = ScanGeometry::LMS200_180_050;
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let walls = [
+        Prim::Seg(2000.0, -4000.0, 2000.0, -200.0),
+        Prim::Seg(3000.0, 0.0, 5000.0, 2000.0),
+    ];
+    let (exact, hits) = scan(&walls, start, step, 361, 8000.0);
+    let mut ex = Extractor::<361, 64>::new();
+    let mut noise = Noise::new(2026);
+    let (mut fits, mut stated) = (Vec::new(), [0.0f64; 2]);
+    for _ in 0..400 {
+        let ranges: Vec<f32> = exact
+            .iter()
+            .zip(&hits)
+            .map(|(&r, h)| {
+                let sigma = if *h == Some(1) { 12.0 } else { 5.0 };
+                (f64::from(r) + sigma * noise.gauss()) as f32
+            })
+            .collect();
+        ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
+            .unwrap();
+        let rough = ex.features().iter().find_map(|f| match f {
+            Feature::Line(l) if l.rho > 1500.0 && l.alpha < -0.5 => Some(*l),
+            _ => None,
+        });
+        if let Some(l) = rough.filter(|l| l.points >= 35) {
+            fits.push((f64::from(l.alpha), f64::from(l.rho)));
+            stated[0] += f64::from(l.var_alpha);
+            stated[1] += f64::from(l.var_rho);
+        }
+    }
+    let n = fits.len() as f64;
+    assert!(n >= 150.0, "{n} scans with the rough line whole");
+    let mean = |k: usize| fits.iter().map(|f| [f.0, f.1][k]).sum::<f64>() / n;
+    for (k, what) in ["var_alpha", "var_rho"].into_iter().enumerate() {
+        let m = mean(k);
+        let spread = fits
+            .iter()
+            .map(|f| ([f.0, f.1][k] - m).powi(2))
+            .sum::<f64>()
+            / (n - 1.0);
+        let ratio = stated[k] / n / spread;
+        println!("{what}: stated / spread {ratio:.2}");
+        assert!(
+            (0.5..=1.5).contains(&ratio),
+            "{what}: stated / spread {ratio:.2}"
+        );
+    }
 }
 
 #[test]
