@@ -114,9 +114,18 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
     }
     let cap = tmp.join("capture.lms");
     std::fs::write(&cap, &capture).unwrap();
-    // The firmware runs without `scrutiny`, where a systematic error is not added: told none.
+    // The firmware runs one sweep, without `scrutiny`, where a systematic error is not added:
+    // told one sweep and none.
     let extracted = Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(["extract", "--format", "lms200", "--sigma-sys", "0"])
+        .args([
+            "extract",
+            "--format",
+            "lms200",
+            "--sweeps",
+            "1",
+            "--sigma-sys",
+            "0",
+        ])
         .arg(&cap)
         .output()
         .unwrap();
