@@ -581,3 +581,33 @@ fn the_offset_of_sweep_zero_or_beyond_the_last_is_none() {
     assert!(estimate(&pts, 2, 2, g.angle_step).is_none());
     assert!(estimate(&pts, 2, 1, f32::NAN).is_none());
 }
+
+/// More sweeps than [`MAX_SWEEPS`] are not aligned at all (rather than some of them moved): a
+/// scan of 8 mm / 6 mrad sweeps declared as 8 gives what it gives as one sweep, with or
+/// without scrutiny, while declared as 2 it is aligned.
+#[test]
+fn more_sweeps_than_the_most_are_left_as_they_are() {
+    assert_eq!(pfe_core::preprocess::sweeps::MAX_SWEEPS, 4);
+    let mut ex = Extractor::<401, 128>::new();
+    let mut noise = Noise::new(31);
+    let (g, n, sweeps) = variant(0.5);
+    let truth = sweep_pose(0.5);
+    let mut aligned_as_two = 0;
+    for config in [Config::default(), Config::default().with_scrutiny(false)] {
+        let config = config.with_sigma_r(5.0);
+        for _ in 0..20 {
+            let room = room(&mut noise);
+            let (ranges, _) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
+            let one = extract_with(&mut ex, g, &ranges, 1, &config);
+            let eight = extract_with(&mut ex, g, &ranges, 8, &config);
+            assert_eq!(eight, one);
+            aligned_as_two += extract_with(&mut ex, g, &ranges, 2, &config)
+                .2
+                .sweeps_aligned;
+        }
+    }
+    assert!(
+        aligned_as_two >= 10,
+        "{aligned_as_two} of 40 aligned as two sweeps"
+    );
+}

@@ -131,17 +131,24 @@ pub(crate) fn align(
     offsets.moved()
 }
 
-/// The significant offsets of sweeps 1 to 3 of one scan (four sweeps at most).
+/// Most sweeps a scan is aligned for (an LMS2xx at 0.25°): a scan declared with more is left
+/// as it is, rather than some of its sweeps moved.
+pub const MAX_SWEEPS: usize = 4;
+
+/// The significant offsets of sweeps 1 to 3 of one scan of at most [`MAX_SWEEPS`].
 #[derive(Clone, Copy, Default)]
 pub(crate) struct Offsets {
     sweeps: usize,
-    of: [Option<SweepOffset>; 3],
+    of: [Option<SweepOffset>; MAX_SWEEPS - 1],
 }
 
 impl Offsets {
-    /// Each sweep's [`estimate`] where it is significant.
+    /// Each sweep's [`estimate`] where it is significant (none beyond [`MAX_SWEEPS`]).
     pub(crate) fn of(points: &[Point], sweeps: usize, angle_step: f32) -> Offsets {
-        let mut of = [None; 3];
+        if sweeps > MAX_SWEEPS {
+            return Offsets::default();
+        }
+        let mut of = [None; MAX_SWEEPS - 1];
         for (s, slot) in of.iter_mut().enumerate() {
             let sweep = s + 1;
             if sweep < sweeps.min(points.len()) {
