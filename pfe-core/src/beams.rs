@@ -121,3 +121,75 @@ impl Beams<'_> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(a: f64) -> (f64, f64) {
+        (a.cos(), a.sin())
+    }
+
+    fn near(p: Point, (x, y): (f64, f64), tol: f64) -> bool {
+        (f64::from(p.x) - x).abs() < tol && (f64::from(p.y) - y).abs() < tol
+    }
+
+    /// Every beam's direction within 1e-5 of its bearing's (f64), exactly `sin_cos` of it
+    /// every 64 beams where the recurrence restarts; the largest gap per mm of range is
+    /// sin δ / sin(10° − δ) (Borges & Aldon's λ = 10°).
+    #[test]
+    fn the_table_holds_each_beams_direction_and_the_gap_factor() {
+        for g in [
+            ScanGeometry::LMS200_180_050,
+            ScanGeometry::lms200(100.0, 0.25),
+            ScanGeometry::lms200(180.0, 1.0),
+        ] {
+            let mut table = BeamTable::<401>::new();
+            let b = table.of(g);
+            let step = f64::from(g.angle_step);
+            for (i, &d) in b.dirs.iter().enumerate() {
+                let a = f64::from(g.start_angle) + step * i as f64;
+                assert!(near(d, dir(a), 1e-5), "beam {i}: {d:?}");
+                if i % 64 == 0 {
+                    let (s, c) = math::sin_cos(g.bearing(i));
+                    assert_eq!((d.x, d.y), (c, s), "beam {i}");
+                }
+            }
+            let lam = 10f64.to_radians();
+            let want = step.sin() / (lam - step).sin();
+            let got = f64::from(b.gap_factor);
+            assert!((got - want).abs() < 1e-6 * want, "{got} vs {want}");
+        }
+    }
+
+    /// A span's middle direction is its middle beam's (odd count) or halfway between the two
+    /// middle beams (even count); its ends are its first and last beams' and its spread the
+    /// table's for its count; an empty span is none.
+    #[test]
+    fn a_span_of_beams_has_its_middle_ends_and_spread() {
+        let g = ScanGeometry::LMS200_180_050;
+        let mut table = BeamTable::<361>::new();
+        let b = table.of(g);
+        let step = f64::from(g.angle_step);
+        let bearing = |i: f64| f64::from(g.start_angle) + step * i;
+        for (s, e) in [(0, 0), (10, 12), (10, 13), (100, 140), (100, 141), (3, 360)] {
+            let span = b.span(s, e).unwrap();
+            assert_eq!(span.count, e - s + 1);
+            let mid = bearing(0.5 * (s + e) as f64);
+            assert!(near(span.mid, dir(mid), 2e-6), "{s}..={e}: {:?}", span.mid);
+            assert!(near(span.ends[0], dir(bearing(s as f64)), 1e-5));
+            assert!(near(span.ends[1], dir(bearing(e as f64)), 1e-5));
+            // E = Σ_j 2 sin²(jδ) over the offsets j from the middle.
+            let want: f64 = (s..=e)
+                .map(|i| 2.0 * ((i as f64 - 0.5 * (s + e) as f64) * step).sin().powi(2))
+                .sum();
+            let got = f64::from(span.spread);
+            assert!(
+                (got - want).abs() < 1e-5 * want.max(1e-3),
+                "{got} vs {want}"
+            );
+        }
+        assert!(b.span(5, 4).is_none());
+        assert!(b.span(5, 361).is_none());
+    }
+}

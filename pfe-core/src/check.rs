@@ -54,3 +54,78 @@ fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule) -> usize {
     }
     next
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::extractor::Extractor;
+    use crate::flags::VALID;
+    use crate::math;
+    use crate::scan::{Scan, ScanGeometry};
+
+    /// The flags after the check step over a wall 3 m ahead (beams within ±60°, none beyond)
+    /// whose only marks are `marks`, reading every flag and (when `noted`) only the noted
+    /// neighbours.
+    fn checked(marks: &[usize], noted: bool) -> [u8; 361] {
+        let g = ScanGeometry::LMS200_180_050;
+        let ranges: [f32; 361] = core::array::from_fn(|i| {
+            let b = g.bearing(i);
+            if math::abs(b) < 1.05 {
+                3000.0 / math::sin_cos(b).1
+            } else {
+                f32::NAN
+            }
+        });
+        let scan = Scan::from_mm(g, &ranges);
+        Extractor::<361, 8>::new().with_pass(&scan, &Config::default(), |pass, rule| {
+            for &i in marks {
+                pass.set(i, START);
+            }
+            if noted {
+                let mut list = heapless::Vec::new();
+                for w in marks.windows(2).filter(|w| w[1] == w[0] + 1) {
+                    let _ = list.push(w[1] as u16);
+                }
+                pass.neighbours = Some(list);
+            }
+            check(pass, rule);
+            let mut flags = [0u8; 361];
+            flags.copy_from_slice(pass.flags);
+            flags
+        })
+    }
+
+    fn starts(flags: &[u8]) -> heapless::Vec<usize, 64> {
+        (0..flags.len())
+            .filter(|&i| flags[i] & (VALID | START) == VALID | START)
+            .collect()
+    }
+
+    /// A run of marks on the wall whose next point its last `NP` points predict keeps only
+    /// the marks up to the window's first point (a longer run keeps its first ones); a run
+    /// ended by an invalid reading or by the end of the valid beams, and a lone mark, stay.
+    #[test]
+    fn a_run_of_marks_is_cleared_after_its_last_window_only_where_the_next_point_fits() {
+        let valid = (0..361).filter(|&i| checked(&[], false)[i] & VALID != 0);
+        let (lo, hi) = (valid.clone().min().unwrap(), valid.max().unwrap());
+        assert_eq!((lo, hi), (60, 300));
+        for noted in [false, true] {
+            // NP + 3 marks: the last NP are the window, the marks after its first go.
+            let run: heapless::Vec<usize, 8> = (150..150 + NP + 3).collect();
+            let kept: heapless::Vec<usize, 8> = (150..=150 + 3).collect();
+            assert_eq!(starts(&checked(&run, noted)), kept, "noted {noted}");
+            // Two marks: the window is the run.
+            assert_eq!(
+                starts(&checked(&[200, 201], noted))[..],
+                [200],
+                "noted {noted}"
+            );
+            // A lone mark stays.
+            assert_eq!(starts(&checked(&[120], noted))[..], [120], "noted {noted}");
+            // Runs ending at the last valid beam stay.
+            let end: heapless::Vec<usize, 8> = (hi - 3..=hi).collect();
+            assert_eq!(starts(&checked(&end, noted)), end, "noted {noted}");
+        }
+    }
+}

@@ -166,6 +166,28 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
         &self.out.features
     }
 
+    /// Runs `step` on the work state of `scan` (loaded: corrected, flags valid, nothing
+    /// marked) with `config`'s rule: one step of the pipeline under test.
+    #[cfg(test)]
+    pub(crate) fn with_pass<R>(
+        &mut self,
+        scan: &Scan<'_>,
+        config: &Config,
+        step: impl FnOnce(&mut Pass<'_>, &Rule) -> R,
+    ) -> R {
+        self.work.len = scan.ranges.len().min(N);
+        let Extractor { beams, work, out } = self;
+        let mut pass = Pass::load(
+            beams.of(scan.geometry),
+            work.slots(),
+            scan,
+            config,
+            &mut out.stats,
+        );
+        let rule = Rule::new(config, scan.geometry.r_max, pass.beams.gap_factor);
+        step(&mut pass, &rule)
+    }
+
     /// Statistics of the last extraction.
     pub fn stats(&self) -> Stats {
         self.out.stats

@@ -73,6 +73,7 @@ pub(crate) fn next_flag(flags: &[u8], from: usize, seek: Seek) -> Option<usize> 
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
 
     /// `Seek::none_in` never skips a word with a hit: every word of four flags made of the
@@ -86,6 +87,29 @@ mod tests {
                 if seek.none_in(word) {
                     assert!(!bytes.iter().any(|&f| seek.hit(f)), "{word:#010x}");
                 }
+            }
+        }
+    }
+
+    /// On the flags a scan has (a segment start is a valid point), `Seek::none_in` is exact:
+    /// it also skips every word without a hit, so the search reads a word's four flags one
+    /// by one only where one of them is what it seeks.
+    #[test]
+    fn seek_skips_every_word_without_hits() {
+        // The four low bits in every combination, less a start on an invalid point.
+        let flags: std::vec::Vec<u8> = (0..16u8)
+            .filter(|f| f & START == 0 || f & VALID != 0)
+            .collect();
+        for seek in [Seek::Mark, Seek::NotMark, Seek::Valid, Seek::SegmentEnd] {
+            for w in 0..flags.len().pow(4) {
+                let pick = |k: u32| flags[(w / flags.len().pow(k)) % flags.len()];
+                let bytes = [pick(0), pick(1), pick(2), pick(3)];
+                let word = u32::from_le_bytes(bytes);
+                assert_eq!(
+                    seek.none_in(word),
+                    !bytes.iter().any(|&f| seek.hit(f)),
+                    "{word:#010x}"
+                );
             }
         }
     }

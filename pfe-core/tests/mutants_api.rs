@@ -547,3 +547,140 @@ fn the_extractor_reports_its_last_extraction() {
         assert_eq!(ex.is_mark(i), marks.contains(&i), "beam {i}");
     }
 }
+
+/// `Point` and `[x, y]` convert both ways without changing a coordinate; a point is valid only
+/// when both coordinates are finite.
+#[test]
+fn points_convert_to_and_from_pairs_and_need_both_coordinates_finite() {
+    let p = Point::from([1.5, -2.25]);
+    assert_eq!((p.x, p.y), (1.5, -2.25));
+    assert_eq!(<[f32; 2]>::from(Point::new(3.0, 4.5)), [3.0, 4.5]);
+    assert!(Point::new(1.0, 2.0).is_valid());
+    for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        assert!(!Point::new(bad, 2.0).is_valid(), "x = {bad}");
+        assert!(!Point::new(1.0, bad).is_valid(), "y = {bad}");
+    }
+}
+
+/// The ray–circle intersection at its edges, where every value is exact in f32: from a point
+/// on the circle looking in, the far side (2r along the diameter); looking out or along the
+/// tangent, nothing; from outside, the near side.
+#[test]
+fn a_ray_meets_a_circle_at_its_nearest_point_ahead() {
+    use pfe_core::geometry::ray_circle_intersection as hit;
+    let o = Point::new(0.0, 0.0);
+    // On the circle, into it: b = r, disc = r², b − √disc = 0 exactly.
+    assert_eq!(hit(o, 1.0, 0.0, Point::new(2.0, 0.0), 2.0), Some(4.0));
+    // On the circle, out of it.
+    assert_eq!(hit(o, -1.0, 0.0, Point::new(2.0, 0.0), 2.0), None);
+    // On the circle, along its tangent: the only meeting is at t = 0, not ahead.
+    assert_eq!(hit(o, 1.0, 0.0, Point::new(0.0, 2.0), 2.0), None);
+    // From outside: the near side, 3 along the ray; from a moved origin the same.
+    assert_eq!(hit(o, 1.0, 0.0, Point::new(5.0, 0.0), 2.0), Some(3.0));
+    assert_eq!(
+        hit(Point::new(1.0, 1.0), 0.0, 1.0, Point::new(1.0, 6.0), 2.0),
+        Some(3.0)
+    );
+    // Behind the origin: nothing ahead.
+    assert_eq!(hit(o, -1.0, 0.0, Point::new(5.0, 0.0), 2.0), None);
+}
+
+/// A circle feature's numbers in declaration order, its arc's angles measured at its centre
+/// (an arc around (1000, 2000), not the origin), and well-formedness needing both first ≤ last
+/// and finite numbers.
+#[test]
+fn a_circle_feature_carries_its_arc_seen_from_its_centre() {
+    use pfe_core::{Circle, CircleFeature};
+    let center = Point::new(1000.0, 2000.0);
+    let r = 300.0f32;
+    let angles: Vec<f32> = (0..9).map(|k| -2.5 + 0.1 * k as f32).collect();
+    let pts: Vec<Point> = angles
+        .iter()
+        .map(|&a| Point::new(center.x + r * a.cos(), center.y + r * a.sin()))
+        .collect();
+    let circle = Circle { center, radius: r };
+    let f = pfe_core::circle_feature(&pts, 10, 18, &circle, Point::new(0.0, 0.0), 5.0).unwrap();
+    let Feature::Circle(c) = f else {
+        panic!("not a circle: {f:?}")
+    };
+    assert!(
+        (c.start_angle - angles[0]).abs() < 1e-5,
+        "{}",
+        c.start_angle
+    );
+    assert!((c.end_angle - angles[8]).abs() < 1e-5, "{}", c.end_angle);
+    assert_eq!((c.first, c.last, c.points), (10, 18, 9));
+    let v = c.values();
+    assert_eq!(v[..3], [1000.0, 2000.0, 300.0]);
+    let cov: Vec<f32> = c.cov.iter().flatten().copied().collect();
+    assert_eq!(v[3..12], cov[..]);
+    assert_eq!(v[12..], [c.start_angle, c.end_angle]);
+    assert!(f.is_well_formed());
+
+    let turned = CircleFeature {
+        first: 18,
+        last: 10,
+        ..c
+    };
+    assert!(!Feature::Circle(turned).is_well_formed());
+    let nan = CircleFeature {
+        radius: f32::NAN,
+        ..c
+    };
+    assert!(!Feature::Circle(nan).is_well_formed());
+}
+
+/// A rough pillar (range noise 9 mm, the configuration told 5 mm, which a smooth wall behind it
+/// keeps as the scan's own σ): the circle's covariance is scaled by its fit's reduced χ²,
+/// whose residuals are compared with the range noise's share along the circle's normal at each
+/// point (σ_r² cos²β), so its stated variances of centre and radius follow their spread over
+/// 300 scans (within 0.5–2: the unweighted fit loses some efficiency). Unscaled they would be
+/// about a third of it; compared with σ_r² (as if every beam met the circle head on), 0.42 in
+/// y (seed 2027).
+#[test]
+fn a_rough_circle_covariance_follows_its_scatter() {
+    let g = ScanGeometry::LMS200_180_050;
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let prims = [
+        Prim::Seg(4000.0, -3500.0, 4000.0, 3500.0),
+        Prim::Circle(2000.0, 500.0, 300.0),
+    ];
+    let (exact, hits) = scan(&prims, start, step, 361, 8000.0);
+    let mut ex = Extractor::<361, 64>::new();
+    let mut noise = Noise::new(2027);
+    let (mut fits, mut stated) = (Vec::new(), [0.0f64; 3]);
+    for _ in 0..300 {
+        let ranges: Vec<f32> = exact
+            .iter()
+            .zip(&hits)
+            .map(|(&r, h)| {
+                let sigma = if *h == Some(1) { 9.0 } else { 5.0 };
+                (f64::from(r) + sigma * noise.gauss()) as f32
+            })
+            .collect();
+        ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
+            .unwrap();
+        let pillar = ex.features().iter().find_map(|f| match f {
+            Feature::Circle(c) if c.center.distance(&Point::new(2000.0, 500.0)) < 100.0 => Some(*c),
+            _ => None,
+        });
+        if let Some(c) = pillar {
+            fits.push([c.center.x, c.center.y, c.radius].map(f64::from));
+            for (k, s) in stated.iter_mut().enumerate() {
+                *s += f64::from(c.cov[k][k]);
+            }
+        }
+    }
+    let n = fits.len() as f64;
+    assert!(n >= 200.0, "{n} scans with the pillar");
+    for (k, what) in ["x", "y", "radius"].into_iter().enumerate() {
+        let m = fits.iter().map(|f| f[k]).sum::<f64>() / n;
+        let spread = fits.iter().map(|f| (f[k] - m).powi(2)).sum::<f64>() / (n - 1.0);
+        let ratio = stated[k] / n / spread;
+        println!("{what}: stated / spread {ratio:.2}");
+        assert!(
+            (0.5..=2.0).contains(&ratio),
+            "{what}: stated / spread {ratio:.2}"
+        );
+    }
+}

@@ -41,7 +41,10 @@ pub(crate) fn feature<const SCRUTINY: bool>(
         Some((c, sse)) => {
             let mut f = circle_feature(pts, s, e, &c, origin, config.sigma_r)?;
             if let Feature::Circle(cf) = &mut f {
-                let k = scatter_scale(sse, var, pts.len() as f32 - 3.0);
+                let c2 = mean_cos2(pass, s, pts, |p| {
+                    Point::new(p.x - c.center.x, p.y - c.center.y)
+                });
+                let k = scatter_scale(sse, var * c2, pts.len() as f32 - 3.0);
                 cf.cov = cf.cov.map(|row| row.map(|v| v * k));
                 systematic_circle(cf, origin, config.sigma_sys);
             }
@@ -64,17 +67,9 @@ pub(crate) fn feature<const SCRUTINY: bool>(
             }
             let mut f = f?;
             if let Feature::Line(lf) = &mut f {
-                // A residual's variance under range noise: σ_r² cos²β, β the incidence at the
-                // middle point: cos²β = ((p − o)·n)² / |p − o|².
-                let m = (s + e) / 2;
-                let (p, o) = (
-                    pts.get(m - s).copied().unwrap_or(line.centroid),
-                    pass.origin(m),
-                );
-                let (dx, dy) = (p.x - o.x, p.y - o.y);
-                let c = dx * line.cos_alpha + dy * line.sin_alpha;
-                let dof = pts.len() as f32 - 2.0;
-                let k = scatter_scale(line.sse() * (dx * dx + dy * dy), var * c * c, dof);
+                let normal = Point::new(line.cos_alpha, line.sin_alpha);
+                let c2 = mean_cos2(pass, s, pts, |_| normal);
+                let k = scatter_scale(line.sse(), var * c2, pts.len() as f32 - 2.0);
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
@@ -82,6 +77,28 @@ pub(crate) fn feature<const SCRUTINY: bool>(
             }
             Some(f)
         }
+    }
+}
+
+/// The mean share of range noise along the fitted curve's normal, cos²β, over the points `pts`
+/// of beams `s..` (β the incidence of each point's beam on the normal `normal(p)`, which need
+/// not be a unit vector): the variance of a residual is σ_r² cos²β. 1 when no point tells.
+fn mean_cos2(pass: &Pass<'_>, s: usize, pts: &[Point], normal: impl Fn(Point) -> Point) -> f32 {
+    let (mut sum, mut n) = (0.0f32, 0usize);
+    for (i, &p) in pts.iter().enumerate() {
+        let o = pass.origin(s + i);
+        let (d, m) = (Point::new(p.x - o.x, p.y - o.y), normal(p));
+        let c2 = (d.x * m.x + d.y * m.y) * (d.x * m.x + d.y * m.y)
+            / ((d.x * d.x + d.y * d.y) * (m.x * m.x + m.y * m.y));
+        if math::finite(c2) {
+            sum += c2;
+            n += 1;
+        }
+    }
+    if n > 0 {
+        sum / n as f32
+    } else {
+        1.0
     }
 }
 
