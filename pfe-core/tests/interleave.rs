@@ -453,6 +453,49 @@ fn the_boards_configuration_aligns_sweeps_its_marks_show_apart() {
     assert!(bad_walls < plain_bad, "{bad_walls} vs {plain_bad}");
 }
 
+/// Without scrutiny, declared sweeps are aligned only by the default mode's rule and only
+/// without odometry: under the paper's rule, or with odometry given (here: standing still,
+/// while the sweeps are 8 mm / 6 mrad apart and the walk marks them so), the scan is
+/// extracted as one sweep is, bit for bit: odometry, when given, places the sweeps.
+#[test]
+fn sweeps_are_aligned_only_by_the_noise_rule_without_odometry() {
+    let mut ex = Extractor::<401, 128>::new();
+    let mut noise = Noise::new(31);
+    let (g, n, sweeps) = variant(0.5);
+    let truth = sweep_pose(0.5);
+    let board = Config::default().with_scrutiny(false).with_sigma_r(5.0);
+    let (mut marks, mut still_marks) = (0, 0);
+    for _ in 0..30 {
+        let room = room(&mut noise);
+        let (ranges, _) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
+        let paper = Config::paper().with_sigma_r(5.0);
+        let one = extract_with(&mut ex, g, &ranges, 1, &paper);
+        let two = extract_with(&mut ex, g, &ranges, 2, &paper);
+        assert_eq!(two.2.sweeps_aligned, 0);
+        assert_eq!((&one.0, &one.1, one.2), (&two.0, &two.1, two.2));
+        marks += one.0.len();
+        let mut with = |sweeps: u8| {
+            let scan = Scan::from_mm(g, &ranges)
+                .with_sweeps(sweeps)
+                .with_motion(Motion {
+                    v: 0.0,
+                    omega: 0.0,
+                    ..motion(0.5)
+                });
+            let stats = ex.extract(&scan, &board).unwrap();
+            (stats, ex.features().to_vec(), ex.marks().count())
+        };
+        let one = with(1);
+        let two = with(2);
+        assert_eq!(two.0.sweeps_aligned, 0);
+        assert_eq!(one, two);
+        still_marks += one.2;
+    }
+    // As one sweep, the paper's walk leaves 43 marks a scan, the default's 24 (seed 31).
+    assert!(marks > 30 * 35, "{marks} marks in 30 scans");
+    assert!(still_marks > 30 * 20, "{still_marks} marks in 30 scans");
+}
+
 /// Of the runs of ≥ 30 beams on a wall of `room`: how many, and how many have not exactly one
 /// line of `features` over most of them with ρ and α within 4 standard deviations of the
 /// wall's (plus 1 mm / 1 mrad).

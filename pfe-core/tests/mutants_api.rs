@@ -509,7 +509,7 @@ fn a_scan_geometry_needs_a_positive_maximum_range() {
 #[test]
 fn the_extractor_reports_its_last_extraction() {
     // A square room 4 m × 4 m around the scanner: walls and corners over 360 beams of 1°, then
-    // the first 100 beams of it.
+    // its beams up to the first mark from beam 100 on.
     let half = 2000.0;
     let prims = [
         Prim::Seg(half, -half, half, half),
@@ -529,20 +529,22 @@ fn the_extractor_reports_its_last_extraction() {
     let first = ex.extract(&Scan::from_mm(g, &long), &config).unwrap();
     assert_eq!(first, ex.stats());
     let marks: Vec<usize> = ex.marks().collect();
-    assert!(marks.iter().any(|&m| m >= 100), "{marks:?}");
     for i in 0..400 {
         assert_eq!(ex.is_mark(i), marks.contains(&i), "beam {i}");
     }
+    // The second scan ends right before a mark of the first: beam `cut` is past its readings.
+    let cut = *marks.iter().find(|&&m| m >= 100).unwrap();
     let second = ex
-        .extract(&Scan::from_mm(g, &long[..100]), &config)
+        .extract(&Scan::from_mm(g, &long[..cut]), &config)
         .unwrap();
     assert_eq!(second, ex.stats());
     assert_ne!(first, second);
     let marks: Vec<usize> = ex.marks().collect();
     assert!(
-        marks.iter().all(|&m| m < 100) && !marks.is_empty(),
+        marks.iter().all(|&m| m < cut) && !marks.is_empty(),
         "{marks:?}"
     );
+    assert!(!ex.is_mark(cut));
     for i in 0..400 {
         assert_eq!(ex.is_mark(i), marks.contains(&i), "beam {i}");
     }

@@ -159,3 +159,135 @@ fn systematic_circle_adds_along_the_beam_from_its_origin() {
         assert_eq!(cf, circle(at.x, at.y));
     }
 }
+
+/// The line's residual sum of `pts` in f64: the smaller eigenvalue of their centred scatter.
+fn line_sse64(pts: &[Point]) -> f64 {
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| f64::from(p.x)).sum::<f64>() / n,
+        pts.iter().map(|p| f64::from(p.y)).sum::<f64>() / n,
+    );
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in pts {
+        let (dx, dy) = (f64::from(p.x) - mx, f64::from(p.y) - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    0.5 * (sxx + syy - libm::sqrt((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy))
+}
+
+/// `n` points on an arc of radius `r` over 40° at 3 m, every other one `d` mm further out.
+fn bumpy_arc(n: usize, r: f32, d: f32) -> heapless::Vec<Point, 64> {
+    let deg = core::f32::consts::PI / 180.0;
+    let c = (3000.0 + r, 0.0);
+    arc(n, c, r, 160.0 * deg, 40.0 * deg)
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let s = if i % 2 == 1 { (r + d) / r } else { 1.0 };
+            Point::new(c.0 + (p.x - c.0) * s, c.1 + (p.y - c.1) * s)
+        })
+        .collect()
+}
+
+/// Whether the fit comparison (default configuration, told `sigma` mm) types `pts` a circle.
+fn circle_at(pts: &[Point], sigma: f32) -> bool {
+    let config = Config::default().with_sigma_r(sigma);
+    let line = fit_line(pts).ok();
+    circle_of::<false>(pts, line.as_ref(), &config).is_some()
+}
+
+/// The fit comparison on points of an exact arc (circle residual ≈ 0, the line's `S` worked
+/// out in f64) turns from circle to line where σ_r² reaches S / max(χ², 1.5 n) (χ² = 25): the
+/// circle must beat the line by χ² σ_r² and the line must leave more than 1.5 σ_r² a point
+/// (n = 20: 1.5 n binds; n = 10: χ² does); within ±3 % of σ_r.
+#[test]
+fn an_exact_arc_is_a_circle_until_the_line_explains_it_within_the_noise() {
+    for n in [10usize, 20] {
+        let pts = bumpy_arc(n, 1000.0, 0.0);
+        let s = line_sse64(&pts);
+        let flip = libm::sqrt(s / f64::max(25.0, 1.5 * n as f64)) as f32;
+        assert!(circle_at(&pts, 0.97 * flip), "n {n}: S {s}, flip σ {flip}");
+        assert!(!circle_at(&pts, 1.03 * flip), "n {n}: S {s}, flip σ {flip}");
+    }
+}
+
+/// The circle must explain the points within 2σ_r RMS (its residual sum ≤ 4 σ_r² n) and leave
+/// less than half the line's: an arc whose every other point lies `d` mm out leaves ±d/2 a
+/// point, a circle residual sum of about n d²/4, and the line's S + n d²/4 (S the exact arc's).
+/// So it is a circle for σ_r above d/4 and for n d²/4 below S (within ±20 %), and no circle
+/// is larger than 2 m.
+#[test]
+fn a_circle_must_explain_its_points_and_halve_the_lines_residual() {
+    let n = 20;
+    // RMS: the alternation d leaves ≈ d²/4 a point (d = 12 mm: 36 mm², σ_r ≥ 3 mm).
+    let pts = bumpy_arc(n, 1000.0, 12.0);
+    assert!(circle_at(&pts, 3.5));
+    assert!(!circle_at(&pts, 2.5));
+    // Ratio: the arc's own S ≈ 6 500 mm² against n d²/4 (σ_r 12 mm: both other tests pass).
+    let s = line_sse64(&bumpy_arc(n, 1000.0, 0.0));
+    let d_flip = libm::sqrt(4.0 * s / n as f64) as f32;
+    assert!(
+        circle_at(&bumpy_arc(n, 1000.0, 0.8 * d_flip), 12.0),
+        "S {s}"
+    );
+    assert!(
+        !circle_at(&bumpy_arc(n, 1000.0, 1.2 * d_flip), 12.0),
+        "S {s}"
+    );
+    // The largest radius, 2 m.
+    let big = |r: f32| {
+        let deg = core::f32::consts::PI / 180.0;
+        arc(n, (3000.0 + r, 0.0), r, 170.0 * deg, 20.0 * deg)
+    };
+    assert!(circle_at(&big(1900.0), 1.0));
+    assert!(!circle_at(&big(2100.0), 1.0));
+}
+
+/// With a circle residual of its own (every other point 20 mm out, n = 10), the circle must
+/// still beat the line by χ² σ_r² after it: the comparison turns at σ_r² = (S_line − S_circle)
+/// / 25 (S_line in f64, S_circle as fitted), within ±3 % of σ_r.
+#[test]
+fn a_circle_must_beat_the_line_by_chi2_noise_variances() {
+    let pts = bumpy_arc(10, 1000.0, 20.0);
+    let config = Config::default().with_sigma_r(6.0);
+    let line = fit_line(&pts).ok();
+    let (_, sse_c) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
+    let s = line_sse64(&pts);
+    assert!(f64::from(sse_c) > 0.15 * s, "{sse_c} vs {s}");
+    let flip = libm::sqrt((s - f64::from(sse_c)) / 25.0) as f32;
+    assert!(circle_at(&pts, 0.97 * flip), "flip σ {flip}");
+    assert!(!circle_at(&pts, 1.03 * flip), "flip σ {flip}");
+}
+
+/// The default's circle is the algebraic (Hyper) fit refined to the geometric optimum: on an
+/// arc with uneven residuals the gradient of its residual sum is 1 % of the Hyper circle's
+/// at most, its residual sum no larger, and the sum returned is the circle's own.
+#[test]
+fn the_default_circle_is_refined_to_the_geometric_optimum() {
+    let deg = core::f32::consts::PI / 180.0;
+    let c = (3500.0, 200.0);
+    let pts: heapless::Vec<Point, 64> = arc(16, c, 500.0, 150.0 * deg, 70.0 * deg)
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let s = 1.0 + [0.0, 0.03, -0.01, 0.05, 0.0, -0.04, 0.02, 0.06][i % 8];
+            Point::new(c.0 + (p.x - c.0) * s, c.1 + (p.y - c.1) * s)
+        })
+        .collect();
+    let config = Config::default().with_sigma_r(12.0);
+    let line = fit_line(&pts).ok();
+    let (circle, sse) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
+    let hyper = NormalEquations::at(&pts, &fit_circle(&pts, config.circle_method).unwrap());
+    let own = NormalEquations::at(&pts, &circle);
+    let norm = |g: [f32; 3]| libm::sqrtf(g.iter().map(|v| v * v).sum());
+    assert!(
+        norm(own.jtr) <= 0.01 * norm(hyper.jtr),
+        "gradient {:?} vs Hyper's {:?}",
+        own.jtr,
+        hyper.jtr
+    );
+    assert!(sse <= hyper.sse, "{sse} vs Hyper's {}", hyper.sse);
+    assert!((own.sse - sse).abs() <= 1e-3 * sse, "{} vs {sse}", own.sse);
+}

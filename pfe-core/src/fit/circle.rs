@@ -362,7 +362,8 @@ pub(crate) fn refine_from(
 /// one circle, with their sum of squares.
 pub(crate) struct NormalEquations {
     jtj: [[f32; 3]; 3],
-    jtr: [f32; 3],
+    /// `Jᵀr`: half the gradient of the residual sum in (centre x, centre y, radius).
+    pub(crate) jtr: [f32; 3],
     /// `Σ (|P_i − c| − R)²` ([`geometric_sse`]).
     pub(crate) sse: f32,
 }
