@@ -686,3 +686,14 @@ fn a_rough_circle_covariance_follows_its_scatter() {
         );
     }
 }
+
+/// A window whose points coincide has no direction: no line, from two points or more.
+#[test]
+fn a_window_of_one_repeated_point_has_no_line() {
+    let p = Point::new(1500.0, -250.0);
+    let o = Point::new(0.0, 0.0);
+    assert!(WindowLine::fit(&[p, p], o).is_none());
+    assert!(WindowLine::fit(&[p, p, p], o).is_none());
+    assert!(WindowLine::fit(&[p, p, p, p, p], o).is_none());
+    assert!(WindowLine::fit(&[p, Point::new(1500.0, -240.0), p], o).is_some());
+}
