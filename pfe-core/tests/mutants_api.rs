@@ -697,3 +697,23 @@ fn a_window_of_one_repeated_point_has_no_line() {
     assert!(WindowLine::fit(&[p, p, p, p, p], o).is_none());
     assert!(WindowLine::fit(&[p, Point::new(1500.0, -240.0), p], o).is_some());
 }
+
+/// A window's line through the scanner meets every other beam at the scanner itself (t = 0,
+/// exactly here: points on y = x): no prediction ahead, an infinite error, as behind it.
+#[test]
+fn a_line_through_the_scanner_predicts_nothing_ahead() {
+    let w = [
+        Point::new(1000.0, 1000.0),
+        Point::new(1100.0, 1100.0),
+        Point::new(1200.0, 1200.0),
+    ];
+    let o = Point::new(0.0, 0.0);
+    let line = WindowLine::fit(&w, o).unwrap();
+    let r = 2000.0f32;
+    let p = line.predict(o, r, 0.0, r);
+    assert!(p.error.is_infinite() && p.signed.is_infinite(), "{p:?}");
+    // A line 10 mm off the scanner is met ahead, close to it.
+    let off: Vec<Point> = w.iter().map(|q| Point::new(q.x + 10.0, q.y)).collect();
+    let p = WindowLine::fit(&off, o).unwrap().predict(o, r, 0.0, r);
+    assert!((p.error - (r - 10.0)).abs() < 1e-2, "{p:?}");
+}
