@@ -33,7 +33,7 @@ const HELP: &str = "cargo xtask <command> [args]
                 beside the static stack bound
   stack         static worst-case stack bound of pfe-qemu (call graph of -Z emit-stack-sizes build)
   fuzz          every cargo-fuzz target for --seconds S
-  mutants       cargo-mutants on pfe-core (--firmware: lms and output) [--shard K/N]
+  mutants       cargo-mutants on pfe-core (--firmware: lms and output) [--shard K/N] [--min-score PCT]
   no-panic      firmware build whose link fails if a panic path survives
   run-qemu      firmware in QEMU between a scanner tty/pty and a feature pty (--scanner, --output)
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU

@@ -1,14 +1,17 @@
-//! `cargo xtask mutants [--shard K/N] [--firmware] [--timeout S]`: mutation testing with
-//! cargo-mutants (installed with `cargo install cargo-mutants --locked` when missing).
+//! `cargo xtask mutants [--shard K/N] [--firmware] [--timeout S] [--min-score PCT]`: mutation
+//! testing with cargo-mutants (installed with `cargo install cargo-mutants --locked` when
+//! missing).
 //!
 //! Without `--firmware` it mutates pfe-core and runs pfe-core's own tests (the crate users
 //! depend on carries its own proof); with it, the firmware's codec and output
 //! (`firmware/src/lms/**` and `firmware/src/output/**`) against the firmware's tests. `--shard
 //! K/N` takes every N-th mutant from the K-th (round-robin), a sample of the whole set. Tests
 //! are built at opt-level 3 (the Monte Carlo and property tests take minutes unoptimised per
-//! mutant). Mutants judged equivalent are excluded in `.cargo/mutants.toml`, each with its
-//! reason. Prints the caught / missed / timeout / unviable counts and the score
-//! caught / (caught + missed + timeout), and lists the missed mutants.
+//! mutant); the unit and integration tests run, not the doctests (examples, each compiled on
+//! its own: 20 s a mutant more, and they can only catch more). Mutants judged equivalent are
+//! excluded in `.cargo/mutants.toml`, each with its reason. Prints the caught / missed /
+//! timeout / unviable counts and the score caught / (caught + missed + timeout), and lists the
+//! missed mutants; with `--min-score`, fails when the score is below `PCT` %.
 
 use anyhow::{bail, Context, Result};
 use std::path::Path;
@@ -83,6 +86,8 @@ fn mutants_args(firmware: bool, shard: Option<&str>, timeout: u64, out: &Path) -
     }
     a.extend([
         "-C=--config=profile.test.opt-level=3".into(),
+        "--cargo-test-arg=--lib".into(),
+        "--cargo-test-arg=--tests".into(),
         "--timeout".into(),
         timeout.to_string(),
         "--output".into(),
@@ -101,6 +106,7 @@ fn ensure_tool() -> Result<()> {
 /// Entry point.
 pub fn run(args: &[String]) -> Result<()> {
     let (mut shard, mut firmware, mut timeout) = (None, false, 120u64);
+    let mut min_score: Option<f64> = None;
     let mut it = args.iter();
     while let Some(a) = it.next() {
         match a.as_str() {
@@ -123,7 +129,18 @@ pub fn run(args: &[String]) -> Result<()> {
                     .parse()
                     .context("--timeout needs a whole number of seconds")?;
             }
-            other => bail!("unknown argument {other:?} (usage: cargo xtask mutants [--shard K/N] [--firmware] [--timeout S])"),
+            "--min-score" => {
+                let v: f64 = it
+                    .next()
+                    .context("--min-score needs a percentage")?
+                    .parse()
+                    .context("--min-score needs a number (per cent)")?;
+                if !(0.0..=100.0).contains(&v) {
+                    bail!("--min-score takes a percentage in 0..=100, got {v}");
+                }
+                min_score = Some(v);
+            }
+            other => bail!("unknown argument {other:?} (usage: cargo xtask mutants [--shard K/N] [--firmware] [--timeout S] [--min-score PCT])"),
         }
     }
     ensure_tool()?;
@@ -155,7 +172,17 @@ pub fn run(args: &[String]) -> Result<()> {
     for m in lines(&dir, "missed.txt") {
         println!("  missed: {m}");
     }
-    Ok(())
+    for m in lines(&dir, "timeout.txt") {
+        println!("  timeout: {m}");
+    }
+    match min_score {
+        Some(min) if 100.0 * n.score() < min => bail!(
+            "mutation score {:.1} % is below {min} %: add tests for the missed mutants above, or \
+             exclude an equivalent one in .cargo/mutants.toml with the reason",
+            100.0 * n.score()
+        ),
+        _ => Ok(()),
+    }
 }
 
 #[cfg(test)]
@@ -192,6 +219,10 @@ mod tests {
             "{a}"
         );
         assert!(a.contains("--shard 1/25 --sharding round-robin"), "{a}");
+        assert!(
+            a.contains("--cargo-test-arg=--lib --cargo-test-arg=--tests"),
+            "{a}"
+        );
         let a = mutants_args(false, None, 60, Path::new("/o")).join(" ");
         assert!(
             a.contains("-p pfe-core") && !a.contains("--shard") && !a.contains("--file"),

@@ -7,8 +7,9 @@
 //! firmware sizes and their budgets, the instruction-count budget (`cargo xtask bench-mcu`:
 //! counts under `-icount` are deterministic), the host speed against the baselines (`pfe
 //! bench --report-only`: timings depend on the machine, so they are printed, not asserted),
-//! MRPT conformance, the no-panic build, fuzzing (60 s per target under `CI`, 10 s otherwise)
-//! and a short soak. `--quick` stops after the host tests and skips the QEMU end-to-end test.
+//! MRPT conformance, the no-panic build, a sampled mutation run of pfe-core (1 mutant in 100,
+//! round-robin; fails below the 90 % target), fuzzing (60 s per target under `CI`, 10 s
+//! otherwise) and a short soak. `--quick` stops after the host tests and skips the QEMU end-to-end test.
 //! It ends with the list of the tests that were skipped and why ([`host_tests::skip`]), or
 //! "skipped: none".
 
@@ -137,6 +138,19 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     step(
         "no panic path in the firmware",
         || crate::no_panic::run(&[]),
+    )?;
+    step(
+        "mutation testing: a sample of pfe-core (cargo xtask mutants --shard 0/100 --min-score 90)",
+        || {
+            crate::mutants::run(&[
+                "--shard".into(),
+                "0/100".into(),
+                "--timeout".into(),
+                "30".into(),
+                "--min-score".into(),
+                "90".into(),
+            ])
+        },
     )?;
     let seconds = if std::env::var_os("CI").is_some() {
         "60"
