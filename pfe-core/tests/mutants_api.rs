@@ -717,3 +717,75 @@ fn a_line_through_the_scanner_predicts_nothing_ahead() {
     let p = WindowLine::fit(&off, o).unwrap().predict(o, r, 0.0, r);
     assert!((p.error - (r - 10.0)).abs() < 1e-2, "{p:?}");
 }
+
+/// A sweep offset moves a point by its rotation about the scanner, then its translation: the
+/// exact rigid motion (f64), for both turn directions and points on every side.
+#[test]
+fn a_sweep_offset_is_a_rotation_then_a_translation() {
+    for dtheta in [0.02f32, -0.3] {
+        let off = pfe_core::SweepOffset {
+            dx: 8.0,
+            dy: -5.0,
+            dtheta,
+            sd: [1.0; 3],
+            sigma: 1.0,
+            chi2: 100.0,
+            rows: 100,
+            max_shift: 50.0,
+        };
+        for p in [
+            Point::new(3000.0, 0.0),
+            Point::new(-1000.0, 2500.0),
+            Point::new(700.0, -4000.0),
+        ] {
+            let (s, c) = f64::from(dtheta).sin_cos();
+            let (x, y) = (f64::from(p.x), f64::from(p.y));
+            let want = (c * x - s * y + 8.0, s * x + c * y - 5.0);
+            let got = off.apply(p);
+            assert!(
+                (f64::from(got.x) - want.0).abs() < 1e-3
+                    && (f64::from(got.y) - want.1).abs() < 1e-3,
+                "{got:?} vs {want:?}"
+            );
+        }
+    }
+}
+
+/// Raw codes: 0 and the reserved codes above `max_valid` are no return, even where the
+/// geometry's maximum range would allow their value (here 100 m with cm codes); the others are
+/// code × mm per unit. A scan's readings are empty only when there are none.
+#[test]
+fn raw_codes_beyond_the_valid_ones_are_no_return() {
+    use pfe_core::Ranges;
+    let codes = [0u16, 100, 8182, 8183, 8191, 5];
+    let raw = Ranges::Raw {
+        values: &codes,
+        mm_per_unit: 10.0,
+        max_valid: 8182,
+    };
+    let got: Vec<Option<f32>> = (0..codes.len()).map(|i| raw.get_mm(i, 100_000.0)).collect();
+    assert_eq!(
+        got,
+        [None, Some(1000.0), Some(81_820.0), None, None, Some(50.0)]
+    );
+    assert!(!raw.is_empty());
+    assert!(Ranges::Mm(&[]).is_empty() && !Ranges::Mm(&[1.0]).is_empty());
+    let none = Ranges::Raw {
+        values: &[],
+        mm_per_unit: 1.0,
+        max_valid: 8182,
+    };
+    assert!(none.is_empty());
+}
+
+/// A beam step must be below 1 rad (and not 0): 1 rad exactly is refused.
+#[test]
+fn a_beam_step_of_one_radian_is_refused() {
+    let g = |angle_step: f32| ScanGeometry {
+        start_angle: 0.0,
+        angle_step,
+        r_max: 8000.0,
+    };
+    assert!(g(0.999).is_valid() && g(-0.999).is_valid());
+    assert!(!g(1.0).is_valid() && !g(-1.0).is_valid() && !g(0.0).is_valid());
+}

@@ -611,6 +611,9 @@ fn taubin_and_hyper_are_the_generalised_eigenvectors_of_their_definitions() {
         ((2000.0, 300.0), 300.0, (2.3, 3.5), 25, 15.0),
         ((-500.0, 2500.0), 200.0, (-2.0, -0.6), 20, 10.0),
         ((4000.0, -1500.0), 800.0, (2.6, 3.3), 40, 20.0),
+        // Noise of a tenth of the radius over 60°: the root η is far from 0.
+        ((1500.0, -200.0), 150.0, (2.6, 3.65), 12, 15.0),
+        ((3000.0, 800.0), 400.0, (2.9, 3.9), 10, 40.0),
     ] {
         let pts = f32s(&arc(c, r, span, n, sigma, &mut noise));
         let p64 = f64s(&pts);

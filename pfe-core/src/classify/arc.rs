@@ -77,3 +77,51 @@ pub(crate) fn continues_arc(pass: &mut Pass<'_>, s: usize, k: usize, rule: &Nois
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::extractor::Extractor;
+    use crate::scan::{Scan, ScanGeometry};
+
+    /// The arc continuation's tolerance along a beam that meets the circle head on is
+    /// `k σ_r √(1 + 1/cos²γ) + floor` = `√2 k σ_r + floor` (γ = 0): the point in the middle of
+    /// a pillar 3 m ahead (radius 500 mm), predicted from the 24 exact points before it, is
+    /// taken 1.38 `k σ_r` + floor from the circle and refused at 1.45.
+    #[test]
+    fn an_arc_continues_within_root_two_k_sigma_head_on() {
+        let g = ScanGeometry::LMS200_180_050;
+        let config = Config::default().with_sigma_r(5.0);
+        let exact: [f32; 361] = core::array::from_fn(|i| {
+            let (s, c) = math::sin_cos(g.bearing(i));
+            ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(3000.0, 0.0), 500.0)
+                .unwrap_or(f32::NAN)
+        });
+        let (first, k) = (exact.iter().position(|r| r.is_finite()).unwrap_or(0), 180);
+        assert!(k - first > 10, "{first}");
+        let mut ex = Extractor::<361, 8>::new();
+        let scan = Scan::from_mm(g, &exact);
+        let (k_sigma, floor) = ex.with_pass(&scan, &config, |_, rule| {
+            rule.noise()
+                .map_or((0.0, 0.0), |r| (r.k_sigma, r.model.floor))
+        });
+        assert!(k_sigma > 0.0);
+        let continues = |ex: &mut Extractor<361, 8>, off: f32| {
+            let mut ranges = exact;
+            if off != 0.0 {
+                ranges[k] += off.signum() * (off.abs() * k_sigma + floor);
+            }
+            let scan = Scan::from_mm(g, &ranges);
+            ex.with_pass(&scan, &config, |pass, rule| {
+                rule.noise()
+                    .is_some_and(|r| continues_arc(pass, first, k, r))
+            })
+        };
+        assert!(continues(&mut ex, 0.0));
+        assert!(continues(&mut ex, 1.38));
+        assert!(!continues(&mut ex, 1.45));
+        assert!(continues(&mut ex, -1.38));
+        assert!(!continues(&mut ex, -1.45));
+    }
+}

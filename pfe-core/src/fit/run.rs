@@ -198,4 +198,29 @@ mod tests {
         });
         assert!(best_split_sse(&bent).unwrap_or(0.0) > 100.0);
     }
+
+    /// The prefix screen in every direction: points 1 m apart along a line at angle `a` (to
+    /// x), alternately 0.3 tol to either side of it, stay one line to the end; one point 2.2
+    /// tol off a straight run ends the prefix there. (The screen compares `d |t|` with `2 tol |t|` for the
+    /// unnormalised direction `t`, whose length grows with the points' spread.)
+    #[test]
+    fn the_prefix_screen_holds_in_every_direction() {
+        let tol = 40.0f32;
+        for k in 0..12 {
+            let a = k as f32 * core::f32::consts::PI / 12.0;
+            let (s, c) = math::sin_cos(a);
+            let at = |i: usize, off: f32| {
+                let t = 1000.0 * i as f32;
+                Point::new(500.0 + t * c - off * s, -300.0 + t * s + off * c)
+            };
+            // Off by ±0.3 tol: every point within 2 tol of the line of the ones before it (the
+            // worst, the third from the line of the first two: 1.2 tol).
+            let pts: [Point; 8] =
+                core::array::from_fn(|i| at(i, if i % 2 == 0 { 0.3 } else { -0.3 } * tol));
+            assert_eq!(line_prefix(&pts, tol), 8, "angle {a}");
+            let mut bad: [Point; 8] = core::array::from_fn(|i| at(i, 0.0));
+            bad[5] = at(5, 2.2 * tol);
+            assert_eq!(line_prefix(&bad, tol), 5, "angle {a}");
+        }
+    }
 }
