@@ -789,3 +789,86 @@ fn a_beam_step_of_one_radian_is_refused() {
     assert!(g(0.999).is_valid() && g(-0.999).is_valid());
     assert!(!g(1.0).is_valid() && !g(-1.0).is_valid() && !g(0.0).is_valid());
 }
+
+/// A prediction needs a beam: none towards the scanner itself or towards a point at infinity.
+#[test]
+fn no_prediction_without_a_finite_beam() {
+    use pfe_core::predict::predict;
+    let w = [
+        Point::new(1000.0, 0.0),
+        Point::new(1000.0, 100.0),
+        Point::new(1000.0, 200.0),
+    ];
+    let o = Point::new(0.0, 0.0);
+    assert!(predict(&w, Point::new(1000.0, 300.0), o).is_some());
+    assert!(predict(&w, o, o).is_none());
+    let moved = Point::new(50.0, -20.0);
+    assert!(predict(&w, moved, moved).is_none());
+    assert!(predict(&w, Point::new(f32::INFINITY, 300.0), o).is_none());
+    assert!(predict(&w, Point::new(1000.0, f32::NAN), o).is_none());
+}
+
+/// The paper's threshold `d_m = (d_0/λ)(r/r_max + (π − ϕ)/π)` at worked values (d_0 = 50 mm,
+/// λ = 2, r_max = 8 m), with r/r_max clamped to [0, 1] and ϕ to [0, π/2].
+#[test]
+fn the_papers_threshold_at_worked_values() {
+    use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
+    use pfe_core::predict::paper_threshold;
+    let d = |r: f32, phi: f32| paper_threshold(50.0, 2.0, r, 8000.0, phi);
+    let close = |a: f32, b: f32| (a - b).abs() < 1e-3;
+    assert!(close(d(8000.0, FRAC_PI_2), 37.5));
+    assert!(close(d(4000.0, FRAC_PI_2), 25.0));
+    assert!(close(d(2000.0, FRAC_PI_4), 25.0 * (0.25 + 0.75)));
+    assert!(close(d(0.0, 0.0), 25.0));
+    assert!(close(d(16_000.0, 2.0), 37.5));
+    assert!(close(
+        paper_threshold(30.0, 3.0, 4000.0, 8000.0, FRAC_PI_2),
+        10.0
+    ));
+}
+
+/// A scan of LMS range codes extracts exactly as the same ranges in mm: mm mode (1 mm a code)
+/// and cm mode (10 mm a code), a room with a pillar.
+#[test]
+fn a_scan_of_range_codes_extracts_as_its_ranges_in_mm() {
+    let g = ScanGeometry::LMS200_180_050;
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let prims = [
+        Prim::Seg(3000.0, -2500.0, 3000.0, 2500.0),
+        Prim::Seg(3000.0, 2500.0, -500.0, 2500.0),
+        Prim::Circle(1500.0, -700.0, 200.0),
+    ];
+    let (exact, _) = scan(&prims, start, step, 361, 8000.0);
+    for unit in [1.0f32, 10.0] {
+        let codes: Vec<u16> = exact
+            .iter()
+            .map(|&r| {
+                if r.is_finite() {
+                    (r / unit).round() as u16
+                } else {
+                    0
+                }
+            })
+            .collect();
+        let mm: Vec<f32> = codes
+            .iter()
+            .map(|&c| {
+                if c == 0 {
+                    f32::NAN
+                } else {
+                    f32::from(c) * unit
+                }
+            })
+            .collect();
+        let geometry = ScanGeometry { r_max: 8000.0, ..g };
+        let (mut a, mut b) = (Extractor::<361, 32>::new(), Extractor::<361, 32>::new());
+        let config = Config::default().with_sigma_r(5.0);
+        let sa = a
+            .extract(&Scan::from_lms(geometry, &codes, unit), &config)
+            .unwrap();
+        let sb = b.extract(&Scan::from_mm(geometry, &mm), &config).unwrap();
+        assert_eq!(sa, sb, "unit {unit}");
+        assert!(sa.features >= 3, "{sa:?}");
+        assert_eq!(a.features(), b.features(), "unit {unit}");
+    }
+}
