@@ -399,4 +399,118 @@ mod tests {
             assert!(k.is_some_and(|k| k == m || k == m + 1), "apex {m}: {k:?}");
         }
     }
+
+    /// `join_lines` on a run of short segments whose middle lies on one line: posts at 5 and
+    /// 9 m (beams 60–63 and 76–80, too far off any line), a wall x = 3 m (beams 64–75). Only
+    /// the wall is joined, into one line over 64..=75; the short segments it cut get new ends
+    /// (63, whose segment was 63..=64) and starts (76, whose segment was 75..=76); the counts
+    /// lose the 11 short segments undone and gain the line and the remainder of 75..=76.
+    #[test]
+    fn a_chain_of_short_segments_is_joined_only_where_it_is_one_line() {
+        use crate::extractor::Extractor;
+        use crate::flags::{END, START, VALID};
+        use crate::scan::{Scan, ScanGeometry};
+        let mut g = ScanGeometry::lms200(180.0, 1.0);
+        g.r_max = 50_000.0;
+        let ranges: [f32; 181] = core::array::from_fn(|i| match i {
+            60..=63 | 76..=80 => [5000.0, 9000.0][i % 2],
+            64..=75 => 3000.0 / crate::math::sin_cos(g.bearing(i)).1,
+            _ => f32::NAN,
+        });
+        let config = Config::default();
+        // Short segments: 63..=64 and 75..=76, every other point of 60..=80 alone.
+        let segments = [
+            (60, 60),
+            (61, 61),
+            (62, 62),
+            (63, 64),
+            (65, 65),
+            (66, 66),
+            (67, 67),
+            (68, 68),
+            (69, 69),
+            (70, 70),
+            (71, 71),
+            (72, 72),
+            (73, 73),
+            (74, 74),
+            (75, 76),
+            (77, 77),
+            (78, 78),
+            (79, 79),
+            (80, 80),
+        ];
+        let mut ex = Extractor::<181, 8>::new();
+        let scan = Scan::from_mm(g, &ranges);
+        ex.with_pass(&scan, &config, |pass, rule| {
+            for &(s, e) in &segments {
+                pass.set(s, START);
+                pass.set(e, END);
+            }
+            pass.stats.segments = segments.len();
+            pass.stats.short_segments = segments.len();
+            let mut out: Vec<Feature, 8> = Vec::new();
+            let Some(noise) = rule.noise() else {
+                panic!("the default rule")
+            };
+            join_lines(pass, (60, 80), noise, &config, &mut out);
+            assert!(
+                matches!(out.as_slice(), [Feature::Line(l)] if (l.first, l.last) == (64, 75)),
+                "{out:?}"
+            );
+            let flag = |i: usize| pass.flag(i) & (START | END);
+            assert_eq!(flag(64), START);
+            assert_eq!(flag(75), END);
+            assert!((65..75).all(|i| flag(i) == 0));
+            assert_eq!(flag(63), START | END);
+            assert_eq!(flag(76), START | END);
+            for i in [60, 61, 62, 77, 78, 79, 80] {
+                assert_eq!(flag(i), START | END, "beam {i}");
+            }
+            assert!((60..=80).all(|i| pass.flag(i) & VALID != 0));
+            let st = *pass.stats;
+            assert_eq!(st.segments, segments.len() + 1 - 11 + 1, "{st:?}");
+            assert_eq!(st.short_segments, segments.len() + 1 - 11, "{st:?}");
+            assert_eq!(st.features, 1, "{st:?}");
+        });
+    }
+
+    /// A chain that starts at beam 0 on a line (the wall y = −3 m, then posts at 5 and 9 m):
+    /// joined from its first point, with nothing before it to end.
+    #[test]
+    fn a_chain_from_the_first_beam_is_joined_from_it() {
+        use crate::extractor::Extractor;
+        use crate::flags::{END, START};
+        use crate::scan::{Scan, ScanGeometry};
+        let mut g = ScanGeometry::lms200(180.0, 1.0);
+        g.r_max = 50_000.0;
+        let ranges: [f32; 181] = core::array::from_fn(|i| match i {
+            0..=11 => -3000.0 / crate::math::sin_cos(g.bearing(i)).0,
+            12..=16 => [5000.0, 9000.0][i % 2],
+            _ => f32::NAN,
+        });
+        let config = Config::default();
+        let mut ex = Extractor::<181, 8>::new();
+        ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+            for i in 0..=16 {
+                pass.set(i, START | END);
+            }
+            pass.stats.segments = 17;
+            pass.stats.short_segments = 17;
+            let mut out: Vec<Feature, 8> = Vec::new();
+            if let Some(noise) = rule.noise() {
+                join_lines(pass, (0, 16), noise, &config, &mut out);
+            }
+            assert!(
+                matches!(out.as_slice(), [Feature::Line(l)] if (l.first, l.last) == (0, 11)),
+                "{out:?}"
+            );
+            assert_eq!(pass.flag(0) & (START | END), START);
+            assert_eq!(pass.flag(11) & (START | END), END);
+            assert_eq!(
+                (pass.stats.segments, pass.stats.short_segments),
+                (17 - 12 + 1, 17 - 12)
+            );
+        });
+    }
 }

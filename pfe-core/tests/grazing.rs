@@ -99,3 +99,63 @@ fn a_staggered_row_of_posts_is_not_one_line() {
         }
     }
 }
+
+/// What joining the distant walls' points leaves, scan by scan: every segment counted once (as
+/// short, degenerate, stored or dropped), each feature with mark points at its first and last
+/// beam and none inside, features in beam order without overlap, the joined lines among them.
+#[test]
+fn joined_walls_leave_consistent_marks_and_counts() {
+    let g = geometry();
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let prims = [
+        Prim::Seg(1000.0, 1500.0, 40_000.0, 1500.0),
+        Prim::Seg(1000.0, -1500.0, 40_000.0, -1500.0),
+        Prim::Seg(40_000.0, -1500.0, 40_000.0, 1500.0),
+    ];
+    let (exact, _) = scan(&prims, start, step, 181, 50_000.0);
+    let config = Config::default().with_sigma_r(SIGMA as f32);
+    let mut ex = Extractor::<181, 64>::new();
+    let mut sparse = 0;
+    for seed in 0..20 {
+        let ranges = noisy(&exact, seed);
+        let st = ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+        assert_eq!(
+            st.segments,
+            st.short_segments + st.degenerate + st.features + st.dropped,
+            "seed {seed}: {st:?}"
+        );
+        assert_eq!(st.features, ex.features().len());
+        let marks: Vec<usize> = ex.marks().collect();
+        let mut after = 0;
+        for f in ex.features() {
+            assert!(f.first() >= after, "seed {seed}: {f:?} overlaps");
+            after = f.last() + 1;
+            assert!(
+                ex.is_mark(f.first()) && ex.is_mark(f.last()),
+                "seed {seed}: {f:?}"
+            );
+            let inside: Vec<&usize> = marks
+                .iter()
+                .filter(|&&m| f.first() < m && m < f.last())
+                .collect();
+            assert!(
+                inside.is_empty(),
+                "seed {seed}: marks {inside:?} inside {f:?}"
+            );
+            // A joined line: its points farther apart than one surface's at ≥ 10° incidence.
+            if let Feature::Line(l) = f {
+                let span = l.start.distance(&l.end);
+                if span > 600.0 * f32::from(l.points) {
+                    sparse += 1;
+                }
+            }
+        }
+        // Segments counted: the marks bound them (a one-point segment is one mark).
+        assert!(
+            st.segments <= marks.len(),
+            "seed {seed}: {st:?}, {} marks",
+            marks.len()
+        );
+    }
+    assert!(sparse >= 20, "{sparse} joined lines in 20 scans");
+}
