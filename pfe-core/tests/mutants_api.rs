@@ -872,3 +872,38 @@ fn a_scan_of_range_codes_extracts_as_its_ranges_in_mm() {
         assert_eq!(a.features(), b.features(), "unit {unit}");
     }
 }
+
+/// A point that is not finite makes a circle fit fail as such (not as a degenerate set).
+#[test]
+fn a_circle_fit_of_a_non_finite_point_says_so() {
+    use pfe_core::{fit_circle, CircleMethod, FitError};
+    let mut pts: Vec<Point> = (0..8)
+        .map(|i| {
+            let t = 0.2 * i as f32;
+            Point::new(2000.0 + 300.0 * t.cos(), 300.0 * t.sin())
+        })
+        .collect();
+    assert!(fit_circle(&pts, CircleMethod::Hyper).is_ok());
+    for bad in [f32::NAN, f32::INFINITY] {
+        for k in [0usize, 1] {
+            let mut p = pts.clone();
+            if k == 0 {
+                p[3].x = bad;
+            } else {
+                p[5].y = bad;
+            }
+            for m in [CircleMethod::Kasa, CircleMethod::Hyper] {
+                assert_eq!(
+                    fit_circle(&p, m),
+                    Err(FitError::NonFinite),
+                    "{bad} {k} {m:?}"
+                );
+            }
+        }
+    }
+    pts.truncate(2);
+    assert!(matches!(
+        fit_circle(&pts, CircleMethod::Hyper),
+        Err(FitError::TooFewPoints { got: 2, need: 3 })
+    ));
+}

@@ -88,7 +88,9 @@ mod tests {
     /// The arc continuation's tolerance along a beam that meets the circle head on is
     /// `k σ_r √(1 + 1/cos²γ) + floor` = `√2 k σ_r + floor` (γ = 0): the point in the middle of
     /// a pillar 3 m ahead (radius 500 mm), predicted from the 24 exact points before it, is
-    /// taken 1.38 `k σ_r` + floor from the circle and refused at 1.45.
+    /// taken 1.38 `k σ_r` + floor from the circle and refused at 1.45; 7° off the centre, where
+    /// the beam meets the circle at γ with 1/cos γ ≈ 1.6, between 0.97 and 1.03 times its
+    /// factor.
     #[test]
     fn an_arc_continues_within_root_two_k_sigma_head_on() {
         let g = ScanGeometry::LMS200_180_050;
@@ -123,5 +125,53 @@ mod tests {
         assert!(!continues(&mut ex, 1.45));
         assert!(continues(&mut ex, -1.38));
         assert!(!continues(&mut ex, -1.45));
+        // Obliquely, 7° off the centre: the tolerance grows with 1/cos γ (f64, ±3 %).
+        let k2 = 194;
+        let b = f64::from(g.bearing(k2));
+        let (d, c, r) = ((b.cos(), b.sin()), (3000.0f64, 0.0f64), 500.0f64);
+        let along = d.0 * c.0 + d.1 * c.1;
+        let t = along - (along * along - (c.0 * c.0 + c.1 * c.1 - r * r)).sqrt();
+        let cos_g = ((t * d.0 - c.0) * d.0 + (t * d.1 - c.1) * d.1).abs() / r;
+        let f = (1.0 + 1.0 / (cos_g * cos_g)).sqrt() as f32;
+        assert!(f > 1.6, "{f}");
+        let at = |ex: &mut Extractor<361, 8>, off: f32| {
+            let mut ranges = exact;
+            ranges[k2] += off * f * k_sigma + floor;
+            ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+                rule.noise()
+                    .is_some_and(|r| continues_arc(pass, first, k2, r))
+            })
+        };
+        assert!(at(&mut ex, 0.97));
+        assert!(!at(&mut ex, 1.03));
+    }
+
+    /// An arc's points must each lie within `k σ_r + floor` (4 · 10 + 3 = 43 mm) of its
+    /// circle: 24 points over 60° of a 500 mm circle, one of them moved out by 0.8 and by 1.3
+    /// times that (the fit takes up a twentieth of it).
+    #[test]
+    fn every_point_of_an_arc_is_within_k_sigma_plus_floor() {
+        let config = Config::default().with_sigma_r(10.0);
+        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let Some(noise) = rule.noise() else {
+            panic!("the default rule")
+        };
+        let tol = noise.k_sigma + noise.model.floor;
+        assert_eq!(tol, 43.0);
+        let arc = |off: f32| -> heapless::Vec<Point, 32> {
+            (0..24)
+                .map(|i| {
+                    let a = core::f32::consts::PI * (5.0 / 6.0 + i as f32 / 69.0);
+                    let r = 500.0 + if i == 12 { off * tol } else { 0.0 };
+                    let (s, c) = math::sin_cos(a);
+                    Point::new(3500.0 + r * c, r * s)
+                })
+                .collect()
+        };
+        assert!(arc_fit(&arc(0.0), noise).is_some());
+        assert!(arc_fit(&arc(0.8), noise).is_some());
+        assert!(arc_fit(&arc(1.3), noise).is_none());
+        assert!(arc_fit(&arc(-0.8), noise).is_some());
+        assert!(arc_fit(&arc(-1.3), noise).is_none());
     }
 }
