@@ -174,4 +174,34 @@ mod tests {
         assert!(arc_fit(&arc(-0.8), noise).is_some());
         assert!(arc_fit(&arc(-1.3), noise).is_none());
     }
+
+    /// An arc must explain its points better than a line by `arc_chi2 σ_r²` (16 · 100 mm²)
+    /// after its own residuals: 24 points over 588 mm of a circle, every other one 16 mm out
+    /// (a circle residual sum of about 24 · 8²); of radius 2 m (the line's residual sum about
+    /// 1 000 mm² more than the circle's, though 2 500 in all) not an arc, of radius 1 m (4 000
+    /// more) an arc.
+    #[test]
+    fn an_arc_beats_the_line_by_chi2_after_its_own_residuals() {
+        let config = Config::default().with_sigma_r(10.0);
+        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let Some(noise) = rule.noise() else {
+            panic!("the default rule")
+        };
+        let bumpy = |radius: f32| -> heapless::Vec<Point, 32> {
+            let span = 588.0 / radius;
+            (0..24)
+                .map(|i| {
+                    let a = core::f32::consts::PI + span * (i as f32 / 23.0 - 0.5);
+                    let r = radius + if i % 2 == 1 { 16.0 } else { 0.0 };
+                    let (s, c) = math::sin_cos(a);
+                    Point::new(3000.0 + radius + r * c, r * s)
+                })
+                .collect()
+        };
+        let (wide, tight) = (bumpy(2000.0), bumpy(1000.0));
+        let sse = |p: &[Point]| crate::fit::line::fit_line(p).map_or(f32::NAN, |l| l.sse());
+        assert!(sse(&wide) > 1600.0 && sse(&wide) < 3000.0, "{}", sse(&wide));
+        assert!(arc_fit(&wide, noise).is_none());
+        assert!(arc_fit(&tight, noise).is_some(), "{}", sse(&tight));
+    }
 }
