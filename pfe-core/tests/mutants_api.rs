@@ -907,3 +907,68 @@ fn a_circle_fit_of_a_non_finite_point_says_so() {
         Err(FitError::TooFewPoints { got: 2, need: 3 })
     ));
 }
+
+/// Three points fix a circle, and its covariance: σ² (WᵀW)⁻¹ exists for three points (here on
+/// a quarter circle, where W's rows are independent), not for two.
+#[test]
+fn three_points_have_a_circle_covariance() {
+    use pfe_core::{circle_covariance, Circle};
+    let circle = Circle {
+        center: Point::new(2000.0, 500.0),
+        radius: 300.0,
+    };
+    let on = |a: f32| Point::new(2000.0 + 300.0 * a.cos(), 500.0 + 300.0 * a.sin());
+    let three = [on(2.0), on(2.8), on(3.6)];
+    let cov = circle_covariance(&three, &circle, 5.0).unwrap();
+    assert!(
+        cov.iter().flatten().all(|v| v.is_finite()) && cov[2][2] > 0.0,
+        "{cov:?}"
+    );
+    assert!(circle_covariance(&three[..2], &circle, 5.0).is_err());
+}
+
+/// `fit_line_iter` (two passes over any re-iterable points) fits the line `fit_line` fits and
+/// the f64 principal axis gives: a wall at 30° with ±4 mm of zig-zag, 40 points.
+#[test]
+fn fit_line_iter_is_the_least_squares_line() {
+    use pfe_core::fit::line::fit_line_iter;
+    use pfe_core::fit_line;
+    let (a, rho) = (0.5236f64, 2500.0f64);
+    let pts: Vec<Point> = (0..40)
+        .map(|i| {
+            let t = -1000.0 + 50.0 * f64::from(i);
+            let off = if i % 3 == 0 { 4.0 } else { -2.0 };
+            let (s, c) = a.sin_cos();
+            Point::new(
+                ((rho + off) * c - t * s) as f32,
+                ((rho + off) * s + t * c) as f32,
+            )
+        })
+        .collect();
+    // f64: the normal is the smaller principal axis of the centred scatter.
+    let n = pts.len() as f64;
+    let (mx, my) = (
+        pts.iter().map(|p| f64::from(p.x)).sum::<f64>() / n,
+        pts.iter().map(|p| f64::from(p.y)).sum::<f64>() / n,
+    );
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in &pts {
+        let (dx, dy) = (f64::from(p.x) - mx, f64::from(p.y) - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    let alpha = 0.5 * (-2.0 * sxy).atan2(syy - sxx);
+    let rho64 = mx * alpha.cos() + my * alpha.sin();
+    for l in [
+        fit_line_iter(pts.iter().copied()).unwrap(),
+        fit_line(&pts).unwrap(),
+    ] {
+        assert!(
+            (f64::from(l.alpha) - alpha).abs() < 1e-5 && (f64::from(l.rho) - rho64).abs() < 1e-2,
+            "{} {} vs {alpha} {rho64}",
+            l.alpha,
+            l.rho
+        );
+    }
+}
