@@ -933,7 +933,7 @@ fn three_points_have_a_circle_covariance() {
 fn fit_line_iter_is_the_least_squares_line() {
     use pfe_core::fit::line::fit_line_iter;
     use pfe_core::fit_line;
-    let (a, rho) = (0.5236f64, 2500.0f64);
+    let (a, rho) = (std::f64::consts::FRAC_PI_6, 2500.0f64);
     let pts: Vec<Point> = (0..40)
         .map(|i| {
             let t = -1000.0 + 50.0 * f64::from(i);
