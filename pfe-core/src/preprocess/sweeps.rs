@@ -386,3 +386,36 @@ fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
         c22 / det,
     ])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::invert;
+
+    /// The inverse of a symmetric 3 × 3 matrix, times the matrix, is the identity; a matrix
+    /// whose determinant is below 10⁻⁴ of its diagonal's product (unknowns 0 and 1 nearly the
+    /// same) has none. Diagonal 100, 100, 4: the bound is 4.
+    #[test]
+    fn invert_refuses_a_nearly_singular_matrix() {
+        let full = |u: &[f32; 6]| {
+            let [a, b, c, d, e, f] = *u;
+            [[a, b, c], [b, d, e], [c, e, f]]
+        };
+        let a = [4.0f32, 1.0, 0.5, 3.0, -0.25, 2.0];
+        let inv = invert(&a).unwrap_or([f32::NAN; 6]);
+        let (m, n) = (full(&a), full(&inv));
+        for i in 0..3 {
+            for j in 0..3 {
+                let p: f32 = (0..3).map(|k| m[i][k] * n[k][j]).sum();
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((p - want).abs() < 1e-5, "({i}, {j}): {p}");
+            }
+        }
+        // det = 4 · 10⁴ (1 − ρ²) against the bound 4: 1 − ρ² = 5·10⁻⁵ gives 2, 2·10⁻⁴ gives 8.
+        let near = |one_minus_rho2: f32| {
+            let rho = (1.0 - one_minus_rho2).sqrt();
+            [100.0, 100.0 * rho, 0.0, 100.0, 0.0, 4.0]
+        };
+        assert!(invert(&near(5e-5)).is_none());
+        assert!(invert(&near(2e-4)).is_some());
+    }
+}
