@@ -403,9 +403,9 @@ mod tests {
         let a = [4.0f32, 1.0, 0.5, 3.0, -0.25, 2.0];
         let inv = invert(&a).unwrap_or([f32::NAN; 6]);
         let (m, n) = (full(&a), full(&inv));
-        for i in 0..3 {
+        for (i, row) in m.iter().enumerate() {
             for j in 0..3 {
-                let p: f32 = (0..3).map(|k| m[i][k] * n[k][j]).sum();
+                let p: f32 = row.iter().zip(&n).map(|(a, col)| a * col[j]).sum();
                 let want = if i == j { 1.0 } else { 0.0 };
                 assert!((p - want).abs() < 1e-5, "({i}, {j}): {p}");
             }
