@@ -204,4 +204,55 @@ mod tests {
         assert!(arc_fit(&wide, noise).is_none());
         assert!(arc_fit(&tight, noise).is_some(), "{}", sse(&tight));
     }
+
+    /// From a moving scanner (1 m/s, turning at 1 rad/s, beams 2.666 ms apart: by the pillar's
+    /// middle beam it has moved sideways by more than 50 mm) the arc is continued along each
+    /// beam from where it was taken: the pillar's exact ranges from each beam's pose (f64)
+    /// continue the arc at its middle beam, and the same point 1.45 `k σ_r` + floor further
+    /// out does not.
+    #[test]
+    fn an_arc_continues_along_the_beam_of_a_moving_scanner() {
+        use crate::preprocess::deskew::Motion;
+        let g = ScanGeometry::LMS200_180_050;
+        let config = Config::default().with_sigma_r(5.0);
+        let (v, w, dt) = (1000.0f64, 1.0f64, 0.002_666f64);
+        let (c, radius) = ((2000.0f64, 2200.0f64), 500.0f64);
+        let exact: [f32; 361] = core::array::from_fn(|i| {
+            let t = i as f64 * dt;
+            let (ox, oy, th) = (v / w * (w * t).sin(), v / w * (1.0 - (w * t).cos()), w * t);
+            let b = f64::from(g.bearing(i)) + th;
+            let d = (libm::cos(b), libm::sin(b));
+            let (px, py) = (c.0 - ox, c.1 - oy);
+            let along = d.0 * px + d.1 * py;
+            let disc = along * along - (px * px + py * py - radius * radius);
+            if disc >= 0.0 && along > 0.0 {
+                (along - libm::sqrt(disc)) as f32
+            } else {
+                f32::NAN
+            }
+        });
+        let first = exact.iter().position(|r| r.is_finite()).unwrap_or(0);
+        let k = (first..361)
+            .take_while(|&i| exact[i].is_finite())
+            .last()
+            .unwrap_or(0)
+            / 2
+            + first / 2;
+        assert!(k > first + 10, "{first} {k}");
+        let motion = Motion::uniform(v as f32, w as f32, dt as f32);
+        let mut ex = Extractor::<361, 8>::new();
+        let mut continues = |off: f32| {
+            let mut ranges = exact;
+            ranges[k] += off;
+            let scan = Scan::from_mm(g, &ranges).with_motion(motion);
+            ex.with_pass(&scan, &config, |pass, rule| {
+                let o = pass.origin(k);
+                assert!(o.y > 50.0, "{o:?}");
+                rule.noise()
+                    .is_some_and(|r| continues_arc(pass, first, k, r))
+            })
+        };
+        assert!(continues(0.0));
+        assert!(!continues(1.45 * 20.0 + 3.0));
+    }
 }
