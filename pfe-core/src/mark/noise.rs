@@ -282,3 +282,45 @@ fn accepted_run(
         _ => to,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::mark::Rule;
+
+    /// The window grows from `window` (10) points until its far end is `min_span · σ_r` (12 ·
+    /// 5 = 60 mm) from the last point, up to `max_window` (24): points 3 mm apart, along y
+    /// and along x, need 21 (20 steps of 3 mm); 10 mm apart, the first 10 already span 90 mm;
+    /// 1 mm apart, the cap.
+    #[test]
+    fn the_window_grows_until_it_spans_min_span_sigmas() {
+        let config = Config::default().with_sigma_r(5.0);
+        let rule = Rule::new(&config, 8000.0, 1.0);
+        let Some(noise) = rule.noise() else {
+            panic!("the default rule")
+        };
+        for (step, want) in [(3.0f32, 21usize), (10.0, 10), (1.0, 24)] {
+            for along_y in [true, false] {
+                let pts: heapless::Vec<Point, 64> = (0..40)
+                    .map(|i| {
+                        let t = step * i as f32;
+                        if along_y {
+                            Point::new(400.0, -50.0 + t)
+                        } else {
+                            Point::new(300.0 + t, 80.0)
+                        }
+                    })
+                    .collect();
+                assert_eq!(
+                    window(&pts, 35, 30, noise),
+                    want,
+                    "step {step}, along y {along_y}"
+                );
+            }
+        }
+        // Never more points than the segment has before k.
+        let pts: heapless::Vec<Point, 64> = (0..40).map(|i| Point::new(400.0, i as f32)).collect();
+        assert_eq!(window(&pts, 35, 12, noise), 12);
+    }
+}

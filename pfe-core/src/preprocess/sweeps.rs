@@ -389,7 +389,46 @@ fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
 
 #[cfg(test)]
 mod tests {
-    use super::invert;
+    use super::{invert, offset, Solution, ROT_SCALE};
+
+    /// An offset's χ² is `xᵀ A x / σ²` with the full symmetric normal matrix A (every
+    /// off-diagonal term counted twice), its standard errors `σ √(A⁻¹)ᵢᵢ` (the rotation's in
+    /// rad), and its largest shift `|(dx, dy)| + |dθ| · far`: worked out in f64.
+    #[test]
+    fn an_offsets_chi2_is_the_quadratic_form_of_its_normal_matrix() {
+        let a = [4.0f32, 1.0, 0.5, 3.0, -0.25, 2.0];
+        let inv = invert(&a).unwrap_or([f32::NAN; 6]);
+        let sol = Solution {
+            x: [2.0, -3.0, 1.5],
+            a,
+            inv,
+            sigma: 2.0,
+            rows: 100,
+        };
+        let off = offset(&sol, 5000.0);
+        let m = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.25], [0.5, -0.25, 2.0f64]];
+        let x = [2.0, -3.0, 1.5f64];
+        let quad: f64 = (0..3)
+            .map(|i| (0..3).map(|j| x[i] * m[i][j] * x[j]).sum::<f64>())
+            .sum();
+        assert!(
+            (f64::from(off.chi2) - quad / 4.0).abs() < 1e-4,
+            "{} vs {}",
+            off.chi2,
+            quad / 4.0
+        );
+        let sd2 = 2.0 * f64::from(inv[5]).sqrt() / f64::from(ROT_SCALE);
+        assert!((f64::from(off.sd[2]) - sd2).abs() < 1e-9, "{:?}", off.sd);
+        assert!((f64::from(off.sd[0]) - 2.0 * f64::from(inv[0]).sqrt()).abs() < 1e-5);
+        assert!((f64::from(off.sd[1]) - 2.0 * f64::from(inv[3]).sqrt()).abs() < 1e-5);
+        let shift = 13f64.sqrt() + 1.5 / f64::from(ROT_SCALE) * 5000.0;
+        assert!(
+            (f64::from(off.max_shift) - shift).abs() < 1e-4,
+            "{}",
+            off.max_shift
+        );
+        assert_eq!((off.dx, off.dy, off.rows), (2.0, -3.0, 100));
+    }
 
     /// The inverse of a symmetric 3 × 3 matrix, times the matrix, is the identity; a matrix
     /// whose determinant is below 10⁻⁴ of its diagonal's product (unknowns 0 and 1 nearly the
