@@ -27,17 +27,23 @@ fn noisy(exact: &[f32], seed: u64) -> Vec<f32> {
         .collect()
 }
 
-#[test]
-fn distant_corridor_walls_are_lines() {
+/// Exact ranges and hits of a corridor 3 m wide and 40 m long (walls 0 and 1, the end wall 2):
+/// both walls seen at a few degrees beyond 10 m.
+fn corridor() -> (Vec<f32>, Vec<Option<usize>>) {
     let g = geometry();
-    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
-    // A corridor 3 m wide, 40 m long: both walls seen at a few degrees beyond 10 m.
     let prims = [
         Prim::Seg(1000.0, 1500.0, 40_000.0, 1500.0),
         Prim::Seg(1000.0, -1500.0, 40_000.0, -1500.0),
         Prim::Seg(40_000.0, -1500.0, 40_000.0, 1500.0),
     ];
-    let (exact, hits) = scan(&prims, start, step, 181, 50_000.0);
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    scan(&prims, start, step, 181, 50_000.0)
+}
+
+#[test]
+fn distant_corridor_walls_are_lines() {
+    let g = geometry();
+    let (exact, hits) = corridor();
     let config = Config::default().with_sigma_r(SIGMA as f32);
     let mut ex = Extractor::<181, 64>::new();
     let (mut far, mut covered) = (0usize, 0usize);
@@ -106,13 +112,7 @@ fn a_staggered_row_of_posts_is_not_one_line() {
 #[test]
 fn joined_walls_leave_consistent_marks_and_counts() {
     let g = geometry();
-    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
-    let prims = [
-        Prim::Seg(1000.0, 1500.0, 40_000.0, 1500.0),
-        Prim::Seg(1000.0, -1500.0, 40_000.0, -1500.0),
-        Prim::Seg(40_000.0, -1500.0, 40_000.0, 1500.0),
-    ];
-    let (exact, _) = scan(&prims, start, step, 181, 50_000.0);
+    let (exact, _) = corridor();
     let config = Config::default().with_sigma_r(SIGMA as f32);
     let mut ex = Extractor::<181, 64>::new();
     let mut sparse = 0;

@@ -146,13 +146,17 @@ mod tests {
         assert!(!at(&mut ex, 1.03));
     }
 
+    /// The default configuration's rule for range noise `sigma_r` mm.
+    fn noise_rule(sigma_r: f32) -> crate::mark::Rule {
+        crate::mark::Rule::new(&Config::default().with_sigma_r(sigma_r), 8000.0, 1.0)
+    }
+
     /// An arc's points must each lie within `k σ_r + floor` (4 · 10 + 3 = 43 mm) of its
     /// circle: 24 points over 60° of a 500 mm circle, one of them moved out by 0.8 and by 1.3
     /// times that (the fit takes up a twentieth of it).
     #[test]
     fn every_point_of_an_arc_is_within_k_sigma_plus_floor() {
-        let config = Config::default().with_sigma_r(10.0);
-        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let rule = noise_rule(10.0);
         let Some(noise) = rule.noise() else {
             panic!("the default rule")
         };
@@ -182,8 +186,7 @@ mod tests {
     /// more) an arc.
     #[test]
     fn an_arc_beats_the_line_by_chi2_after_its_own_residuals() {
-        let config = Config::default().with_sigma_r(10.0);
-        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let rule = noise_rule(10.0);
         let Some(noise) = rule.noise() else {
             panic!("the default rule")
         };
