@@ -90,7 +90,7 @@ mod tests {
     /// a pillar 3 m ahead (radius 500 mm), predicted from the 24 exact points before it, is
     /// taken 1.38 `k σ_r` + floor from the circle and refused at 1.45; 7° off the centre, where
     /// the beam meets the circle at γ with 1/cos γ ≈ 1.6, between 0.97 and 1.03 times its
-    /// factor.
+    /// factor; a beam that misses the fitted circle, by the point's distance from it.
     #[test]
     fn an_arc_continues_within_root_two_k_sigma_head_on() {
         let g = ScanGeometry::LMS200_180_050;
@@ -144,6 +144,22 @@ mod tests {
         };
         assert!(at(&mut ex, 0.97));
         assert!(!at(&mut ex, 1.03));
+        // Beam 200 passes 20.9 mm outside the pillar: a point on it 22 mm from the circle is
+        // taken (within k σ_r + floor = 23 mm of it), one 30 mm from it is not.
+        let edge = |ex: &mut Extractor<361, 8>, delta: f64| {
+            let b = f64::from(g.bearing(200));
+            let along = 3000.0 * b.cos();
+            let r = along - (along * along - 3000.0f64.powi(2) + (500.0 + delta).powi(2)).sqrt();
+            let mut ranges = exact;
+            ranges[200] = r as f32;
+            ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+                rule.noise()
+                    .is_some_and(|r| continues_arc(pass, first, 200, r))
+            })
+        };
+        assert!(exact[200].is_nan() && exact[199].is_finite());
+        assert!(edge(&mut ex, 22.0));
+        assert!(!edge(&mut ex, 30.0));
     }
 
     /// The default configuration's rule for range noise `sigma_r` mm.
