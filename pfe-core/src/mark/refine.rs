@@ -126,3 +126,45 @@ pub(crate) fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize
 fn sq(x: f32) -> f32 {
     x * x
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 40 points: the wall y = 0 (x = 100 i) to point `at − 1`, then the wall x = `corner_x`
+    /// (y = 100 (i − at + 1)) from point `at`.
+    fn corner_at(corner_x: f32, at: usize) -> [Point; 40] {
+        core::array::from_fn(|i| {
+            if i < at {
+                Point::new(100.0 * i as f32, 0.0)
+            } else {
+                Point::new(corner_x, 100.0 * (i as f32 - at as f32 + 1.0))
+            }
+        })
+    }
+
+    fn corner(corner_x: f32) -> [Point; 40] {
+        corner_at(corner_x, 20)
+    }
+
+    /// The boundary settles where the two fixed lines split the contested points best: at 20
+    /// from a detection 1 or 2 points late or 1 early. Where a point lies on both lines (the
+    /// apex, here point 19 on x = 1900 too), the split before and after it tie and the detected
+    /// boundary is kept when it is one of them, the earlier one otherwise.
+    #[test]
+    fn a_boundary_settles_between_two_fixed_lines() {
+        let pts = corner(1950.0);
+        for b in [19, 20, 21, 22] {
+            assert_eq!(refine_boundary(&pts, 0, b, 40), 20, "detected at {b}");
+        }
+        let apex = corner(1900.0);
+        assert_eq!(refine_boundary(&apex, 0, 20, 40), 20);
+        assert_eq!(refine_boundary(&apex, 0, 19, 40), 19);
+        assert_eq!(refine_boundary(&apex, 0, 22, 40), 19);
+        // A segment that began too close before it (fewer than NP points to the left of the
+        // candidates): the detection stands. NP points after the segment's start, the
+        // boundary can settle right there (a corner at 5 of a segment from 2, detected at 8).
+        assert_eq!(refine_boundary(&pts, 19, 21, 40), 21);
+        assert_eq!(refine_boundary(&corner_at(550.0, 5), 2, 8, 40), 5);
+    }
+}
