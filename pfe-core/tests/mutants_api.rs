@@ -972,3 +972,25 @@ fn fit_line_iter_is_the_least_squares_line() {
         );
     }
 }
+
+/// A point at the very centre of the circle being refined (distance 0: no direction) adds its
+/// residual but nothing to the normal equations: the refinement still steps, and lowers the
+/// residual sum, from a start centred on one of the points.
+#[test]
+fn a_point_at_the_centre_does_not_stop_the_refinement() {
+    use pfe_core::fit::circle::geometric_sse;
+    use pfe_core::{refine_circle, Circle};
+    let pts: Vec<Point> = (0..12)
+        .map(|i| {
+            let a = 2.4 + 0.12 * i as f32;
+            Point::new(2000.0 + 300.0 * a.cos(), 300.0 * a.sin())
+        })
+        .collect();
+    let start = Circle {
+        center: pts[6],
+        radius: 300.0,
+    };
+    let refined = refine_circle(&pts, start, 3).unwrap();
+    let (before, after) = (geometric_sse(&pts, &start), geometric_sse(&pts, &refined));
+    assert!(after < 0.5 * before, "{before} -> {after}");
+}
