@@ -513,4 +513,48 @@ mod tests {
             );
         });
     }
+
+    /// Two neighbouring segments that are one arc together (a pillar 3 m ahead cut in two by a
+    /// start the walk set inside it) are merged into one circle; with a jump between them, or
+    /// an invalid reading, they stay two.
+    #[test]
+    fn neighbouring_segments_of_one_arc_are_merged() {
+        use crate::extractor::Extractor;
+        use crate::flags::{JUMP, START};
+        use crate::geometry::ray_circle_intersection;
+        use crate::scan::{Scan, ScanGeometry};
+        let g = ScanGeometry::LMS200_180_050;
+        let exact: [f32; 361] = core::array::from_fn(|i| {
+            let (s, c) = crate::math::sin_cos(g.bearing(i));
+            ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(3000.0, 0.0), 500.0)
+                .unwrap_or(f32::NAN)
+        });
+        let (first, last) = (
+            exact.iter().position(|r| r.is_finite()).unwrap_or(0),
+            exact.iter().rposition(|r| r.is_finite()).unwrap_or(0),
+        );
+        let cut = (first + last) / 2;
+        let config = Config::default();
+        let run = |flag_cut: u8, gap: bool| {
+            let mut ranges = exact;
+            if gap {
+                ranges[cut - 1] = f32::NAN;
+            }
+            let mut ex = Extractor::<361, 8>::new();
+            ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+                pass.set(first, START);
+                pass.set(cut, START | flag_cut);
+                let mut out: Vec<Feature, 8> = Vec::new();
+                segments(pass, rule, &config, &mut out);
+                out
+            })
+        };
+        let one = run(0, false);
+        assert!(
+            matches!(one.as_slice(), [Feature::Circle(c)] if usize::from(c.first) == first && usize::from(c.last) == last),
+            "{one:?}"
+        );
+        assert_eq!(run(JUMP, false).len(), 2);
+        assert_eq!(run(0, true).len(), 2);
+    }
 }
