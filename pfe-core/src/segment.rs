@@ -557,4 +557,35 @@ mod tests {
         assert_eq!(run(JUMP, false).len(), 2);
         assert_eq!(run(0, true).len(), 2);
     }
+
+    /// A run of short segments is joined at most `CHAIN_MAX` (64) points at a time (the work
+    /// a join may take is bounded): 100 single points of one wall become a line of the first 64
+    /// and one of the other 36.
+    #[test]
+    fn a_long_chain_is_joined_64_points_at_a_time() {
+        use crate::extractor::Extractor;
+        use crate::flags::{END, START};
+        use crate::scan::{Scan, ScanGeometry};
+        let mut g = ScanGeometry::lms200(180.0, 1.0);
+        g.r_max = 50_000.0;
+        let ranges: [f32; 181] = core::array::from_fn(|i| {
+            if (40..140).contains(&i) {
+                3000.0 / crate::math::sin_cos(g.bearing(i)).1
+            } else {
+                f32::NAN
+            }
+        });
+        let config = Config::default();
+        let mut ex = Extractor::<181, 8>::new();
+        let out = ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+            for i in 40..140 {
+                pass.set(i, START | END);
+            }
+            let mut out: Vec<Feature, 8> = Vec::new();
+            segments(pass, rule, &config, &mut out);
+            out
+        });
+        let spans: Vec<(usize, usize), 8> = out.iter().map(|f| (f.first(), f.last())).collect();
+        assert_eq!(spans.as_slice(), [(40, 103), (104, 139)], "{out:?}");
+    }
 }
