@@ -227,8 +227,9 @@ mod tests {
     /// From a moving scanner (1 m/s, turning at 1 rad/s, beams 2.666 ms apart: by the pillar's
     /// middle beam it has moved sideways by more than 50 mm) the arc is continued along each
     /// beam from where it was taken: the pillar's exact ranges from each beam's pose (f64)
-    /// continue the arc at its middle beam, and the same point 1.45 `k σ_r` + floor further
-    /// out does not.
+    /// continue the arc at its middle beam, as does the same point 1.3 `k σ_r` + floor further
+    /// out (the head-on tolerance is √2 `k σ_r` + floor, the beam at 48° to the axes), and not
+    /// 1.45 `k σ_r` + floor.
     #[test]
     fn an_arc_continues_along_the_beam_of_a_moving_scanner() {
         use crate::preprocess::deskew::Motion;
@@ -272,6 +273,7 @@ mod tests {
             })
         };
         assert!(continues(0.0));
+        assert!(continues(1.3 * 20.0 + 3.0));
         assert!(!continues(1.45 * 20.0 + 3.0));
     }
 }
