@@ -994,3 +994,39 @@ fn a_point_at_the_centre_does_not_stop_the_refinement() {
     let (before, after) = (geometric_sse(&pts, &start), geometric_sse(&pts, &refined));
     assert!(after < 0.5 * before, "{before} -> {after}");
 }
+
+/// A floor above `k σ_r` (10 mm against 4 · 1 mm): the walk's exact test decides every point
+/// (the fast path's test holds only for floors below `k σ_r`; what it rejects is examined
+/// again), so a wall with 0.5 mm of noise is one line with no mark inside it, as with the
+/// floor at 3 mm.
+#[test]
+fn a_floor_above_k_sigma_takes_the_exact_test() {
+    let g = ScanGeometry::LMS200_180_050;
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let (exact, _) = scan(
+        &[Prim::Seg(2000.0, -1500.0, 2000.0, 1500.0)],
+        start,
+        step,
+        361,
+        8000.0,
+    );
+    let mut noise = Noise::new(5);
+    let ranges: Vec<f32> = exact
+        .iter()
+        .map(|&r| (f64::from(r) + 0.5 * noise.gauss()) as f32)
+        .collect();
+    let mut ex = Extractor::<361, 8>::new();
+    for floor in [3.0f32, 10.0] {
+        let config = with_model(|m| m.floor = floor).with_sigma_r(1.0);
+        ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+        let marks: Vec<usize> = ex.marks().collect();
+        let [Feature::Line(l)] = ex.features() else {
+            panic!("floor {floor}: {:?}", ex.features())
+        };
+        let (a, b) = (usize::from(l.first), usize::from(l.last));
+        assert!(
+            marks.iter().all(|&m| m == a || m == b),
+            "floor {floor}: marks {marks:?} in {a}..={b}"
+        );
+    }
+}
