@@ -7,6 +7,10 @@ use crate::geometry::Point;
 use crate::math;
 use crate::scan::ScanGeometry;
 
+/// Smallest incidence at which consecutive points of one surface are not a jump (10°, Borges
+/// & Aldon's λ), rad.
+pub(crate) const MIN_INCIDENCE: f32 = 0.174_532_93;
+
 /// The beam table of up to `N` beams.
 pub(crate) struct BeamTable<const N: usize> {
     /// Beam directions (cos, sin).
@@ -79,7 +83,7 @@ fn fill(dirs: &mut [Point], spreads: &mut [f32], g: ScanGeometry) -> Shape {
     let (s, c) = math::sin_cos(0.5 * g.angle_step);
     // Largest gap between consecutive points of one surface: seen at down to 10° incidence
     // (Borges & Aldon's λ); the default mode adds the noise of two readings.
-    let (step, lam) = (math::abs(g.angle_step), 10.0f32.to_radians());
+    let (step, lam) = (math::abs(g.angle_step), MIN_INCIDENCE);
     let below = math::sin(lam - step);
     Shape {
         half_step: Point::new(c, s),

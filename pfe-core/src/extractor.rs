@@ -263,7 +263,7 @@ fn run(
 ) -> Result<Stats, ExtractError> {
     // §2: readings to points (range correction, de-skew).
     let (points, ranges, flags) = slots;
-    let motion = scan.motion.filter(|m| m.is_valid());
+    let motion = scan.deskewing();
     preprocess::load(
         (&mut *points, &mut *ranges, &mut *flags),
         &beams,
@@ -310,6 +310,7 @@ fn run(
     };
     flags.iter_mut().for_each(|f| *f &= VALID);
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    pass.uneven = true;
     mark::mark(&mut pass, &rule);
     fit(&mut pass, &rule, config, out);
     outcome(pass.stats)
@@ -336,7 +337,7 @@ fn scrutinised(
     stats: &mut Stats,
     out: &mut dyn FeatureSink,
 ) -> Result<Stats, ExtractError> {
-    let motion = scan.motion.filter(|m| m.is_valid());
+    let motion = scan.deskewing();
     let sweeps = usize::from(scan.sweeps.max(1));
     let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
     let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
@@ -366,28 +367,31 @@ fn scrutinised(
         return outcome(pass.stats);
     }
     let unmoved = starts(pass.flags);
-    // Walks the points again with `rule`, from the flags of the pre-processing; returns the
-    // marks (every walk's predictions are counted).
-    let walk_again =
-        |(points, ranges, flags): (&[Point], &[f32], &mut [u8]), stats: &mut Stats, rule: &Rule| {
-            flags.iter_mut().for_each(|f| *f &= VALID);
-            let mut pass = Pass::over(beams, (points, ranges, flags), motion, stats);
-            mark::mark(&mut pass, rule);
-            starts(pass.flags)
-        };
+    // Walks the points again with `rule`, from the flags of the pre-processing, `moved` or as
+    // loaded; returns the marks (every walk's predictions are counted).
+    let walk_again = |(points, ranges, flags): (&[Point], &[f32], &mut [u8]),
+                      stats: &mut Stats,
+                      rule: &Rule,
+                      moved: bool| {
+        flags.iter_mut().for_each(|f| *f &= VALID);
+        let mut pass = Pass::over(beams, (points, ranges, flags), motion, stats);
+        pass.uneven = moved;
+        mark::mark(&mut pass, rule);
+        starts(pass.flags)
+    };
     offsets.apply(points, ranges, flags);
     let moved_config = own(points, stats);
     let moved_sigma_um = stats.scan_sigma_um;
     let moved_rule = Rule::new(&moved_config, r_max, gap);
     if sweeps > 2 {
-        walk_again((points, ranges, flags), stats, &walk_rule);
+        walk_again((points, ranges, flags), stats, &walk_rule, true);
     } else {
         let rule = if apart { &walk_rule } else { &moved_rule };
-        if walk_again((points, ranges, flags), stats, rule) >= unmoved {
+        if walk_again((points, ranges, flags), stats, rule, true) >= unmoved {
             // The first walk stands: the points are loaded again (exactly as they were) and
             // walked again (its flags are not kept), then moved again when apart.
             preprocess::load((points, ranges, flags), &beams, motion, scan, config, stats);
-            walk_again((points, ranges, flags), stats, &walk_rule);
+            walk_again((points, ranges, flags), stats, &walk_rule, false);
             if !apart {
                 stats.scan_sigma_um = walk_sigma_um;
                 let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);

@@ -28,6 +28,10 @@ pub(crate) struct Pass<'a> {
     pub flags: &'a mut [u8],
     /// Motion during the scan, when de-skewing.
     pub motion: Option<Motion>,
+    /// Consecutive points are not one beam step apart in bearing: interleaved sweeps taken
+    /// from different poses, de-skewed or moved onto sweep 0 (a short and a long step in
+    /// turn). The walk then measures each step rather than assume the beam step.
+    pub uneven: bool,
     /// Segment starts the default mode's walk set right after another one, in increasing
     /// order: the only places where its check step can act. `None` when not known (the
     /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
@@ -47,7 +51,7 @@ impl<'a> Pass<'a> {
         config: &Config,
         stats: &'a mut Stats,
     ) -> Self {
-        let motion = scan.motion.filter(|m| m.is_valid());
+        let motion = scan.deskewing();
         let slots = (&mut *points, &mut *ranges, &mut *flags);
         preprocess::load(slots, &beams, motion, scan, config, stats);
         Self::over(beams, (points, ranges, flags), motion, stats)
@@ -66,6 +70,7 @@ impl<'a> Pass<'a> {
             ranges,
             flags,
             motion,
+            uneven: motion.is_some_and(|m| m.sweeps_apart()),
             neighbours: None,
             stats,
         }

@@ -82,6 +82,9 @@ pub struct WindowLine {
     /// |t|² sin²ϕ̄, ϕ̄ the incidence of the line at the window's last point, seen from the
     /// origin given to [`WindowLine::fit`] (sin²ϕ̄ = 1 when that point is the origin).
     t2_sin2_last: f32,
+    /// The window's last point along the line from the centroid (times |t|), or NaN before
+    /// [`Self::capped`].
+    tail: f32,
 }
 
 impl WindowLine {
@@ -129,6 +132,7 @@ impl WindowLine {
             inv_n,
             inv_t2suu: 1.0 / (t2 * suu),
             lever_sin2: f32::NAN,
+            tail: f32::NAN,
             t2_sin2_last: if l2 > 0.0 { ln * ln / l2 } else { t2 },
         })
     }
@@ -142,6 +146,39 @@ impl WindowLine {
         let u_last = last.x * self.tx + last.y * self.ty - self.ct;
         let u_next = u_last + (u_last - u_first) / n.saturating_sub(1).max(1) as f32;
         self.lever_sin2 = (self.inv_n + u_next * u_next * self.inv_t2suu) * self.t2_sin2_last;
+        self.tail = u_last;
+        self
+    }
+
+    /// [`Self::accepts`] for the point `(x, y)` after the point `prev` (both relative to the
+    /// scanner), with the lever a window like this line's, ending at `prev`, gives it: the
+    /// point's own step from `prev` instead of the window's mean step. For points not evenly
+    /// spaced (interleaved sweeps de-skewed: a short and a long step in turn), where the mean
+    /// step tests the point after a long one far more strictly than a fresh window would.
+    pub(crate) fn accepts_after(
+        &self,
+        prev: &Point,
+        (x, y): (f32, f32),
+        r: f32,
+        k_sigma2: f32,
+        floor: f32,
+    ) -> bool {
+        let u_next = self.tail + (x - prev.x) * self.tx + (y - prev.y) * self.ty;
+        let lever_sin2 = (self.inv_n + u_next * u_next * self.inv_t2suu) * self.t2_sin2_last;
+        Self {
+            lever_sin2,
+            ..*self
+        }
+        .accepts(x, y, r, k_sigma2, floor)
+    }
+
+    /// The same line in the frame of a scanner at `origin` (the frame of the scanner at (0, 0)
+    /// moved by `origin`, not turned): [`Self::accepts`] then tests a point given relative to
+    /// `origin`, as a de-skewed beam's point is seen from its own pose.
+    #[inline]
+    pub(crate) fn seen_from(mut self, origin: Point) -> Self {
+        self.cn -= self.tx * origin.y - self.ty * origin.x;
+        self.ct -= self.tx * origin.x + self.ty * origin.y;
         self
     }
 
@@ -377,6 +414,93 @@ mod tests {
             agreed > 5000 && accepted > 1000 && agreed - accepted > 1000 && within > 1000,
             "{agreed} {accepted} {within}"
         );
+        Ok(())
+    }
+
+    /// Ten points of the wall x = 2000 mm seen from `o` (17.5 mm apart, ±1 mm wiggle), and
+    /// their line fitted from `o`, capped.
+    fn wall_from(o: Point) -> Result<(WindowLine, Point), &'static str> {
+        let window: heapless::Vec<Point, 10> = (0..10)
+            .map(|i| {
+                let d = if i % 2 == 0 { 1.0 } else { -1.0 };
+                Point::new(o.x + 2000.0 + d, o.y + 17.5 * i as f32)
+            })
+            .collect();
+        let (first, last) = (
+            window.first().ok_or("empty")?,
+            window.last().ok_or("empty")?,
+        );
+        let line = WindowLine::fit(&window, o).ok_or("fit")?;
+        Ok((line.capped(first, last, window.len()), *last))
+    }
+
+    /// The point of the beam from the scanner through (2000, y) at `off` mm past the wall.
+    fn beyond(y: f32, off: f32) -> (f32, f32, f32) {
+        let r = math::hypot(2000.0, y);
+        let k = (r + off) / r;
+        (2000.0 * k, y * k, r + off)
+    }
+
+    /// A line fitted from a scanner at `o`, `seen_from(o)`, tests points given relative to `o`:
+    /// the wall's next points are accepted and 60 mm behind it rejected; without it, the same
+    /// relative points lie 40 mm off a line that is 2040 mm away and are rejected.
+    #[test]
+    fn a_line_seen_from_its_scanner_tests_points_relative_to_it() -> Result<(), &'static str> {
+        let (ks2, floor) = (15.0f32 * 15.0, 0.0);
+        let o = Point::new(40.0, -25.0);
+        let (line, _) = wall_from(o)?;
+        let seen = line.seen_from(o);
+        for y in [175.0f32, 192.5, 210.0] {
+            let (x, yy, r) = beyond(y, 0.0);
+            assert!(seen.accepts(x, yy, r, ks2, floor), "{y}");
+            assert!(!line.accepts(x, yy, r, ks2, floor), "{y}");
+            let (x, yy, r) = beyond(y, 60.0);
+            assert!(!seen.accepts(x, yy, r, ks2, floor), "{y}");
+        }
+        // Seen from where it was fitted, nothing moves.
+        let (line0, _) = wall_from(Point::new(0.0, 0.0))?;
+        assert_eq!(line0.seen_from(Point::new(0.0, 0.0)), line0);
+        Ok(())
+    }
+
+    /// `accepts_after` a point one mean step past the window's last point tests as `accepts`
+    /// (the capped lever: the same bound); a point five mean steps past it gets its own larger
+    /// lever: a point off the wall by between the two bounds is accepted after that long step,
+    /// rejected by `accepts` and after a mean step.
+    #[test]
+    fn a_point_after_a_long_step_gets_its_own_lever() -> Result<(), &'static str> {
+        let (ks2, floor) = (15.0f32 * 15.0, 0.0);
+        let (line, last) = wall_from(Point::new(0.0, 0.0))?;
+        // The bound |r − t| ≤ k σ √(1 + lever (r/q)²) at the wall point 1 and 5 steps on.
+        let bound = |steps: f32| {
+            let y = last.y + 17.5 * steps;
+            let u = line.tail + 17.5 * steps * line.ty;
+            let lever = line.inv_n + u * u * line.inv_t2suu;
+            let (r, q) = (math::hypot(2000.0, y), 2000.0 * line.ty);
+            let ratio2 = line.t2_sin2_last * (r / q) * (r / q);
+            (y, 15.0 * math::sqrt(1.0 + lever * ratio2))
+        };
+        let (y1, b1) = bound(1.0);
+        let (y5, b5) = bound(5.0);
+        assert!(b5 > 1.2 * b1, "{b1} {b5}");
+        let between = 0.5 * (b1 + b5);
+        // One mean step on: both forms agree, inside and outside the bound.
+        for (off, want) in [(0.5 * b1, true), (1.5 * b1, false), (between, false)] {
+            let (x, y, r) = beyond(y1, off);
+            assert_eq!(line.accepts(x, y, r, ks2, floor), want, "{off}");
+            assert_eq!(
+                line.accepts_after(&last, (x, y), r, ks2, floor),
+                want,
+                "{off}"
+            );
+        }
+        // A step of five from the window's last point.
+        let prev = last;
+        let (x, y, r) = beyond(y5, between);
+        assert!(!line.accepts(x, y, r, ks2, floor));
+        assert!(line.accepts_after(&prev, (x, y), r, ks2, floor));
+        let (x, y, r) = beyond(y5, 1.2 * b5);
+        assert!(!line.accepts_after(&prev, (x, y), r, ks2, floor));
         Ok(())
     }
 }

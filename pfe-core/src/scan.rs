@@ -201,6 +201,13 @@ impl<'a> Scan<'a> {
         self
     }
 
+    /// The motion the extraction de-skews with: [`Self::motion`] when valid and moving
+    /// (standing still, de-skewing would change nothing: the scan is extracted as without
+    /// odometry).
+    pub(crate) fn deskewing(&self) -> Option<Motion> {
+        self.motion.filter(|m| m.is_valid() && m.moves())
+    }
+
     /// Number of interleaved sweeps (at least 1): the motion's timing's when there is one.
     pub fn sweep_count(&self) -> usize {
         match self.motion {

@@ -454,9 +454,10 @@ fn the_boards_configuration_aligns_sweeps_its_marks_show_apart() {
 }
 
 /// Without scrutiny, declared sweeps are aligned only by the default mode's rule and only
-/// without odometry: under the paper's rule, or with odometry given (here: standing still,
-/// while the sweeps are 8 mm / 6 mrad apart and the walk marks them so), the scan is
-/// extracted as one sweep is, bit for bit: odometry, when given, places the sweeps.
+/// without odometry: under the paper's rule, or with odometry given (the robot's motion,
+/// 8 mm / 6 mrad between the sweeps), the scan is extracted as one sweep is, bit for bit:
+/// odometry, when given, places the sweeps. (Odometry of a scanner standing still is no
+/// odometry: `tests/odometry.rs`.)
 #[test]
 fn sweeps_are_aligned_only_by_the_noise_rule_without_odometry() {
     let mut ex = Extractor::<401, 128>::new();
@@ -464,7 +465,7 @@ fn sweeps_are_aligned_only_by_the_noise_rule_without_odometry() {
     let (g, n, sweeps) = variant(0.5);
     let truth = sweep_pose(0.5);
     let board = Config::default().with_scrutiny(false).with_sigma_r(5.0);
-    let (mut marks, mut still_marks) = (0, 0);
+    let (mut marks, mut moving_marks) = (0, 0);
     for _ in 0..30 {
         let room = room(&mut noise);
         let (ranges, _) = render(&room.prims, g, n, sweeps, &truth, 5.0, &mut noise);
@@ -477,11 +478,7 @@ fn sweeps_are_aligned_only_by_the_noise_rule_without_odometry() {
         let mut with = |sweeps: u8| {
             let scan = Scan::from_mm(g, &ranges)
                 .with_sweeps(sweeps)
-                .with_motion(Motion {
-                    v: 0.0,
-                    omega: 0.0,
-                    ..motion(0.5)
-                });
+                .with_motion(motion(0.5));
             let stats = ex.extract(&scan, &board).unwrap();
             (stats, ex.features().to_vec(), ex.marks().count())
         };
@@ -489,11 +486,12 @@ fn sweeps_are_aligned_only_by_the_noise_rule_without_odometry() {
         let two = with(2);
         assert_eq!(two.0.sweeps_aligned, 0);
         assert_eq!(one, two);
-        still_marks += one.2;
+        moving_marks += one.2;
     }
-    // As one sweep, the paper's walk leaves 43 marks a scan, the default's 24 (seed 31).
+    // As one sweep, the paper's walk leaves 43 marks a scan (seed 31); the default's with
+    // the odometry 9, about the rooms' corners and the pillar's edges (24 without it).
     assert!(marks > 30 * 35, "{marks} marks in 30 scans");
-    assert!(still_marks > 30 * 20, "{still_marks} marks in 30 scans");
+    assert!(moving_marks < 30 * 12, "{moving_marks} marks in 30 scans");
 }
 
 /// Of the runs of ≥ 30 beams on a wall of `room`: how many, and how many have not exactly one

@@ -6,7 +6,10 @@ pub(crate) mod noise;
 pub(crate) mod paper;
 pub(crate) mod refine;
 
+use crate::beams::MIN_INCIDENCE;
 use crate::config::{Config, NoiseModel, Threshold};
+use crate::geometry::Point;
+use crate::math;
 use crate::pass::Pass;
 use crate::predict::{paper_threshold, Prediction};
 
@@ -105,6 +108,26 @@ impl NoiseRule {
     pub(crate) fn jump_limit(&self, prev_r: f32) -> f32 {
         prev_r * self.gap_factor + self.jump_add
     }
+
+    /// [`Self::jump_limit`] from the point `a` (at range `prev_r`) to `b`, both relative to
+    /// the scanner, at the angle they are apart rather than one beam step: the gap a surface
+    /// seen at down to [`MIN_INCIDENCE`] leaves between them. For points not evenly spaced in
+    /// bearing ([`Pass::uneven`]).
+    pub(crate) fn jump_limit_between(&self, a: Point, b: Point, prev_r: f32) -> f32 {
+        // |a × b| = |a||b| sin Δφ, a·b = |a||b| cos Δφ: sin(λ − Δφ) |a||b| below.
+        let cross = math::abs(a.x * b.y - a.y * b.x);
+        let dot = a.x * b.x + a.y * b.y;
+        let norm = math::sqrt((a.x * a.x + a.y * a.y) * (b.x * b.x + b.y * b.y));
+        let (sin_l, cos_l) = math::sin_cos(MIN_INCIDENCE);
+        let below = sin_l * dot - cos_l * cross;
+        let floor = 1e-3 * norm;
+        let gap = cross / if below > floor { below } else { floor };
+        if math::finite(gap) {
+            prev_r * gap + self.jump_add
+        } else {
+            self.jump_limit(prev_r)
+        }
+    }
 }
 
 /// Mark points under the configured rule (the paper's, or the default mode's walk).
@@ -114,5 +137,50 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &Rule) {
     match rule {
         Rule::Paper(rule) => paper::mark(pass, rule),
         Rule::Noise(rule) => noise::mark(pass, rule),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The jump limit between two points at their own angle Δφ apart is the gap a surface seen
+    /// at 10° incidence leaves, `r sin Δφ / sin(λ − Δφ)`, plus the noise allowance (f64
+    /// reference, both points at range r); one beam step apart, the beam table's limit.
+    #[test]
+    fn the_jump_limit_between_two_points_follows_their_angle() -> Result<(), &'static str> {
+        let lam = 10.0f64.to_radians();
+        let step = 0.5f64.to_radians();
+        let gap = (step.sin() / (lam - step).sin()) as f32;
+        let Rule::Noise(rule) = Rule::new(&Config::default(), 8000.0, gap) else {
+            return Err("not the noise rule");
+        };
+        for r in [500.0f64, 3000.0, 20000.0] {
+            for dphi in [0.0027f64, step, 0.0147, 0.1] {
+                let b = 0.3f64;
+                let a = Point::new((r * b.cos()) as f32, (r * b.sin()) as f32);
+                let c = Point::new((r * (b + dphi).cos()) as f32, (r * (b + dphi).sin()) as f32);
+                let want = r * dphi.sin() / (lam - dphi).sin() + f64::from(rule.jump_add);
+                let got = f64::from(rule.jump_limit_between(a, c, r as f32));
+                assert!(
+                    (got - want).abs() <= 1e-3 * want,
+                    "r {r} Δφ {dphi}: {got} {want}"
+                );
+                if dphi == step {
+                    let table = f64::from(rule.jump_limit(r as f32));
+                    assert!((got - table).abs() <= 1e-3 * table, "{got} {table}");
+                }
+            }
+        }
+        // At or past λ the gap has no bound but the floor's (10³ r sin Δφ), and a point that
+        // is not finite gives the beam table's limit.
+        let (a, c) = (Point::new(1000.0, 0.0), Point::new(0.0, 1000.0));
+        assert!(rule.jump_limit_between(a, c, 1000.0) > 1e5);
+        let nan = Point::new(f32::NAN, 0.0);
+        assert_eq!(
+            rule.jump_limit_between(a, nan, 1000.0),
+            rule.jump_limit(1000.0)
+        );
+        Ok(())
     }
 }

@@ -57,7 +57,19 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
     // its test (`WindowLine::accepts_within`); otherwise every point takes the slow path, with
     // the same outcome.
     let floor = rule.model.floor;
-    let fast = pass.motion.is_none() && floor * floor <= WindowLine::FLOOR2_WITHIN * rule.k_sigma2;
+    let fast = pass.motion.is_none()
+        && !pass.uneven
+        && floor * floor <= WindowLine::FLOOR2_WITHIN * rule.k_sigma2;
+    if fast {
+        walk::<true>(pass, rule);
+    } else {
+        walk::<false>(pass, rule);
+    }
+}
+
+/// The walk over every point, with the fast path (`FAST`: the scanner at the origin, points
+/// evenly spaced: the uneven cases' tests compile out) or without.
+fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule) {
     pass.neighbours = Some(Vec::new());
     // Points and ranges cut to the number of readings once: one bounds check for both.
     let n = pass.len();
@@ -72,7 +84,7 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
         // Fast path: the points the cached line accepts, up to the next point where a
         // boundary awaits refinement or a merge test is due.
         let cached = walk.cache.as_ref().filter(|_| walk.seg.is_some());
-        if let (Some((line, until)), true) = (cached, fast) {
+        if let (Some((line, until)), true) = (cached, FAST) {
             let stop = walk.next_check(k, until + 1).min(n);
             let next = accepted_run(points, ranges, k, stop, line, rule);
             pass.stats.predictions += next - k;
@@ -82,7 +94,7 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
                 break;
             }
         }
-        step(pass, cloud, k, &mut walk, stale_failed, rule);
+        step::<FAST>(pass, cloud, k, &mut walk, stale_failed, rule);
         k += 1;
     }
 }
@@ -90,7 +102,7 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
 /// The walk at point `k`, with everything the fast path does not do: segment starts, jumps,
 /// fresh windows, arc continuation, boundary placement, refinement and merges.
 /// `stale_failed`: the fast path just saw the cached line reject `k`.
-fn step(
+fn step<const FAST: bool>(
     pass: &mut Pass<'_>,
     cloud: Cloud<'_>,
     k: usize,
@@ -116,7 +128,13 @@ fn step(
     else {
         return;
     };
-    let limit = rule.jump_limit(prev_r);
+    let limit = if !FAST && pass.uneven {
+        let o = pass.origin(k);
+        let seen = |q: Point| Point::new(q.x - o.x, q.y - o.y);
+        rule.jump_limit_between(seen(prev), seen(p), prev_r)
+    } else {
+        rule.jump_limit(prev_r)
+    };
     let (ex, ey) = (p.x - prev.x, p.y - prev.y);
     let jump = ex * ex + ey * ey > limit * limit;
     let boundary = if jump {
@@ -127,26 +145,37 @@ fn step(
         None
     } else {
         // A recent window's line first (unless the fast path just saw it fail here).
-        let stale_ok = !stale_failed
-            && walk.cache.as_ref().is_some_and(|(line, until)| {
-                k <= *until && line_accepts(pass, cloud, line, k, rule)
-            });
+        let stale = walk.cache.filter(|(_, until)| !stale_failed && k <= *until);
+        let stale_ok = stale.is_some_and(|(line, _)| {
+            // The fast path counts the points it tests; here, without it, each one.
+            if !FAST {
+                pass.stats.predictions += 1;
+            }
+            line_accepts::<FAST>(pass, cloud, &line, k, rule)
+        });
         if stale_ok {
             None
         } else {
             let w = window(points, k, c, rule);
             let (first, last) = (point_at(points, k - w), prev);
-            // It may test the next 8w points while they fit it, no more loosely than a fresh
-            // line (`WindowLine::accepts`); a point it rejects gets a fresh window.
-            walk.cache = pass
-                .window_line(k - w, k, k)
-                .map(|l| (l.capped(&first, &last, w), k + 8 * w));
-            let line = walk.cache.as_ref().map(|(l, _)| l);
-            let over = !line.is_some_and(|l| line_accepts(pass, cloud, l, k, rule));
-            (over && !continues_arc(pass, s, k, rule)).then(|| {
-                let pred = line.and_then(|l| pass.predict_with(l, k));
-                locate(pass, s, k, pred, rule)
-            })
+            if !FAST && pass.uneven && !spans(&first, &last, rule) {
+                // Points not evenly spaced (interleaved sweeps de-skewed or moved: close to
+                // the scanner one sweep's point may even pass the other's) give a window that
+                // does not yet span the noise no direction: no test until it does.
+                None
+            } else {
+                // It may test the next 8w points while they fit it, no more loosely than a
+                // fresh line (`WindowLine::accepts`); a point it rejects gets a fresh window.
+                walk.cache = pass
+                    .window_line(k - w, k, k)
+                    .map(|l| (l.capped(&first, &last, w), k + 8 * w));
+                let line = walk.cache.as_ref().map(|(l, _)| l);
+                let over = !line.is_some_and(|l| line_accepts::<FAST>(pass, cloud, l, k, rule));
+                (over && !continues_arc(pass, s, k, rule)).then(|| {
+                    let pred = line.and_then(|l| pass.predict_with(l, k));
+                    locate(pass, s, k, pred, rule)
+                })
+            }
         }
     };
     if let Some(b) = boundary {
@@ -191,23 +220,32 @@ fn step(
     }
 }
 
-/// Whether `line` accepts point `k` (the inverse of [`NoiseRule::marks`], without building the
-/// prediction when not de-skewing).
+/// Whether `line` accepts point `k` ([`WindowLine::accepts`]: the lever of the beam after the
+/// line's window for every beam it tests). When de-skewing, from beam `k`'s own pose: the same
+/// test, so that odometry of a scanner standing still changes nothing.
 #[inline(always)]
-fn line_accepts(
+fn line_accepts<const FAST: bool>(
     pass: &Pass<'_>,
     cloud: Cloud<'_>,
     line: &WindowLine,
     k: usize,
     rule: &NoiseRule,
 ) -> bool {
-    match pass.motion {
-        None => {
-            let p = point_at(cloud.points, k);
-            let r = cloud.ranges.get(k).copied().unwrap_or(f32::NAN);
-            line.accepts(p.x, p.y, r, rule.k_sigma2, rule.model.floor)
-        }
-        Some(_) => pass.predict_with(line, k).is_some_and(|p| !rule.marks(&p)),
+    let p = point_at(cloud.points, k);
+    let r = cloud.ranges.get(k).copied().unwrap_or(f32::NAN);
+    let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
+    if FAST || (pass.motion.is_none() && !pass.uneven) {
+        return line.accepts(p.x, p.y, r, k_sigma2, floor);
+    }
+    let o = pass.origin(k);
+    let seen = line.seen_from(o);
+    let (x, y) = (p.x - o.x, p.y - o.y);
+    if pass.uneven {
+        let prev = point_at(cloud.points, k.wrapping_sub(1));
+        let prev = Point::new(prev.x - o.x, prev.y - o.y);
+        seen.accepts_after(&prev, (x, y), r, k_sigma2, floor)
+    } else {
+        seen.accepts(x, y, r, k_sigma2, floor)
     }
 }
 
@@ -229,6 +267,13 @@ fn window(points: &[Point], k: usize, c: usize, rule: &NoiseRule) -> usize {
         w += 1;
     }
     w
+}
+
+/// Whether the window from `first` to `last` spans `min_span · σ_r`.
+fn spans(first: &Point, last: &Point, rule: &NoiseRule) -> bool {
+    let span = rule.model.min_span * rule.sigma_r;
+    let (dx, dy) = (last.x - first.x, last.y - first.y);
+    dx * dx + dy * dy >= span * span
 }
 
 /// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its

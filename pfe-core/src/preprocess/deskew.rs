@@ -128,6 +128,17 @@ impl Motion {
         math::all_finite(&[self.v, self.omega]) && self.timing.is_valid()
     }
 
+    /// Whether interleaved sweeps are taken from different poses (more than one sweep and
+    /// the scanner moving): their de-skewed points are then not evenly spaced in bearing.
+    pub(crate) fn sweeps_apart(&self) -> bool {
+        self.timing.sweep_count() > 1 && self.moves()
+    }
+
+    /// Whether the scanner moves (v or ω not zero).
+    pub(crate) fn moves(&self) -> bool {
+        self.v != 0.0 || self.omega != 0.0
+    }
+
     /// Scanner pose when beam `i` was taken, in the frame of beam 0 (exact arc of a circle).
     ///
     /// ```

@@ -55,14 +55,14 @@ pub(crate) fn load(
     stats.valid = n - invalid;
     if config.correction.is_some() || motion.is_some() {
         let slots = (points, ranges, flags, dirs);
-        stats.valid -= adjust(slots, motion, scan, config);
+        stats.valid -= adjust(slots, motion, config);
     }
 }
 
 /// Applies the range correction and de-skewing to the valid points; a point they make invalid
 /// is dropped. Returns the number dropped.
-fn adjust(slots: Slots<'_>, motion: Option<Motion>, scan: &Scan<'_>, config: &Config) -> usize {
-    let (g, correction) = (scan.geometry, config.correction);
+fn adjust(slots: Slots<'_>, motion: Option<Motion>, config: &Config) -> usize {
+    let correction = config.correction;
     let (points, ranges, flags, dirs) = slots;
     let slots = points
         .iter_mut()
@@ -78,8 +78,15 @@ fn adjust(slots: Slots<'_>, motion: Option<Motion>, scan: &Scan<'_>, config: &Co
         if let Some(k) = correction {
             r = k.apply(r);
         }
+        // The beam's point turned and moved by the scanner's pose at its time (from the beam
+        // table's direction: standing still, exactly the point without odometry).
         let p = match motion {
-            Some(m) => m.deskew(i, r, g.bearing(i)).0,
+            Some(m) => {
+                let pose = m.pose(i);
+                let (s, c) = math::sin_cos(pose.theta);
+                let (x, y) = (r * d.x, r * d.y);
+                Point::new(c * x - s * y + pose.origin.x, s * x + c * y + pose.origin.y)
+            }
             None => Point::new(r * d.x, r * d.y),
         };
         if math::finite(r) && r > 0.0 && p.is_valid() {
