@@ -265,4 +265,58 @@ mod tests {
             }
         }
     }
+
+    /// Range limits exactly at a code's range and one f32 step below it, for 2 000 unit sizes:
+    /// where the quotient `r_max / mm` rounds to the wrong side of a code, both of `max_code`'s
+    /// correcting walks are needed (against the definition, as above).
+    #[test]
+    fn max_code_is_exact_where_the_quotient_rounds_past_a_code() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let (mut down, mut up) = (0, 0);
+        for _ in 0..2000 {
+            let mm = 0.01 + (next() % 2_000_000) as f32 * 1e-5;
+            let max_valid = 100 + (next() % 16_000) as u16;
+            let v0 = 1 + (next() % u64::from(max_valid - 1)) as u16;
+            let at = f32::from(v0) * mm;
+            for r_max in [at, f32::from_bits(at.to_bits() - 1)] {
+                let expected = (1..=max_valid)
+                    .rev()
+                    .find(|&v| f32::from(v) * mm <= r_max)
+                    .unwrap_or(0);
+                assert_eq!(
+                    max_code(mm, max_valid, r_max),
+                    expected,
+                    "{mm} {r_max} {max_valid}"
+                );
+                let q = (r_max / mm) as u16;
+                down += usize::from(q > expected);
+                up += usize::from(q < expected);
+            }
+        }
+        // Both walks were needed.
+        assert!(down > 10 && up > 10, "{down} {up}");
+    }
+
+    /// The sweeps declared, at least one; with odometry, its timing's.
+    #[test]
+    fn the_sweep_count_is_the_declared_or_the_timings() {
+        let ranges = [1000.0f32; 361];
+        let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges);
+        assert_eq!(scan.sweep_count(), 1);
+        assert_eq!(scan.with_sweeps(0).sweep_count(), 1);
+        assert_eq!(scan.with_sweeps(4).sweep_count(), 4);
+        let motion = Motion::uniform(100.0, 0.0, 1e-4);
+        assert_eq!(scan.with_sweeps(4).with_motion(motion).sweep_count(), 1);
+        let m = Motion {
+            timing: crate::BeamTiming::lms2xx(0.5),
+            ..motion
+        };
+        assert_eq!(scan.with_motion(m).sweep_count(), 2);
+    }
 }
