@@ -129,4 +129,18 @@ mod tests {
         assert_eq!(serde_json::from_str::<Feature>(&json)?, circle);
         Ok(())
     }
+
+    /// A line without its `rho` is refused, and the error names the field.
+    #[test]
+    fn a_missing_field_is_named() {
+        let json = r#"{"kind":"line","first":3,"last":12,"points":10,"alpha":0.5,"var_alpha":0.25,"var_rho":4.0,"cov_alpha_rho":-1.5,"start":[1.0,2.0],"end":[3.0,-4.5]}"#;
+        let err = serde_json::from_str::<Feature>(json)
+            .err()
+            .map(|e| e.to_string());
+        assert!(
+            err.as_deref()
+                .is_some_and(|e| e.contains("missing field `rho`")),
+            "{err:?}"
+        );
+    }
 }
