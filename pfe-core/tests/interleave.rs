@@ -27,37 +27,26 @@ struct Room {
     walls: Vec<(f64, f64)>,
 }
 
+/// [`common::room`] with its walls as (ρ, α).
 fn room(noise: &mut Noise) -> Room {
-    let u = |n: &mut Noise| n.gauss().clamp(-2.0, 2.0) / 4.0 + 0.5;
-    let (w, h) = (5000.0 + 4000.0 * u(noise), 4000.0 + 3000.0 * u(noise));
-    let (x, y) = (w * (0.3 + 0.3 * u(noise)), h * (0.3 + 0.4 * u(noise)));
-    let th = 3.0 * (u(noise) - 0.5);
-    let (s, c) = th.sin_cos();
-    let local = |px: f64, py: f64| {
-        let (dx, dy) = (px - x, py - y);
-        (c * dx + s * dy, -s * dx + c * dy)
-    };
-    let corners = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)];
-    let mut prims = Vec::new();
-    let mut walls = Vec::new();
-    for k in 0..4 {
-        let (a, b) = (
-            local(corners[k].0, corners[k].1),
-            local(corners[(k + 1) % 4].0, corners[(k + 1) % 4].1),
-        );
-        prims.push(Prim::Seg(a.0, a.1, b.0, b.1));
-        // Normal from the origin to the wall.
-        let (ex, ey) = (b.0 - a.0, b.1 - a.1);
-        let len = ex.hypot(ey);
-        let (mut nx, mut ny) = (-ey / len, ex / len);
-        let mut rho = a.0 * nx + a.1 * ny;
-        if rho < 0.0 {
-            (nx, ny, rho) = (-nx, -ny, -rho);
-        }
-        walls.push((rho, ny.atan2(nx)));
-    }
-    let (px, py) = local(x + 0.5 * (w - x) * u(noise) + 800.0, y + 600.0);
-    prims.push(Prim::Circle(px, py, 150.0 + 150.0 * u(noise)));
+    let prims = common::room(noise);
+    let walls = prims
+        .iter()
+        .filter_map(|p| match *p {
+            // Normal from the origin to the wall.
+            Prim::Seg(x0, y0, x1, y1) => {
+                let (ex, ey) = (x1 - x0, y1 - y0);
+                let len = ex.hypot(ey);
+                let (mut nx, mut ny) = (-ey / len, ex / len);
+                let mut rho = x0 * nx + y0 * ny;
+                if rho < 0.0 {
+                    (nx, ny, rho) = (-nx, -ny, -rho);
+                }
+                Some((rho, ny.atan2(nx)))
+            }
+            Prim::Circle(..) => None,
+        })
+        .collect();
     Room { prims, walls }
 }
 
@@ -73,27 +62,7 @@ fn render(
     noise: &mut Noise,
 ) -> (Vec<f32>, Vec<Option<usize>>) {
     let moved: Vec<Vec<Prim>> = (0..sweeps)
-        .map(|s| {
-            let (ox, oy, th) = pose(s);
-            let (sn, cs) = th.sin_cos();
-            let to = |x: f64, y: f64| {
-                let (dx, dy) = (x - ox, y - oy);
-                (cs * dx + sn * dy, -sn * dx + cs * dy)
-            };
-            prims
-                .iter()
-                .map(|p| match *p {
-                    Prim::Seg(x0, y0, x1, y1) => {
-                        let (a, b) = (to(x0, y0), to(x1, y1));
-                        Prim::Seg(a.0, a.1, b.0, b.1)
-                    }
-                    Prim::Circle(cx, cy, r) => {
-                        let c = to(cx, cy);
-                        Prim::Circle(c.0, c.1, r)
-                    }
-                })
-                .collect()
-        })
+        .map(|s| common::seen_from(prims, pose(s)))
         .collect();
     (0..n)
         .map(|i| {

@@ -42,25 +42,7 @@ fn render(
 ) -> (Vec<f32>, Vec<Option<usize>>) {
     (0..n)
         .map(|i| {
-            let (ox, oy, th) = pose_at(v, omega, beam_time(i, sweeps));
-            let (s, c) = th.sin_cos();
-            let to = |x: f64, y: f64| {
-                let (dx, dy) = (x - ox, y - oy);
-                (c * dx + s * dy, -s * dx + c * dy)
-            };
-            let local: Vec<Prim> = prims
-                .iter()
-                .map(|p| match *p {
-                    Prim::Seg(x0, y0, x1, y1) => {
-                        let (a, b) = (to(x0, y0), to(x1, y1));
-                        Prim::Seg(a.0, a.1, b.0, b.1)
-                    }
-                    Prim::Circle(cx, cy, r) => {
-                        let (x, y) = to(cx, cy);
-                        Prim::Circle(x, y, r)
-                    }
-                })
-                .collect();
+            let local = common::seen_from(prims, pose_at(v, omega, beam_time(i, sweeps)));
             match cast(&local, f64::from(g.bearing(i))) {
                 Some((t, p)) if t < 7900.0 => ((t + sigma * noise.gauss()) as f32, Some(p)),
                 _ => (f32::NAN, None),
@@ -73,26 +55,7 @@ fn render(
 /// inside it.
 fn room(noise: &mut Noise) -> Vec<Prim> {
     let u = |n: &mut Noise| n.gauss().clamp(-2.0, 2.0) / 4.0 + 0.5;
-    let (w, h) = (5000.0 + 4000.0 * u(noise), 4000.0 + 3000.0 * u(noise));
-    let (x, y) = (w * (0.3 + 0.3 * u(noise)), h * (0.3 + 0.4 * u(noise)));
-    let th = 3.0 * (u(noise) - 0.5);
-    let (s, c) = th.sin_cos();
-    let local = |px: f64, py: f64| {
-        let (dx, dy) = (px - x, py - y);
-        (c * dx + s * dy, -s * dx + c * dy)
-    };
-    let corners = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)];
-    let mut prims: Vec<Prim> = (0..4)
-        .map(|k| {
-            let (a, b) = (
-                local(corners[k].0, corners[k].1),
-                local(corners[(k + 1) % 4].0, corners[(k + 1) % 4].1),
-            );
-            Prim::Seg(a.0, a.1, b.0, b.1)
-        })
-        .collect();
-    let (px, py) = local(x + 0.5 * (w - x) * u(noise) + 800.0, y + 600.0);
-    prims.push(Prim::Circle(px, py, 150.0 + 150.0 * u(noise)));
+    let mut prims = common::room(noise);
     // A box 0.6–1.2 m from the robot, at any bearing: close enough for the sweeps to pass
     // each other.
     let (d, b, side) = (

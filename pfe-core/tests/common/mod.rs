@@ -118,3 +118,52 @@ pub fn overlapping(
         .filter(|f| f.last() >= first && f.first() <= last)
         .collect()
 }
+
+/// A room 5–9 × 4–7 m seen from a random pose inside it (`noise` draws the size, the pose and
+/// a pillar): its four walls as segments, then the pillar, in the scanner's frame.
+pub fn room(noise: &mut Noise) -> Vec<Prim> {
+    let u = |n: &mut Noise| n.gauss().clamp(-2.0, 2.0) / 4.0 + 0.5;
+    let (w, h) = (5000.0 + 4000.0 * u(noise), 4000.0 + 3000.0 * u(noise));
+    let (x, y) = (w * (0.3 + 0.3 * u(noise)), h * (0.3 + 0.4 * u(noise)));
+    let th = 3.0 * (u(noise) - 0.5);
+    let (s, c) = th.sin_cos();
+    let local = |px: f64, py: f64| {
+        let (dx, dy) = (px - x, py - y);
+        (c * dx + s * dy, -s * dx + c * dy)
+    };
+    let corners = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)];
+    let mut prims: Vec<Prim> = (0..4)
+        .map(|k| {
+            let (a, b) = (
+                local(corners[k].0, corners[k].1),
+                local(corners[(k + 1) % 4].0, corners[(k + 1) % 4].1),
+            );
+            Prim::Seg(a.0, a.1, b.0, b.1)
+        })
+        .collect();
+    let (px, py) = local(x + 0.5 * (w - x) * u(noise) + 800.0, y + 600.0);
+    prims.push(Prim::Circle(px, py, 150.0 + 150.0 * u(noise)));
+    prims
+}
+
+/// `prims` seen from a scanner at `(x, y)` heading `th` (all in the frame of `prims`).
+pub fn seen_from(prims: &[Prim], (ox, oy, th): (f64, f64, f64)) -> Vec<Prim> {
+    let (s, c) = th.sin_cos();
+    let to = |x: f64, y: f64| {
+        let (dx, dy) = (x - ox, y - oy);
+        (c * dx + s * dy, -s * dx + c * dy)
+    };
+    prims
+        .iter()
+        .map(|p| match *p {
+            Prim::Seg(x0, y0, x1, y1) => {
+                let (a, b) = (to(x0, y0), to(x1, y1));
+                Prim::Seg(a.0, a.1, b.0, b.1)
+            }
+            Prim::Circle(cx, cy, r) => {
+                let (x, y) = to(cx, cy);
+                Prim::Circle(x, y, r)
+            }
+        })
+        .collect()
+}
