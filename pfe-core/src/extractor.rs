@@ -13,6 +13,7 @@ use crate::geometry::Point;
 use crate::mark::{self, Rule};
 use crate::pass::Pass;
 use crate::preprocess::{self, scatter, sweeps};
+use crate::reach;
 use crate::scan::Scan;
 use crate::segment;
 
@@ -94,6 +95,8 @@ pub(crate) trait FeatureSink {
     fn push(&mut self, f: Feature) -> bool;
     /// Removes every feature.
     fn clear(&mut self);
+    /// The features stored, in the order pushed.
+    fn features_mut(&mut self) -> &mut [Feature];
 }
 
 impl<const M: usize> FeatureSink for Vec<Feature, M> {
@@ -102,6 +105,9 @@ impl<const M: usize> FeatureSink for Vec<Feature, M> {
     }
     fn clear(&mut self) {
         Vec::clear(self);
+    }
+    fn features_mut(&mut self) -> &mut [Feature] {
+        self
     }
 }
 
@@ -410,13 +416,17 @@ fn scrutinised(
     outcome(pass.stats)
 }
 
-/// §3.3: the check step; §3.4–3.5: segments and pairing, merges, type and fit of each.
+/// §3.3: the check step; §3.4–3.5: segments and pairing, merges, type and fit of each; with
+/// [`Config::scrutiny`], line ends reach over the beams next to them that lie on them.
 #[inline(always)]
 fn fit(pass: &mut Pass<'_>, rule: &Rule, config: &Config, out: &mut dyn FeatureSink) {
     if config.check_step {
         check::check(pass, rule);
     }
     segment::segments(pass, rule, config, out);
+    if let (true, Some(noise)) = (cfg!(feature = "scrutiny") && config.scrutiny, rule.noise()) {
+        reach::extend(pass, noise, out.features_mut());
+    }
 }
 
 /// Segment starts among `flags` (the marks of a walk).

@@ -16,6 +16,7 @@
 //! | segments (and arc merges) | §3.4 | `segment` |
 //! | type of a segment (and the arc tests) | §3.5 | `classify` (`arc`) |
 //! | line and circle fits with covariance | §3.5 | [`fit::line`], [`fit::circle`] |
+//! | line ends over the beams beside them that lie on them | | `reach` |
 //! | output | | [`feature`] |
 //!
 //! [`Extractor`] owns the beam table (what depends on the geometry only), the work buffers of
@@ -56,6 +57,7 @@ mod math;
 mod pass;
 pub mod predict;
 pub mod preprocess;
+mod reach;
 pub mod scan;
 mod segment;
 

@@ -1,0 +1,314 @@
+//! Line ends reach over the neighbouring beams that lie on them (default mode, after the
+//! fits). The walk marks the point where a prediction from a short window fails and pairs the
+//! marks into segments; at a corner or a step this leaves one to three beams between two
+//! features, in a segment too short to fit, though most of them lie on one of the two lines
+//! well within the noise (the fitted line, from all the segment's points, is far better known
+//! than the walk's window). A line's span grows over such beams, one at a time outwards, while
+//! each is valid, is not across a jump, lies within `k σ f + floor` of the line (`f²` = 1 +
+//! the line's own variance at the point over σ²) and is not closer to the next feature. The
+//! fit stands: `points` still counts the fitted points; the end points move to the new ends.
+
+use crate::feature::{CircleFeature, Feature, LineFeature};
+use crate::flags::JUMP;
+use crate::geometry::Point;
+use crate::mark::NoiseRule;
+use crate::math;
+use crate::pass::Pass;
+
+/// Extends every line of `features` (in scan order; a feature out of order is left as it is)
+/// over the beams of `pass` next to its ends that lie on it.
+pub(crate) fn extend(pass: &Pass<'_>, rule: &NoiseRule, features: &mut [Feature]) {
+    for i in 0..features.len() {
+        let (before, rest) = features.split_at_mut(i);
+        let Some((this, after)) = rest.split_first_mut() else {
+            return;
+        };
+        let Feature::Line(line) = this else {
+            continue;
+        };
+        let prev = before.last();
+        let next = after.first();
+        // Beams between the neighbours' spans, when the three are in order.
+        let lo = prev.map_or(0, |p| p.last() + 1);
+        let hi = next.map_or(pass.len(), Feature::first);
+        if lo > usize::from(line.first) || hi <= usize::from(line.last) {
+            continue;
+        }
+        let reach = Reach::of(line, rule);
+        // Forwards, each beam not closer to the next feature.
+        let mut j = usize::from(line.last) + 1;
+        while j < hi && pass.flag(j) & JUMP == 0 {
+            let p = pass.point(j);
+            let Some(d) = reach.offset(pass, j, &p) else {
+                break;
+            };
+            let Ok(last) = u16::try_from(j) else { break };
+            if next.is_some_and(|n| distance(n, &p) < d) {
+                break;
+            }
+            line.last = last;
+            line.end = reach.project(&p);
+            j += 1;
+        }
+        // Backwards (the feature before has taken what lies closer to it).
+        let mut j = usize::from(line.first);
+        while j > lo && pass.flag(j) & JUMP == 0 {
+            let b = j - 1;
+            let p = pass.point(b);
+            let (Some(_), Ok(first)) = (reach.offset(pass, b, &p), u16::try_from(b)) else {
+                break;
+            };
+            line.first = first;
+            line.start = reach.project(&p);
+            j = b;
+        }
+    }
+}
+
+/// A line's test of further points.
+struct Reach {
+    /// Unit normal (cos α, sin α).
+    normal: (f32, f32),
+    rho: f32,
+    var_alpha: f32,
+    var_rho: f32,
+    cov: f32,
+    /// σ².
+    var: f32,
+    /// k².
+    k2: f32,
+    floor: f32,
+}
+
+impl Reach {
+    fn of(line: &LineFeature, rule: &NoiseRule) -> Self {
+        let (s, c) = math::sin_cos(line.alpha);
+        Self {
+            normal: (c, s),
+            rho: line.rho,
+            var_alpha: line.var_alpha,
+            var_rho: line.var_rho,
+            cov: line.cov_alpha_rho,
+            var: rule.sigma_r * rule.sigma_r,
+            k2: rule.model.k * rule.model.k,
+            floor: rule.model.floor,
+        }
+    }
+
+    /// The distance of point `p` (beam `i`, valid) from the line, when within the test.
+    fn offset(&self, pass: &Pass<'_>, i: usize, p: &Point) -> Option<f32> {
+        if !pass.valid(i) {
+            return None;
+        }
+        let (c, s) = self.normal;
+        let d = p.x * c + p.y * s - self.rho;
+        // ∂d/∂α: the point's position along the line.
+        let t = p.y * c - p.x * s;
+        let var = self.var + t * t * self.var_alpha - 2.0 * t * self.cov + self.var_rho;
+        let e = math::abs(d) - self.floor;
+        (e <= 0.0 || e * e <= self.k2 * var).then_some(math::abs(d))
+    }
+
+    /// The foot of `p` on the line.
+    fn project(&self, p: &Point) -> Point {
+        let (c, s) = self.normal;
+        let d = p.x * c + p.y * s - self.rho;
+        Point::new(p.x - d * c, p.y - d * s)
+    }
+}
+
+/// The distance of `p` from feature `f` (a line's or a circle's).
+fn distance(f: &Feature, p: &Point) -> f32 {
+    match f {
+        Feature::Line(l) => {
+            let (s, c) = math::sin_cos(l.alpha);
+            math::abs(p.x * c + p.y * s - l.rho)
+        }
+        Feature::Circle(CircleFeature { center, radius, .. }) => {
+            math::abs(p.distance(center) - radius)
+        }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::indexing_slicing)]
+mod tests {
+    use super::*;
+    use crate::config::Config;
+    use crate::extractor::Extractor;
+    use crate::feature::LineFeature;
+    use crate::scan::{Scan, ScanGeometry};
+
+    const G: ScanGeometry = ScanGeometry::LMS200_180_050;
+    /// The wall x = 3000 mm is seen by beams 66..=294 (|bearing| < 1 rad); no return beyond.
+    const WALL: (usize, usize) = (66, 294);
+
+    /// Ranges of the wall x = `3000 + offset(i)` mm.
+    fn wall_ranges(offset: impl Fn(usize) -> f64) -> [f32; 361] {
+        core::array::from_fn(|i| {
+            let b = f64::from(G.bearing(i));
+            if b.abs() < 1.0 {
+                ((3000.0 + offset(i)) / b.cos()) as f32
+            } else {
+                f32::NAN
+            }
+        })
+    }
+
+    /// The line x = `rho` over beams `first..=last`, with the covariance (σ_α², σ_ρ², cov).
+    fn line(first: u16, last: u16, rho: f32, (va, vr, c): (f32, f32, f32)) -> Feature {
+        Feature::Line(LineFeature {
+            first,
+            last,
+            points: last - first + 1,
+            alpha: 0.0,
+            rho,
+            var_alpha: va,
+            var_rho: vr,
+            cov_alpha_rho: c,
+            start: Point::new(rho, 0.0),
+            end: Point::new(rho, 0.0),
+        })
+    }
+
+    /// `features` after [`extend`] over the scan `ranges` (σ_r 5 mm: k σ_r + floor = 23 mm),
+    /// with `jumps` flagged.
+    fn extended<const M: usize>(
+        ranges: &[f32],
+        jumps: &[usize],
+        features: [Feature; M],
+    ) -> [Feature; M] {
+        let mut features = features;
+        let scan = Scan::from_mm(G, ranges);
+        Extractor::<361, 8>::new().with_pass(&scan, &Config::default(), |pass, rule| {
+            for &j in jumps {
+                pass.set(j, JUMP);
+            }
+            extend(pass, rule.noise().unwrap(), &mut features);
+        });
+        features
+    }
+
+    fn span(f: &Feature) -> (usize, usize) {
+        (f.first(), f.last())
+    }
+
+    fn ends(f: &Feature) -> (Point, Point) {
+        match f {
+            Feature::Line(l) => (l.start, l.end),
+            Feature::Circle(_) => panic!("a line"),
+        }
+    }
+
+    #[test]
+    fn a_line_reaches_every_beam_on_it_up_to_a_missing_return_and_its_ends_move_there() {
+        let r = wall_ranges(|_| 0.0);
+        let [f] = extended(&r, &[], [line(150, 200, 3000.0, (0.0, 0.0, 0.0))]);
+        assert_eq!(span(&f), WALL);
+        let (s, e) = ends(&f);
+        for (p, i) in [(s, WALL.0), (e, WALL.1)] {
+            let y = 3000.0 * f64::from(G.bearing(i)).tan();
+            assert!(
+                (f64::from(p.x) - 3000.0).abs() < 0.01 && (f64::from(p.y) - y).abs() < 0.01,
+                "{p:?} {y}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_reach_stops_at_the_first_point_beyond_k_sigma_plus_floor() {
+        // No variance of its own: the test is |d| ≤ 4 · 5 + 3 = 23 mm.
+        let r = wall_ranges(|i| match i {
+            210 => 22.8,
+            212 => 23.2,
+            140 => -22.8,
+            138 => -23.2,
+            _ => 0.0,
+        });
+        let [f] = extended(&r, &[], [line(150, 200, 3000.0, (0.0, 0.0, 0.0))]);
+        assert_eq!(span(&f), (139, 211));
+    }
+
+    #[test]
+    fn the_reach_widens_with_the_lines_own_variance_at_the_point() {
+        // At beam i, t = y along the line: σ² = 25 + t² σ_α² − 2 t cov + σ_ρ²; the points at
+        // beams 230 and 100 lie 0.3 mm inside, those at 232 and 98 0.3 mm outside.
+        let cov = (1e-5f32, 30.0f32, 0.02f32);
+        // The point moves along its beam: t = (3000 + d) tan b, solved for d at the bound.
+        let tol = |i: usize| {
+            let mut d = 0.0;
+            for _ in 0..20 {
+                let t = (3000.0 + d) * f64::from(G.bearing(i)).tan();
+                let var =
+                    25.0 + t * t * f64::from(cov.0) - 2.0 * t * f64::from(cov.2) + f64::from(cov.1);
+                d = 4.0 * var.sqrt() + 3.0;
+            }
+            d
+        };
+        let r = wall_ranges(|i| match i {
+            230 | 100 => tol(i) - 0.3,
+            232 | 98 => tol(i) + 0.3,
+            _ => 0.0,
+        });
+        // The cross term matters: without it the two sides' tolerances differ by > 10 mm.
+        assert!((tol(230) - tol(100)).abs() > 10.0);
+        let [f] = extended(&r, &[], [line(150, 200, 3000.0, cov)]);
+        assert_eq!(span(&f), (99, 231));
+    }
+
+    #[test]
+    fn the_reach_stops_at_a_jump_and_at_an_invalid_point() {
+        // A jump flagged at 205 lies between 204 and 205; at 145, between 144 and 145.
+        let r = wall_ranges(|_| 0.0);
+        let [f] = extended(&r, &[205, 145], [line(150, 200, 3000.0, (0.0, 0.0, 0.0))]);
+        assert_eq!(span(&f), (145, 204));
+        let mut r = r;
+        r[190] = f32::NAN;
+        r[120] = 0.0;
+        let [f] = extended(&r, &[], [line(150, 180, 3000.0, (0.0, 0.0, 0.0))]);
+        assert_eq!(span(&f), (121, 189));
+    }
+
+    #[test]
+    fn a_beam_closer_to_the_next_feature_is_left_to_it_which_reaches_back_over_it() {
+        // Beams 220..=259 lie on x = 3010: within A's 23 mm, but on B.
+        let r = wall_ranges(|i| if (220..260).contains(&i) { 10.0 } else { 0.0 });
+        let a = line(150, 200, 3000.0, (0.0, 0.0, 0.0));
+        let b = line(235, 259, 3010.0, (0.0, 0.0, 0.0));
+        let [a, b] = extended(&r, &[], [a, b]);
+        assert_eq!(span(&a), (WALL.0, 219));
+        // B reaches back to 220, and on past 259 over the wall 10 mm off (within its test).
+        assert_eq!(span(&b), (220, WALL.1));
+    }
+
+    #[test]
+    fn features_out_of_scan_order_are_left_as_they_are() {
+        let r = wall_ranges(|_| 0.0);
+        let a = line(150, 200, 3000.0, (0.0, 0.0, 0.0));
+        let b = line(230, 260, 3000.0, (0.0, 0.0, 0.0));
+        assert_eq!(extended(&r, &[], [b, a]), [b, a]);
+        // Overlapping spans too.
+        let c = line(190, 240, 3000.0, (0.0, 0.0, 0.0));
+        assert_eq!(extended(&r, &[], [a, c]), [a, c]);
+    }
+
+    #[test]
+    fn a_circle_is_not_extended_and_its_distance_is_from_its_rim() {
+        let c = Feature::Circle(CircleFeature {
+            first: 150,
+            last: 200,
+            points: 51,
+            center: Point::new(0.0, 0.0),
+            radius: 100.0,
+            cov: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            start_angle: 0.0,
+            end_angle: 1.0,
+        });
+        let r = wall_ranges(|_| 0.0);
+        assert_eq!(extended(&r, &[], [c]), [c]);
+        assert_eq!(distance(&c, &Point::new(300.0, 400.0)), 400.0);
+        assert_eq!(distance(&c, &Point::new(30.0, 40.0)), 50.0);
+        let l = line(0, 1, 3000.0, (0.0, 0.0, 0.0));
+        assert_eq!(distance(&l, &Point::new(2990.0, 500.0)), 10.0);
+    }
+}
