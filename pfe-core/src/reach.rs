@@ -131,6 +131,7 @@ fn distance(f: &Feature, p: &Point) -> f32 {
 }
 
 #[cfg(test)]
+#[cfg(test)]
 #[allow(clippy::indexing_slicing)]
 mod tests {
     use super::*;
@@ -140,13 +141,21 @@ mod tests {
     use crate::scan::{Scan, ScanGeometry};
 
     const G: ScanGeometry = ScanGeometry::LMS200_180_050;
-    /// The wall x = 3000 mm is seen by beams 66..=294 (|bearing| < 1 rad); no return beyond.
-    const WALL: (usize, usize) = (66, 294);
+    /// Normal angles of the walls tried, rad.
+    const ALPHAS: [f32; 3] = [0.0, 0.5, -0.4];
+    /// No covariance of its own.
+    const EXACT: (f32, f32, f32) = (0.0, 0.0, 0.0);
 
-    /// Ranges of the wall x = `3000 + offset(i)` mm.
-    fn wall_ranges(offset: impl Fn(usize) -> f64) -> [f32; 361] {
+    /// Bearing of beam `i` from the wall's normal `alpha`.
+    fn off_normal(i: usize, alpha: f32) -> f64 {
+        f64::from(G.bearing(i)) - f64::from(alpha)
+    }
+
+    /// Ranges of the wall `x cos α + y sin α = 3000 + offset(i)` mm, seen by the beams within
+    /// 1 rad of its normal (no return beyond).
+    fn wall_ranges(alpha: f32, offset: impl Fn(usize) -> f64) -> [f32; 361] {
         core::array::from_fn(|i| {
-            let b = f64::from(G.bearing(i));
+            let b = off_normal(i, alpha);
             if b.abs() < 1.0 {
                 ((3000.0 + offset(i)) / b.cos()) as f32
             } else {
@@ -155,13 +164,22 @@ mod tests {
         })
     }
 
-    /// The line x = `rho` over beams `first..=last`, with the covariance (σ_α², σ_ρ², cov).
-    fn line(first: u16, last: u16, rho: f32, (va, vr, c): (f32, f32, f32)) -> Feature {
+    /// The beams that see the wall of normal `alpha`.
+    fn wall(alpha: f32) -> (usize, usize) {
+        let seen: heapless::Vec<usize, 361> = (0..361)
+            .filter(|&i| off_normal(i, alpha).abs() < 1.0)
+            .collect();
+        (seen[0], seen[seen.len() - 1])
+    }
+
+    /// The line `x cos α + y sin α = rho` over beams `first..=last`, with the covariance
+    /// (σ_α², σ_ρ², cov).
+    fn line(first: u16, last: u16, alpha: f32, rho: f32, (va, vr, c): (f32, f32, f32)) -> Feature {
         Feature::Line(LineFeature {
             first,
             last,
             points: last - first + 1,
-            alpha: 0.0,
+            alpha,
             rho,
             var_alpha: va,
             var_rho: vr,
@@ -202,98 +220,133 @@ mod tests {
 
     #[test]
     fn a_line_reaches_every_beam_on_it_up_to_a_missing_return_and_its_ends_move_there() {
-        let r = wall_ranges(|_| 0.0);
-        let [f] = extended(&r, &[], [line(150, 200, 3000.0, (0.0, 0.0, 0.0))]);
-        assert_eq!(span(&f), WALL);
-        let (s, e) = ends(&f);
-        for (p, i) in [(s, WALL.0), (e, WALL.1)] {
-            let y = 3000.0 * f64::from(G.bearing(i)).tan();
-            assert!(
-                (f64::from(p.x) - 3000.0).abs() < 0.01 && (f64::from(p.y) - y).abs() < 0.01,
-                "{p:?} {y}"
-            );
+        for alpha in ALPHAS {
+            let r = wall_ranges(alpha, |_| 0.0);
+            let [f] = extended(&r, &[], [line(150, 200, alpha, 3000.0, EXACT)]);
+            let (first, last) = wall(alpha);
+            assert_eq!(span(&f), (first, last), "α {alpha}");
+            // The ends are the end beams' points, on the wall.
+            let (s, e) = ends(&f);
+            for (p, i) in [(s, first), (e, last)] {
+                let b = f64::from(G.bearing(i));
+                let range = 3000.0 / off_normal(i, alpha).cos();
+                let (x, y) = (range * b.cos(), range * b.sin());
+                assert!(
+                    (f64::from(p.x) - x).abs() < 0.01 && (f64::from(p.y) - y).abs() < 0.01,
+                    "α {alpha}: {p:?} ({x}, {y})"
+                );
+            }
         }
     }
 
     #[test]
     fn the_reach_stops_at_the_first_point_beyond_k_sigma_plus_floor() {
         // No variance of its own: the test is |d| ≤ 4 · 5 + 3 = 23 mm.
-        let r = wall_ranges(|i| match i {
-            210 => 22.8,
-            212 => 23.2,
-            140 => -22.8,
-            138 => -23.2,
-            _ => 0.0,
-        });
-        let [f] = extended(&r, &[], [line(150, 200, 3000.0, (0.0, 0.0, 0.0))]);
-        assert_eq!(span(&f), (139, 211));
+        for alpha in ALPHAS {
+            let r = wall_ranges(alpha, |i| match i {
+                210 => 22.8,
+                212 => 23.2,
+                140 => -22.8,
+                138 => -23.2,
+                _ => 0.0,
+            });
+            let [f] = extended(&r, &[], [line(150, 200, alpha, 3000.0, EXACT)]);
+            assert_eq!(span(&f), (139, 211), "α {alpha}");
+        }
+    }
+
+    #[test]
+    fn the_reach_starts_past_the_lines_ends_whatever_they_are() {
+        // The line's own last point lies off it (the fit took it): the beams past it still count.
+        for alpha in ALPHAS {
+            let r = wall_ranges(alpha, |i| if i == 200 { 40.0 } else { 0.0 });
+            let [f] = extended(&r, &[], [line(150, 200, alpha, 3000.0, EXACT)]);
+            assert_eq!(span(&f), wall(alpha), "α {alpha}");
+        }
     }
 
     #[test]
     fn the_reach_widens_with_the_lines_own_variance_at_the_point() {
-        // At beam i, t = y along the line: σ² = 25 + t² σ_α² − 2 t cov + σ_ρ²; the points at
-        // beams 230 and 100 lie 0.3 mm inside, those at 232 and 98 0.3 mm outside.
+        // At beam i, t (along the line) = (3000 + d) tan(bearing − α): σ² = 25 + t² σ_α²
+        // − 2 t cov + σ_ρ², solved for d at the bound; the points at beams 230 and 100 lie
+        // 0.3 mm inside, those at 232 and 98 0.3 mm outside.
         let cov = (1e-5f32, 30.0f32, 0.02f32);
-        // The point moves along its beam: t = (3000 + d) tan b, solved for d at the bound.
-        let tol = |i: usize| {
-            let mut d = 0.0;
-            for _ in 0..20 {
-                let t = (3000.0 + d) * f64::from(G.bearing(i)).tan();
-                let var =
-                    25.0 + t * t * f64::from(cov.0) - 2.0 * t * f64::from(cov.2) + f64::from(cov.1);
-                d = 4.0 * var.sqrt() + 3.0;
-            }
-            d
-        };
-        let r = wall_ranges(|i| match i {
-            230 | 100 => tol(i) - 0.3,
-            232 | 98 => tol(i) + 0.3,
-            _ => 0.0,
-        });
-        // The cross term matters: without it the two sides' tolerances differ by > 10 mm.
-        assert!((tol(230) - tol(100)).abs() > 10.0);
-        let [f] = extended(&r, &[], [line(150, 200, 3000.0, cov)]);
-        assert_eq!(span(&f), (99, 231));
+        for alpha in [0.0f32, 0.2] {
+            let tol = |i: usize| {
+                let mut d = 0.0;
+                for _ in 0..20 {
+                    let t = (3000.0 + d) * off_normal(i, alpha).tan();
+                    let var = 25.0 + t * t * f64::from(cov.0) - 2.0 * t * f64::from(cov.2)
+                        + f64::from(cov.1);
+                    d = 4.0 * var.sqrt() + 3.0;
+                }
+                d
+            };
+            let r = wall_ranges(alpha, |i| match i {
+                230 | 100 => tol(i) - 0.3,
+                232 | 98 => tol(i) + 0.3,
+                _ => 0.0,
+            });
+            // The cross term matters: without it the two sides' tolerances differ by > 10 mm.
+            assert!((tol(230) - tol(100)).abs() > 10.0);
+            let [f] = extended(&r, &[], [line(150, 200, alpha, 3000.0, cov)]);
+            assert_eq!(span(&f), (99, 231), "α {alpha}");
+        }
     }
 
     #[test]
     fn the_reach_stops_at_a_jump_and_at_an_invalid_point() {
         // A jump flagged at 205 lies between 204 and 205; at 145, between 144 and 145.
-        let r = wall_ranges(|_| 0.0);
-        let [f] = extended(&r, &[205, 145], [line(150, 200, 3000.0, (0.0, 0.0, 0.0))]);
+        let r = wall_ranges(0.0, |_| 0.0);
+        let [f] = extended(&r, &[205, 145], [line(150, 200, 0.0, 3000.0, EXACT)]);
         assert_eq!(span(&f), (145, 204));
         let mut r = r;
         r[190] = f32::NAN;
         r[120] = 0.0;
-        let [f] = extended(&r, &[], [line(150, 180, 3000.0, (0.0, 0.0, 0.0))]);
+        let [f] = extended(&r, &[], [line(150, 180, 0.0, 3000.0, EXACT)]);
         assert_eq!(span(&f), (121, 189));
     }
 
     #[test]
     fn a_beam_closer_to_the_next_feature_is_left_to_it_which_reaches_back_over_it() {
-        // Beams 220..=259 lie on x = 3010: within A's 23 mm, but on B.
-        let r = wall_ranges(|i| if (220..260).contains(&i) { 10.0 } else { 0.0 });
-        let a = line(150, 200, 3000.0, (0.0, 0.0, 0.0));
-        let b = line(235, 259, 3010.0, (0.0, 0.0, 0.0));
+        for alpha in ALPHAS {
+            // The beams from 220 on lie 10 mm further: within A's 23 mm, but on B.
+            let r = wall_ranges(alpha, |i| if i >= 220 { 10.0 } else { 0.0 });
+            let a = line(150, 200, alpha, 3000.0, EXACT);
+            let b = line(230, 240, alpha, 3010.0, EXACT);
+            let [a, b] = extended(&r, &[], [a, b]);
+            let (first, last) = wall(alpha);
+            assert_eq!(span(&a), (first, 219), "α {alpha}");
+            // B reaches back to 220 and on to the wall's end.
+            assert_eq!(span(&b), (220, last), "α {alpha}");
+        }
+    }
+
+    #[test]
+    fn a_line_right_after_another_still_reaches_forwards() {
+        let r = wall_ranges(0.0, |_| 0.0);
+        let a = line(100, 149, 0.0, 3000.0, EXACT);
+        let b = line(150, 200, 0.0, 3000.0, EXACT);
         let [a, b] = extended(&r, &[], [a, b]);
-        assert_eq!(span(&a), (WALL.0, 219));
-        // B reaches back to 220, and on past 259 over the wall 10 mm off (within its test).
-        assert_eq!(span(&b), (220, WALL.1));
+        assert_eq!(
+            (span(&a), span(&b)),
+            ((wall(0.0).0, 149), (150, wall(0.0).1))
+        );
     }
 
     #[test]
     fn features_out_of_scan_order_are_left_as_they_are() {
-        let r = wall_ranges(|_| 0.0);
-        let a = line(150, 200, 3000.0, (0.0, 0.0, 0.0));
-        let b = line(230, 260, 3000.0, (0.0, 0.0, 0.0));
+        let r = wall_ranges(0.0, |_| 0.0);
+        let a = line(150, 200, 0.0, 3000.0, EXACT);
+        let b = line(230, 260, 0.0, 3000.0, EXACT);
         assert_eq!(extended(&r, &[], [b, a]), [b, a]);
         // Overlapping spans too.
-        let c = line(190, 240, 3000.0, (0.0, 0.0, 0.0));
+        let c = line(190, 240, 0.0, 3000.0, EXACT);
         assert_eq!(extended(&r, &[], [a, c]), [a, c]);
     }
 
     #[test]
-    fn a_circle_is_not_extended_and_its_distance_is_from_its_rim() {
+    fn a_circle_is_not_extended_and_distances_are_from_its_rim_or_the_line() {
         let c = Feature::Circle(CircleFeature {
             first: 150,
             last: 200,
@@ -304,11 +357,14 @@ mod tests {
             start_angle: 0.0,
             end_angle: 1.0,
         });
-        let r = wall_ranges(|_| 0.0);
+        let r = wall_ranges(0.0, |_| 0.0);
         assert_eq!(extended(&r, &[], [c]), [c]);
         assert_eq!(distance(&c, &Point::new(300.0, 400.0)), 400.0);
         assert_eq!(distance(&c, &Point::new(30.0, 40.0)), 50.0);
-        let l = line(0, 1, 3000.0, (0.0, 0.0, 0.0));
-        assert_eq!(distance(&l, &Point::new(2990.0, 500.0)), 10.0);
+        // The line 0.6 x + 0.8 y = 1000: (1000, 500) lies on it, (700, 600) 100 mm off.
+        let alpha = libm::atan2f(0.8, 0.6);
+        let l = line(0, 1, alpha, 1000.0, EXACT);
+        assert!((distance(&l, &Point::new(1000.0, 500.0)) - 0.0).abs() < 1e-3);
+        assert!((distance(&l, &Point::new(700.0, 600.0)) - 100.0).abs() < 1e-3);
     }
 }
