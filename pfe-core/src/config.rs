@@ -102,9 +102,11 @@ pub struct Config {
     /// The default mode's checks for real scans: runs of short segments that lie on one line
     /// within the noise are joined (distant walls at grazing incidence); a circle must cover
     /// at least 6 points and 30° of arc and beat the best two-line (corner) split; a line that
-    /// two lines explain far better (a corner the walk followed) is split there; line and
-    /// circle covariances grow with the fit's reduced χ² where the scatter exceeds σ_r. They
-    /// cost about 5 instructions a point on a Cortex-M4F (docs/PERFORMANCE.md). A build
+    /// two lines explain far better (a corner the walk followed) is split there; a line's
+    /// ends reach over the beams beside them that lie on it (the beams the walk leaves between
+    /// two features at a corner); line and circle covariances grow with the fit's reduced χ²
+    /// where the scatter exceeds σ_r. They cost a few instructions a point on a Cortex-M4F
+    /// (docs/PERFORMANCE.md). A build
     /// without the `scrutiny` feature leaves them out and refuses this on (not
     /// [`Config::is_valid`]).
     pub scrutiny: bool,
