@@ -244,7 +244,7 @@ mod tests {
         // No variance of its own: the test is |d| ≤ 4 · 5 + 3 = 23 mm.
         for alpha in ALPHAS {
             let r = wall_ranges(alpha, |i| match i {
-                210 => 22.8,
+                211 => 22.8,
                 212 => 23.2,
                 140 => -22.8,
                 138 => -23.2,
@@ -252,6 +252,18 @@ mod tests {
             });
             let [f] = extended(&r, &[], [line(150, 200, alpha, 3000.0, EXACT)]);
             assert_eq!(span(&f), (139, 211), "α {alpha}");
+            // The new end is the foot on the line of beam 211's point, 22.8 mm off it.
+            let (b, a) = (f64::from(G.bearing(211)), f64::from(alpha));
+            let range = 3022.8 / off_normal(211, alpha).cos();
+            let (x, y) = (
+                range * b.cos() - 22.8 * a.cos(),
+                range * b.sin() - 22.8 * a.sin(),
+            );
+            let e = ends(&f).1;
+            assert!(
+                (f64::from(e.x) - x).abs() < 0.01 && (f64::from(e.y) - y).abs() < 0.01,
+                "α {alpha}: {e:?} ({x}, {y})"
+            );
         }
     }
 
