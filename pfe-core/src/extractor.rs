@@ -206,7 +206,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// Mark points of the last extraction: the first and last point of every segment (after
-    /// the check step and pairing), in increasing order.
+    /// the check step and pairing, and in the default mode the reach of line ends over the
+    /// beams beside them), in increasing order.
     pub fn marks(&self) -> impl Iterator<Item = usize> + '_ {
         self.work
             .flags

@@ -9,15 +9,16 @@
 //! fit stands: `points` still counts the fitted points; the end points move to the new ends.
 
 use crate::feature::{CircleFeature, Feature, LineFeature};
-use crate::flags::JUMP;
+use crate::flags::{END, JUMP, START};
 use crate::geometry::Point;
 use crate::mark::NoiseRule;
 use crate::math;
 use crate::pass::Pass;
 
 /// Extends every line of `features` (in scan order; a feature out of order is left as it is)
-/// over the beams of `pass` next to its ends that lie on it.
-pub(crate) fn extend(pass: &Pass<'_>, rule: &NoiseRule, features: &mut [Feature]) {
+/// over the beams of `pass` next to its ends that lie on it. The marks follow: a line's ends
+/// stay the ends of its segment, and what is left of a short segment beside it keeps its own.
+pub(crate) fn extend(pass: &mut Pass<'_>, rule: &NoiseRule, features: &mut [Feature]) {
     for i in 0..features.len() {
         let (before, rest) = features.split_at_mut(i);
         let Some((this, after)) = rest.split_first_mut() else {
@@ -31,36 +32,63 @@ pub(crate) fn extend(pass: &Pass<'_>, rule: &NoiseRule, features: &mut [Feature]
         // Beams between the neighbours' spans, when the three are in order.
         let lo = prev.map_or(0, |p| p.last() + 1);
         let hi = next.map_or(pass.len(), Feature::first);
-        if lo > usize::from(line.first) || hi <= usize::from(line.last) {
+        let (first, last) = (usize::from(line.first), usize::from(line.last));
+        if lo > first || hi <= last {
             continue;
         }
         let reach = Reach::of(line, rule);
         // Forwards, each beam not closer to the next feature.
-        let mut j = usize::from(line.last) + 1;
+        let mut j = last + 1;
         while j < hi && pass.flag(j) & JUMP == 0 {
             let p = pass.point(j);
             let Some(d) = reach.offset(pass, j, &p) else {
                 break;
             };
-            let Ok(last) = u16::try_from(j) else { break };
+            let Ok(end) = u16::try_from(j) else { break };
             if next.is_some_and(|n| distance(n, &p) < d) {
                 break;
             }
-            line.last = last;
+            line.last = end;
             line.end = reach.project(&p);
             j += 1;
         }
+        if j > last + 1 {
+            remark(pass, (last, j - 1), END, j < hi);
+        }
         // Backwards (the feature before has taken what lies closer to it).
-        let mut j = usize::from(line.first);
+        let mut j = first;
         while j > lo && pass.flag(j) & JUMP == 0 {
             let b = j - 1;
             let p = pass.point(b);
-            let (Some(_), Ok(first)) = (reach.offset(pass, b, &p), u16::try_from(b)) else {
+            let (Some(_), Ok(start)) = (reach.offset(pass, b, &p), u16::try_from(b)) else {
                 break;
             };
-            line.first = first;
+            line.first = start;
             line.start = reach.project(&p);
             j = b;
+        }
+        if j < first {
+            remark(pass, (j, first), START, j > lo);
+        }
+    }
+}
+
+/// Moves a segment's end mark `end` (`END` or `START`) over the beams `a..=b` it reached: from
+/// `b` (`END`) or `a` (`START`) to the other; the beam beyond, when `rest` (what is left of the
+/// short segment there), gets the mark of its own end.
+fn remark(pass: &mut Pass<'_>, (a, b): (usize, usize), end: u8, rest: bool) {
+    for i in a..=b {
+        pass.clear(i, START | END);
+    }
+    if end == END {
+        pass.set(b, END);
+        if rest && pass.valid(b + 1) {
+            pass.set(b + 1, START);
+        }
+    } else {
+        pass.set(a, START);
+        if rest && pass.valid(a - 1) {
+            pass.set(a - 1, END);
         }
     }
 }
