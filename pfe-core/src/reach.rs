@@ -246,6 +246,24 @@ mod tests {
         }
     }
 
+    /// The foot on the wall of normal `alpha` of beam `i`'s point lying `offset` mm off it.
+    fn foot(i: usize, alpha: f32, offset: f64) -> (f64, f64) {
+        let (b, a) = (f64::from(G.bearing(i)), f64::from(alpha));
+        let range = (3000.0 + offset) / off_normal(i, alpha).cos();
+        (
+            range * b.cos() - offset * a.cos(),
+            range * b.sin() - offset * a.sin(),
+        )
+    }
+
+    /// `p` is within 0.01 mm of `(x, y)`.
+    fn assert_at(p: Point, (x, y): (f64, f64), alpha: f32) {
+        assert!(
+            (f64::from(p.x) - x).abs() < 0.01 && (f64::from(p.y) - y).abs() < 0.01,
+            "α {alpha}: {p:?} ({x}, {y})"
+        );
+    }
+
     #[test]
     fn a_line_reaches_every_beam_on_it_up_to_a_missing_return_and_its_ends_move_there() {
         for alpha in ALPHAS {
@@ -256,13 +274,7 @@ mod tests {
             // The ends are the end beams' points, on the wall.
             let (s, e) = ends(&f);
             for (p, i) in [(s, first), (e, last)] {
-                let b = f64::from(G.bearing(i));
-                let range = 3000.0 / off_normal(i, alpha).cos();
-                let (x, y) = (range * b.cos(), range * b.sin());
-                assert!(
-                    (f64::from(p.x) - x).abs() < 0.01 && (f64::from(p.y) - y).abs() < 0.01,
-                    "α {alpha}: {p:?} ({x}, {y})"
-                );
+                assert_at(p, foot(i, alpha, 0.0), alpha);
             }
         }
     }
@@ -281,17 +293,7 @@ mod tests {
             let [f] = extended(&r, &[], [line(150, 200, alpha, 3000.0, EXACT)]);
             assert_eq!(span(&f), (139, 211), "α {alpha}");
             // The new end is the foot on the line of beam 211's point, 22.8 mm off it.
-            let (b, a) = (f64::from(G.bearing(211)), f64::from(alpha));
-            let range = 3022.8 / off_normal(211, alpha).cos();
-            let (x, y) = (
-                range * b.cos() - 22.8 * a.cos(),
-                range * b.sin() - 22.8 * a.sin(),
-            );
-            let e = ends(&f).1;
-            assert!(
-                (f64::from(e.x) - x).abs() < 0.01 && (f64::from(e.y) - y).abs() < 0.01,
-                "α {alpha}: {e:?} ({x}, {y})"
-            );
+            assert_at(ends(&f).1, foot(211, alpha, 22.8), alpha);
         }
     }
 
