@@ -628,3 +628,49 @@ fn taubin_and_hyper_are_the_generalised_eigenvectors_of_their_definitions() {
         }
     }
 }
+
+/// `fit_circle`'s guards name the failure: a spread whose square overflows f32 is non-finite
+/// (not degenerate), points that all coincide are degenerate, for every method.
+#[test]
+fn circle_fit_guards_name_the_failure() {
+    let methods = [
+        CircleMethod::Kasa,
+        CircleMethod::Taubin,
+        CircleMethod::Hyper,
+    ];
+    // x spread 1e20: the sum of offsets is finite, the sum of their squares (1e40) is not.
+    let far = [
+        Point::new(1e20, 0.0),
+        Point::new(0.0, 1.0),
+        Point::new(1.0, 0.0),
+    ];
+    let same = [Point::new(1000.0, 2000.0); 4];
+    for m in methods {
+        assert_eq!(fit_circle(&far, m), Err(FitError::NonFinite), "{m:?}");
+        assert_eq!(fit_circle(&same, m), Err(FitError::Degenerate), "{m:?}");
+    }
+}
+
+/// An exact arc whose points balance about the first one (the first at the top of the arc,
+/// the others in mirror pairs: their x offsets sum to exactly 0) is fitted like any other.
+#[test]
+fn an_arc_balanced_about_its_first_point_is_fitted() {
+    let (c, r) = ((0.0f64, 3000.0f64), 400.0f64);
+    let mut pts = vec![(c.0, c.1 - r)];
+    for k in 1..=4 {
+        let t = 0.2 * f64::from(k);
+        pts.push((c.0 + r * t.sin(), c.1 - r * t.cos()));
+        pts.push((c.0 - r * t.sin(), c.1 - r * t.cos()));
+    }
+    let pts = f32s(&pts);
+    let sx: f32 = pts.iter().map(|p| p.x - pts[0].x).sum();
+    assert_eq!(sx, 0.0);
+    for m in [
+        CircleMethod::Kasa,
+        CircleMethod::Taubin,
+        CircleMethod::Hyper,
+    ] {
+        let got = c64(&fit_circle(&pts, m).unwrap());
+        assert!(max_err(got, (c.0, c.1, r)) < 0.5, "{m:?}: {got:?}");
+    }
+}

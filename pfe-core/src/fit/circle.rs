@@ -61,7 +61,7 @@ fn moments(points: &[Point]) -> Result<Moments, FitError> {
     let (mx, my) = (sx * inv_n, sy * inv_n);
     let mean = Point::new(first.x + mx, first.y + my);
     let scale = math::sqrt((sq - sx * mx - sy * my) * inv_n);
-    if !(scale > 0.0) || !math::finite(scale) {
+    if !(scale > 0.0) {
         return Err(FitError::Degenerate);
     }
     let inv_scale = 1.0 / scale;
