@@ -674,3 +674,26 @@ fn an_arc_balanced_about_its_first_point_is_fitted() {
         assert!(max_err(got, (c.0, c.1, r)) < 0.5, "{m:?}: {got:?}");
     }
 }
+
+/// A start off along one axis only: the first step is (−20, ≈0, ≈0) mm, and its length (not
+/// a product of its components, which is ≈0) decides convergence, so the refinement moves.
+#[test]
+fn refinement_moves_a_start_off_along_one_axis() {
+    let mut noise = Noise::new(3);
+    let truth = (2000.0, 0.0, 300.0);
+    let pts = f32s(&arc(
+        (truth.0, truth.1),
+        truth.2,
+        (2.4, 3.9),
+        21,
+        0.0,
+        &mut noise,
+    ));
+    for start in [
+        (truth.0 + 20.0, truth.1, truth.2),
+        (truth.0, truth.1, truth.2 - 20.0),
+    ] {
+        let c = c64(&refine_circle(&pts, circle(start.0, start.1, start.2), 30).unwrap());
+        assert!(max_err(c, truth) < 0.05, "from {start:?}: {c:?}");
+    }
+}

@@ -621,4 +621,25 @@ mod tests {
         }
         Ok(())
     }
+
+    /// Points on one line have no Kåsa circle in the arc test's sums (their determinant is
+    /// rounding only, far below 1e-10 of the spread squared); a gentle arc does.
+    #[test]
+    fn arc_sums_of_collinear_points_have_no_circle() {
+        for (x0, y0, dx, dy) in [
+            (1000.0f32, 0.0f32, 7.0f32, 3.0f32),
+            (-4000.0, 2500.0, 1.0, -40.0),
+        ] {
+            let pts: [Point; 9] =
+                core::array::from_fn(|i| Point::new(x0 + dx * i as f32, y0 + dy * i as f32));
+            let sums = ArcSums::of(&pts);
+            assert!(sums.is_some_and(|s| s.kasa().is_none()), "{x0} {y0}");
+        }
+        let arc: [Point; 9] = core::array::from_fn(|i| {
+            let t = 0.05 * i as f32;
+            Point::new(5000.0 * t.cos(), 5000.0 * t.sin())
+        });
+        let c = ArcSums::of(&arc).and_then(|s| s.kasa());
+        assert!(c.is_some_and(|c| (c.radius - 5000.0).abs() < 5.0), "{c:?}");
+    }
 }
