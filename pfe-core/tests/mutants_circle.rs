@@ -697,3 +697,45 @@ fn refinement_moves_a_start_off_along_one_axis() {
         assert!(max_err(c, truth) < 0.05, "from {start:?}: {c:?}");
     }
 }
+
+/// A point at the circle's centre has no direction from it: the covariances skip it (the
+/// same as without it), and the range-noise sandwich skips a point at the scanner itself.
+#[test]
+fn covariances_skip_points_without_a_direction() {
+    let c = circle(1000.0, 2000.0, 300.0);
+    let ring: Vec<Point> = (0..12)
+        .map(|i| {
+            let t = 0.3 * f64::from(i);
+            Point::new(
+                (1000.0 + 300.0 * t.cos()) as f32,
+                (2000.0 + 300.0 * t.sin()) as f32,
+            )
+        })
+        .collect();
+    let mut with_centre = ring.clone();
+    with_centre.push(Point::new(1000.0, 2000.0));
+    assert_eq!(
+        circle_covariance(&with_centre, &c, 5.0).unwrap(),
+        circle_covariance(&ring, &c, 5.0).unwrap()
+    );
+    let o = Point::new(0.0, 0.0);
+    assert_eq!(
+        circle_covariance_range(&with_centre, &c, o, 5.0).unwrap(),
+        circle_covariance_range(&ring, &c, o, 5.0).unwrap()
+    );
+    // A point at the scanner (on this circle through the origin) adds to WᵀW, not to the
+    // noise in the middle.
+    let c0 = circle(300.0, 0.0, 300.0);
+    let through: Vec<Point> = (0..12)
+        .map(|i| {
+            let t = 1.0 + 0.3 * f64::from(i);
+            Point::new((300.0 + 300.0 * t.cos()) as f32, (300.0 * t.sin()) as f32)
+        })
+        .collect();
+    let mut at_origin = through.clone();
+    at_origin.push(o);
+    let a = circle_covariance_range(&at_origin, &c0, o, 5.0).unwrap();
+    let b = circle_covariance_range(&through, &c0, o, 5.0).unwrap();
+    assert!(a.iter().flatten().all(|v| v.is_finite()));
+    assert!(a[0][0] < b[0][0], "more W rows, same noise: {a:?} {b:?}");
+}

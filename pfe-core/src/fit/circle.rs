@@ -642,4 +642,32 @@ mod tests {
         let c = ArcSums::of(&arc).and_then(|s| s.kasa());
         assert!(c.is_some_and(|c| (c.radius - 5000.0).abs() < 5.0), "{c:?}");
     }
+
+    /// `inverse3` refuses matrices singular relative to their scale (condition beyond 1e9 of
+    /// the largest entry cubed), whatever their scale, and a determinant that overflows; it
+    /// inverts a well-conditioned one at any scale.
+    #[test]
+    fn inverse3_judges_singularity_relative_to_scale() {
+        let diag = |a: f32, b: f32, c: f32| [[a, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]];
+        for s in [1e-3f32, 1.0, 1e3] {
+            // det = s³·1e-11: 1e-11 of the scale cubed.
+            assert_eq!(inverse3(&diag(s, s, s * 1e-11)), None, "{s}");
+            // Entries in any order: the largest sets the scale.
+            assert_eq!(inverse3(&diag(s * 1e-11, s, s)), None, "{s}");
+            let m = [[2.0 * s, s, 0.0], [s, 3.0 * s, s], [0.0, s, 4.0 * s]];
+            let inv = inverse3(&m).unwrap();
+            for (i, row) in m.iter().enumerate() {
+                for j in 0..3 {
+                    let p: f32 = (0..3).map(|k| row[k] * inv[k][j]).sum();
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    assert!((p - want).abs() < 1e-5, "{s} {i} {j} {p}");
+                }
+            }
+        }
+        // |det| = 4 · (5e12)³ overflows f32 while the scale cubed does not.
+        let k = 5e12f32;
+        let big = [[k, k, k], [k, -k, k], [k, k, -k]];
+        assert!(!det3(&big).is_finite());
+        assert_eq!(inverse3(&big), None);
+    }
 }
