@@ -656,9 +656,8 @@ mod tests {
             assert_eq!(inverse3(&diag(s * 1e-11, s, s)), None, "{s}");
             let m = [[2.0 * s, s, 0.0], [s, 3.0 * s, s], [0.0, s, 4.0 * s]];
             let inv = inverse3(&m).unwrap();
-            for (i, row) in m.iter().enumerate() {
-                for j in 0..3 {
-                    let p: f32 = (0..3).map(|k| row[k] * inv[k][j]).sum();
+            for (i, row) in mul3(&m, &inv).iter().enumerate() {
+                for (j, p) in row.iter().enumerate() {
                     let want = if i == j { 1.0 } else { 0.0 };
                     assert!((p - want).abs() < 1e-5, "{s} {i} {j} {p}");
                 }
