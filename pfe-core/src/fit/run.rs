@@ -247,4 +247,36 @@ mod tests {
         let ((kn, sn), (kf, sf)) = (cn.unwrap_or((0, f32::NAN)), cf.unwrap_or((0, f32::NAN)));
         assert!(kn == kf && (sf - sn).abs() <= 1e-3 * sn, "{cn:?} vs {cf:?}");
     }
+
+    /// `n` points 80 mm apart along the line of normal angle `alpha` at ρ 3 m, each off it by
+    /// `off(i)` mm.
+    fn along_line(alpha: f32, n: usize, off: impl Fn(usize) -> f32) -> heapless::Vec<Point, 64> {
+        let (s, c) = (alpha.sin(), alpha.cos());
+        (0..n)
+            .map(|i| {
+                let (t, d) = (80.0 * i as f32 - 400.0, 3000.0 + off(i));
+                Point::new(d * c - t * s, d * s + t * c)
+            })
+            .collect()
+    }
+
+    /// The RMS bound 1.5 σ: residuals of ±1.4 σ pass, ±1.6 σ do not (σ 5 mm, a distance
+    /// bound far away); at every normal angle, including 45° and the angle where sin α =
+    /// −cos² α (an "along" coordinate built from other products stays constant there).
+    #[test]
+    fn one_line_within_the_rms_bound_at_any_angle() {
+        let var = 25.0f32;
+        for alpha in [0.3f32, core::f32::consts::FRAC_PI_4, -0.666_239, 2.0] {
+            let pts = |k: f32| along_line(alpha, 12, |i| if i % 2 == 0 { k } else { -k });
+            assert!(on_one_line(&pts(7.0), 100.0, var), "{alpha}");
+            assert!(!on_one_line(&pts(8.0), 100.0, var), "{alpha}");
+        }
+        // A point repeated is not a wall seen beam by beam.
+        let mut twice = along_line(0.3, 8, |_| 0.0);
+        let last = twice.last().copied();
+        if let Some(p) = last {
+            let _ = twice.push(p);
+        }
+        assert!(!on_one_line(&twice, 100.0, var));
+    }
 }
