@@ -93,8 +93,6 @@ struct Output<const M: usize> {
 pub(crate) trait FeatureSink {
     /// Stores `f`; false when there is no room.
     fn push(&mut self, f: Feature) -> bool;
-    /// Removes every feature.
-    fn clear(&mut self);
     /// The features stored, in the order pushed.
     fn features_mut(&mut self) -> &mut [Feature];
 }
@@ -102,9 +100,6 @@ pub(crate) trait FeatureSink {
 impl<const M: usize> FeatureSink for Vec<Feature, M> {
     fn push(&mut self, f: Feature) -> bool {
         Vec::push(self, f).is_ok()
-    }
-    fn clear(&mut self) {
-        Vec::clear(self);
     }
     fn features_mut(&mut self) -> &mut [Feature] {
         self
@@ -306,13 +301,12 @@ fn run(
         fit(&mut pass, &rule, config, out);
         return outcome(stats);
     }
-    out.clear();
+    // Nothing was fitted before aligning: `out` is still empty.
     *stats = Stats {
         readings: stats.readings,
         valid: stats.valid,
         predictions: stats.predictions,
         sweeps_aligned: stats.sweeps_aligned,
-        scan_sigma_um: stats.scan_sigma_um,
         ..Stats::default()
     };
     flags.iter_mut().for_each(|f| *f &= VALID);

@@ -411,7 +411,11 @@ fn the_boards_configuration_aligns_sweeps_its_marks_show_apart() {
         assert!(stats.sweeps_aligned <= 1);
         if stats.sweeps_aligned == 1 {
             aligned += 1;
-            assert!(stats.predictions > one.predictions, "{stats:?} vs {one:?}");
+            // Both walks' predictions, each about one a point.
+            assert!(
+                2 * stats.predictions > 3 * one.predictions,
+                "{stats:?} vs {one:?}"
+            );
         } else {
             assert_eq!(features, plain_features);
         }
