@@ -1,0 +1,92 @@
+//! Unit tests of `fit::circle`'s crate-private kernels (`ArcSums`, `inverse3`).
+
+extern crate std;
+use super::*;
+use std::vec::Vec;
+
+/// The one-pass sums give the same line residual and Kåsa circle as the two-pass fits, on
+/// arcs of several radii, spans and distances, with alternating 5 mm offsets as noise.
+#[test]
+fn arc_sums_match_the_two_pass_fits() -> Result<(), FitError> {
+    for &(cx, cy, r) in &[
+        (3000.0f32, 500.0f32, 150.0f32),
+        (6000.0, -2000.0, 400.0),
+        (1500.0, 0.0, 1500.0),
+    ] {
+        for n in [6usize, 12, 24, 64] {
+            let span = 1.2f32;
+            let pts: Vec<Point> = (0..n)
+                .map(|i| {
+                    let t = 2.5 + span * i as f32 / (n - 1) as f32;
+                    let rr = r + if i % 2 == 0 { 5.0 } else { -5.0 };
+                    Point::new(cx + rr * t.cos(), cy + rr * t.sin())
+                })
+                .collect();
+            let sums = ArcSums::of(&pts).ok_or(FitError::Degenerate)?;
+            let two_pass = fit_circle(&pts, CircleMethod::Kasa)?;
+            let one_pass = sums.kasa().ok_or(FitError::Degenerate)?;
+            assert!(
+                one_pass.center.distance(&two_pass.center) < 1e-3 * r,
+                "{n} {r}"
+            );
+            assert!(
+                (one_pass.radius - two_pass.radius).abs() < 1e-3 * r,
+                "{n} {r}"
+            );
+            let line = crate::fit::line::fit_line(&pts)?.sse();
+            assert!(
+                (sums.line_sse() - line).abs() <= 1e-3 * line + 1.0,
+                "{n} {r}"
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Points on one line have no Kåsa circle in the arc test's sums (their determinant is
+/// rounding only, far below 1e-10 of the spread squared); a gentle arc does.
+#[test]
+fn arc_sums_of_collinear_points_have_no_circle() {
+    for (x0, y0, dx, dy) in [
+        (1000.0f32, 0.0f32, 7.0f32, 3.0f32),
+        (-4000.0, 2500.0, 1.0, -40.0),
+    ] {
+        let pts: [Point; 9] =
+            core::array::from_fn(|i| Point::new(x0 + dx * i as f32, y0 + dy * i as f32));
+        let sums = ArcSums::of(&pts);
+        assert!(sums.is_some_and(|s| s.kasa().is_none()), "{x0} {y0}");
+    }
+    let arc: [Point; 9] = core::array::from_fn(|i| {
+        let t = 0.05 * i as f32;
+        Point::new(5000.0 * t.cos(), 5000.0 * t.sin())
+    });
+    let c = ArcSums::of(&arc).and_then(|s| s.kasa());
+    assert!(c.is_some_and(|c| (c.radius - 5000.0).abs() < 5.0), "{c:?}");
+}
+
+/// `inverse3` refuses matrices singular relative to their scale (condition beyond 1e9 of
+/// the largest entry cubed), whatever their scale, and a determinant that overflows; it
+/// inverts a well-conditioned one at any scale.
+#[test]
+fn inverse3_judges_singularity_relative_to_scale() {
+    let diag = |a: f32, b: f32, c: f32| [[a, 0.0, 0.0], [0.0, b, 0.0], [0.0, 0.0, c]];
+    for s in [1e-3f32, 1.0, 1e3] {
+        // det = s³·1e-11: 1e-11 of the scale cubed.
+        assert_eq!(inverse3(&diag(s, s, s * 1e-11)), None, "{s}");
+        // Entries in any order: the largest sets the scale.
+        assert_eq!(inverse3(&diag(s * 1e-11, s, s)), None, "{s}");
+        let m = [[2.0 * s, s, 0.0], [s, 3.0 * s, s], [0.0, s, 4.0 * s]];
+        let inv = inverse3(&m).unwrap();
+        for (i, row) in mul3(&m, &inv).iter().enumerate() {
+            for (j, p) in row.iter().enumerate() {
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((p - want).abs() < 1e-5, "{s} {i} {j} {p}");
+            }
+        }
+    }
+    // |det| = 4 · (5e12)³ overflows f32 while the scale cubed does not.
+    let k = 5e12f32;
+    let big = [[k, k, k], [k, -k, k], [k, k, -k]];
+    assert!(!det3(&big).is_finite());
+    assert_eq!(inverse3(&big), None);
+}
