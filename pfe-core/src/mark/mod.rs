@@ -176,6 +176,13 @@ mod tests {
         // is not finite gives the beam table's limit.
         let (a, c) = (Point::new(1000.0, 0.0), Point::new(0.0, 1000.0));
         assert!(rule.jump_limit_between(a, c, 1000.0) > 1e5);
+        for (dphi, ra, rc) in [(0.5f64, 1000.0f64, 3000.0f64), (0.2, 2500.0, 700.0)] {
+            let at = |r: f64, t: f64| Point::new((r * t.cos()) as f32, (r * t.sin()) as f32);
+            let (a, c) = (at(ra, 0.7), at(rc, 0.7 + dphi));
+            let want = ra * 1e3 * dphi.sin() + f64::from(rule.jump_add);
+            let got = f64::from(rule.jump_limit_between(a, c, ra as f32));
+            assert!((got - want).abs() <= 1e-4 * want, "Δφ {dphi}: {got} {want}");
+        }
         let nan = Point::new(f32::NAN, 0.0);
         assert_eq!(
             rule.jump_limit_between(a, nan, 1000.0),
