@@ -770,3 +770,28 @@ fn a_floor_above_k_sigma_takes_the_exact_test() {
         );
     }
 }
+
+/// The paper's threshold grows with the range (`d_m = (d_0/λ)(r/r_max + (π − ϕ)/π)`): a 20 mm
+/// bump in a wall faced straight on is a mark at 0.5 m (d_m ≈ 14 mm) and not at 7.5 m
+/// (d_m ≈ 36 mm).
+#[test]
+fn the_papers_threshold_grows_with_range() {
+    let g = ScanGeometry::LMS200_180_050;
+    let mut ex = Extractor::<361, 32>::new();
+    for (d, marked) in [(500.0f32, true), (7500.0, false)] {
+        let ranges: Vec<f32> = (0..361)
+            .map(|i| {
+                let b = g.bearing(i);
+                let r = d / b.cos() + if i == 180 { 20.0 } else { 0.0 };
+                if b.abs() < 0.5 {
+                    r
+                } else {
+                    f32::NAN
+                }
+            })
+            .collect();
+        ex.extract(&Scan::from_mm(g, &ranges), &Config::paper())
+            .unwrap();
+        assert_eq!(ex.is_mark(180), marked, "wall at {d} mm");
+    }
+}
