@@ -235,6 +235,73 @@ mod tests {
         features
     }
 
+    /// [`extended`] from `marks` (START at `.0`, END at `.1`), with the beams marked after it:
+    /// (START, END) lists.
+    fn remarked<const M: usize>(
+        ranges: &[f32],
+        jumps: &[usize],
+        marks: &[(usize, usize)],
+        features: [Feature; M],
+    ) -> (
+        [Feature; M],
+        heapless::Vec<usize, 16>,
+        heapless::Vec<usize, 16>,
+    ) {
+        let mut features = features;
+        let scan = Scan::from_mm(G, ranges);
+        Extractor::<361, 8>::new().with_pass(&scan, &Config::default(), |pass, rule| {
+            for &j in jumps {
+                pass.set(j, JUMP);
+            }
+            for &(s, e) in marks {
+                pass.set(s, START);
+                pass.set(e, END);
+            }
+            extend(pass, rule.noise().unwrap(), &mut features);
+            let flagged = |bit: u8| {
+                (0..pass.len())
+                    .filter(|&i| pass.flag(i) & bit != 0)
+                    .collect()
+            };
+            (features, flagged(START), flagged(END))
+        })
+    }
+
+    /// The marks move with the ends: the segment's START and END go to the new first and last
+    /// beams; the rest of a short segment beyond keeps its own marks; an end the reach does not
+    /// move keeps its marks as they were.
+    #[test]
+    fn the_marks_move_with_the_ends() {
+        let r = wall_ranges(0.0, |_| 0.0);
+        // Marks of the line (150–200) and of short segments beside it, 140–149 and 201–212.
+        let marks = [(140, 149), (150, 200), (201, 212)];
+        // Jumps between 144 and 145 and between 204 and 205: the reach takes 145–149 and
+        // 201–204.
+        let (f, starts, ends) = remarked(
+            &r,
+            &[145, 205],
+            &marks,
+            [line(150, 200, 0.0, 3000.0, EXACT)],
+        );
+        assert_eq!(span(&f[0]), (145, 204));
+        assert_eq!(
+            (&starts[..], &ends[..]),
+            (&[140, 145, 205][..], &[144, 204, 212][..])
+        );
+        // Nothing to take (jumps right beside it): the marks stay as they were.
+        let (f, starts, ends) = remarked(
+            &r,
+            &[150, 201],
+            &marks,
+            [line(150, 200, 0.0, 3000.0, EXACT)],
+        );
+        assert_eq!(span(&f[0]), (150, 200));
+        assert_eq!(
+            (&starts[..], &ends[..]),
+            (&[140, 150, 201][..], &[149, 200, 212][..])
+        );
+    }
+
     fn span(f: &Feature) -> (usize, usize) {
         (f.first(), f.last())
     }
