@@ -368,4 +368,192 @@ mod tests {
         let pts: heapless::Vec<Point, 64> = (0..40).map(|i| Point::new(400.0, i as f32)).collect();
         assert_eq!(window(&pts, 35, 12, noise), 12);
     }
+
+    /// A room of `seed`: four walls 1.5–6 m away (corners and door gaps), up to three pillars
+    /// (radius 80–400 mm) and a free-standing wall segment, as (segments, circles).
+    type Room = (
+        heapless::Vec<(Point, Point), 8>,
+        heapless::Vec<(Point, f32), 4>,
+    );
+
+    fn lcg(seed: &mut u32) -> f32 {
+        *seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (*seed >> 8) as f32 / (1u32 << 24) as f32
+    }
+
+    fn room(seed: &mut u32) -> Room {
+        let mut walls = heapless::Vec::new();
+        let mut pillars = heapless::Vec::new();
+        let turn = 0.6 * lcg(seed) - 0.3;
+        let corners: [Point; 4] = core::array::from_fn(|i| {
+            let (s, c) =
+                crate::math::sin_cos(turn + core::f32::consts::FRAC_PI_2 * i as f32 + 0.785);
+            let d = 2000.0 + 5000.0 * lcg(seed);
+            Point::new(d * c, d * s)
+        });
+        for i in 0..4 {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            // A door: the wall split with a gap of 0.8 m in one of two.
+            if lcg(seed) < 0.5 {
+                let t = 0.2 + 0.4 * lcg(seed);
+                let at = |u: f32| Point::new(a.x + u * (b.x - a.x), a.y + u * (b.y - a.y));
+                let _ = walls.push((a, at(t)));
+                let _ = walls.push((at(t + 0.15), b));
+            } else {
+                let _ = walls.push((a, b));
+            }
+        }
+        for _ in 0..(lcg(seed) * 4.0) as usize {
+            let c = Point::new(2500.0 * lcg(seed) + 400.0, 4000.0 * lcg(seed) - 2000.0);
+            let _ = pillars.push((c, 80.0 + 320.0 * lcg(seed)));
+        }
+        let a = Point::new(1500.0 * lcg(seed) + 300.0, 3000.0 * lcg(seed) - 1500.0);
+        let _ = walls.push((
+            a,
+            Point::new(a.x + 600.0 * lcg(seed), a.y + 900.0 * lcg(seed)),
+        ));
+        (walls, pillars)
+    }
+
+    /// Range from `o` along `(dx, dy)` (unit) to the nearest surface of `room`, NaN if none.
+    fn cast(o: Point, (dx, dy): (f32, f32), (walls, pillars): &Room) -> f32 {
+        let mut best = f32::NAN;
+        let mut keep = |t: f32| {
+            if t > 1.0 && !(t >= best) {
+                best = t;
+            }
+        };
+        for (a, b) in walls {
+            let (ex, ey) = (b.x - a.x, b.y - a.y);
+            let den = dx * ey - dy * ex;
+            if den.abs() > 1e-9 {
+                let (wx, wy) = (a.x - o.x, a.y - o.y);
+                let t = (wx * ey - wy * ex) / den;
+                let u = (wx * dy - wy * dx) / den;
+                if (0.0..=1.0).contains(&u) {
+                    keep(t);
+                }
+            }
+        }
+        for (c, r) in pillars {
+            let (wx, wy) = (c.x - o.x, c.y - o.y);
+            let along = wx * dx + wy * dy;
+            let d2 = wx * wx + wy * wy - along * along;
+            if d2 <= r * r {
+                keep(along - crate::math::sqrt(r * r - d2));
+            }
+        }
+        best
+    }
+
+    /// How [`walked`] walks.
+    #[derive(Clone, Copy, PartialEq)]
+    enum How {
+        Mark,
+        Fast,
+        Slow,
+    }
+
+    /// Flags of the walk over `points` and `ranges` (an LMS200 scan, 180° at 0.5°, invalid
+    /// where the range is NaN): marked by `mark`, or walked with or without the fast path.
+    fn walked(
+        (points, ranges): (&[Point], &[f32]),
+        uneven: bool,
+        config: &crate::config::Config,
+        how: How,
+    ) -> [u8; 361] {
+        use crate::extractor::Extractor;
+        use crate::scan::{Scan, ScanGeometry};
+        let g = ScanGeometry::LMS200_180_050;
+        let zeros = [1000.0f32; 361];
+        let mut flags: [u8; 361] = core::array::from_fn(|i| {
+            if ranges[i].is_finite() {
+                crate::flags::VALID
+            } else {
+                0
+            }
+        });
+        let mut ex = Extractor::<361, 8>::new();
+        ex.with_pass(&Scan::from_mm(g, &zeros), config, |loaded, rule| {
+            let mut stats = crate::extractor::Stats::default();
+            let mut pass = Pass::over(loaded.beams, (points, ranges, &mut flags), None, &mut stats);
+            pass.uneven = uneven;
+            let Some(noise) = rule.noise() else {
+                panic!("the default rule")
+            };
+            match how {
+                How::Mark => super::mark(&mut pass, noise),
+                How::Fast => walk::<true>(&mut pass, noise),
+                How::Slow => walk::<false>(&mut pass, noise),
+            }
+        });
+        flags
+    }
+
+    /// The walk's fast path (a cached line tested in a tight loop) and its choice mark the
+    /// same points as the slow path, which tests every point on its own: 300 rooms with noise
+    /// of 2–12 mm, spikes and dropouts; floors within and far beyond the fast path's bound,
+    /// where `mark` must take the slow path; and interleaved sweeps moved apart (odd beams
+    /// from 8 mm further and 6 mrad turned, `uneven`), where it must too (there the fast path
+    /// marks differently: the choice matters).
+    #[test]
+    fn the_fast_path_marks_what_the_slow_path_marks() {
+        use crate::config::{Config, Threshold};
+        use crate::scan::ScanGeometry;
+        let g = ScanGeometry::LMS200_180_050;
+        let (mut seed, mut fast_differs, mut slow_only) = (11u32, 0, 0);
+        for t in 0..300u32 {
+            let scene = room(&mut seed);
+            let sigma = 2.0 + 10.0 * lcg(&mut seed);
+            let floor = [3.0, 3.0, 0.0, 60.0][t as usize % 4];
+            let uneven = t % 3 == 0;
+            let mut config = Config::default().with_sigma_r(sigma);
+            if let Threshold::Noise(m) = &mut config.threshold {
+                m.floor = floor;
+            }
+            let mut points = [Point::INVALID; 361];
+            let mut ranges = [f32::NAN; 361];
+            for i in 0..361 {
+                let odd = uneven && i % 2 == 1;
+                let (o, turn) = if odd {
+                    (Point::new(8.0, 0.0), 0.006)
+                } else {
+                    (Point::new(0.0, 0.0), 0.0)
+                };
+                let (s, c) = crate::math::sin_cos(g.bearing(i) + turn);
+                let noise = (lcg(&mut seed) + lcg(&mut seed) + lcg(&mut seed) - 1.5) * 2.0 * sigma;
+                let u = lcg(&mut seed);
+                let r = if u < 0.01 {
+                    f32::NAN
+                } else if u < 0.03 {
+                    300.0 + 2000.0 * lcg(&mut seed)
+                } else {
+                    cast(o, (c, s), &scene) + noise
+                };
+                if r.is_finite() && r < 8000.0 {
+                    (points[i], ranges[i]) = (Point::new(o.x + r * c, o.y + r * s), r);
+                }
+            }
+            let cloud = (&points[..], &ranges[..]);
+            let slow = walked(cloud, uneven, &config, How::Slow);
+            let fast = walked(cloud, uneven, &config, How::Fast);
+            assert_eq!(
+                walked(cloud, uneven, &config, How::Mark),
+                slow,
+                "room {t}: mark"
+            );
+            if uneven || floor > 20.0 {
+                slow_only += 1;
+                fast_differs += usize::from(fast != slow);
+            } else {
+                assert_eq!(fast, slow, "room {t}: fast");
+            }
+            let starts = slow.iter().filter(|f| **f & START != 0).count();
+            assert!((2..120).contains(&starts), "room {t}: {starts} starts");
+        }
+        assert!(
+            fast_differs * 2 > slow_only,
+            "{fast_differs} of {slow_only}"
+        );
+    }
 }
