@@ -462,11 +462,21 @@ mod tests {
     /// Flags of the walk over `points` and `ranges` (an LMS200 scan, 180° at 0.5°, invalid
     /// where the range is NaN): marked by `mark`, or walked with or without the fast path.
     fn walked(
+        cloud: (&[Point], &[f32]),
+        frame: (Option<crate::preprocess::deskew::Motion>, bool),
+        config: &crate::config::Config,
+        how: How,
+    ) -> [u8; 361] {
+        walked_counted(cloud, frame, config, how).0
+    }
+
+    /// [`walked`] and the number of predictions the walk counted.
+    fn walked_counted(
         (points, ranges): (&[Point], &[f32]),
         (motion, uneven): (Option<crate::preprocess::deskew::Motion>, bool),
         config: &crate::config::Config,
         how: How,
-    ) -> [u8; 361] {
+    ) -> ([u8; 361], usize) {
         use crate::extractor::Extractor;
         use crate::scan::{Scan, ScanGeometry};
         let g = ScanGeometry::LMS200_180_050;
@@ -479,7 +489,7 @@ mod tests {
             }
         });
         let mut ex = Extractor::<361, 8>::new();
-        ex.with_pass(&Scan::from_mm(g, &zeros), config, |loaded, rule| {
+        let predictions = ex.with_pass(&Scan::from_mm(g, &zeros), config, |loaded, rule| {
             let mut stats = crate::extractor::Stats::default();
             let mut pass = Pass::over(
                 loaded.beams,
@@ -496,8 +506,9 @@ mod tests {
                 How::Fast => walk::<true>(&mut pass, noise),
                 How::Slow => walk::<false>(&mut pass, noise),
             }
+            pass.stats.predictions
         });
-        flags
+        (flags, predictions)
     }
 
     /// The walk's fast path (a cached line tested in a tight loop) and its choice mark the
@@ -545,8 +556,8 @@ mod tests {
                 }
             }
             let cloud = (&points[..], &ranges[..]);
-            let slow = walked(cloud, (None, uneven), &config, How::Slow);
-            let fast = walked(cloud, (None, uneven), &config, How::Fast);
+            let (slow, slow_n) = walked_counted(cloud, (None, uneven), &config, How::Slow);
+            let (fast, fast_n) = walked_counted(cloud, (None, uneven), &config, How::Fast);
             assert_eq!(
                 walked(cloud, (None, uneven), &config, How::Mark),
                 slow,
@@ -557,6 +568,12 @@ mod tests {
                 fast_differs += usize::from(fast != slow);
             } else {
                 assert_eq!(fast, slow, "room {t}: fast");
+                // The same predictions counted, but for the points the fast loop rejects, which
+                // the slow path tests once more with its stale line (0.86–0.97 here).
+                assert!(
+                    fast_n <= slow_n && fast_n * 5 >= slow_n * 4,
+                    "room {t}: {fast_n} predictions on the fast path, {slow_n} on the slow"
+                );
             }
             let starts = slow.iter().filter(|f| **f & START != 0).count();
             assert!((2..120).contains(&starts), "room {t}: {starts} starts");
@@ -579,6 +596,7 @@ mod tests {
         let config = Config::default();
         let mut seed = 5u32;
         let (mut starts, mut false_starts, mut changes, mut missed) = (0, 0, 0, 0);
+        let (mut jumps, mut flagged) = (0, 0);
         for t in 0..200u32 {
             let scene = room(&mut seed);
             let (shift, turn) = if t % 2 == 0 {
@@ -592,14 +610,20 @@ mod tests {
             };
             let (points, ranges, ids) = scanned(&scene, odd, &mut seed);
             let flags = walked((&points, &ranges), (None, true), &config, How::Mark);
-            let [s, f, c, m] = against_truth(&flags, &ids);
+            let [s, f, c, m, j, jf] = against_truth(&flags, &ids, &ranges);
             (starts, false_starts, changes, missed) =
                 (starts + s, false_starts + f, changes + c, missed + m);
+            (jumps, flagged) = (jumps + j, flagged + jf);
         }
         // Walked as if evenly spaced, the same points give 796 false starts of 2 553.
         assert!(
             changes > 500 && false_starts * 100 <= starts * 8 && missed * 50 <= changes,
             "{starts} starts, {false_starts} false; {changes} changes, {missed} missed"
+        );
+        // An occlusion (a change of range by more than 0.5 m) is a jump (399 of 399 here).
+        assert!(
+            jumps > 200 && flagged * 50 >= jumps * 49,
+            "{flagged} of {jumps} jumps"
         );
     }
 
@@ -628,9 +652,11 @@ mod tests {
 
     /// Segment starts in `flags`, those not within 2 beams of a change of surface in `ids`,
     /// changes between surfaces seen by 5 beams or more on both sides, those not marked within
-    /// 2 beams.
-    fn against_truth(flags: &[u8; 361], ids: &[usize; 361]) -> [usize; 4] {
+    /// 2 beams, those of them where the range changes by more than 0.5 m, and those flagged
+    /// [`JUMP`].
+    fn against_truth(flags: &[u8; 361], ids: &[usize; 361], ranges: &[f32; 361]) -> [usize; 6] {
         let (mut starts, mut false_starts, mut changes, mut missed) = (0, 0, 0, 0);
+        let (mut jumps, mut flagged) = (0, 0);
         let near_change = |i: usize| {
             (i.saturating_sub(2)..(i + 3).min(361)).any(|j| j > 0 && ids[j] != ids[j - 1])
         };
@@ -650,9 +676,13 @@ mod tests {
                 changes += 1;
                 let marked = (i - 2..i + 3).any(|j| flags.get(j).is_some_and(|f| f & START != 0));
                 missed += usize::from(!marked);
+                if (ranges[i] - ranges[i - 1]).abs() > 500.0 {
+                    jumps += 1;
+                    flagged += usize::from(flags[i] & JUMP != 0);
+                }
             }
         }
-        [starts, false_starts, changes, missed]
+        [starts, false_starts, changes, missed, jumps, flagged]
     }
 
     /// De-skewed by odometry, a scan taken on the move (LMS200 at 0.5°: two sweeps one mirror
@@ -664,7 +694,7 @@ mod tests {
         use crate::preprocess::deskew::{BeamTiming, Motion};
         let config = Config::default();
         let mut seed = 9u32;
-        let mut sum = [0usize; 4];
+        let mut sum = [0usize; 6];
         for t in 0..200u32 {
             let scene = room(&mut seed);
             let omega = if t % 2 == 0 { 1.5 } else { -1.5 };
@@ -679,14 +709,67 @@ mod tests {
             };
             let (points, ranges, ids) = scanned(&scene, pose, &mut seed);
             let flags = walked((&points, &ranges), (Some(m), false), &config, How::Mark);
-            for (s, n) in sum.iter_mut().zip(against_truth(&flags, &ids)) {
+            for (s, n) in sum.iter_mut().zip(against_truth(&flags, &ids, &ranges)) {
                 *s += n;
             }
         }
-        let [starts, false_starts, changes, missed] = sum;
+        let [starts, false_starts, changes, missed, jumps, flagged] = sum;
         assert!(
             changes > 300 && false_starts * 100 <= starts * 5 && missed * 50 <= changes,
             "{starts} starts, {false_starts} false; {changes} changes, {missed} missed"
+        );
+        // 216 of 218 here.
+        assert!(
+            jumps > 100 && flagged * 50 >= jumps * 49,
+            "{flagged} of {jumps} jumps"
+        );
+    }
+
+    /// A window spans the noise when its ends are `min_span · σ_r` apart (12 · 5 = 60 mm) or
+    /// more, in any direction.
+    #[test]
+    fn a_window_spans_min_span_sigmas() {
+        let config = crate::config::Config::default().with_sigma_r(5.0);
+        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let Some(noise) = rule.noise() else {
+            panic!("the default rule")
+        };
+        let first = Point::new(1000.0, -300.0);
+        for (dx, dy, want) in [
+            (60.0, 0.0, true),
+            (0.0, -59.9, false),
+            (36.0, 48.0, true),
+            (-35.9, 47.9, false),
+            (-42.5, -42.5, true),
+        ] {
+            let last = Point::new(first.x + dx, first.y + dy);
+            assert_eq!(spans(&first, &last, noise), want, "({dx}, {dy})");
+        }
+    }
+
+    /// A round wall (radius 0.5–2 m, 1–3 m beyond its radius) is one segment: arc
+    /// continuation, boundary refinement and the merge of an arc's grazing edge leave 99 starts
+    /// inside 300 of them (σ_r 5 mm; at most 105 allowed).
+    #[test]
+    fn a_round_wall_is_one_segment() {
+        let config = crate::config::Config::default();
+        let mut seed = 21u32;
+        let (mut walls, mut inside) = (0usize, 0usize);
+        for _ in 0..300 {
+            let r = 500.0 + 1500.0 * lcg(&mut seed);
+            let d = r + 1000.0 + 2000.0 * lcg(&mut seed);
+            let mut round: Room = (heapless::Vec::new(), heapless::Vec::new());
+            let _ = round.1.push((Point::new(0.0, d), r));
+            let (points, ranges, ids) = scanned(&round, |_| (Point::new(0.0, 0.0), 0.0), &mut seed);
+            let flags = walked((&points, &ranges), (None, false), &config, How::Mark);
+            walls += 1;
+            inside += (1..361)
+                .filter(|&i| ids[i] == 100 && ids[i - 1] == 100 && flags[i] & START != 0)
+                .count();
+        }
+        assert!(
+            inside * 20 <= walls * 7,
+            "{inside} starts inside {walls} round walls"
         );
     }
 }
