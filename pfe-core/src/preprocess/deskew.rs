@@ -184,3 +184,35 @@ impl Motion {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Interleaved sweeps are apart exactly when there is more than one and the scanner moves
+    /// (forwards or turning).
+    #[test]
+    fn sweeps_are_apart_when_several_are_taken_on_the_move() {
+        let cases = [
+            (1.0, 600.0, 0.0, false),
+            (1.0, 0.0, 0.4, false),
+            (0.5, 0.0, 0.0, false),
+            (0.5, 600.0, 0.0, true),
+            (0.5, 0.0, -0.4, true),
+            (0.25, 0.0, 0.0, false),
+            (0.25, -300.0, 0.0, true),
+        ];
+        for (resolution, v, omega, want) in cases {
+            let m = Motion {
+                v,
+                omega,
+                timing: BeamTiming::lms2xx(resolution),
+            };
+            assert_eq!(
+                m.sweeps_apart(),
+                want,
+                "{resolution}° at {v} mm/s, {omega} rad/s"
+            );
+        }
+    }
+}
