@@ -245,9 +245,9 @@ mod tests {
     }
 
     /// On the move (3 m/s, 2 rad/s, two sweeps one mirror turn apart: beams up to 40 mm and
-    /// 27 mrad apart in pose), a point of a wall (y = 2 m, cast from its own beam's pose) is
-    /// predicted on the wall from the ten before it, each seen from the pose of the beam
-    /// predicted: error below 0.05 mm.
+    /// 27 mrad apart in pose), a point of a wall (ahead, beside, at 45°; cast from its own
+    /// beam's pose) is predicted on the wall from the ten before it, each seen from the pose of
+    /// the beam predicted: error below 0.05 mm.
     #[test]
     fn a_point_of_a_wall_is_predicted_on_it_from_its_own_pose() {
         let g = ScanGeometry::LMS200_180_050;
@@ -256,29 +256,38 @@ mod tests {
             omega: 2.0,
             timing: BeamTiming::lms2xx(0.5),
         };
-        let (mut points, mut ranges) = ([Point::INVALID; 361], [f32::NAN; 361]);
-        for i in 0..361 {
-            let pose = motion.pose(i);
-            let (s, c) = crate::math::sin_cos(g.bearing(i) + pose.theta);
-            // The beam from the pose meets y = 2000 at r = (2000 − o_y) / sin.
-            let r = (2000.0 - pose.origin.y) / s;
-            if s > 0.3 {
-                points[i] = Point::new(pose.origin.x + r * c, pose.origin.y + r * s);
-                ranges[i] = r;
-            }
-        }
-        with_pass((&points, &ranges), Some(motion), |pass| {
-            let mut tested = 0;
-            for k in 10..361 {
-                if (k - 10..=k).all(|i| pass.valid(i)) {
-                    let Some(p) = pass.predict(k - 10, k, k) else {
-                        panic!("beam {k}: no prediction")
-                    };
-                    assert!(p.error < 0.05, "beam {k}: error {} mm", p.error);
-                    tested += 1;
+        // Walls x cos α + y sin α = ρ: ahead, to the left, and at 45° to the right.
+        for (alpha, rho) in [(0.0f32, 2500.0f32), (1.5708, 2000.0), (-0.7854, 1800.0)] {
+            let (sa, ca) = crate::math::sin_cos(alpha);
+            let (mut points, mut ranges) = ([Point::INVALID; 361], [f32::NAN; 361]);
+            for i in 0..361 {
+                let pose = motion.pose(i);
+                let (s, c) = crate::math::sin_cos(g.bearing(i) + pose.theta);
+                // The beam from the pose meets the wall at r = (ρ − o·n) / (d·n).
+                let dn = c * ca + s * sa;
+                let r = (rho - pose.origin.x * ca - pose.origin.y * sa) / dn;
+                if dn > 0.3 {
+                    points[i] = Point::new(pose.origin.x + r * c, pose.origin.y + r * s);
+                    ranges[i] = r;
                 }
             }
-            assert!(tested > 100, "{tested}");
-        });
+            with_pass((&points, &ranges), Some(motion), |pass| {
+                let mut tested = 0;
+                for k in 10..361 {
+                    if (k - 10..=k).all(|i| pass.valid(i)) {
+                        let Some(p) = pass.predict(k - 10, k, k) else {
+                            panic!("wall {alpha}, beam {k}: no prediction")
+                        };
+                        assert!(
+                            p.error < 0.05,
+                            "wall {alpha}, beam {k}: error {} mm",
+                            p.error
+                        );
+                        tested += 1;
+                    }
+                }
+                assert!(tested > 100, "wall {alpha}: {tested}");
+            });
+        }
     }
 }
