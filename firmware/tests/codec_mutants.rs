@@ -212,3 +212,410 @@ fn count_word_unit_bits() {
     assert_eq!(Unit::from_count_bits(3), None);
     assert_eq!(Unit::Dm.mm_per_unit(), 100.0);
 }
+
+/// Baud mode codes of `20 xx` (§4 table, traces A–D): 0x40 38 400, 0x41 19 200, 0x42 9600,
+/// 0x48 500 000; the other `20 xx` modes (0x24 continuous, 0x25 request, 0x00 install) are no
+/// rate.
+#[test]
+fn baud_mode_codes_follow_the_table() {
+    for (code, baud) in [
+        (0x40, Baud::B38400),
+        (0x41, Baud::B19200),
+        (0x42, Baud::B9600),
+        (0x48, Baud::B500000),
+    ] {
+        assert_eq!(Baud::from_mode_code(code), Some(baud), "{code:#04x}");
+    }
+    for code in [0x00, 0x24, 0x25, 0x43, 0x47] {
+        assert_eq!(Baud::from_mode_code(code), None, "{code:#04x}");
+    }
+}
+
+/// Values per scan (§7: 181 at 180°/1°, 361 at 180°/0.5°, 101, 201, 401 at 100°), and each
+/// count names its variant; a count no variant has names none.
+#[test]
+fn value_counts_name_their_variant() {
+    let table = [
+        (Variant::new(180, 100), 181),
+        (Variant::new(180, 50), 361),
+        (Variant::new(100, 100), 101),
+        (Variant::new(100, 50), 201),
+        (Variant::new(100, 25), 401),
+    ];
+    for (v, n) in table {
+        assert_eq!(v.values(), n, "{v:?}");
+        assert_eq!(Variant::from_values(n), Some(v), "{n} values");
+    }
+    for n in [0, 180, 360, 362, 721] {
+        assert_eq!(Variant::from_values(n), None, "{n} values");
+    }
+}
+
+/// Bearing of value 0 (§7: value 0 at the right-hand edge; S7 maps 180° to −90°…+90° and 100°
+/// to −50°…+50°). Measured from the right-hand edge of the full 180° field that is 0° for a
+/// 180° scan and 40° for a 100° scan.
+#[test]
+fn variant_start_angles_follow_s7() {
+    for (v, centred, from_edge) in [
+        (Variant::A180_R100, -90.0, 0.0),
+        (Variant::A180_R050, -90.0, 0.0),
+        (Variant::A100_R100, -50.0, 40.0),
+        (Variant::A100_R050, -50.0, 40.0),
+        (Variant::A100_R025, -50.0, 40.0),
+    ] {
+        assert_eq!(v.start_deg(), centred, "{v:?}");
+        assert_eq!(v.start_deg() + 90.0, from_edge, "{v:?}");
+    }
+}
+
+/// Unit codes: count-word bits 14–15 (§7: 00 cm, 01 mm, 10 dm) and config byte 6 / B1 byte 122
+/// (§5, §6: 0 cm, 1 mm, S5 2 dm).
+#[test]
+fn unit_codes_of_count_word_and_config() {
+    use firmware::lms::types::Unit;
+    for (unit, code) in [(Unit::Cm, 0u8), (Unit::Mm, 1), (Unit::Dm, 2)] {
+        assert_eq!(unit.count_bits(), u16::from(code), "{unit:?}");
+        assert_eq!(Unit::from_config(code), Some(unit), "{code}");
+        assert_eq!(unit.config_byte(), code, "{unit:?}");
+    }
+    assert_eq!(Unit::from_config(3), None);
+    assert_eq!(Unit::from_config(0xFF), None);
+}
+
+/// Largest valid range code (§7): 8182 in the 8 m / 80 m modes (8183 is "> maximum"), 32758 in
+/// the 32 m modes (32759 "> maximum"); the reserved codes are defined only below 8191 / 16383 /
+/// 32767, so in the 16-bit modes (0x0F immediate, 0x3F reflectivity) every word is a value.
+#[test]
+fn largest_valid_code_per_measuring_mode() {
+    use firmware::lms::types::MeasuringMode;
+    for m in [0x00, 0x01, 0x02] {
+        assert_eq!(MeasuringMode(m).max_valid(), 8182, "mode {m:#04x}");
+    }
+    for m in [0x05, 0x06] {
+        assert_eq!(MeasuringMode(m).max_valid(), 32758, "mode {m:#04x}");
+    }
+    for m in [0x0F, 0x3F] {
+        assert_eq!(MeasuringMode(m).max_valid(), 0xFFFF, "mode {m:#04x}");
+    }
+}
+
+/// The error Display texts name their values: a bad LEN and the protocol's limit (812 − 6 =
+/// 806, §1), both CRCs (the vector `20 24` has CRC 0x0834, §1), a reply's code and lengths.
+#[test]
+fn error_messages_name_their_values() {
+    use firmware::lms::frame::FrameError;
+    use firmware::lms::reply::ReplyError;
+    let s = FrameError::BadLength(900).to_string();
+    assert!(s.contains("900") && s.contains("806"), "{s}");
+    let s = FrameError::Crc {
+        expected: 0x0834,
+        got: 0x0835,
+    }
+    .to_string();
+    assert!(s.contains("0x0834") && s.contains("0x0835"), "{s}");
+    for e in [
+        FrameError::Truncated,
+        FrameError::TrailingBytes,
+        FrameError::NoStx,
+        FrameError::BufferTooSmall,
+    ] {
+        assert!(!e.to_string().is_empty(), "{e:?}");
+    }
+    let s = ReplyError::Length {
+        code: 0xB0,
+        expected: 726,
+        got: 21,
+    }
+    .to_string();
+    assert!(
+        s.contains("0xb0") && s.contains("726") && s.contains("21"),
+        "{s}"
+    );
+    assert!(!ReplyError::Empty.to_string().is_empty());
+}
+
+/// Framing (§1): LEN 0 and LEN above 806 are bad lengths even with a good CRC; a telegram
+/// short of its LEN is truncated, one with bytes after its CRC has trailing bytes; the address
+/// byte of a device telegram is 0x80, of a host telegram 0x00.
+#[test]
+fn telegram_framing_errors_and_address() {
+    use common::lms::{crc16, device_telegram};
+    use firmware::lms::frame::{FrameError, Telegram};
+    let with_crc = |mut t: Vec<u8>| {
+        let c = crc16(&t);
+        t.extend_from_slice(&c.to_le_bytes());
+        t
+    };
+    let zero = with_crc(vec![0x02, 0x80, 0x00, 0x00]);
+    assert_eq!(Telegram::parse(&zero), Err(FrameError::BadLength(0)));
+    let mut big = vec![0x02, 0x80, 0x27, 0x03]; // LEN 807
+    big.resize(4 + 807, 0xB0);
+    let big = with_crc(big);
+    assert_eq!(Telegram::parse(&big), Err(FrameError::BadLength(807)));
+
+    let a0 = device_telegram(&[0xA0, 0x00, 0x10]);
+    let t = Telegram::parse(&a0).unwrap();
+    assert_eq!(t.address(), 0x80);
+    for cut in 1..=4 {
+        assert_eq!(
+            Telegram::parse(&a0[..a0.len() - cut]),
+            Err(FrameError::Truncated),
+            "{cut} bytes short"
+        );
+    }
+    let mut long = a0.clone();
+    long.push(0x06);
+    assert_eq!(Telegram::parse(&long), Err(FrameError::TrailingBytes));
+
+    // `20 24` from the vectors: host address 0x00.
+    let cmd = [0x02, 0x00, 0x02, 0x00, 0x20, 0x24, 0x34, 0x08];
+    assert_eq!(Telegram::parse(&cmd).unwrap().address(), 0x00);
+}
+
+/// Decodes `chunks` with at most 8 calls per chunk, so a decoder that repeats itself fails
+/// instead of hanging; `None` marks an ACK.
+fn bounded_decode(dec: &mut Decoder<MAX_TELEGRAM>, chunks: &[&[u8]]) -> Vec<Option<Vec<u8>>> {
+    let mut events = Vec::new();
+    for chunk in chunks {
+        let mut rest = *chunk;
+        for _ in 0..8 {
+            let (used, ev) = dec.feed(rest);
+            rest = &rest[used..];
+            match ev {
+                Some(Event::Ack) => events.push(None),
+                Some(Event::Nak) => events.push(Some(vec![0x15])),
+                Some(Event::Telegram(t)) => events.push(Some(t.raw().to_vec())),
+                None => break,
+            }
+        }
+    }
+    events
+}
+
+/// Each telegram of a stream is delivered once (the §7 vector B0 and A0 telegrams back to
+/// back, an ACK between them): once delivered, a telegram leaves the buffer, nothing is
+/// pending and nothing is skipped.
+#[test]
+fn a_delivered_telegram_is_delivered_once() {
+    let a0 = vec![0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A];
+    let b0 = vec![
+        0x02, 0x80, 0x0A, 0x00, 0xB0, 0x03, 0x00, 0x64, 0x00, 0xC8, 0x00, 0x2C, 0x01, 0x10, 0xBE,
+        0x64,
+    ];
+    let stream = [&b0[..], &[0x06], &a0[..], &b0[..]].concat();
+    let want = vec![Some(b0.clone()), None, Some(a0.clone()), Some(b0.clone())];
+    // One chunk, then the same bytes one at a time and as telegram-sized chunks.
+    let mut dec = Decoder::<MAX_TELEGRAM>::new();
+    assert_eq!(bounded_decode(&mut dec, &[&stream]), want);
+    let bytes: Vec<&[u8]> = stream.chunks(1).collect();
+    let mut dec1 = Decoder::<MAX_TELEGRAM>::new();
+    assert_eq!(bounded_decode(&mut dec1, &bytes), want);
+    let mut dec2 = Decoder::<MAX_TELEGRAM>::new();
+    assert_eq!(bounded_decode(&mut dec2, &[&b0, &[0x06], &a0, &b0]), want);
+    for d in [&mut dec, &mut dec1, &mut dec2] {
+        // The last telegram was delivered: an empty feed drops it and returns nothing.
+        assert!(d.feed(&[]).1.is_none());
+        assert_eq!(d.pending(), 0);
+        assert_eq!(d.stats().bytes_skipped, 0);
+        assert_eq!(d.stats().telegrams, 3);
+        assert_eq!(d.stats().acks, 1);
+    }
+}
+
+/// Dropped candidates are counted by cause and in total (a bad CRC, a LEN of 0, a LEN that
+/// fits the protocol but not a small buffer), and `reset_stats` zeroes every counter.
+#[test]
+fn dropped_counts_every_rejected_candidate_and_reset_zeroes() {
+    let mut bad_crc = vec![0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A];
+    bad_crc[8] ^= 0xFF;
+    let zero_len = [0x02, 0x80, 0x00, 0x00];
+    // B0 of 361 values: LEN 0x02D6 (trace A), too long for a 64-byte buffer.
+    let long = [0x02, 0x80, 0xD6, 0x02];
+    let mut dec = Decoder::<64>::new();
+    for chunk in [&bad_crc[..], &zero_len, &long] {
+        let mut rest = chunk;
+        for _ in 0..8 {
+            let (used, ev) = dec.feed(rest);
+            rest = &rest[used..];
+            assert!(ev.is_none(), "{ev:?}");
+            if rest.is_empty() {
+                break;
+            }
+        }
+    }
+    let s = dec.stats();
+    assert_eq!((s.crc_errors, s.bad_length, s.overflows), (1, 1, 1));
+    assert_eq!(s.dropped(), 3);
+    assert!(s.bytes_skipped > 0);
+    dec.reset_stats();
+    assert_eq!(dec.stats(), firmware::lms::DecoderStats::default());
+    assert_eq!(dec.stats().dropped(), 0);
+    assert_eq!(dec.stats().bytes_skipped, 0);
+}
+
+/// B0 count word (§7): bits 0–9 the count, 11–12 the partial-scan index (0–3), bit 13 the
+/// partial-scan flag; a telegram with no value is empty.
+#[test]
+fn count_word_partial_bits_and_empty_scans() {
+    let opts = ReplyOptions::default();
+    for (index, partial) in [(0u16, false), (1, true), (2, true), (3, true), (3, false)] {
+        let cw = (1u16 << 14) | (index << 11) | (u16::from(partial) << 13) | 2;
+        let [c0, c1] = cw.to_le_bytes();
+        let p = [0xB0, c0, c1, 0xE8, 0x03, 0xE9, 0x03, 0x10];
+        let Reply::Values(v) = parse_reply(&p, opts).unwrap().reply else {
+            panic!("not a B0")
+        };
+        assert_eq!(v.partial_index(), index as u8, "{cw:#06x}");
+        assert_eq!(v.is_partial(), partial, "{cw:#06x}");
+        assert_eq!(v.len(), 2);
+        assert!(!v.is_empty());
+    }
+    let Reply::Values(v) = parse_reply(&[0xB0, 0x00, 0x40, 0x10], opts).unwrap().reply else {
+        panic!("not a B0")
+    };
+    assert!(v.is_empty());
+    assert_eq!(v.len(), 0);
+}
+
+/// B2 error log (§4: n × (type, code), 0 pairs = no errors): three pairs are three entries.
+#[test]
+fn error_log_length_counts_pairs() {
+    let p = [0xB2, 0x03, 0x41, 0x02, 0x07, 0x04, 0x0A, 0x10];
+    let Reply::ErrorLog(log) = parse_reply(&p, ReplyOptions::default()).unwrap().reply else {
+        panic!("not an error log")
+    };
+    assert_eq!(log.len(), 3);
+    assert!(!log.is_empty());
+    assert_eq!(
+        log.entries().collect::<Vec<_>>(),
+        vec![(0x03, 0x41), (0x02, 0x07), (0x04, 0x0A)]
+    );
+    let Reply::ErrorLog(one) = parse_reply(&[0xB2, 0x03, 0x41, 0x10], ReplyOptions::default())
+        .unwrap()
+        .reply
+    else {
+        panic!("not an error log")
+    };
+    assert_eq!(one.len(), 1);
+}
+
+/// Configuration block (§5): 34 bytes, or 32 from older clients (S5, S6); other lengths are not
+/// a block. Byte 4 is availability, flag 0x02 the real-time scan index.
+#[test]
+fn config_block_lengths_and_availability_byte() {
+    use firmware::lms::reply::ConfigBlock;
+    let opts = ReplyOptions::default();
+    for n in [32usize, 34] {
+        let mut p = vec![0xF4];
+        p.extend((0..n).map(|i| i as u8 + 0x40));
+        p.push(0x10);
+        let Reply::Config(c) = parse_reply(&p, opts).unwrap().reply else {
+            panic!("not a config reply")
+        };
+        assert_eq!(c.as_bytes().len(), n);
+        assert_eq!(c.availability(), 0x44, "byte 4");
+    }
+    for n in [0usize, 31, 33, 35, 36] {
+        let mut p = vec![0xF4];
+        p.resize(1 + n, 0);
+        p.push(0x10);
+        assert!(parse_reply(&p, opts).is_err(), "{n} config bytes");
+        assert!(ConfigBlock::from_bytes(&p[1..=n]).is_none(), "{n} bytes");
+    }
+
+    let mut b = [0u8; 34];
+    b[4] = 0x02;
+    let c = ConfigBlock::from_bytes(&b).unwrap();
+    assert_eq!(c.availability(), 0x02);
+    assert!(c.realtime_index());
+    b[4] = 0x05; // high availability, dazzle no effect: no index
+    let c = ConfigBlock::from_bytes(&b).unwrap();
+    assert_eq!(c.availability(), 0x05);
+    assert!(!c.realtime_index());
+
+    let mut c = ConfigBlock::default_mm();
+    assert_eq!(c.availability(), 0);
+    c.set_availability(0x03);
+    assert_eq!(c.as_bytes()[4], 0x03);
+    assert_eq!(c.availability(), 0x03);
+    assert!(c.realtime_index());
+    c.set_availability(0x01);
+    assert!(!c.realtime_index());
+}
+
+/// Runs `scenario` on another thread; if it panics or has not returned within 5 s the whole
+/// test binary exits with a failure at once, because a hung thread (this one, or another test
+/// hung by the same fault) would otherwise keep the binary running until an outside timeout.
+fn within_5_s(what: &str, scenario: impl FnOnce() + Send + 'static) {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let worker = std::thread::spawn(move || {
+        scenario();
+        let _ = tx.send(());
+    });
+    match rx.recv_timeout(std::time::Duration::from_secs(5)) {
+        Ok(()) => worker.join().unwrap(),
+        // The panic message is already printed.
+        Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+            eprintln!("{what} failed");
+            std::process::exit(101);
+        }
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            eprintln!("{what} did not return within 5 s");
+            std::process::exit(101);
+        }
+    }
+}
+
+/// The decoder returns on every input and, fed the rest until it reports nothing, delivers the
+/// good telegrams of the vectors (A0, B0 3 values) and the ACK / NAK bytes between them, past a
+/// STX with the host address, a telegram with a bad CRC, a LEN of 0 and line noise (§1, §2). Named to sort first, so it starts
+/// before any other test of this binary can hang.
+#[test]
+fn a_decoder_always_returns() {
+    within_5_s("the decoder", || {
+        let a0 = vec![0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A];
+        let b0 = vec![
+            0x02, 0x80, 0x0A, 0x00, 0xB0, 0x03, 0x00, 0x64, 0x00, 0xC8, 0x00, 0x2C, 0x01, 0x10,
+            0xBE, 0x64,
+        ];
+        let mut bad = a0.clone();
+        bad[8] ^= 0xFF;
+        // Noise, an ACK, a STX with the host address (wrong here), a bad CRC, noise, …
+        let stream = [
+            &[0x55, 0x06, 0x02, 0x00][..],
+            &bad,
+            &[0x55],
+            &a0,
+            &b0,
+            &[0x02, 0x80, 0x00, 0x00, 0x15],
+            &a0,
+        ]
+        .concat();
+        let want = vec![
+            None,
+            Some(a0.clone()),
+            Some(b0.clone()),
+            Some(vec![0x15]),
+            Some(a0.clone()),
+        ];
+        for size in [1, 2, 3, 7, stream.len()] {
+            let mut dec = Decoder::<MAX_TELEGRAM>::new();
+            let chunks: Vec<&[u8]> = stream.chunks(size).collect();
+            let mut events = Vec::new();
+            for chunk in chunks {
+                let mut rest = chunk;
+                for _ in 0..1000 {
+                    let (used, ev) = dec.feed(rest);
+                    rest = &rest[used..];
+                    match ev {
+                        Some(Event::Ack) => events.push(None),
+                        Some(Event::Nak) => events.push(Some(vec![0x15])),
+                        Some(Event::Telegram(t)) => events.push(Some(t.raw().to_vec())),
+                        None => break,
+                    }
+                }
+            }
+            assert_eq!(events, want, "chunks of {size}");
+        }
+    });
+}

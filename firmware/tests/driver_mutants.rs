@@ -250,3 +250,297 @@ fn a_power_on_message_while_streaming_reinitialises_at_once() {
     let gap = times[2] - times[1];
     assert!(gap < 900, "{gap} ms between the scans around the restart");
 }
+
+/// Runs `scenario` on another thread; if it panics or has not returned within 5 s the whole
+/// test binary exits with a failure at once, because a hung thread (this one, or another test
+/// hung by the same fault) would otherwise keep the binary running until an outside timeout.
+fn within_5_s(what: &str, scenario: impl FnOnce() + Send + 'static) {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let worker = std::thread::spawn(move || {
+        scenario();
+        let _ = tx.send(());
+    });
+    match rx.recv_timeout(std::time::Duration::from_secs(5)) {
+        Ok(()) => worker.join().unwrap(),
+        // The panic message is already printed.
+        Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+            eprintln!("{what} failed");
+            std::process::exit(101);
+        }
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            eprintln!("{what} did not return within 5 s");
+            std::process::exit(101);
+        }
+    }
+}
+
+/// The driver never hangs on a device that answers (§4 order, traces A–D): init, three scans
+/// and stop come back within 5 s of real time (simulated time makes them take milliseconds).
+/// Named to sort first, so it starts before any other test of this binary can hang.
+#[test]
+fn a_driver_on_a_working_device_always_returns() {
+    within_5_s("init, three scans and stop", || {
+        let mut d = driver(9600, Config::default());
+        d.init().unwrap();
+        for _ in 0..3 {
+            assert_eq!(d.next_scan().unwrap().len(), 361);
+        }
+        d.stop().unwrap();
+    });
+}
+
+/// `20 xx` baud codes (§4, traces A, C): a device found at 9600 is switched to the configured
+/// rate with `20 40` (38 400) or `20 48` (500 000) and then runs there; a device already at the
+/// configured rate gets no baud command.
+#[test]
+fn the_baud_is_switched_only_when_the_device_runs_at_another() {
+    for (baud, code, bps) in [
+        (Baud::B38400, 0x40u8, 38400u32),
+        (Baud::B500000, 0x48, 500_000),
+    ] {
+        let mut d = driver(9600, Config::default().with_baud(baud));
+        d.init().unwrap();
+        assert_eq!(d.device().baud, Some(baud));
+        let (uart, _, _) = d.release();
+        let switches: Vec<_> = uart
+            .sent(0x20)
+            .into_iter()
+            .filter(|c| c[1] & 0xF0 == 0x40)
+            .collect();
+        assert_eq!(switches, vec![&vec![0x20, code]], "{bps}");
+        assert_eq!(uart.dev_bps, bps);
+        assert_eq!(uart.host_bauds.last(), Some(&bps));
+    }
+    let mut d = driver(38400, Config::default());
+    d.init().unwrap();
+    let (uart, _, _) = d.release();
+    let modes: Vec<u8> = uart.sent(0x20).iter().map(|c| c[1]).collect();
+    assert_eq!(
+        modes,
+        vec![0x25, 0x24],
+        "only request mode, then continuous"
+    );
+}
+
+/// `10` is the reset (§4): answered `91`, after which the device runs at 9600. The driver sends
+/// it, stops streaming and knows the device is at 9600; the next scan re-initialises there.
+#[test]
+fn reset_sends_10_and_the_device_is_then_at_9600() {
+    let mut d = driver(38400, Config::default());
+    d.init().unwrap();
+    d.reset_device().unwrap();
+    assert!(!d.is_streaming());
+    assert_eq!(d.device().baud, Some(Baud::B9600));
+    assert_eq!(d.next_scan().unwrap().len(), 361);
+    assert_eq!(d.device().baud, Some(Baud::B38400));
+    let (uart, _, _) = d.release();
+    assert_eq!(uart.sent(0x10), vec![&vec![0x10]]);
+    assert_eq!(uart.dev_bps, 38400);
+}
+
+/// A reset whose `91` is damaged on the line, followed by the device's power-on message `90`
+/// (§4: `10` → `91`, then `90`): the power-on is what the reset asked for, not a failure; the
+/// reset is tried again and acknowledged.
+#[test]
+fn a_power_on_message_while_waiting_for_the_reset_ack_is_no_failure() {
+    let t = Time::default();
+    let mut d = Driver::new(
+        Lms::new(t.clone(), 9600),
+        t.clone(),
+        t.clone(),
+        Config::default().with_baud(Baud::B9600),
+    );
+    d.init().unwrap();
+    d.stop().unwrap();
+    let (mut uart, delay, clock) = d.release();
+    let mut ack91 = common::lms::device_telegram(&[0x91, 0x10]);
+    let last = ack91.len() - 1;
+    ack91[last] ^= 0xFF;
+    let power_on = common::lms::device_telegram(&[&[0x90][..], b"LMS200", &[0x10]].concat());
+    uart.replace_reply = Some((
+        uart.commands.len(),
+        [&[0x06][..], &ack91, &power_on].concat(),
+    ));
+    let mut d = Driver::new(uart, delay, clock, Config::default().with_baud(Baud::B9600));
+    assert_eq!(d.reset_device(), Ok(()));
+    assert_eq!(d.counters().device_resets, 0);
+    assert_eq!(
+        d.release().0.sent(0x10).len(),
+        2,
+        "the reset is tried again"
+    );
+}
+
+/// `config_refused` counts initialisations whose unit change was refused (a `92` answer to
+/// `77`, §4): none when nothing had to change, one when the device refused; the device's unit
+/// (mm) is then kept.
+#[test]
+fn config_refused_counts_only_refusals() {
+    let mut d = driver(38400, Config::default());
+    d.init().unwrap();
+    assert_eq!(d.counters().config_refused, 0);
+
+    // 20 25, 3A, 31, 74, 20 00 (install), 77: its answer replaced by ACK + `92`.
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 38400);
+    let refuse = common::lms::device_telegram(&[0x92, 0x10]);
+    lms.replace_reply = Some((5, [&[0x06][..], &refuse].concat()));
+    let cfg = Config::default().with_unit(firmware::lms::Unit::Cm);
+    let mut d = Driver::new(lms, t.clone(), t, cfg);
+    d.init().unwrap();
+    assert_eq!(d.counters().config_refused, 1);
+    assert_eq!(d.device().unit, Some(firmware::lms::Unit::Mm));
+    let (uart, _, _) = d.release();
+    assert_eq!(uart.sent(0x77).len(), 1);
+}
+
+/// A delay that records every wait, on the shared simulated time.
+#[derive(Clone)]
+struct Recorded(Time, std::rc::Rc<std::cell::RefCell<Vec<u32>>>);
+
+impl embedded_hal::delay::DelayNs for Recorded {
+    fn delay_ns(&mut self, ns: u32) {
+        self.1.borrow_mut().push(ns);
+        self.0.delay_ns(ns);
+    }
+}
+
+/// A clock that advances the simulated time by 1 µs at every reading, so the driver gets on
+/// even if it never waited.
+#[derive(Clone)]
+struct Ticking(Time);
+
+impl firmware::lms::driver::Clock for Ticking {
+    fn now_ms(&mut self) -> u32 {
+        self.0 .0.set(self.0 .0.get() + 1);
+        (self.0 .0.get() / 1000) as u32
+    }
+}
+
+/// While waiting for a reply at 38 400 Bd the driver waits half a character (10 bits, §8) at a
+/// time: 5 000 000 / 38 400 = 130 µs, never 0.
+#[test]
+fn waits_for_replies_are_half_a_character_never_zero() {
+    let t = Time::default();
+    let log = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+    let mut d = Driver::new(
+        Lms::new(t.clone(), 38400),
+        Recorded(t.clone(), log.clone()),
+        Ticking(t),
+        Config::default(),
+    );
+    d.init().unwrap();
+    let waits = log.borrow();
+    assert!(waits.iter().all(|&ns| ns > 0), "a zero wait");
+    let half_chars = waits.iter().filter(|&&ns| ns == 130_000).count();
+    assert!(half_chars > 20, "{half_chars} waits of 130 µs");
+}
+
+/// At 9600 Bd a 361-value telegram is 2 × 361 + 10 = 732 bytes, 762.5 ms (§7, §8); the silence
+/// limit is two of them, 1525 ms. A device sending a scan every 1.5 s is not silent.
+#[test]
+fn silence_limit_counts_the_ten_framing_bytes() {
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 9600);
+    lms.scan_period_us = 1_500_000;
+    let mut d = Driver::new(lms, t.clone(), t, Config::default().with_baud(Baud::B9600));
+    for _ in 0..6 {
+        d.next_scan().unwrap();
+    }
+    assert_eq!(d.counters().reinits, 0);
+}
+
+/// `with_silence_timeout_ms` sets the timeout and keeps the other settings: at 19 200 Bd with a
+/// 3 s timeout a device scanning every 2.5 s is neither switched to another rate nor
+/// re-initialised.
+#[test]
+fn silence_timeout_setting_keeps_the_other_settings() {
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 19200);
+    lms.scan_period_us = 2_500_000;
+    let cfg = Config::default()
+        .with_baud(Baud::B19200)
+        .with_silence_timeout_ms(3000);
+    let mut d = Driver::new(lms, t.clone(), t, cfg);
+    assert_eq!(d.config().silence_timeout_ms, 3000);
+    assert_eq!(d.config().baud, Baud::B19200);
+    for _ in 0..4 {
+        d.next_scan().unwrap();
+    }
+    assert_eq!(d.counters().reinits, 0);
+    let (uart, _, _) = d.release();
+    assert_eq!(uart.dev_bps, 19200);
+}
+
+/// A device that refuses `3B` and does not answer `31` keeps its variant; its scans' value
+/// count names it (§7: 181 values = 180° at 1°).
+#[test]
+fn the_value_count_names_the_variant_the_device_kept() {
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 38400);
+    lms.variant = (180, 100);
+    lms.answer_status = false;
+    // 20 25, 3A, 31 (refused), 74, 3B: its answer replaced by ACK + `92`.
+    let refuse = common::lms::device_telegram(&[0x92, 0x10]);
+    lms.replace_reply = Some((4, [&[0x06][..], &refuse].concat()));
+    let mut d = Driver::new(lms, t.clone(), t, Config::default());
+    let s = d.next_scan().unwrap();
+    assert_eq!(s.len(), 181);
+    assert_eq!(s.variant, firmware::lms::Variant::A180_R100);
+    assert_eq!(d.counters().variant_refused, 1);
+}
+
+/// A device that restarts (power-on `90`, §4) in place of every scan is re-initialised
+/// `max_reinits_per_call` (2) times; then `next_scan` gives up with `Silence`.
+#[test]
+fn next_scan_gives_up_after_its_reinitialisations() {
+    let t = Time::default();
+    let mut lms = Lms::new(t.clone(), 38400);
+    lms.power_on_scans = (1..=40).collect();
+    let mut d = Driver::new(lms, t.clone(), t, Config::default());
+    assert_eq!(d.next_scan().map(|s| s.len()), Err(Error::Silence));
+    assert_eq!(d.counters().reinits, 2);
+    assert!(!d.is_streaming());
+}
+
+/// A scan's value `i` is split per measuring mode 0 (§5: range bits 0–12, flags 13–15): the
+/// scripted device's value 0 is 1000 mm with no flag; there is no value 361.
+#[test]
+fn scan_measurements_split_the_value_words() {
+    use firmware::lms::reply::{Measurement, RangeCode};
+    let mut d = driver(38400, Config::default());
+    let s = d.next_scan().unwrap();
+    assert_eq!(
+        s.measurement(0),
+        Some(Measurement {
+            code: 1000,
+            flags: 0,
+            kind: RangeCode::Valid(1000)
+        })
+    );
+    assert_eq!(s.measurement(360).map(|m| m.code), Some(1360));
+    assert_eq!(s.measurement(361), None);
+}
+
+/// Unrequested replies while streaming: an `A0` soon after the last command (`20 24`) is a late
+/// answer to it, and any other reply (a type string `BA`) is no reset; an `A0` seconds after
+/// the last command can only come from a device that restarted: it re-initialises.
+#[test]
+fn unrequested_replies_while_streaming() {
+    let a0 = vec![0xA0, 0x00, 0x10];
+    let ba = [&[0xBA][..], b"LMS200;30106", &[0x10]].concat();
+    // (after scan, payload, resets expected). At 38 400 Bd a scan takes 190 ms: scan 2 ends
+    // 0.4 s after `20 24`, scan 20 ends 3.8 s after it.
+    for (after, payload, resets) in [(2u32, a0.clone(), 0u32), (3, ba, 0), (20, a0, 1)] {
+        let t = Time::default();
+        let mut lms = Lms::new(t.clone(), 38400);
+        lms.stray_after_scan = vec![(after, payload.clone())];
+        let mut d = Driver::new(lms, t.clone(), t, Config::default());
+        for _ in 0..25 {
+            d.next_scan().unwrap();
+        }
+        let what = format!("{payload:02x?} after scan {after}");
+        assert_eq!(d.counters().device_resets, resets, "{what}");
+        assert_eq!(d.counters().reinits, resets, "{what}");
+    }
+}

@@ -95,6 +95,8 @@ pub struct Lms {
     pub scan_unit_bits: Option<u16>,
     /// Times (µs) at which the host polled `read_ready` and nothing had arrived, with its rate.
     pub idle_polls: Vec<(u64, u32)>,
+    /// Unrequested telegrams (payloads) sent right after the scan of the given number.
+    pub stray_after_scan: Vec<(u32, Vec<u8>)>,
 }
 
 impl Lms {
@@ -126,6 +128,7 @@ impl Lms {
             power_on_scans: Vec::new(),
             scan_unit_bits: None,
             idle_polls: Vec::new(),
+            stray_after_scan: Vec::new(),
         }
     }
 
@@ -184,6 +187,11 @@ impl Lms {
             let t = device_telegram(&p);
             let at = self.next_scan_at;
             self.send(&t, at);
+            let n = self.scans_sent;
+            for (_, payload) in self.stray_after_scan.clone().iter().filter(|s| s.0 == n) {
+                let t = device_telegram(payload);
+                self.send(&t, at);
+            }
             self.next_scan_at = (at + self.scan_period_us).max(self.line_free_at);
         }
     }
@@ -261,6 +269,19 @@ impl Lms {
                 d.extend_from_slice(&p[1..]);
                 let r = ok(0xF7, &d);
                 self.reply(&r);
+            }
+            (0x10, None) => {
+                // Reset (§4): `91` at the current rate, then the device restarts at 9600 and
+                // sends the power-on message `90` + text.
+                let r = ok(0x91, &[]);
+                self.reply(&r);
+                self.streaming = false;
+                self.install = false;
+                self.dev_bps = 9600;
+                let r = ok(0x90, b"LMS200");
+                let t = device_telegram(&r);
+                let start = self.now() + 1000;
+                self.send(&t, start);
             }
             (0x3B, _) if p.len() == 5 => {
                 self.variant = (
