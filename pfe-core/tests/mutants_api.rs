@@ -805,3 +805,28 @@ fn the_papers_threshold_grows_with_range() {
         assert_eq!(ex.is_mark(180), marked, "wall at {d} mm");
     }
 }
+
+/// Loading LMS codes: the largest valid code (the lesser of the device's 8182 and r_max over
+/// the unit) is a point, the next one is no return.
+#[test]
+fn a_code_one_past_the_largest_valid_one_is_no_return() {
+    let g = ScanGeometry::LMS200_180_050;
+    for (unit, r_max, largest) in [(1.0f32, 8000.0f32, 8000u16), (10.0, 81_820.0, 8182)] {
+        let geometry = ScanGeometry { r_max, ..g };
+        let mut codes = [1000u16; 361];
+        (codes[100], codes[101], codes[200]) = (largest, largest + 1, largest);
+        let mut ex = Extractor::<361, 32>::new();
+        let stats = ex
+            .extract(&Scan::from_lms(geometry, &codes, unit), &Config::default())
+            .unwrap();
+        assert_eq!(stats.valid, 360, "unit {unit}");
+        let points = ex.points();
+        assert!(points[100].is_valid() && points[200].is_valid() && !points[101].is_valid());
+        let r = f32::from(largest) * unit;
+        assert!(
+            (points[100].norm() - r).abs() < 1e-3 * r,
+            "unit {unit}: {:?}",
+            points[100]
+        );
+    }
+}
