@@ -772,4 +772,36 @@ mod tests {
             "{inside} starts inside {walls} round walls"
         );
     }
+
+    /// A corner (two walls meeting, no step in range) is marked at the beam where the walls
+    /// change in most rooms and within one beam in nearly all: boundary localisation and
+    /// refinement (300 rooms, σ_r 5 mm).
+    #[test]
+    fn corners_are_marked_at_their_beam() {
+        let config = crate::config::Config::default();
+        let mut seed = 21u32;
+        let mut off = [0usize; 3];
+        for _ in 0..300 {
+            let scene = room(&mut seed);
+            let (points, ranges, ids) = scanned(&scene, |_| (Point::new(0.0, 0.0), 0.0), &mut seed);
+            let flags = walked((&points, &ranges), (None, false), &config, How::Mark);
+            for i in 6..355 {
+                let corner = ids[i] != ids[i - 1]
+                    && ids[i] < 100
+                    && ids[i - 1] < 100
+                    && (ranges[i] - ranges[i - 1]).abs() < 100.0;
+                if corner {
+                    let start = |j: usize| flags[j] & START != 0;
+                    let d = (0..2).find(|&d| start(i + d) || start(i - d)).unwrap_or(2);
+                    off[d] += 1;
+                }
+            }
+        }
+        // 350 at their beam, 102 one beam off, 2 farther here.
+        let corners: usize = off.iter().sum();
+        assert!(
+            corners > 300 && off[0] * 10 >= corners * 7 && off[2] * 50 <= corners,
+            "{off:?}"
+        );
+    }
 }
