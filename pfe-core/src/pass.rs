@@ -195,6 +195,7 @@ mod tests {
     use crate::extractor::{Extractor, Stats};
     use crate::preprocess::deskew::BeamTiming;
     use crate::scan::ScanGeometry;
+    use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
     /// Runs `f` on a pass over `points` and `ranges` (an LMS200 scan, 180° at 0.5°; valid where
     /// the range is finite), taken with `motion`.
@@ -257,7 +258,11 @@ mod tests {
             timing: BeamTiming::lms2xx(0.5),
         };
         // Walls x cos α + y sin α = ρ: ahead, to the left, and at 45° to the right.
-        for (alpha, rho) in [(0.0f32, 2500.0f32), (1.5708, 2000.0), (-0.7854, 1800.0)] {
+        for (alpha, rho) in [
+            (0.0f32, 2500.0f32),
+            (FRAC_PI_2, 2000.0),
+            (-FRAC_PI_4, 1800.0),
+        ] {
             let (sa, ca) = crate::math::sin_cos(alpha);
             let (mut points, mut ranges) = ([Point::INVALID; 361], [f32::NAN; 361]);
             for i in 0..361 {
