@@ -67,6 +67,7 @@ fn main() -> Result<()> {
         let context = ScanContext {
             odometry: None,
             sweeps: usize::from(formats::sweeps_of(Format::Carmen, &rec.geometry)),
+            quantum: formats::range_quantum(&rec.ranges_mm, rec.geometry.r_max),
         };
         let pose = rec.pose.map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t]);
         for ((m, tally), prev) in ms.iter_mut().zip(&mut tallies).zip(&mut prev) {

@@ -279,6 +279,9 @@ fn run(
     let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
     let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
     if cfg!(feature = "scrutiny") && config.scrutiny {
+        // The readings' rounding joins the systematic error (see `Scan::quantum`).
+        let var = config.sigma_sys * config.sigma_sys + scan.shared_rounding(config.sigma_r);
+        let config = &config.with_sigma_sys(crate::math::sqrt(var));
         return scrutinised(beams, (points, ranges, flags), scan, config, stats, out);
     }
     let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);

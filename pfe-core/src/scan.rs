@@ -148,6 +148,14 @@ pub struct Scan<'a> {
     /// [`MAX_SWEEPS`](crate::preprocess::sweeps::MAX_SWEEPS) sweeps; a scan declared with more
     /// is extracted as it is); with it, its timing's sweeps rule.
     pub sweeps: u8,
+    /// Resolution of the readings, mm (0: unknown, or finer than matters). Readings rounded to
+    /// a grid of q mm carry an error of variance q²/12. Range noise much finer than q leaves
+    /// it a function of the true range, which neighbouring beams on one surface share (a fit
+    /// cannot see it in its scatter); noise of q/2 or more dithers it into independent noise
+    /// (Widrow). With [`Config::scrutiny`](crate::Config::scrutiny) the shared part
+    /// ([`Self::shared_rounding`]) counts as systematic, beside
+    /// [`Config::sigma_sys`](crate::Config::sigma_sys).
+    pub quantum: f32,
 }
 
 impl<'a> Scan<'a> {
@@ -165,10 +173,20 @@ impl<'a> Scan<'a> {
             ranges: Ranges::Mm(ranges),
             motion: None,
             sweeps: 1,
+            quantum: 0.0,
         }
     }
 
-    /// A scan of raw LMS codes in the 8 m / 80 m modes (`mm_per_unit` 1.0 for mm, 10.0 for cm).
+    /// A scan of raw LMS codes in the 8 m / 80 m modes (`mm_per_unit` 1.0 for mm, 10.0 for cm,
+    /// also its [`quantum`](Self::quantum)).
+    ///
+    /// ```
+    /// use pfe_core::{Scan, ScanGeometry};
+    /// let codes = [250_u16; 181];
+    /// let scan = Scan::from_lms(ScanGeometry::lms200(180.0, 1.0), &codes, 10.0);
+    /// assert_eq!(scan.point(90).map(|p| p.norm()), Some(2500.0));
+    /// assert_eq!(scan.quantum, 10.0);
+    /// ```
     pub fn from_lms(geometry: ScanGeometry, values: &'a [u16], mm_per_unit: f32) -> Self {
         Self {
             geometry,
@@ -179,7 +197,39 @@ impl<'a> Scan<'a> {
             },
             motion: None,
             sweeps: 1,
+            quantum: mm_per_unit,
         }
+    }
+
+    /// The same scan, its readings on a grid of `quantum` mm (see [`Self::quantum`]).
+    ///
+    /// ```
+    /// use pfe_core::{Scan, ScanGeometry};
+    /// let ranges = [2050.0_f32; 181];
+    /// let scan = Scan::from_mm(ScanGeometry::lms200(180.0, 1.0), &ranges).with_quantum(50.0);
+    /// // Noise of σ_r = 5 mm leaves most of a 50 mm rounding shared by neighbouring beams,
+    /// // noise of 50 mm none of it.
+    /// assert!((scan.shared_rounding(5.0) / (2500.0 / 12.0) - 0.821).abs() < 0.002);
+    /// assert!(scan.shared_rounding(50.0) < 1e-6);
+    /// ```
+    pub fn with_quantum(mut self, quantum: f32) -> Self {
+        self.quantum = quantum;
+        self
+    }
+
+    /// The part of the readings' rounding variance q²/12 (mm²) that neighbouring beams on one
+    /// surface share, under range noise `sigma_r` (mm): q²/12 · exp(−2π² σ_r²/q²), the
+    /// amplitude with which the rounding error of a noisy reading still follows the true range
+    /// (the first harmonic of its dependence, Widrow and Kollár, *Quantization Noise*, 2008).
+    /// 0 when [`Self::quantum`] or `sigma_r` is not a finite number ≥ 0, or q is 0.
+    pub fn shared_rounding(&self, sigma_r: f32) -> f32 {
+        let q = self.quantum;
+        let var = q * q / 12.0;
+        if !(q > 0.0 && crate::math::finite(var) && sigma_r >= 0.0) {
+            return 0.0;
+        }
+        let x = 2.0 * core::f32::consts::PI * core::f32::consts::PI * sigma_r * sigma_r / (q * q);
+        var * exp_neg(x)
     }
 
     /// The same scan, de-skewed for `motion`.
@@ -223,9 +273,64 @@ impl<'a> Scan<'a> {
     }
 }
 
+/// e^(−x) for x ≥ 0 as (1 + x/4096)^(−4096): above it by x²/8192 of it (0.2 % up to x = 3,
+/// 7 % at x = 24, where e^(−x) < 10⁻¹⁰), 0 from x = 24 on; NaN and +∞ give 0.
+fn exp_neg(x: f32) -> f32 {
+    if !(x < 24.0) {
+        return 0.0;
+    }
+    let mut y = 1.0 / (1.0 + x / 4096.0);
+    for _ in 0..12 {
+        y *= y;
+    }
+    y
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `exp_neg` against f64's exp.
+    #[test]
+    fn exp_neg_follows_exp() {
+        for i in 0..240 {
+            let x = i as f32 * 0.1;
+            let want = (-f64::from(x)).exp();
+            let got = f64::from(exp_neg(x));
+            let tol = want * (0.0005 + f64::from(x * x) / 7000.0);
+            assert!((got - want).abs() <= tol, "x {x}: {got} against {want}");
+        }
+        for x in [f32::NAN, f32::INFINITY, 24.0, 1e30] {
+            assert_eq!(exp_neg(x), 0.0, "{x}");
+        }
+        assert_eq!(exp_neg(0.0), 1.0);
+    }
+
+    /// The shared part of the rounding at both ends of Widrow's range, and its refusals.
+    #[test]
+    fn shared_rounding_fades_with_noise() {
+        let r = [1000.0_f32; 10];
+        let at = |q: f32, s: f32| {
+            Scan::from_mm(ScanGeometry::lms200(180.0, 1.0), &r)
+                .with_quantum(q)
+                .shared_rounding(s)
+        };
+        assert_eq!(at(50.0, 0.0), 2500.0 / 12.0);
+        // σ_r = q/4: e^(−π²/8) = 0.2912.
+        assert!((at(40.0, 10.0) / (1600.0 / 12.0) - 0.2912).abs() < 0.001);
+        assert!(at(10.0, 10.0) < 1e-7);
+        for (q, s) in [
+            (0.0, 1.0),
+            (-10.0, 1.0),
+            (f32::NAN, 1.0),
+            (f32::INFINITY, 1.0),
+            (1e30, 1.0),
+            (10.0, -1.0),
+            (10.0, f32::NAN),
+        ] {
+            assert_eq!(at(q, s), 0.0, "q {q}, σ {s}");
+        }
+    }
 
     /// `max_code` against the definition (a code is a return when `code_mm` and `valid_mm`
     /// accept it), for unit sizes and range limits that do and do not divide evenly.

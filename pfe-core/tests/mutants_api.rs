@@ -738,7 +738,9 @@ fn a_scan_of_range_codes_extracts_as_its_ranges_in_mm() {
         let sa = a
             .extract(&Scan::from_lms(geometry, &codes, unit), &config)
             .unwrap();
-        let sb = b.extract(&Scan::from_mm(geometry, &mm), &config).unwrap();
+        // The codes' unit is their grid: the same ranges in mm, on the same grid.
+        let mm_scan = Scan::from_mm(geometry, &mm).with_quantum(unit);
+        let sb = b.extract(&mm_scan, &config).unwrap();
         assert_eq!(sa, sb, "unit {unit}");
         assert!(sa.features >= 3, "{sa:?}");
         assert_eq!(a.features(), b.features(), "unit {unit}");

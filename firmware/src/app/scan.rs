@@ -46,6 +46,7 @@ impl<'a> RawScan<'a> {
             // One sweep: the interleaved sweeps' alignment (`Scan::with_sweeps`, host side)
             // does not fit the board's budget of 200 instructions a point (docs/PERFORMANCE.md).
             sweeps: 1,
+            quantum: self.mm_per_unit,
         }
     }
 }

@@ -77,7 +77,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             }
         };
         let record = &scan.record;
-        let context = a.method.context(&record.geometry);
+        let context = a.method.context(record);
         let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
         scans += 1;
         features += ex.features.len() as u64;

@@ -125,8 +125,10 @@ impl MethodArgs {
             .method(self.sigma_r, self.sigma_sys, self.format)
     }
 
-    /// What the extractor is told besides the ranges of a scan of `geometry`.
-    pub fn context(&self, geometry: &pfe_core::ScanGeometry) -> crate::methods::ScanContext {
+    /// What the extractor is told besides the ranges of `record`: its sweeps and the grid its
+    /// ranges lie on.
+    pub fn context(&self, record: &crate::formats::Record) -> crate::methods::ScanContext {
+        let geometry = &record.geometry;
         crate::methods::ScanContext {
             odometry: None,
             sweeps: usize::from(
@@ -134,6 +136,7 @@ impl MethodArgs {
                     .0
                     .unwrap_or_else(|| crate::formats::sweeps_of(self.format, geometry)),
             ),
+            quantum: crate::formats::range_quantum(&record.ranges_mm, geometry.r_max),
         }
     }
 }

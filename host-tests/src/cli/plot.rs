@@ -108,7 +108,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
     let plots: Vec<Plot> = found
         .iter()
         .map(|s| {
-            let context = a.method.context(&s.record.geometry);
+            let context = a.method.context(&s.record);
             let ex = method.extract_in(&s.record.geometry, &s.record.ranges_mm, &context);
             let title = title(&name, s, method.name());
             Plot {

@@ -48,4 +48,7 @@ pub struct ScanContext {
     pub odometry: Option<Motion>,
     /// Number of interleaved sweeps the scan is made of (0 or 1: one).
     pub sweeps: usize,
+    /// Grid the ranges lie on, mm (0: unknown; pfe's `Scan::quantum`):
+    /// [`range_quantum`](crate::formats::range_quantum) for recordings.
+    pub quantum: f32,
 }

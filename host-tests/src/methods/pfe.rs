@@ -64,7 +64,9 @@ impl Method for Pfe {
         if let Some(odometry) = context.odometry {
             scan = scan.with_motion(odometry);
         }
-        scan = scan.with_sweeps(u8::try_from(context.sweeps).unwrap_or(u8::MAX));
+        scan = scan
+            .with_sweeps(u8::try_from(context.sweeps).unwrap_or(u8::MAX))
+            .with_quantum(context.quantum);
         // Scans longer than the capacity are an error value: no features, kept for
         // `last_result`.
         self.last = self.extractor.extract(&scan, &self.config).map(|_| ());

@@ -60,6 +60,7 @@ impl AdversarialScan {
             },
             motion: None,
             sweeps: 1,
+            quantum: self.mm_per_unit(),
         };
         let mut ex = Extractor::<401, 48>::new();
         let _ = ex.extract(&scan, &firmware::app::ConfigChoice::Default.config());

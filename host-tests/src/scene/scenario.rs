@@ -283,6 +283,7 @@ impl SimScan {
         crate::methods::ScanContext {
             odometry: self.odometry,
             sweeps: self.sweeps,
+            quantum: self.mm_per_unit,
         }
     }
 

@@ -186,6 +186,7 @@ pub fn run_records(
                 sweeps: usize::from(sweeps.unwrap_or_else(|| {
                     crate::formats::sweeps_of(crate::formats::Format::Carmen, &record.geometry)
                 })),
+                quantum: crate::formats::range_quantum(&record.ranges_mm, record.geometry.r_max),
             };
             let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
             tally.scans += 1;
