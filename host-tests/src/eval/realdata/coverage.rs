@@ -24,6 +24,9 @@ pub struct Coverage {
     pub in_features: usize,
     /// Beams of smooth runs in no feature.
     pub bare: usize,
+    /// Of those, the beams of bare stretches that reach an end of their smooth run (the beams
+    /// between a feature's end and a jump or a no-return, such as mixed pixels at an edge).
+    pub bare_at_ends: usize,
 }
 
 impl Coverage {
@@ -48,6 +51,7 @@ impl Coverage {
                 .filter(|(v, c)| **v && **c)
                 .count(),
             bare: 0,
+            bare_at_ends: 0,
         };
         let mut i = 0;
         while i < n {
@@ -64,6 +68,10 @@ impl Coverage {
             }
             if j + 1 - i >= MIN_SMOOTH_RUN {
                 out.bare += (i..=j).filter(|&k| !covered[k]).count();
+                // The bare stretches that start at i or end at j.
+                let head = (i..=j).take_while(|&k| !covered[k]).count();
+                let tail = (i..=j).rev().take_while(|&k| !covered[k]).count();
+                out.bare_at_ends += (head + tail).min(j + 1 - i);
             }
             i = j + 1;
         }
@@ -75,6 +83,7 @@ impl Coverage {
         self.valid += other.valid;
         self.in_features += other.in_features;
         self.bare += other.bare;
+        self.bare_at_ends += other.bare_at_ends;
     }
 }
 
@@ -111,5 +120,23 @@ mod tests {
         // Run 0..=29: beams 0..5 and 25..30 bare (10); 31..=35 too short; 36 alone (jump on
         // both sides); 37..=59: beams 37, 38, 39 bare.
         assert_eq!(cov.bare, 13);
+        // All of them reach an end of their run.
+        assert_eq!(cov.bare_at_ends, 13);
+    }
+
+    #[test]
+    fn bare_stretches_between_features_are_not_at_the_ends() {
+        let g = ScanGeometry::LMS200_180_050;
+        let r = vec![2000.0f32; 40];
+        // Bare: 0..=2 (at the run's start), 13..=15 (between two lines), 30..=39 (at its end).
+        let cov = Coverage::of(&g, &r, &[line(3, 12), line(16, 29)]);
+        assert_eq!((cov.bare, cov.bare_at_ends), (16, 13));
+        // A run with no feature is bare from end to end, counted once.
+        let cov = Coverage::of(&g, &r, &[]);
+        assert_eq!((cov.bare, cov.bare_at_ends), (40, 40));
+        let mut sum = Coverage::default();
+        sum.add(&cov);
+        sum.add(&Coverage::of(&g, &r, &[line(3, 12), line(16, 29)]));
+        assert_eq!((sum.valid, sum.bare, sum.bare_at_ends), (80, 56, 53));
     }
 }

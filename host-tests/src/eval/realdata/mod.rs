@@ -84,6 +84,8 @@ pub struct Summary {
     pub in_features_pct: f64,
     /// Bare beams of smooth runs, % of valid beams.
     pub bare_pct: f64,
+    /// Of those, the beams of bare stretches at a smooth run's end, % of valid beams.
+    pub bare_at_ends_pct: f64,
     /// Point-weighted fraction of lines of ≥ 10 points that re-appear, %.
     pub lines_reappear_pct: f64,
     /// Matched lines.
@@ -127,6 +129,7 @@ impl Tally {
             pairs: p.pairs,
             in_features_pct: pct(self.coverage.in_features, self.coverage.valid),
             bare_pct: pct(self.coverage.bare, self.coverage.valid),
+            bare_at_ends_pct: pct(self.coverage.bare_at_ends, self.coverage.valid),
             lines_reappear_pct: pct(p.line_points_matched, p.line_points),
             lines_matched: p.d_rho.len(),
             d_rho_mm: quantile(&p.d_rho, 0.5),

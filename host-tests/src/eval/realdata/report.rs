@@ -14,10 +14,11 @@ use super::{LogReport, Summary};
 /// Median of a χ²₂ variable (2 ln 2): the line and circle NIS median of consistent covariances.
 pub const CHI2_2_MEDIAN: f64 = 1.386_294_361;
 
-const HEADER: [&str; 14] = [
+const HEADER: [&str; 15] = [
     "method",
     "feat%",
     "bare%",
+    "at ends%",
     "lines%",
     "n lines",
     "|Δρ| mm",
@@ -39,11 +40,12 @@ fn num(v: f64, digits: usize) -> String {
     }
 }
 
-fn row(s: &Summary) -> [String; 14] {
+fn row(s: &Summary) -> [String; 15] {
     [
         s.method.clone(),
         num(s.in_features_pct, 1),
         num(s.bare_pct, 2),
+        num(s.bare_at_ends_pct, 2),
         num(s.lines_reappear_pct, 1),
         s.lines_matched.to_string(),
         num(s.d_rho_mm, 1),
@@ -69,7 +71,7 @@ fn title(r: &LogReport) -> String {
 
 /// One log's text table.
 pub fn table(r: &LogReport) -> String {
-    let rows: Vec<[String; 14]> = r.methods.iter().map(row).collect();
+    let rows: Vec<[String; 15]> = r.methods.iter().map(row).collect();
     let mut widths: Vec<usize> = HEADER.iter().map(|h| h.chars().count()).collect();
     for cells in &rows {
         for (w, c) in widths.iter_mut().zip(cells) {
@@ -117,6 +119,9 @@ the laser's and as exact. In these logs consecutive scans are about 1 m and 0.1�
 maximal run of ≥ {MIN_SMOOTH_RUN} consecutive valid beams whose neighbours differ in range by \
 less than {:.1} m: a surface seen continuously that the method left as bare mark points (or \
 left out).\n\
+- **at ends%**: the part of bare% in bare stretches that reach an end of their smooth run: the \
+beams between a feature's end and a jump (≥ {:.1} m) or a no-return, such as the mixed pixels an \
+edge gives and short pieces too small for a feature; the rest lies between two features.\n\
 - **lines%**: scan k's lines of ≥ {MIN_LINE_POINTS} points are moved into scan k+1's frame \
 (α' = α + θ_k − θ_{{k+1}}, ρ' = ρ + (t_k − t_{{k+1}})·(cos α_w, sin α_w), α_w = α + θ_k; \
 (α', ρ') → (α' + π, −ρ') when ρ' < 0) and matched to the nearest line of k+1 by \
@@ -141,6 +146,7 @@ centres by the pair's pose refit from its lines (pairs with a refit; the refit i
 the lines only, so it costs the circles no degree of freedom; its own uncertainty, the inverse \
 of its normal matrix, is added to the centres' covariance).\n\n\
 Figures are over the whole log; `–` = nothing to measure.\n\n",
+        f64::from(SMOOTH_STEP_MM) / 1000.0,
         f64::from(SMOOTH_STEP_MM) / 1000.0,
         GATE_RHO_MM / 1000.0,
         GATE_CENTER_MM / 1000.0,

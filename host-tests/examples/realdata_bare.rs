@@ -1,0 +1,170 @@
+//! Where pfe `default` leaves bare beams on a real log: the real-data benchmark's bare% (`pfe
+//! realdata`, docs/REALDATA.md) split by the length of each bare stretch and by what is beside
+//! it (`L` a line, `C` a circle, `|` the end of its smooth run: a jump of ≥ 0.3 m or a
+//! no-return), and, for stretches between a line's end and a run's end, by how far their
+//! farthest beam lies from that line.
+//!
+//! `cargo run -p host-tests --release --example realdata_bare -- LOG [--show N]`
+//!
+//! `--show N` prints the first N stretches of two beams or more with the ranges around them
+//! (the stretch in brackets).
+
+use std::collections::BTreeMap;
+
+use anyhow::{bail, Context, Result};
+use host_tests::eval::realdata::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
+use host_tests::eval::realdata::methods;
+use host_tests::formats::{self, Format};
+use host_tests::methods::ScanContext;
+use pfe_core::Feature;
+
+/// Bounds of the distance classes, mm.
+const OFFSETS_MM: [f32; 4] = [30.0, 60.0, 100.0, 200.0];
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let (mut log, mut show) = (None, 0usize);
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--show" => show = it.next().context("--show needs a count")?.parse()?,
+            "-h" | "--help" => {
+                println!("realdata_bare LOG [--show N]");
+                return Ok(());
+            }
+            _ if log.is_none() => log = Some(a.clone()),
+            _ => bail!("unexpected argument {a}"),
+        }
+    }
+    let log = log.context("usage: realdata_bare LOG [--show N]")?;
+    let input = formats::open_for(std::path::Path::new(&log), Format::Carmen, |r| r)
+        .with_context(|| format!("opening {log}"))?;
+    let mut ms = methods(Format::Carmen.sigma_r());
+    let pfe = ms.first_mut().context("no method")?;
+    let mut by_kind: BTreeMap<String, usize> = BTreeMap::new();
+    let mut by_offset = [0usize; 5];
+    let (mut valid_all, mut bare_all, mut scans) = (0usize, 0usize, 0usize);
+    for (k, rec) in formats::carmen::Reader::new(input).enumerate() {
+        let rec = rec.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
+        scans += 1;
+        let context = ScanContext {
+            odometry: None,
+            sweeps: usize::from(formats::sweeps_of(Format::Carmen, &rec.geometry)),
+            quantum: formats::range_quantum(&rec.ranges_mm, rec.geometry.r_max),
+        };
+        let ex = pfe.extract_in(&rec.geometry, &rec.ranges_mm, &context);
+        let r = &rec.ranges_mm;
+        let n = r.len();
+        // The feature each beam lies in, with its kind.
+        let mut owner: Vec<Option<(char, &Feature)>> = vec![None; n];
+        for f in &ex.features {
+            let kind = if matches!(f, Feature::Line(_)) {
+                'L'
+            } else {
+                'C'
+            };
+            for o in owner.iter_mut().take(f.last() + 1).skip(f.first()) {
+                *o = Some((kind, f));
+            }
+        }
+        let valid: Vec<bool> = r
+            .iter()
+            .map(|&x| x.is_finite() && x > 0.0 && x <= rec.geometry.r_max)
+            .collect();
+        valid_all += valid.iter().filter(|v| **v).count();
+        // Smooth runs i..=j, as the benchmark's coverage finds them.
+        let mut i = 0;
+        while i < n {
+            if !valid[i] {
+                i += 1;
+                continue;
+            }
+            let mut j = i;
+            while j + 1 < n && valid[j + 1] && (r[j + 1] - r[j]).abs() < SMOOTH_STEP_MM {
+                j += 1;
+            }
+            let mut a = i;
+            while j + 1 - i >= MIN_SMOOTH_RUN && a <= j {
+                if owner[a].is_some() {
+                    a += 1;
+                    continue;
+                }
+                let mut b = a;
+                while b < j && owner[b + 1].is_none() {
+                    b += 1;
+                }
+                let len = b + 1 - a;
+                bare_all += len;
+                let side = |x: usize, end: bool| {
+                    if end {
+                        '|'
+                    } else {
+                        owner[x].map_or('-', |o| o.0)
+                    }
+                };
+                let (left, right) = (side(a.wrapping_sub(1), a == i), side(b + 1, b == j));
+                let bucket = match len {
+                    1 => "1",
+                    2 => "2",
+                    3 => "3",
+                    4..=5 => "4–5",
+                    6..=9 => "6–9",
+                    _ => "≥10",
+                };
+                *by_kind
+                    .entry(format!("{bucket:>3} beams, {left}{right}"))
+                    .or_default() += len;
+                let line = match (left, right) {
+                    ('L', '|') => owner[a - 1],
+                    ('|', 'L') => owner[b + 1],
+                    _ => None,
+                };
+                if let Some((_, Feature::Line(l))) = line {
+                    let off = (a..=b)
+                        .map(|x| (r[x] * (rec.geometry.bearing(x) - l.alpha).cos() - l.rho).abs())
+                        .fold(0.0f32, f32::max);
+                    let o = OFFSETS_MM.iter().take_while(|&&b| off >= b).count();
+                    if let Some(slot) = by_offset.get_mut(o) {
+                        *slot += len;
+                    }
+                }
+                if show > 0 && len >= 2 {
+                    show -= 1;
+                    let around: Vec<String> = (a.saturating_sub(3)..=(b + 3).min(n - 1))
+                        .map(|x| {
+                            if (a..=b).contains(&x) {
+                                format!("[{:.0}]", r[x])
+                            } else {
+                                format!("{:.0}", r[x])
+                            }
+                        })
+                        .collect();
+                    println!(
+                        "scan {k} beams {a}..={b} {left}{right}: {}",
+                        around.join(" ")
+                    );
+                }
+                a = b + 1;
+            }
+            i = j + 1;
+        }
+    }
+    if scans == 0 {
+        bail!("{log}: no scan");
+    }
+    let pct = |v: usize| 100.0 * v as f64 / valid_all.max(1) as f64;
+    println!(
+        "{log}: {scans} scans, bare {:.2} % of valid beams",
+        pct(bare_all)
+    );
+    println!("by stretch length and neighbours (L line, C circle, | run end), % of valid beams:");
+    for (kind, v) in &by_kind {
+        println!("  {kind}: {:.3}", pct(*v));
+    }
+    println!("stretches between a line and a run end, by their farthest beam from the line:");
+    let labels = ["< 30", "30–60", "60–100", "100–200", "≥ 200"];
+    for (o, v) in labels.iter().zip(by_offset) {
+        println!("  {o} mm: {:.3}", pct(v));
+    }
+    Ok(())
+}
