@@ -12,7 +12,7 @@
 use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
-use host_tests::eval::realdata::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
+use host_tests::eval::realdata::coverage::smooth_runs;
 use host_tests::eval::realdata::methods;
 use host_tests::formats::{self, Format};
 use host_tests::methods::ScanContext;
@@ -67,24 +67,14 @@ fn main() -> Result<()> {
                 *o = Some((kind, f));
             }
         }
-        let valid: Vec<bool> = r
+        valid_all += r
             .iter()
-            .map(|&x| x.is_finite() && x > 0.0 && x <= rec.geometry.r_max)
-            .collect();
-        valid_all += valid.iter().filter(|v| **v).count();
-        // Smooth runs i..=j, as the benchmark's coverage finds them.
-        let mut i = 0;
-        while i < n {
-            if !valid[i] {
-                i += 1;
-                continue;
-            }
-            let mut j = i;
-            while j + 1 < n && valid[j + 1] && (r[j + 1] - r[j]).abs() < SMOOTH_STEP_MM {
-                j += 1;
-            }
+            .filter(|&&x| x.is_finite() && x > 0.0 && x <= rec.geometry.r_max)
+            .count();
+        for run in smooth_runs(&rec.geometry, r) {
+            let (i, j) = (*run.start(), *run.end());
             let mut a = i;
-            while j + 1 - i >= MIN_SMOOTH_RUN && a <= j {
+            while a <= j {
                 if owner[a].is_some() {
                     a += 1;
                     continue;
@@ -146,7 +136,6 @@ fn main() -> Result<()> {
                 }
                 a = b + 1;
             }
-            i = j + 1;
         }
     }
     if scans == 0 {

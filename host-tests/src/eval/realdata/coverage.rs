@@ -8,6 +8,8 @@
 //!   no feature are **bare**: a surface the scanner saw continuously but the method described
 //!   only by mark points (or not at all).
 
+use std::ops::RangeInclusive;
+
 use pfe_core::{Feature, ScanGeometry};
 
 /// Shortest smooth run, beams.
@@ -53,27 +55,12 @@ impl Coverage {
             bare: 0,
             bare_at_ends: 0,
         };
-        let mut i = 0;
-        while i < n {
-            if !valid[i] {
-                i += 1;
-                continue;
-            }
-            let mut j = i;
-            while j + 1 < n
-                && valid[j + 1]
-                && (ranges_mm[j + 1] - ranges_mm[j]).abs() < SMOOTH_STEP_MM
-            {
-                j += 1;
-            }
-            if j + 1 - i >= MIN_SMOOTH_RUN {
-                out.bare += (i..=j).filter(|&k| !covered[k]).count();
-                // The bare stretches that start at i or end at j.
-                let head = (i..=j).take_while(|&k| !covered[k]).count();
-                let tail = (i..=j).rev().take_while(|&k| !covered[k]).count();
-                out.bare_at_ends += (head + tail).min(j + 1 - i);
-            }
-            i = j + 1;
+        for run in smooth_runs(geometry, ranges_mm) {
+            out.bare += run.clone().filter(|&k| !covered[k]).count();
+            // The bare stretches that start or end the run.
+            let head = run.clone().take_while(|&k| !covered[k]).count();
+            let tail = run.clone().rev().take_while(|&k| !covered[k]).count();
+            out.bare_at_ends += (head + tail).min(run.count());
         }
         out
     }
@@ -85,6 +72,42 @@ impl Coverage {
         self.bare += other.bare;
         self.bare_at_ends += other.bare_at_ends;
     }
+}
+
+/// The smooth runs of one scan, as ranges of beam indices: maximal runs of at least
+/// [`MIN_SMOOTH_RUN`] consecutive valid beams (finite, > 0, ≤ r_max) whose neighbours differ in
+/// range by less than [`SMOOTH_STEP_MM`].
+///
+/// ```
+/// use host_tests::eval::realdata::coverage::smooth_runs;
+/// use pfe_core::ScanGeometry;
+/// let mut r = vec![2000.0f32; 40];
+/// r[20] = 5000.0; // a jump on both sides: 0..=19 and 21..=39 remain
+/// r[35] = f32::NAN; // 21..=34 and a run of 4 beams, too short
+/// assert_eq!(smooth_runs(&ScanGeometry::LMS200_180_050, &r), vec![0..=19, 21..=34]);
+/// ```
+pub fn smooth_runs(geometry: &ScanGeometry, ranges_mm: &[f32]) -> Vec<RangeInclusive<usize>> {
+    let valid = |r: f32| r.is_finite() && r > 0.0 && r <= geometry.r_max;
+    let mut runs = Vec::new();
+    let mut i = 0;
+    while let Some(&r) = ranges_mm.get(i) {
+        if !valid(r) {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while let (Some(&a), Some(&b)) = (ranges_mm.get(j), ranges_mm.get(j + 1)) {
+            if !(valid(b) && (b - a).abs() < SMOOTH_STEP_MM) {
+                break;
+            }
+            j += 1;
+        }
+        if j + 1 - i >= MIN_SMOOTH_RUN {
+            runs.push(i..=j);
+        }
+        i = j + 1;
+    }
+    runs
 }
 
 #[cfg(test)]
