@@ -95,8 +95,9 @@ pub struct Config {
     /// scan (a SICK LMS200's data sheet gives ±15 mm typical in mm mode): what a feature's beams
     /// share of it moves the feature between scans, seen by other beams. With `scrutiny`, a
     /// line of length L gets σ_sys² on ρ and 2σ_sys²/L² on α (its two ends independent), a
-    /// circle σ_sys² on its centre along the beam to it. 0 (the default): none. A scan's
-    /// rounding ([`Scan::quantum`](crate::Scan::quantum), variance q²/12) is added to it.
+    /// circle σ_sys² on its centre along the beam to it. 0 (the default): none. The part of a
+    /// scan's rounding its beams share ([`Scan::shared_rounding`](crate::Scan::shared_rounding),
+    /// at most q²/12 for [`Scan::quantum`](crate::Scan::quantum) q) is added to σ_sys².
     pub sigma_sys: f32,
     /// Systematic range correction applied to every reading.
     pub correction: Option<RangeCorrection>,
