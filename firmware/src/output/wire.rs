@@ -11,8 +11,8 @@ pub const WIRE_VERSION: u8 = 2;
 /// Most features one decoded frame can hold.
 pub const MAX_FEATURES: usize = 64;
 
-/// Largest encoding of one [`Feature`](pfe_core::Feature) (a circle: tag + 3 u16 varints + 15
-/// f32).
+/// Bound on the encoding of one [`Feature`](pfe_core::Feature): a circle, the largest, takes
+/// its tag, 3 u16 varints and 14 f32 (66 bytes at most); the bound counts 15 f32 (70 bytes).
 pub const MAX_FEATURE_LEN: usize = 1 + 3 * 3 + 15 * 4;
 
 /// Largest frame on the wire for `features` features (header, features, CRC, COBS overhead
