@@ -120,6 +120,29 @@ fn the_vector_is_what_the_firmware_app_sends() {
     }
 }
 
+/// The length the text gives the vector is the vector's.
+#[test]
+fn the_vectors_stated_length_is_its_length() {
+    let doc = doc();
+    let from = doc.find("## Test vector").expect("a Test vector section");
+    let said = doc[from..]
+        .split("The frame, ")
+        .nth(1)
+        .and_then(|t| t.split(' ').next())
+        .and_then(|n| n.parse::<usize>().ok())
+        .expect("\"The frame, N bytes\" in the Test vector section");
+    assert_eq!(
+        said,
+        doc_bytes().len(),
+        "docs/FRAME.md states the wrong length"
+    );
+    assert_eq!(
+        doc_bytes().last(),
+        Some(&0),
+        "the vector ends with its terminator"
+    );
+}
+
 #[test]
 fn firmware_decoder_reads_the_docs_json() {
     let bytes = doc_bytes();
