@@ -138,6 +138,31 @@ fn beam_times_agree_with_pfe_core_to_1_us() {
     }
 }
 
+/// The one-sweep control: at 0.5° every beam is taken in one mirror turn, beam `i` at
+/// `i · 0.5 · TURN / 360` (driving at the wall at 600 mm/s: the scanner `600 t` further on), the
+/// scan is declared as one sweep and the odometry carries that timing.
+#[test]
+fn one_sweep_takes_every_beam_in_one_mirror_turn() {
+    let mut s = moving(600.0, 0.0);
+    s.one_sweep = true;
+    s.odometry_given = true;
+    let sim = render(&wall(), &s, &mut ChaCha8Rng::seed_from_u64(1));
+    assert_eq!(sim.sweeps, 1);
+    let m = sim.odometry.expect("odometry given");
+    assert_eq!(m.timing, BeamTiming::uniform((TURN / 720.0) as f32));
+    let mut n = 0;
+    for (i, &r) in sim.true_ranges_mm.iter().enumerate() {
+        if r.is_finite() {
+            let t = i as f64 * TURN / 720.0;
+            let b = bearing(&sim.geometry, i);
+            let expect = (WALL_X - 600.0 * t) / b.cos();
+            assert!((r - expect).abs() < 1e-6, "beam {i}: {r} vs {expect}");
+            n += 1;
+        }
+    }
+    assert!(n > 200);
+}
+
 #[test]
 fn odometry_deskews_both_sweeps_onto_the_wall() {
     let mut s = moving(600.0, 0.45);

@@ -6,8 +6,9 @@
 //! its first marks stay. Runs at the end of a valid stretch are left alone.
 
 use crate::config::NP;
-use crate::flags::{next_flag, Seek, START};
+use crate::flags::{next_flag, Seek, JUMP, START};
 use crate::mark::Rule;
+use crate::math;
 use crate::pass::Pass;
 
 /// Applies the check step to the marks of `pass`.
@@ -46,13 +47,40 @@ fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule) -> usize {
     if e > j && next < len && pass.valid(next) {
         let from = (e + 1).saturating_sub(NP).max(j);
         let pred = pass.predict_next(from, next);
-        if !rule.marks(pred, pass.range(next)) {
+        if !rule.marks(pred, pass.range(next)) && !out_and_back(pass, rule, from, e, next) {
             for i in from + 1..next {
                 pass.clear(i, START);
             }
         }
     }
     next
+}
+
+/// Whether the window `from ..= e` with the point `next` after it jumps away and back (a
+/// point of it starts a segment by a jump and a step goes back along the window by more than
+/// the noise): the interleaved sweeps of a scanner that turns, de-skewed by its odometry, take
+/// the foreground and the background in turn at an occluding edge, and a line through a
+/// window of them may well predict the next point. Points that are where they were taken
+/// (odometry given, or one sweep) do not go back along one surface; sweeps moved by an
+/// estimate of their offset may, so there the prediction alone decides.
+fn out_and_back(pass: &Pass<'_>, rule: &Rule, from: usize, e: usize, next: usize) -> bool {
+    let exact = pass.stats.sweeps_aligned == 0 && !(pass.uneven && pass.motion.is_none());
+    let tol = rule.noise().map_or(0.0, |n| n.k_sigma + n.model.floor);
+    exact && (from + 1..=e).any(|i| pass.flag(i) & JUMP != 0) && !onward(pass, from, next, tol)
+}
+
+/// Whether no step of the points `from ..= to` goes back by more than `tol` mm along the chord
+/// from the first to the last, as consecutive beams along one surface do not: a window that
+/// jumps away and back (interleaved sweeps of a moving scanner at an occluding edge:
+/// foreground, background, foreground) is not one surface, whatever line fits it.
+fn onward(pass: &Pass<'_>, from: usize, to: usize, tol: f32) -> bool {
+    let (a, b) = (pass.point(from), pass.point(to));
+    let (dx, dy) = (b.x - a.x, b.y - a.y);
+    let back = tol * math::sqrt(dx * dx + dy * dy);
+    (from..to).all(|i| {
+        let (p, q) = (pass.point(i), pass.point(i + 1));
+        (q.x - p.x) * dx + (q.y - p.y) * dy >= -back
+    })
 }
 
 #[cfg(test)]

@@ -246,6 +246,24 @@ pub fn conditions() -> Vec<Condition> {
                 s.odometry_given = true;
             },
         ),
+        // What interleaving costs beyond the motion: the same motion with no turn (the sweeps
+        // stay evenly spaced in bearing), and with every beam in one mirror turn (no LMS2xx
+        // does this; de-skewed, the beams stay evenly spaced).
+        (
+            "interleaved 0.5°, 8 mm / no turn between sweeps, odometry given",
+            |s| {
+                *s = s.with_motion(MOVING_V, 0.0);
+                s.odometry_given = true;
+            },
+        ),
+        (
+            "control: 8 mm / 6 mrad a mirror turn, one sweep, odometry given",
+            |s| {
+                *s = s.with_motion(MOVING_V, MOVING_OMEGA);
+                s.one_sweep = true;
+                s.odometry_given = true;
+            },
+        ),
         ("interleaved 0.25° (4 sweeps), moving, no odometry", |s| {
             *s = s.with_motion(MOVING_V, MOVING_OMEGA);
             s.resolution = crate::scene::Resolution::Quarter;

@@ -141,7 +141,7 @@ pub fn render(shapes: &[Shape], scenario: &Scenario, rng: &mut ChaCha8Rng) -> Si
         true_ranges_mm: true_r,
         sigma_r: sigma,
         mm_per_unit: scenario.range_mode.mm_per_unit(),
-        sweeps: scenario.resolution.sweeps(),
+        sweeps: scenario.sweeps(),
         odometry: scenario.odometry_given.then(|| scenario.motion()),
     }
 }

@@ -171,6 +171,10 @@ pub struct Scenario {
     pub range_mode: RangeMode,
     /// Noise grows with the incidence angle ([`incidence_noise_factor`]) (default off).
     pub incidence_noise: bool,
+    /// Every beam taken in one mirror turn, at any resolution (default off: the LMS2xx
+    /// interleaves sweeps below 1°). No LMS2xx does this; it is the control that tells what
+    /// interleaving costs a moving scanner beyond the motion itself.
+    pub one_sweep: bool,
 }
 
 /// One simulated scan with its ground truth.
@@ -219,6 +223,7 @@ impl Scenario {
             odometry_given: false,
             range_mode: RangeMode::Mm,
             incidence_noise: false,
+            one_sweep: false,
         }
     }
 
@@ -236,12 +241,26 @@ impl Scenario {
         g
     }
 
-    /// The robot's motion with the LMS2xx beam timing of the resolution.
+    /// The robot's motion with the LMS2xx beam timing of the resolution (one sweep when
+    /// [`one_sweep`](Self::one_sweep)).
     pub fn motion(&self) -> Motion {
+        let deg = self.resolution.degrees() as f32;
+        let timing = match self.one_sweep {
+            true => BeamTiming::uniform(BeamTiming::LMS2XX_TURN / 360.0 * deg),
+            false => BeamTiming::lms2xx(deg),
+        };
         Motion {
             v: self.v,
             omega: self.omega,
-            timing: BeamTiming::lms2xx(self.resolution.degrees() as f32),
+            timing,
+        }
+    }
+
+    /// Number of interleaved sweeps the scan is made of.
+    pub fn sweeps(&self) -> usize {
+        match self.one_sweep {
+            true => 1,
+            false => self.resolution.sweeps(),
         }
     }
 
@@ -250,7 +269,10 @@ impl Scenario {
         super::motion::pose_at(
             f64::from(self.v),
             f64::from(self.omega),
-            self.resolution.beam_time(i),
+            match self.one_sweep {
+                true => i as f64 * self.resolution.degrees() * super::motion::DEGREE_S,
+                false => self.resolution.beam_time(i),
+            },
         )
     }
 
