@@ -10,7 +10,11 @@
 use pfe_core::Feature;
 
 use super::frame::{nis, FrameChange, LineObs, Pose};
-use super::refit::{correction, correction_covariance, refit_nis, Innovation};
+use rand::SeedableRng;
+
+use super::refit::{
+    consistent_refit_nis, correction, correction_covariance, refit_nis, Innovation,
+};
 use super::CircleObs;
 
 /// Shortest line counted, points.
@@ -19,6 +23,8 @@ pub const MIN_LINE_POINTS: usize = 10;
 pub const GATE_ALPHA: f64 = 0.1;
 /// Line gate on the distance, mm.
 pub const GATE_RHO_MM: f64 = 300.0;
+/// Draws per refitted pair of the consistent reference of the line NIS after the refit.
+pub const CONSISTENT_DRAWS: usize = 8;
 /// Circle gate on the centre, mm.
 pub const GATE_CENTER_MM: f64 = 300.0;
 
@@ -96,6 +102,9 @@ pub struct PairTally {
     pub nis: Vec<f64>,
     /// NIS of matched lines after the pair's pose refit (pairs with a refit only).
     pub nis_refit: Vec<f64>,
+    /// What `nis_refit` would be with consistent covariances ([`consistent_refit_nis`]:
+    /// [`CONSISTENT_DRAWS`] draws of each refitted pair's lines).
+    pub nis_refit_consistent: Vec<f64>,
     /// Pairs with a pose refit.
     pub refits: usize,
     /// Circles of scan k.
@@ -142,6 +151,11 @@ impl PairTally {
         if let Some(v) = refit_nis(&innovations) {
             self.refits += 1;
             self.nis_refit.extend(v);
+            // Seeded by the pair's number: the same figures on every run.
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.pairs as u64);
+            if let Some(v) = consistent_refit_nis(&innovations, CONSISTENT_DRAWS, &mut rng) {
+                self.nis_refit_consistent.extend(v);
+            }
         }
         // The lines' pose correction, applied to the moved circle centres too, with its own
         // uncertainty.

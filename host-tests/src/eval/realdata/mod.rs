@@ -98,6 +98,8 @@ pub struct Summary {
     pub nis: f64,
     /// Median line NIS after the pose refit.
     pub nis_refit: f64,
+    /// What that median would be with consistent covariances (the same lines and refits).
+    pub nis_refit_consistent: f64,
     /// Pairs with a pose refit.
     pub refits: usize,
     /// Circles of scan k.
@@ -136,6 +138,7 @@ impl Tally {
             d_alpha_mrad: 1000.0 * quantile(&p.d_alpha, 0.5),
             nis: quantile(&p.nis, 0.5),
             nis_refit: quantile(&p.nis_refit, 0.5),
+            nis_refit_consistent: quantile(&p.nis_refit_consistent, 0.5),
             refits: p.refits,
             circles: p.circles,
             circles_reappear_pct: pct(p.circles_matched, p.circles),

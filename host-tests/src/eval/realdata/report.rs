@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::Context;
 
-use super::compare::{GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, MIN_LINE_POINTS};
+use super::compare::{CONSISTENT_DRAWS, GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, MIN_LINE_POINTS};
 use super::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
 use super::refit::{MIN_LINES, MIN_SPREAD};
 use super::svg::grouped_bars;
@@ -14,7 +14,7 @@ use super::{LogReport, Summary};
 /// Median of a χ²₂ variable (2 ln 2): the line and circle NIS median of consistent covariances.
 pub const CHI2_2_MEDIAN: f64 = 1.386_294_361;
 
-const HEADER: [&str; 15] = [
+const HEADER: [&str; 16] = [
     "method",
     "feat%",
     "bare%",
@@ -25,6 +25,7 @@ const HEADER: [&str; 15] = [
     "|Δα| mrad",
     "NIS",
     "NIS refit",
+    "if consistent",
     "circles",
     "circ%",
     "n circ",
@@ -40,7 +41,7 @@ fn num(v: f64, digits: usize) -> String {
     }
 }
 
-fn row(s: &Summary) -> [String; 15] {
+fn row(s: &Summary) -> [String; 16] {
     [
         s.method.clone(),
         num(s.in_features_pct, 1),
@@ -52,6 +53,7 @@ fn row(s: &Summary) -> [String; 15] {
         num(s.d_alpha_mrad, 1),
         num(s.nis, 2),
         num(s.nis_refit, 2),
+        num(s.nis_refit_consistent, 2),
         s.circles.to_string(),
         num(s.circles_reappear_pct, 1),
         s.circles_matched.to_string(),
@@ -71,7 +73,7 @@ fn title(r: &LogReport) -> String {
 
 /// One log's text table.
 pub fn table(r: &LogReport) -> String {
-    let rows: Vec<[String; 15]> = r.methods.iter().map(row).collect();
+    let rows: Vec<[String; 16]> = r.methods.iter().map(row).collect();
     let mut widths: Vec<usize> = HEADER.iter().map(|h| h.chars().count()).collect();
     for cells in &rows {
         for (w, c) in widths.iter_mut().zip(cells) {
@@ -138,6 +140,10 @@ their normals are not nearly parallel: smallest eigenvalue of the mean n nᵀ �
 The refit absorbs the poses' own errors but also 3 of the 2m degrees of freedom of m lines: \
 consistent covariances then give a mean NIS of (2m − 3)/m per line (1 for m = 3, 1.7 for \
 m = 10), so the median lies below {CHI2_2_MEDIAN:.2}.\n\
+- **if consistent**: the median NIS refit that consistent covariances would give on the same \
+lines and refits: each refitted pair's differences drawn {CONSISTENT_DRAWS} times from \
+N(0, S) with its lines' own S, refitted and scored as the measured ones. Below it, the \
+covariances are larger than the scatter; above it, smaller.\n\
 - **circles**: circles of scan k; **circ%**: those whose moved centre lies within \
 {:.1} m of a circle centre of k+1 (the nearest is taken), %; **n circ**: matched; \
 **circ NIS**: median centre NIS with both 2×2 centre covariances (k's turned with the frame), \
