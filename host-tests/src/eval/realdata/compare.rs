@@ -118,17 +118,20 @@ pub struct PairTally {
     pub circle_nis_refit: Vec<f64>,
 }
 
-impl PairTally {
-    /// Moves `a`'s features into `b`'s frame, matches them and adds the result.
-    pub fn add(&mut self, a: &Seen, b: &Seen) {
-        self.pairs += 1;
-        let change = FrameChange::between(a.pose, b.pose);
-        let mut innovations = Vec::new();
-        for l in a.lines.iter().filter(|l| l.points >= MIN_LINE_POINTS) {
-            self.line_points += l.points;
+/// Scan `a`'s lines of ≥ [`MIN_LINE_POINTS`] points that re-appear in scan `b` (`change`:
+/// the frame change from `a` to `b`), each with its difference from the nearest line of `b`
+/// within the gate whose extent overlaps it.
+pub fn matched_lines<'a>(
+    a: &'a Seen,
+    b: &Seen,
+    change: &FrameChange,
+) -> Vec<(&'a LineObs, Innovation)> {
+    a.lines
+        .iter()
+        .filter(|l| l.points >= MIN_LINE_POINTS)
+        .filter_map(|l| {
             let moved = change.line(l);
-            let best = b
-                .lines
+            b.lines
                 .iter()
                 .filter_map(|c| {
                     let (d, s, alpha) = moved.difference(c);
@@ -139,14 +142,27 @@ impl PairTally {
                     let cost = (d[0] / GATE_ALPHA).powi(2) + (d[1] / GATE_RHO_MM).powi(2);
                     (gated && overlap).then_some((cost, Innovation { d, s, alpha }))
                 })
-                .min_by(|x, y| x.0.total_cmp(&y.0));
-            if let Some((_, inn)) = best {
-                self.line_points_matched += l.points;
-                self.d_rho.push(inn.d[1].abs());
-                self.d_alpha.push(inn.d[0].abs());
-                self.nis.extend(nis(inn.d, &inn.s));
-                innovations.push(inn);
-            }
+                .min_by(|x, y| x.0.total_cmp(&y.0))
+                .map(|(_, inn)| (l, inn))
+        })
+        .collect()
+}
+
+impl PairTally {
+    /// Moves `a`'s features into `b`'s frame, matches them and adds the result.
+    pub fn add(&mut self, a: &Seen, b: &Seen) {
+        self.pairs += 1;
+        let change = FrameChange::between(a.pose, b.pose);
+        let long = a.lines.iter().filter(|l| l.points >= MIN_LINE_POINTS);
+        self.line_points += long.map(|l| l.points).sum::<usize>();
+        let matched = matched_lines(a, b, &change);
+        let mut innovations = Vec::with_capacity(matched.len());
+        for (l, inn) in matched {
+            self.line_points_matched += l.points;
+            self.d_rho.push(inn.d[1].abs());
+            self.d_alpha.push(inn.d[0].abs());
+            self.nis.extend(nis(inn.d, &inn.s));
+            innovations.push(inn);
         }
         if let Some(v) = refit_nis(&innovations) {
             self.refits += 1;

@@ -79,19 +79,31 @@ fn normal_equations(pairs: &[Innovation]) -> Option<([[f64; 3]; 3], [f64; 3])> {
     Some((a, b))
 }
 
-/// The NIS of every pair after removing the refit correction (`None` when no refit).
-pub fn refit_nis(pairs: &[Innovation]) -> Option<Vec<f64>> {
+/// The difference (Δα, Δρ) of every pair after removing the refit correction (`None` when
+/// no refit).
+pub fn refit_residuals(pairs: &[Innovation]) -> Option<Vec<[f64; 2]>> {
     let delta = correction(pairs)?;
     Some(
         pairs
             .iter()
-            .filter_map(|p| {
-                let r = [
+            .map(|p| {
+                [
                     p.d[0] + delta[2],
                     p.d[1] + delta[0] * p.alpha.cos() + delta[1] * p.alpha.sin(),
-                ];
-                nis(r, &p.s)
+                ]
             })
+            .collect(),
+    )
+}
+
+/// The NIS of every pair after removing the refit correction (`None` when no refit).
+pub fn refit_nis(pairs: &[Innovation]) -> Option<Vec<f64>> {
+    let r = refit_residuals(pairs)?;
+    Some(
+        pairs
+            .iter()
+            .zip(r)
+            .filter_map(|(p, r)| nis(r, &p.s))
             .collect(),
     )
 }
@@ -109,16 +121,21 @@ pub fn consistent_refit_nis(
     correction(pairs)?;
     let mut out = Vec::with_capacity(draws * pairs.len());
     for _ in 0..draws {
-        let drawn: Vec<Innovation> = pairs
-            .iter()
-            .map(|p| Innovation {
-                d: draw(&p.s, rng),
-                ..*p
-            })
-            .collect();
-        out.extend(refit_nis(&drawn)?);
+        out.extend(refit_nis(&drawn(pairs, rng))?);
     }
     Some(out)
+}
+
+/// `pairs` with their differences drawn from N(0, S) with their own S: what consistent
+/// covariances and exact poses would give.
+pub fn drawn(pairs: &[Innovation], rng: &mut impl rand::Rng) -> Vec<Innovation> {
+    pairs
+        .iter()
+        .map(|p| Innovation {
+            d: draw(&p.s, rng),
+            ..*p
+        })
+        .collect()
 }
 
 /// A draw of N(0, s) (Cholesky factor of `s`; zeros when `s` is not positive definite).

@@ -143,7 +143,11 @@ m = 10), so the median lies below {CHI2_2_MEDIAN:.2}.\n\
 - **if consistent**: the median NIS refit that consistent covariances would give on the same \
 lines and refits: each refitted pair's differences drawn {CONSISTENT_DRAWS} times from \
 N(0, S) with its lines' own S, refitted and scored as the measured ones. Below it, the \
-covariances are larger than the scatter; above it, smaller.\n\
+covariances are larger than the differences; above it, smaller. Scans taken from nearly one \
+place (freiburg-079: 0.1 m apart) see a wall's roughness and the scanner's systematic error \
+alike, which their difference cancels: there the NIS lies below the reference even with \
+consistent covariances. `cargo run -p host-tests --release --example realdata_nis -- LOG` \
+splits both by class of line.\n\
 - **circles**: circles of scan k; **circ%**: those whose moved centre lies within \
 {:.1} m of a circle centre of k+1 (the nearest is taken), %; **n circ**: matched; \
 **circ NIS**: median centre NIS with both 2×2 centre covariances (k's turned with the frame), \
