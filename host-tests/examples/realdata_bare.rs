@@ -13,45 +13,34 @@ use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
 use host_tests::eval::realdata::coverage::smooth_runs;
-use host_tests::eval::realdata::methods;
-use host_tests::formats::{self, Format};
-use host_tests::methods::ScanContext;
+use host_tests::eval::realdata::{log_scans, methods, LogScan};
+use host_tests::formats::Format;
 use pfe_core::Feature;
+
+mod common;
+use common::LogArgs;
 
 /// Bounds of the distance classes, mm.
 const OFFSETS_MM: [f32; 4] = [30.0, 60.0, 100.0, 200.0];
 
 fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (mut log, mut show) = (None, 0usize);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--show" => show = it.next().context("--show needs a count")?.parse()?,
-            "-h" | "--help" => {
-                println!("realdata_bare LOG [--show N]");
-                return Ok(());
-            }
-            _ if log.is_none() => log = Some(a.clone()),
-            _ => bail!("unexpected argument {a}"),
-        }
-    }
-    let log = log.context("usage: realdata_bare LOG [--show N]")?;
-    let input = formats::open_for(std::path::Path::new(&log), Format::Carmen, |r| r)
-        .with_context(|| format!("opening {log}"))?;
+    let Some(args) = LogArgs::parse("realdata_bare", &["--show"])? else {
+        return Ok(());
+    };
+    let mut show: usize = args.get("--show", 0)?;
+    let log = &args.log;
     let mut ms = methods(Format::Carmen.sigma_r());
     let pfe = ms.first_mut().context("no method")?;
     let mut by_kind: BTreeMap<String, usize> = BTreeMap::new();
     let mut by_offset = [0usize; 5];
     let (mut valid_all, mut bare_all, mut scans) = (0usize, 0usize, 0usize);
-    for (k, rec) in formats::carmen::Reader::new(input).enumerate() {
-        let rec = rec.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
+    for (k, scan) in log_scans(std::path::Path::new(log))?.enumerate() {
+        let LogScan {
+            record: rec,
+            context,
+            ..
+        } = scan?;
         scans += 1;
-        let context = ScanContext {
-            odometry: None,
-            sweeps: usize::from(formats::sweeps_of(Format::Carmen, &rec.geometry)),
-            quantum: formats::range_quantum(&rec.ranges_mm, rec.geometry.r_max),
-        };
         let ex = pfe.extract_in(&rec.geometry, &rec.ranges_mm, &context);
         let r = &rec.ranges_mm;
         let n = r.len();

@@ -12,11 +12,13 @@
 //! σ_α is each method's own: the baselines' covariances are not consistent (their NIS is
 //! 10–100), so the split compares each method with itself rather than with the others.
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use host_tests::eval::realdata::compare::{GATE_ALPHA, GATE_RHO_MM, MIN_LINE_POINTS};
 use host_tests::eval::realdata::{methods, FrameChange, LineObs, Seen};
-use host_tests::formats::{self, Format};
-use host_tests::methods::ScanContext;
+use host_tests::formats::Format;
+
+mod common;
+use common::{for_each_pair, LogArgs};
 
 /// Bound between well and poorly determined lines, rad.
 const SIGMA_ALPHA: f64 = 0.010;
@@ -39,50 +41,18 @@ struct Tally {
 }
 
 fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (mut log, mut sigma_r) = (None, 10.0f32);
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--sigma-r" => {
-                sigma_r = it.next().context("--sigma-r needs mm")?.parse()?;
-            }
-            "-h" | "--help" => {
-                println!("realdata_lines LOG [--sigma-r MM]");
-                return Ok(());
-            }
-            other if log.is_none() && !other.starts_with('-') => log = Some(other.to_string()),
-            other => bail!("unknown argument `{other}`"),
-        }
-    }
-    let log = log.context("give a CARMEN log with poses (usage: realdata_lines LOG)")?;
-    let input = formats::open_for(std::path::Path::new(&log), Format::Carmen, |r| r)
-        .with_context(|| format!("opening {log}"))?;
+    let Some(args) = LogArgs::parse("realdata_lines", &["--sigma-r"])? else {
+        return Ok(());
+    };
+    let sigma_r: f32 = args.get("--sigma-r", Format::Carmen.sigma_r())?;
+    let log = &args.log;
     let mut ms = methods(sigma_r);
     let mut tallies: Vec<Tally> = ms.iter().map(|_| Tally::default()).collect();
-    let mut prev: Vec<Option<Seen>> = vec![None; ms.len()];
-    let mut pairs = 0usize;
-    for rec in formats::carmen::Reader::new(input) {
-        let rec = rec.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
-        let context = ScanContext {
-            odometry: None,
-            sweeps: usize::from(formats::sweeps_of(Format::Carmen, &rec.geometry)),
-            quantum: formats::range_quantum(&rec.ranges_mm, rec.geometry.r_max),
-        };
-        let pose = rec.pose.map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t]);
-        for ((m, tally), prev) in ms.iter_mut().zip(&mut tallies).zip(&mut prev) {
-            let ex = m.extract_in(&rec.geometry, &rec.ranges_mm, &context);
-            let seen = pose.map(|p| Seen::new(p, &ex.features));
-            if let (Some(a), Some(b)) = (prev.as_ref(), seen.as_ref()) {
-                add(tally, a, b);
-            }
-            *prev = seen;
+    for_each_pair(log, &mut ms, |m, a, b| {
+        if let Some(tally) = tallies.get_mut(m) {
+            add(tally, a, b);
         }
-        pairs += 1;
-    }
-    if pairs < 2 {
-        bail!("{log}: fewer than two scans with poses");
-    }
+    })?;
     println!("{log}: σ_r {sigma_r} mm; lines of ≥ {MIN_LINE_POINTS} points, point-weighted");
     println!(
         "{:12} {:>9} {:>7} {:>9} {:>9} {:>7} | unmatched: {}",

@@ -13,15 +13,18 @@
 
 use std::collections::BTreeMap;
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use host_tests::eval::realdata::compare::matched_lines;
 use host_tests::eval::realdata::frame::nis;
 use host_tests::eval::realdata::refit::{drawn, refit_residuals};
 use host_tests::eval::realdata::{FrameChange, LineObs, Seen};
 use host_tests::eval::score::quantile;
-use host_tests::formats::{self, Format};
-use host_tests::methods::{Method, Pfe, ScanContext};
+use host_tests::formats::Format;
+use host_tests::methods::{Method, Pfe};
 use rand::SeedableRng;
+
+mod common;
+use common::{for_each_pair, LogArgs};
 
 /// Consistent draws per refitted pair.
 const DRAWS: usize = 8;
@@ -34,52 +37,19 @@ struct Class {
 }
 
 fn main() -> Result<()> {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let (mut log, mut sigma_r) = (None, 10.0f32);
-    let mut sigma_sys = Format::Carmen.sigma_sys();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--sigma-r" => sigma_r = it.next().context("--sigma-r needs mm")?.parse()?,
-            "--sigma-sys" => sigma_sys = it.next().context("--sigma-sys needs mm")?.parse()?,
-            "-h" | "--help" => {
-                println!("realdata_nis LOG [--sigma-r MM] [--sigma-sys MM]");
-                return Ok(());
-            }
-            other if log.is_none() && !other.starts_with('-') => log = Some(other.to_string()),
-            other => bail!("unknown argument `{other}`"),
-        }
-    }
-    let log = log.context("give a CARMEN log with poses (usage: realdata_nis LOG)")?;
-    let input = formats::open_for(std::path::Path::new(&log), Format::Carmen, |r| r)
-        .with_context(|| format!("opening {log}"))?;
+    let Some(args) = LogArgs::parse("realdata_nis", &["--sigma-r", "--sigma-sys"])? else {
+        return Ok(());
+    };
+    let sigma_r: f32 = args.get("--sigma-r", Format::Carmen.sigma_r())?;
+    let sigma_sys: f32 = args.get("--sigma-sys", Format::Carmen.sigma_sys())?;
+    let log = &args.log;
     let config = pfe_core::Config::default()
         .with_sigma_r(sigma_r)
         .with_sigma_sys(sigma_sys);
-    let mut pfe = Pfe::new("pfe-default", config);
+    let mut pfe: [Box<dyn Method>; 1] = [Box::new(Pfe::new("pfe-default", config))];
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let mut classes: BTreeMap<String, Class> = BTreeMap::new();
-    let mut prev: Option<Seen> = None;
-    let mut scans = 0usize;
-    for rec in formats::carmen::Reader::new(input) {
-        let rec = rec.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
-        let context = ScanContext {
-            odometry: None,
-            sweeps: usize::from(formats::sweeps_of(Format::Carmen, &rec.geometry)),
-            quantum: formats::range_quantum(&rec.ranges_mm, rec.geometry.r_max),
-        };
-        let pose = rec.pose.map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t]);
-        let ex = pfe.extract_in(&rec.geometry, &rec.ranges_mm, &context);
-        let seen = pose.map(|p| Seen::new(p, &ex.features));
-        if let (Some(a), Some(b)) = (prev.as_ref(), seen.as_ref()) {
-            add(&mut classes, a, b, &mut rng);
-        }
-        prev = seen;
-        scans += 1;
-    }
-    if scans < 2 {
-        bail!("{log}: fewer than two scans with poses");
-    }
+    for_each_pair(log, &mut pfe, |_, a, b| add(&mut classes, a, b, &mut rng))?;
     println!("{log}: pfe-default, σ_r {sigma_r} mm, σ_sys {sigma_sys} mm; medians, ratio = measured / consistent");
     println!(
         "{:14} {:>6} | {:>6} {:>6} {:>5} | {:>6} {:>6} {:>5} | {:>6} {:>6} {:>5}",

@@ -183,17 +183,9 @@ pub fn run_records(
         if beams == 0 {
             beams = record.ranges_mm.len();
         }
-        let pose = record
-            .pose
-            .map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t] as Pose);
+        let pose = pose_of(&record);
+        let context = context_of(&record, sweeps);
         for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
-            let context = ScanContext {
-                odometry: None,
-                sweeps: usize::from(sweeps.unwrap_or_else(|| {
-                    crate::formats::sweeps_of(crate::formats::Format::Carmen, &record.geometry)
-                })),
-                quantum: crate::formats::range_quantum(&record.ranges_mm, record.geometry.r_max),
-            };
             let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
             tally.scans += 1;
             tally.coverage.add(&Coverage::of(
@@ -220,6 +212,50 @@ pub fn run_records(
             .map(|(m, t)| t.summary(m.name()))
             .collect(),
     })
+}
+
+/// What the benchmark tells a method about a scan of a CARMEN log: no odometry, `sweeps`
+/// interleaved sweeps (`None`: a SICK LMS2xx's for its resolution) and the grid its ranges lie
+/// on.
+pub fn context_of(record: &Record, sweeps: Option<u8>) -> ScanContext {
+    let carmen = crate::formats::Format::Carmen;
+    ScanContext {
+        odometry: None,
+        sweeps: usize::from(
+            sweeps.unwrap_or_else(|| crate::formats::sweeps_of(carmen, &record.geometry)),
+        ),
+        quantum: crate::formats::range_quantum(&record.ranges_mm, record.geometry.r_max),
+    }
+}
+
+/// A record's pose in mm and rad (the logs give m).
+pub fn pose_of(record: &Record) -> Option<Pose> {
+    record.pose.map(|[x, y, t]| [1000.0 * x, 1000.0 * y, t])
+}
+
+/// One scan of a CARMEN log as the benchmark reads it.
+pub struct LogScan {
+    /// The record.
+    pub record: Record,
+    /// What a method is told about it ([`context_of`], the sweeps of a SICK LMS2xx).
+    pub context: ScanContext,
+    /// Its pose, mm and rad.
+    pub pose: Option<Pose>,
+}
+
+/// The scans of the CARMEN log `path` (gzip allowed), in order.
+pub fn log_scans(path: &Path) -> anyhow::Result<impl Iterator<Item = anyhow::Result<LogScan>>> {
+    let input = crate::formats::open_for(path, crate::formats::Format::Carmen, |r| r)
+        .with_context(|| format!("opening {}", path.display()))?;
+    let log = path.display().to_string();
+    Ok(crate::formats::carmen::Reader::new(input).map(move |r| {
+        let record = r.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
+        Ok(LogScan {
+            context: context_of(&record, None),
+            pose: pose_of(&record),
+            record,
+        })
+    }))
 }
 
 /// Runs the four [`methods`] (σ_r = `sigma_r` mm) on the CARMEN log `path`.
