@@ -8,8 +8,9 @@
 //! A ratio (measured median / consistent median) above 1: the lines' differences between scans
 //! exceed their covariances; below 1: the covariances exceed them. The α and ρ parts are each
 //! difference's squared component over its own variance. Scans taken from nearly one place see
-//! one wall's roughness and the scanner's systematic error alike, which the difference then
-//! cancels: there the ratio lies below 1 with consistent covariances.
+//! one wall's roughness and the scanner's systematic error alike: their errors are correlated,
+//! which the sum of both covariances ignores, so there the ratio lies below 1 even where each
+//! scan's covariance is right.
 
 use std::collections::BTreeMap;
 

@@ -149,7 +149,8 @@ fn one_sweep_takes_every_beam_in_one_mirror_turn() {
     let sim = render(&wall(), &s, &mut ChaCha8Rng::seed_from_u64(1));
     assert_eq!(sim.sweeps, 1);
     let m = sim.odometry.expect("odometry given");
-    assert_eq!(m.timing, BeamTiming::uniform((TURN / 720.0) as f32));
+    assert_eq!((m.timing.sweeps, m.timing.sweep_dt), (1, 0.0));
+    assert!((f64::from(m.timing.beam_dt) - TURN / 720.0).abs() < 1e-9);
     let mut n = 0;
     for (i, &r) in sim.true_ranges_mm.iter().enumerate() {
         if r.is_finite() {

@@ -58,21 +58,22 @@ fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule) -> usize {
 
 /// Whether the window `from ..= e` with the point `next` after it jumps away and back (a
 /// point of it starts a segment by a jump and a step goes back along the window by more than
-/// the noise): the interleaved sweeps of a scanner that turns, de-skewed by its odometry, take
-/// the foreground and the background in turn at an occluding edge, and a line through a
-/// window of them may well predict the next point. Points that are where they were taken
-/// (odometry given, or one sweep) do not go back along one surface; sweeps moved by an
-/// estimate of their offset may, so there the prediction alone decides.
+/// the noise): not one surface, whatever line fits it. The interleaved sweeps of a turning
+/// scanner, de-skewed by its odometry, take the foreground and the background in turn at an
+/// occluding edge, and a line through two nearly coincident foreground points and a background
+/// one may well predict the next foreground point; in one sweep, a jump onto a surface that
+/// comes back towards the scanner does the same. Not where sweeps were moved by an estimate of
+/// their offset: its error zigzags their points along one surface, and the prediction alone
+/// decides there.
 fn out_and_back(pass: &Pass<'_>, rule: &Rule, from: usize, e: usize, next: usize) -> bool {
-    let exact = pass.stats.sweeps_aligned == 0 && !(pass.uneven && pass.motion.is_none());
     let tol = rule.noise().map_or(0.0, |n| n.k_sigma + n.model.floor);
-    exact && (from + 1..=e).any(|i| pass.flag(i) & JUMP != 0) && !onward(pass, from, next, tol)
+    pass.stats.sweeps_aligned == 0
+        && (from + 1..=e).any(|i| pass.flag(i) & JUMP != 0)
+        && !onward(pass, from, next, tol)
 }
 
 /// Whether no step of the points `from ..= to` goes back by more than `tol` mm along the chord
-/// from the first to the last, as consecutive beams along one surface do not: a window that
-/// jumps away and back (interleaved sweeps of a moving scanner at an occluding edge:
-/// foreground, background, foreground) is not one surface, whatever line fits it.
+/// from the first to the last, as consecutive beams along one surface do not.
 fn onward(pass: &Pass<'_>, from: usize, to: usize, tol: f32) -> bool {
     let (a, b) = (pass.point(from), pass.point(to));
     let (dx, dy) = (b.x - a.x, b.y - a.y);

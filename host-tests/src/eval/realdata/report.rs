@@ -145,8 +145,8 @@ lines and refits: each refitted pair's differences drawn {CONSISTENT_DRAWS} time
 N(0, S) with its lines' own S, refitted and scored as the measured ones. Below it, the \
 covariances are larger than the differences; above it, smaller. Scans taken from nearly one \
 place (freiburg-079: 0.1 m apart) see a wall's roughness and the scanner's systematic error \
-alike, which their difference cancels: there the NIS lies below the reference even with \
-consistent covariances. `cargo run -p host-tests --release --example realdata_nis -- LOG` \
+alike: their errors are correlated, which S, the sum of both scans' covariances, ignores, so \
+there the NIS lies below the reference even where each scan's covariance is right. `cargo run -p host-tests --release --example realdata_nis -- LOG` \
 splits both by class of line.\n\
 - **circles**: circles of scan k; **circ%**: those whose moved centre lies within \
 {:.1} m of a circle centre of k+1 (the nearest is taken), %; **n circ**: matched; \
