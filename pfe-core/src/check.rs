@@ -7,6 +7,7 @@
 
 use crate::config::NP;
 use crate::flags::{next_flag, Seek, JUMP, START};
+use crate::geometry::Point;
 use crate::mark::Rule;
 use crate::math;
 use crate::pass::Pass;
@@ -69,19 +70,24 @@ fn out_and_back(pass: &Pass<'_>, rule: &Rule, from: usize, e: usize, next: usize
     let tol = rule.noise().map_or(0.0, |n| n.k_sigma + n.model.floor);
     pass.stats.sweeps_aligned == 0
         && (from + 1..=e).any(|i| pass.flag(i) & JUMP != 0)
-        && !onward(pass, from, next, tol)
+        && !pass
+            .points
+            .get(from..=next)
+            .is_none_or(|pts| onward(pts, tol))
 }
 
-/// Whether no step of the points `from ..= to` goes back by more than `tol` mm along the chord
-/// from the first to the last, as consecutive beams along one surface do not.
-fn onward(pass: &Pass<'_>, from: usize, to: usize, tol: f32) -> bool {
-    let (a, b) = (pass.point(from), pass.point(to));
+/// Whether no step of `points` goes back by more than `tol` mm along the chord from the first
+/// to the last, as consecutive beams along one surface do not.
+fn onward(points: &[Point], tol: f32) -> bool {
+    let (Some(a), Some(b)) = (points.first(), points.last()) else {
+        return true;
+    };
     let (dx, dy) = (b.x - a.x, b.y - a.y);
     let back = tol * math::sqrt(dx * dx + dy * dy);
-    (from..to).all(|i| {
-        let (p, q) = (pass.point(i), pass.point(i + 1));
-        (q.x - p.x) * dx + (q.y - p.y) * dy >= -back
-    })
+    points
+        .iter()
+        .zip(points.iter().skip(1))
+        .all(|(p, q)| (q.x - p.x) * dx + (q.y - p.y) * dy >= -back)
 }
 
 #[cfg(test)]
@@ -123,6 +129,41 @@ mod tests {
             flags.copy_from_slice(pass.flags);
             flags
         })
+    }
+
+    /// Steps along the chord of a window go on; one step back along it by more than `tol`
+    /// (here 10 mm, the chord along x whatever its length and side) does not, by 9 mm does;
+    /// sideways steps of any size do; fewer than two points go on.
+    #[test]
+    fn a_window_goes_on_unless_a_step_goes_back_by_more_than_tol() {
+        let p = |x: f32, y: f32| Point::new(x, y);
+        for (sx, y0) in [(1.0f32, 0.0f32), (-1.0, 500.0), (3.0, -2000.0)] {
+            let at = |x: f32, y: f32| p(sx * x, y0 + y);
+            assert!(onward(
+                &[at(0.0, 0.0), at(50.0, 3.0), at(100.0, -4.0)],
+                10.0
+            ));
+            assert!(onward(
+                &[at(0.0, 0.0), at(60.0, 900.0), at(100.0, 0.0)],
+                10.0
+            ));
+            let back = |by: f32| {
+                [
+                    at(0.0, 0.0),
+                    at(60.0, 0.0),
+                    at(60.0 - by, 0.0),
+                    at(100.0, 0.0),
+                ]
+            };
+            assert!(onward(&back(9.0 / sx.abs()), 10.0), "{sx}");
+            assert!(!onward(&back(11.0 / sx.abs()), 10.0), "{sx}");
+            // Out to the background and back.
+            assert!(!onward(
+                &[at(0.0, 0.0), at(40.0, 2000.0), at(10.0, 0.0), at(20.0, 0.0)],
+                10.0
+            ));
+        }
+        assert!(onward(&[p(1.0, 2.0)], 0.0) && onward(&[], 0.0));
     }
 
     fn starts(flags: &[u8]) -> heapless::Vec<usize, 64> {
