@@ -132,15 +132,20 @@ mod tests {
     }
 
     /// Steps along the chord of a window go on; one step back along it by more than `tol`
-    /// (here 10 mm, the chord along x whatever its length and side) does not, by 9 mm does;
-    /// sideways steps of any size do; fewer than two points go on.
+    /// (here 10 mm) does not, by 9 mm does, whatever the chord's length, direction and place;
+    /// sideways steps of any size go on; fewer than two points go on.
     #[test]
     fn a_window_goes_on_unless_a_step_goes_back_by_more_than_tol() {
-        let p = |x: f32, y: f32| Point::new(x, y);
-        for (sx, y0) in [(1.0f32, 0.0f32), (-1.0, 500.0), (3.0, -2000.0)] {
-            let at = |x: f32, y: f32| p(sx * x, y0 + y);
+        for (sx, turn, (ox, oy)) in [
+            (1.0f32, 0.0f32, (0.0f32, 0.0f32)),
+            (-1.0, 0.7, (700.0, -300.0)),
+            (3.0, -2.2, (-1500.0, 2500.0)),
+        ] {
+            let (s, c) = math::sin_cos(turn);
+            // (x, y) along and across the chord, x stretched by sx, turned and moved.
+            let at = |x: f32, y: f32| Point::new(ox + c * sx * x - s * y, oy + s * sx * x + c * y);
             assert!(onward(
-                &[at(0.0, 0.0), at(50.0, 3.0), at(100.0, -4.0)],
+                &[at(0.0, 0.0), at(50.0, 3.0), at(100.0, -4.0), at(100.0, 0.0)],
                 10.0
             ));
             assert!(onward(
@@ -158,12 +163,11 @@ mod tests {
             assert!(onward(&back(9.0 / sx.abs()), 10.0), "{sx}");
             assert!(!onward(&back(11.0 / sx.abs()), 10.0), "{sx}");
             // Out to the background and back.
-            assert!(!onward(
-                &[at(0.0, 0.0), at(40.0, 2000.0), at(10.0, 0.0), at(20.0, 0.0)],
-                10.0
-            ));
+            let out = [at(0.0, 0.0), at(40.0, 2000.0), at(10.0, 0.0), at(20.0, 0.0)];
+            assert!(!onward(&out, 10.0), "{sx}");
         }
-        assert!(onward(&[p(1.0, 2.0)], 0.0) && onward(&[], 0.0));
+        let p = Point::new(1.0, 2.0);
+        assert!(onward(&[p], 0.0) && onward(&[], 0.0));
     }
 
     fn starts(flags: &[u8]) -> heapless::Vec<usize, 64> {
