@@ -75,8 +75,13 @@ fn main() -> Result<()> {
 }
 
 /// The classes of a matched line of `m` matched in its pair.
-fn classes_of(l: &LineObs, m: usize) -> [String; 6] {
+fn classes_of(l: &LineObs, m: usize) -> [String; 7] {
     let length = (l.end[0] - l.start[0]).hypot(l.end[1] - l.start[1]);
+    let mid = [(l.start[0] + l.end[0]) / 2.0, (l.start[1] + l.end[1]) / 2.0];
+    let incidence = (l.rho.abs() / mid[0].hypot(mid[1]).max(1.0))
+        .min(1.0)
+        .acos()
+        .to_degrees();
     let sigma_alpha = l.cov[0][0].sqrt();
     let pick = |v: f64, bounds: [f64; 2], names: [&str; 3]| {
         names[usize::from(v >= bounds[0]) + usize::from(v >= bounds[1])].to_string()
@@ -102,6 +107,10 @@ fn classes_of(l: &LineObs, m: usize) -> [String; 6] {
         format!(
             "pair has {}",
             pick(m as f64, [5.0, 8.0], ["3-4", "5-7", "8+"])
+        ),
+        format!(
+            "incidence {}",
+            pick(incidence, [45.0, 70.0], ["<45°", "45-70°", ">70°"])
         ),
     ]
 }

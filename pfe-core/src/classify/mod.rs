@@ -6,17 +6,17 @@
 //! than σ_r explains.
 
 pub(crate) mod arc;
+mod covariance;
 
 use crate::config::{Config, Typing};
-use crate::feature::{
-    circle_feature, line_feature, line_feature_with, CircleFeature, Feature, LineFeature,
-};
+use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
 use crate::fit::circle::{fit_circle, refine_circle, refine_from, Circle, NormalEquations};
 use crate::fit::line::{fit_line, LineFit};
 use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
+use covariance::{correlated_scale, mean_cos2, scatter_scale, systematic_circle, systematic_line};
 
 /// Fewest points of a circle in the default mode.
 const CIRCLE_MIN_POINTS: usize = 6;
@@ -44,7 +44,13 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 let c2 = mean_cos2(pass, s, pts, |p| {
                     Point::new(p.x - c.center.x, p.y - c.center.y)
                 });
-                let k = scatter_scale(sse, var * c2, pts.len() as f32 - 3.0);
+                let dof = pts.len() as f32 - 3.0;
+                let mut k = scatter_scale(sse, var * c2, dof);
+                if sse > var * c2 * dof {
+                    let (o, r) = (c.center, c.radius);
+                    let residuals = pts.iter().map(|p| math::hypot(p.x - o.x, p.y - o.y) - r);
+                    k = correlated_scale(residuals, var * c2, dof).unwrap_or(k);
+                }
                 cf.cov = cf.cov.map(|row| row.map(|v| v * k));
                 systematic_circle(cf, origin, config.sigma_sys);
             }
@@ -69,7 +75,12 @@ pub(crate) fn feature<const SCRUTINY: bool>(
             if let Feature::Line(lf) = &mut f {
                 let normal = Point::new(line.cos_alpha, line.sin_alpha);
                 let c2 = mean_cos2(pass, s, pts, |_| normal);
-                let k = scatter_scale(line.sse(), var * c2, pts.len() as f32 - 2.0);
+                let (sse, dof) = (line.sse(), pts.len() as f32 - 2.0);
+                let mut k = scatter_scale(sse, var * c2, dof);
+                if sse > var * c2 * dof {
+                    let residuals = pts.iter().map(|p| line.signed_distance(p));
+                    k = correlated_scale(residuals, var * c2, dof).unwrap_or(k);
+                }
                 lf.var_alpha *= k;
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
@@ -77,90 +88,6 @@ pub(crate) fn feature<const SCRUTINY: bool>(
             }
             Some(f)
         }
-    }
-}
-
-/// The mean share of range noise along the fitted curve's normal, cos²β, over the points `pts`
-/// of beams `s..` (β the incidence of each point's beam on the normal `normal(p)`, which need
-/// not be a unit vector): the variance of a residual is σ_r² cos²β. 1 when no point tells.
-fn mean_cos2(pass: &Pass<'_>, s: usize, pts: &[Point], normal: impl Fn(Point) -> Point) -> f32 {
-    let (mut sum, mut n) = (0.0f32, 0usize);
-    for (i, &p) in pts.iter().enumerate() {
-        let o = pass.origin(s + i);
-        let (d, m) = (Point::new(p.x - o.x, p.y - o.y), normal(p));
-        let c2 = (d.x * m.x + d.y * m.y) * (d.x * m.x + d.y * m.y)
-            / ((d.x * d.x + d.y * d.y) * (m.x * m.x + m.y * m.y));
-        if math::finite(c2) {
-            sum += c2;
-            n += 1;
-        }
-    }
-    if n > 0 {
-        sum / n as f32
-    } else {
-        1.0
-    }
-}
-
-/// Adds the share of a beam-to-beam systematic range error σ_sys (`s`, mm) to a line's
-/// covariance: an offset σ_sys along the normal (ρ) and a tilt about the line's middle M of
-/// variance 2σ_sys²/L² (its two ends independent), which moves ρ by the tilt times M's position
-/// along the line.
-fn systematic_line(lf: &mut LineFeature, s: f32) {
-    if !(s > 0.0) {
-        return;
-    }
-    let (dx, dy) = (lf.end.x - lf.start.x, lf.end.y - lf.start.y);
-    let len2 = dx * dx + dy * dy;
-    if !(len2 > 0.0) {
-        return;
-    }
-    let tilt = 2.0 * s * s / len2;
-    let (sin, cos) = math::sin_cos(lf.alpha);
-    // M · t, t = (−sin α, cos α) the line's direction.
-    let along = 0.5 * ((lf.start.x + lf.end.x) * -sin + (lf.start.y + lf.end.y) * cos);
-    lf.var_alpha += tilt;
-    lf.cov_alpha_rho += tilt * along;
-    lf.var_rho += s * s + tilt * along * along;
-}
-
-/// Adds the share of a beam-to-beam systematic range error σ_sys (`s`, mm) to a circle's
-/// centre covariance: σ_sys² along the beam from the scanner (`origin`) to the centre (an
-/// offset common to its beams moves every point, and so the centre, that way).
-fn systematic_circle(cf: &mut CircleFeature, origin: Point, s: f32) {
-    let (dx, dy) = (cf.center.x - origin.x, cf.center.y - origin.y);
-    let d2 = dx * dx + dy * dy;
-    if !(s > 0.0 && d2 > 0.0) {
-        return;
-    }
-    let k = s * s / d2;
-    let [[xx, xy, _], [yx, yy, _], _] = &mut cf.cov;
-    *xx += k * dx * dx;
-    *xy += k * dx * dy;
-    *yx += k * dx * dy;
-    *yy += k * dy * dy;
-}
-
-/// Factor on a fit's covariance: its reduced χ², `sse / (var · dof)` (`var` the variance of a
-/// residual under the noise model), when that exceeds 1 by more than three standard deviations
-/// of its sampling spread √(2/dof); otherwise 1 (the noise model explains the scatter). No
-/// division unless it scales.
-fn scatter_scale(sse: f32, var: f32, dof: f32) -> f32 {
-    let expected = var * dof;
-    // sse/expected − 1 > 3 √(2/dof), squared and times expected².
-    let excess = sse - expected;
-    if !(dof >= 1.0
-        && expected > 0.0
-        && excess > 0.0
-        && excess * excess * dof > 18.0 * expected * expected)
-    {
-        return 1.0;
-    }
-    let ratio = sse / expected;
-    if math::finite(ratio) {
-        ratio
-    } else {
-        1.0
     }
 }
 

@@ -3,6 +3,7 @@
 #![allow(clippy::indexing_slicing)]
 
 use super::*;
+use crate::feature::{CircleFeature, LineFeature};
 
 /// `n` points on the circle of centre `c` and radius `r` from `from` over `span` rad.
 fn arc(n: usize, c: (f32, f32), r: f32, from: f32, span: f32) -> heapless::Vec<Point, 64> {
@@ -27,6 +28,67 @@ fn scatter_scales_only_beyond_three_spreads_of_its_expectation() {
     assert_eq!(scatter_scale(0.1, 1.0, 18.0), 1.0);
     assert_eq!(scatter_scale(5.0, 0.0, 5.0), 1.0);
     assert_eq!(scatter_scale(f32::INFINITY, 1.0, 5.0), 1.0);
+}
+
+/// The AR(1) variance factor of a mean against its sum written out in f64: 1 without
+/// correlation or with one value, 1 + φ for two values, the sum's value for twenty.
+#[test]
+fn ar1_factor_is_the_variance_of_a_mean_of_correlated_values() {
+    use super::covariance::ar1_factor;
+    assert_eq!(ar1_factor(0.0, 20), 1.0);
+    assert_eq!(ar1_factor(0.7, 1), 1.0);
+    assert!((ar1_factor(0.5, 2) - 1.5).abs() < 1e-6);
+    for (phi, n) in [(0.3f64, 7usize), (0.9, 20), (0.5, 140)] {
+        let sum = 1.0
+            + 2.0
+                * (1..n)
+                    .map(|k| (1.0 - k as f64 / n as f64) * phi.powi(k as i32))
+                    .sum::<f64>();
+        let got = f64::from(ar1_factor(phi as f32, n));
+        assert!(
+            (got / sum - 1.0).abs() < 1e-5,
+            "φ {phi} n {n}: {got} vs {sum}"
+        );
+    }
+}
+
+/// A bend (six residuals +1, six −1): lag-one autocorrelation 9/12 > 2/√12, its excess τ² =
+/// 12/10 − var and φ = (9/11)/τ² (taken at most 0.9) give 1 + (τ²/var) f(φ, 12). Alternating
+/// residuals, a scatter the noise explains, too few or non-finite residuals: not correlated.
+#[test]
+fn correlated_scale_takes_the_excess_and_its_correlation() {
+    use super::covariance::ar1_factor;
+    let bend = [
+        1.0f32, 1.0, 1.0, 1.0, 1.0, 1.0, -1.0, -1.0, -1.0, -1.0, -1.0, -1.0,
+    ];
+    for var in [0.25f32, 0.5] {
+        let tau2 = 1.2 - f64::from(var);
+        let phi = (9.0 / 11.0 / tau2).min(0.9);
+        let want = 1.0 + tau2 / f64::from(var) * f64::from(ar1_factor(phi as f32, 12));
+        let got = f64::from(correlated_scale(bend.iter().copied(), var, 10.0).unwrap());
+        assert!(
+            (got / want - 1.0).abs() < 1e-5,
+            "var {var}: {got} vs {want}"
+        );
+    }
+    // τ² ≤ 0: the noise explains the scatter.
+    assert_eq!(correlated_scale(bend.iter().copied(), 1.2, 10.0), None);
+    let alternating = bend
+        .iter()
+        .enumerate()
+        .map(|(i, _)| if i % 2 == 0 { 1.0 } else { -1.0 });
+    assert_eq!(correlated_scale(alternating, 0.25, 10.0), None);
+    // Lag-one autocorrelation 5/8 below 2/√8.
+    assert_eq!(
+        correlated_scale(bend[2..10].iter().copied(), 0.25, 6.0),
+        None
+    );
+    assert_eq!(correlated_scale(core::iter::empty(), 0.25, 1.0), None);
+    assert_eq!(
+        correlated_scale([f32::NAN; 12].into_iter(), 0.25, 10.0),
+        None
+    );
+    assert_eq!(correlated_scale(bend.iter().copied(), 0.0, 10.0), None);
 }
 
 /// An arc is at least 6 points and 30° between its ends (here around a centre away from the
