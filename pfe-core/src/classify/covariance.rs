@@ -131,16 +131,12 @@ pub(super) fn correlated_scale(
     }
     let r = lag / sse;
     let tau2 = sse / dof - var;
-    // r > 2/√n, squared; τ² > 0.
-    if !(math::finite(r) && r > 0.0 && r * r * n as f32 > 4.0 && tau2 > 0.0 && var > 0.0) {
+    // r > 2/√n, squared; τ² > 0. (var = 0 gives an infinite factor, refused below.)
+    if !(math::finite(r) && r > 0.0 && r * r * n as f32 > 4.0 && tau2 > 0.0) {
         return None;
     }
     let phi = lag / (n.saturating_sub(1) as f32 * tau2);
-    let phi = if phi < MAX_CORRELATION {
-        phi
-    } else {
-        MAX_CORRELATION
-    };
+    let phi = phi.min(MAX_CORRELATION);
     let k = 1.0 + tau2 / var * ar1_factor(phi, n);
     math::finite(k).then_some(k)
 }

@@ -78,6 +78,9 @@ fn correlated_scale_takes_the_excess_and_its_correlation() {
         .enumerate()
         .map(|(i, _)| if i % 2 == 0 { 1.0 } else { -1.0 });
     assert_eq!(correlated_scale(alternating, 0.25, 10.0), None);
+    // Lag-one autocorrelation exactly 2/√n (1/2, n = 16): not beyond.
+    let step = [1.0f32, 1.0].into_iter().chain([0.0; 14]);
+    assert_eq!(correlated_scale(step, 0.1, 14.0), None);
     // Lag-one autocorrelation 5/8 below 2/√8.
     assert_eq!(
         correlated_scale(bend[2..10].iter().copied(), 0.25, 6.0),
