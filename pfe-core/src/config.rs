@@ -107,8 +107,8 @@ pub struct Config {
     /// two lines explain far better (a corner the walk followed) is split there; a line's
     /// ends reach over the beams beside them that lie on it (the beams the walk leaves between
     /// two features at a corner); line and circle covariances grow with the fit's reduced χ²
-    /// where the scatter exceeds σ_r, and more where that excess is correlated from beam to
-    /// beam (it does not average out over the points). They cost a few instructions a point on a Cortex-M4F
+    /// where the scatter significantly exceeds σ_r, and more where that excess is also
+    /// correlated from beam to beam (it does not average out over the points). They cost a few instructions a point on a Cortex-M4F
     /// (docs/PERFORMANCE.md). A build
     /// without the `scrutiny` feature leaves them out and refuses this on (not
     /// [`Config::is_valid`]).

@@ -1,8 +1,8 @@
 //! How honest a feature's covariance is made in the default mode: the fit's covariance under
-//! the range noise grows with the scatter the noise does not explain ([`scatter_scale`]), or,
-//! when that scatter is correlated from beam to beam (a rippled or bent wall, a slowly varying
-//! bias: residuals that do not average out over the points), with the scatter and its
-//! correlation ([`correlated_scale`]); the share of a systematic range error its beams have in
+//! the range noise grows with a significant scatter the noise does not explain
+//! ([`scatter_scale`]), or, when that scatter is also correlated from beam to beam (a rippled
+//! or bent wall, a slowly varying bias: residuals that do not average out over the points),
+//! with the scatter and its correlation ([`correlated_scale`]); the share of a systematic range error its beams have in
 //! common is added ([`systematic_line`], [`systematic_circle`]).
 
 use crate::feature::{CircleFeature, LineFeature};
@@ -103,17 +103,21 @@ pub(super) fn scatter_scale(sse: f32, var: f32, dof: f32) -> f32 {
 }
 
 /// Factor on a fit's covariance when its residuals `residuals` (in beam order) are correlated
-/// from one beam to the next, `None` when they are not (then [`scatter_scale`] stands).
+/// from one beam to the next; `None` when they are not, or when the factor is not finite
+/// (`var` = 0). The caller asks only where [`scatter_scale`] finds the scatter significant
+/// (and keeps its factor on `None`): the correlation of a scatter the noise explains is
+/// chance.
 ///
 /// `var` is a residual's variance under the noise model and `dof` the residuals less the
 /// fit's parameters. The residuals are taken as independent noise of variance `var` plus an
 /// AR(1) error of variance τ² = sse/dof − var whose neighbours correlate by φ = γ₁/τ², γ₁ =
-/// Σ eᵢeᵢ₊₁/(n − 1): the variance of a mean of n of them is τ² f(φ, n), f the AR(1) variance
-/// factor [`ar1_factor`], so the factor is 1 + (τ²/var) f. Correlated: the residuals' lag-one
-/// autocorrelation Σ eᵢeᵢ₊₁ / Σ eᵢ² exceeds two standard deviations of its spread under
-/// independent noise, 2/√n, and τ² > 0. φ is taken at most 0.9. A correlated error the fit
-/// absorbs (a slow bend over the whole line moves the line) does not show in its residuals:
-/// this is a lower bound of what correlation costs.
+/// Σ eᵢeᵢ₊₁/(n − 1): the variance of a mean of n of them is (var + τ² f(φ, n))/n against
+/// var/n, f the AR(1) variance factor [`ar1_factor`], so the factor is 1 + (τ²/var) f, used
+/// for every parameter of the fit. Correlated: the residuals' lag-one autocorrelation
+/// Σ eᵢeᵢ₊₁ / Σ eᵢ² exceeds two standard deviations of its spread under independent noise,
+/// 2/√n, and τ² > 0. φ is taken at most 0.9. A correlated error that the fit absorbs (a slow
+/// bend over the whole line moves the line) does not show in its residuals: one scan cannot
+/// tell it.
 pub(super) fn correlated_scale(
     residuals: impl Iterator<Item = f32>,
     var: f32,

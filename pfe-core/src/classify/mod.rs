@@ -3,7 +3,8 @@
 //! covariance. [`arc`]: the default mode's arc tests. In the default mode a circle must also
 //! beat the best two-line (corner) split, cover enough points and arc angle, and every
 //! feature's covariance is scaled up by the reduced χ² of its fit when that shows more scatter
-//! than σ_r explains.
+//! than σ_r explains, and further when that scatter is correlated from beam to beam
+//! ([`covariance`]).
 
 pub(crate) mod arc;
 mod covariance;
@@ -46,7 +47,8 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 });
                 let dof = pts.len() as f32 - 3.0;
                 let mut k = scatter_scale(sse, var * c2, dof);
-                if sse > var * c2 * dof {
+                // Only a significant scatter can show its correlation (see `correlated_scale`).
+                if k > 1.0 {
                     let (o, r) = (c.center, c.radius);
                     let residuals = pts.iter().map(|p| math::hypot(p.x - o.x, p.y - o.y) - r);
                     k = correlated_scale(residuals, var * c2, dof).unwrap_or(k);
@@ -77,7 +79,7 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 let c2 = mean_cos2(pass, s, pts, |_| normal);
                 let (sse, dof) = (line.sse(), pts.len() as f32 - 2.0);
                 let mut k = scatter_scale(sse, var * c2, dof);
-                if sse > var * c2 * dof {
+                if k > 1.0 {
                     let residuals = pts.iter().map(|p| line.signed_distance(p));
                     k = correlated_scale(residuals, var * c2, dof).unwrap_or(k);
                 }
