@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::Noise;
+use common::{wall_ranges, Noise};
 use pfe_core::{Config, Extractor, Feature, Scan, ScanGeometry};
 
 const TRIALS: usize = 1000;
@@ -30,17 +30,14 @@ fn spread_over_stated(half_deg: f64, phi: f64, sigma_c: f64) -> (f64, f64, usize
     for _ in 0..TRIALS {
         // AR(1) with stationary standard deviation sigma_c.
         let mut c = sigma_c * noise.gauss();
-        let ranges: Vec<f32> = (0..361)
-            .map(|i| {
-                c = phi * c + sigma_c * (1.0 - phi * phi).sqrt() * noise.gauss();
-                let b = g.bearing(i) as f64;
-                if (b - alpha).abs() < half_deg.to_radians() {
-                    (rho / (b - alpha).cos() + c + 5.0 * noise.gauss()) as f32
-                } else {
-                    f32::NAN
-                }
-            })
-            .collect();
+        let ranges = wall_ranges(g, (alpha, rho), half_deg.to_radians(), |on| {
+            c = phi * c + sigma_c * (1.0 - phi * phi).sqrt() * noise.gauss();
+            if on {
+                c + 5.0 * noise.gauss()
+            } else {
+                0.0
+            }
+        });
         ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
             .unwrap();
         let [Feature::Line(l)] = ex.features() else {
@@ -93,16 +90,13 @@ fn stated_var_rho(half_deg: f64) -> Vec<f64> {
     let mut ex = Extractor::<361, 16>::new();
     let mut out = Vec::new();
     for _ in 0..4000 {
-        let ranges: Vec<f32> = (0..361)
-            .map(|i| {
-                let b = g.bearing(i) as f64;
-                if b.abs() < half_deg.to_radians() {
-                    (2000.0 / b.cos() + 5.0 * noise.gauss()) as f32
-                } else {
-                    f32::NAN
-                }
-            })
-            .collect();
+        let ranges = wall_ranges(g, (0.0, 2000.0), half_deg.to_radians(), |on| {
+            if on {
+                5.0 * noise.gauss()
+            } else {
+                0.0
+            }
+        });
         ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
             .unwrap();
         if let [Feature::Line(l)] = ex.features() {

@@ -6,7 +6,7 @@
 
 mod common;
 
-use common::Noise;
+use common::{wall_ranges, Noise};
 use pfe_core::{
     circle_covariance, circle_covariance_range, fit_circle, fit_line, refine_circle, Circle,
     CircleMethod, Config, Extractor, Feature, Point, Scan, ScanGeometry,
@@ -81,18 +81,14 @@ fn line_through_extractor(alpha: f64, rho: f64) {
     let mut ex = Extractor::<361, 16>::new();
     let mut split = 0;
     for _ in 0..TRIALS {
-        let ranges: Vec<f32> = (0..361)
-            .map(|i| {
-                let b = g.bearing(i) as f64;
-                let den = (b - alpha).cos();
-                // The wall between ±35° of its normal.
-                if (b - alpha).abs() < 35f64.to_radians() && den > 0.0 {
-                    (rho / den + SIGMA * noise.gauss()) as f32
-                } else {
-                    f32::NAN
-                }
-            })
-            .collect();
+        // The wall between ±35° of its normal.
+        let ranges = wall_ranges(g, (alpha, rho), 35f64.to_radians(), |on| {
+            if on {
+                SIGMA * noise.gauss()
+            } else {
+                0.0
+            }
+        });
         ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
             .unwrap();
         let [Feature::Line(l)] = ex.features() else {

@@ -167,3 +167,26 @@ pub fn seen_from(prims: &[Prim], (ox, oy, th): (f64, f64, f64)) -> Vec<Prim> {
         })
         .collect()
 }
+
+/// The ranges of a scan of `geometry` (361 beams) seeing only the wall `x cos α + y sin α = ρ`
+/// (`wall`, rad and mm) over the beams within `half` rad of its normal, the others no return;
+/// `error(on_wall)` is called for every beam in order and its value added on the wall.
+pub fn wall_ranges(
+    geometry: pfe_core::ScanGeometry,
+    (alpha, rho): (f64, f64),
+    half: f64,
+    mut error: impl FnMut(bool) -> f64,
+) -> Vec<f32> {
+    (0..361)
+        .map(|i| {
+            let off = f64::from(geometry.bearing(i)) - alpha;
+            let on = off.abs() < half;
+            let e = error(on);
+            if on {
+                (rho / off.cos() + e) as f32
+            } else {
+                f32::NAN
+            }
+        })
+        .collect()
+}
