@@ -2,8 +2,9 @@
 //! the range noise grows with a significant scatter the noise does not explain
 //! ([`scatter_scale`]), or, when that scatter is also correlated from beam to beam (a rippled
 //! or bent wall, a slowly varying bias: residuals that do not average out over the points),
-//! with the scatter and its correlation ([`correlated_scale`]); the share of a systematic range error its beams have in
-//! common is added ([`systematic_line`], [`systematic_circle`]).
+//! with the scatter and its correlation ([`correlated_scale`]); the share of a systematic
+//! range error its beams have in common is added ([`systematic_line`],
+//! [`systematic_circle`]).
 
 use crate::feature::{CircleFeature, LineFeature};
 use crate::geometry::Point;
