@@ -170,6 +170,63 @@ mod tests {
         assert!(onward(&[p], 0.0) && onward(&[], 0.0));
     }
 
+    /// The marks after the check step of the run `60..=63` (its window 61..=63, the next point
+    /// 64) on a wall 800 mm to the right of a scanner driving at 1.2 m/s and turning at 0.9 rad/s
+    /// (12 mrad a mirror turn, more than the 8.7 mrad beam step), with its odometry: de-skewed,
+    /// the points of the two sweeps change places along the wall, so that from 62 to 63 the
+    /// window goes back 39 mm along its chord (σ_r = `sigma_r`: with 5 mm more than the 23 mm
+    /// of `k σ + floor`, with 10 mm less than its 43 mm). `jumps` are the marks also set as
+    /// jumps.
+    fn checked_on_a_passed_wall(sigma_r: f32, jumps: &[usize]) -> heapless::Vec<usize, 64> {
+        use crate::preprocess::deskew::{BeamTiming, Motion};
+        let g = ScanGeometry::LMS200_180_050;
+        let (v, omega, d) = (1200.0f64, 0.9f64, -800.0f64);
+        let ranges: [f32; 361] = core::array::from_fn(|i| {
+            // Beam i's time: its sweep's mirror turn (1/75 s) and its place in the sweep; the
+            // wall y = d seen from the pose then (x does not change the range to it).
+            let t = (i % 2) as f64 / 75.0 + (i / 2) as f64 / 75.0 / 360.0;
+            let th = omega * t;
+            let y = v / omega * (1.0 - libm::cos(th));
+            let sin = libm::sin(th + f64::from(g.bearing(i)));
+            if sin < -0.2 {
+                ((d - y) / sin) as f32
+            } else {
+                f32::NAN
+            }
+        });
+        let motion = Motion {
+            v: v as f32,
+            omega: omega as f32,
+            timing: BeamTiming::lms2xx(0.5),
+        };
+        let scan = Scan::from_mm(g, &ranges).with_sweeps(2).with_motion(motion);
+        let config = Config::default().with_sigma_r(sigma_r);
+        Extractor::<361, 8>::new().with_pass(&scan, &config, |pass, rule| {
+            for i in 60..=63 {
+                pass.set(i, START);
+            }
+            for &i in jumps {
+                pass.set(i, JUMP);
+            }
+            check(pass, rule);
+            starts(pass.flags)
+        })
+    }
+
+    /// On one surface whose de-skewed points go back and forth along it, the prediction alone
+    /// decides: a window with no jump, or with jumps only before its second point (where the
+    /// surface begins), is cleared after its first point; a jump inside it keeps it, unless
+    /// the window goes back by no more than the noise.
+    #[test]
+    fn only_a_jump_inside_the_window_calls_for_the_out_and_back_test() {
+        assert_eq!(checked_on_a_passed_wall(5.0, &[])[..], [60, 61]);
+        assert_eq!(checked_on_a_passed_wall(5.0, &[60, 61])[..], [60, 61]);
+        for jump in [62, 63] {
+            assert_eq!(checked_on_a_passed_wall(5.0, &[jump])[..], [60, 61, 62, 63]);
+            assert_eq!(checked_on_a_passed_wall(10.0, &[jump])[..], [60, 61]);
+        }
+    }
+
     fn starts(flags: &[u8]) -> heapless::Vec<usize, 64> {
         (0..flags.len())
             .filter(|&i| flags[i] & (VALID | START) == VALID | START)
