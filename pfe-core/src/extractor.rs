@@ -410,6 +410,7 @@ fn scrutinised(
     // A new pass over the moved points: the walk's noted neighbours are gone, the check step
     // reads every flag (the same outcome).
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    pass.alignment = offsets.variance();
     fit(&mut pass, &moved_rule, &moved_config, out);
     outcome(pass.stats)
 }

@@ -38,6 +38,11 @@ pub(crate) struct Pass<'a> {
     pub neighbours: Option<Vec<u16, NEIGHBOURS>>,
     /// What the extraction did so far.
     pub stats: &'a mut Stats,
+    /// The variance a feature's points inherit from the estimated offsets that moved
+    /// interleaved sweeps onto sweep 0 ([`crate::preprocess::sweeps::Offsets::variance`]):
+    /// (x mm², y mm², θ rad²), each sweep's over the square of the sweeps. Zero when no sweep
+    /// was moved by an estimate.
+    pub alignment: [f32; 3],
 }
 
 impl<'a> Pass<'a> {
@@ -73,6 +78,7 @@ impl<'a> Pass<'a> {
             uneven: motion.is_some_and(|m| m.sweeps_apart()),
             neighbours: None,
             stats,
+            alignment: [0.0; 3],
         }
     }
 

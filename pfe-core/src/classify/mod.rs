@@ -17,7 +17,10 @@ use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
-use covariance::{correlated_scale, mean_cos2, scatter_scale, systematic_circle, systematic_line};
+use covariance::{
+    aligned_circle, aligned_line, correlated_scale, mean_cos2, scatter_scale, systematic_circle,
+    systematic_line,
+};
 
 /// Fewest points of a circle in the default mode.
 const CIRCLE_MIN_POINTS: usize = 6;
@@ -55,6 +58,7 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 }
                 cf.cov = cf.cov.map(|row| row.map(|v| v * k));
                 systematic_circle(cf, origin, config.sigma_sys);
+                aligned_circle(cf, pass.alignment);
             }
             Some(f)
         }
@@ -87,6 +91,7 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
                 systematic_line(lf, config.sigma_sys);
+                aligned_line(lf, pass.alignment);
             }
             Some(f)
         }

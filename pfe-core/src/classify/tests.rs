@@ -356,3 +356,66 @@ fn the_default_circle_is_refined_to_the_geometric_optimum() {
     assert!(sse <= hyper.sse, "{sse} vs Hyper's {}", hyper.sse);
     assert!((own.sse - sse).abs() <= 1e-3 * sse, "{} vs {sse}", own.sse);
 }
+
+/// The offsets that moved interleaved sweeps: ρ gets n·(x, y)'s variance, α the turn's; a
+/// circle's centre c gets (x, y)'s and the turn's lever (−c_y, c_x); nothing when none moved.
+#[test]
+fn aligned_sweeps_add_the_offsets_variance() {
+    let alignment = [4.0f32, 9.0, 1e-6];
+    let (alpha, rho) = (0.5f32, 2000.0f32);
+    let mut lf = LineFeature {
+        first: 0,
+        last: 9,
+        points: 10,
+        alpha,
+        rho,
+        var_alpha: 1e-6,
+        var_rho: 4.0,
+        cov_alpha_rho: 1e-4,
+        start: Point::new(1000.0, 0.0),
+        end: Point::new(0.0, 2000.0),
+    };
+    let plain = lf;
+    aligned_line(&mut lf, [0.0; 3]);
+    assert_eq!(lf, plain);
+    // Each term alone counts.
+    for one in [[4.0, 0.0, 0.0], [0.0, 9.0, 0.0], [0.0, 0.0, 1e-6]] {
+        let mut l = plain;
+        aligned_line(&mut l, one);
+        assert_ne!(
+            (l.var_alpha, l.var_rho),
+            (plain.var_alpha, plain.var_rho),
+            "{one:?}"
+        );
+    }
+    aligned_line(&mut lf, alignment);
+    let (c, s) = (f64::from(alpha).cos(), f64::from(alpha).sin());
+    let want_rho = 4.0 + c * c * 4.0 + s * s * 9.0;
+    assert!(
+        (f64::from(lf.var_rho) - want_rho).abs() < 1e-4,
+        "{}",
+        lf.var_rho
+    );
+    assert!((f64::from(lf.var_alpha) - 2e-6).abs() < 1e-12);
+    assert_eq!(lf.cov_alpha_rho, 1e-4);
+
+    let mut cf = CircleFeature {
+        first: 0,
+        last: 9,
+        points: 10,
+        center: Point::new(1000.0, -2000.0),
+        radius: 150.0,
+        cov: [[1.0, 0.5, 0.0], [0.5, 2.0, 0.0], [0.0, 0.0, 3.0]],
+        start_angle: 0.0,
+        end_angle: 1.0,
+    };
+    aligned_circle(&mut cf, alignment);
+    // dθ moves the centre by dθ (2000, 1000).
+    let want = [[1.0 + 4.0 + 4.0, 0.5 + 2.0], [0.5 + 2.0, 2.0 + 9.0 + 1.0]];
+    for (i, row) in want.iter().enumerate() {
+        for (j, v) in row.iter().enumerate() {
+            assert!((cf.cov[i][j] - v).abs() < 1e-4, "{i}{j}: {:?}", cf.cov);
+        }
+    }
+    assert_eq!(cf.cov[2], [0.0, 0.0, 3.0]);
+}

@@ -159,6 +159,26 @@ impl Offsets {
         Offsets { sweeps, of }
     }
 
+    /// The variance of the offsets applied, as a feature over all sweeps inherits it: sweep s
+    /// holds 1/S of its points (interleaved), which move by s's error, so the feature moves
+    /// by 1/S of it. Σ over the moved sweeps of (sd/S)² for x, y (mm²) and θ (rad²); the
+    /// estimates' correlations are left out.
+    pub(crate) fn variance(&self) -> [f32; 3] {
+        let share = 1.0 / self.sweeps.max(1) as f32;
+        let mut v = [0.0f32; 3];
+        for o in self.of.iter().flatten() {
+            for (v, sd) in v.iter_mut().zip(o.sd) {
+                let s = sd * share;
+                *v += s * s;
+            }
+        }
+        if v.iter().all(|x| math::finite(*x)) {
+            v
+        } else {
+            [0.0; 3]
+        }
+    }
+
     /// Sweeps with a significant offset.
     pub(crate) fn moved(&self) -> usize {
         self.of.iter().flatten().count()
@@ -389,7 +409,36 @@ fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
 
 #[cfg(test)]
 mod tests {
-    use super::{invert, offset, Solution, ROT_SCALE};
+    use super::{invert, offset, Offsets, Solution, SweepOffset, ROT_SCALE};
+
+    /// Each moved sweep's standard errors over the sweeps, squared and summed; sweeps not
+    /// moved add nothing.
+    #[test]
+    fn the_offsets_variance_is_their_share_of_each_sweeps() {
+        let moved = |sd: [f32; 3]| {
+            Some(SweepOffset {
+                dx: 8.0,
+                dy: 0.0,
+                dtheta: 0.006,
+                sd,
+                sigma: 5.0,
+                chi2: 100.0,
+                rows: 64,
+                max_shift: 30.0,
+            })
+        };
+        let two = Offsets {
+            sweeps: 2,
+            of: [moved([2.0, 4.0, 1.0 / 1024.0]), None, None],
+        };
+        assert_eq!(two.variance(), [1.0, 4.0, 1.0 / 4_194_304.0]);
+        let four = Offsets {
+            sweeps: 4,
+            of: [moved([4.0, 8.0, 1.0 / 256.0]), None, moved([8.0, 4.0, 0.0])],
+        };
+        assert_eq!(four.variance(), [5.0, 5.0, 1.0 / 1_048_576.0]);
+        assert_eq!(Offsets::default().variance(), [0.0; 3]);
+    }
 
     /// An offset's χ² is `xᵀ A x / σ²` with the full symmetric normal matrix A (every
     /// off-diagonal term counted twice), its standard errors `σ √(A⁻¹)ᵢᵢ` (the rotation's in
