@@ -278,6 +278,18 @@ fn an_exact_arc_is_a_circle_until_the_line_explains_it_within_the_noise() {
     }
 }
 
+/// The screen before the algebraic fit (the line must leave more than χ² σ_r² and 1.5 σ_r² a
+/// point) is no stricter than the tests after it, also for σ_r below 1 mm, where χ² σ_r² is
+/// smaller than χ² + σ_r²: a flat exact arc whose line leaves 7.5–25 mm² over 20 points is a
+/// circle at σ_r = 0.5 mm.
+#[test]
+fn a_flat_arc_is_a_circle_for_a_scanner_of_half_a_millimetre() {
+    let pts = arc(20, (0.0, 0.0), 1000.0, 0.0, 0.152);
+    let s = line_sse64(&pts);
+    assert!(s > 7.5 && s < 25.0, "S {s}");
+    assert!(circle_at(&pts, 0.5), "S {s}");
+}
+
 /// The circle must explain the points within 2σ_r RMS (its residual sum ≤ 4 σ_r² n) and leave
 /// less than half the line's: an arc whose every other point lies `d` mm out leaves ±d/2 a
 /// point, a circle residual sum of about n d²/4, and the line's S + n d²/4 (S the exact arc's).
