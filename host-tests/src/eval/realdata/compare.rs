@@ -58,6 +58,7 @@ impl Seen {
                     start: [f64::from(l.start.x), f64::from(l.start.y)],
                     end: [f64::from(l.end.x), f64::from(l.end.y)],
                     points: usize::from(l.points),
+                    beams: [usize::from(l.first), usize::from(l.last)],
                 }),
                 Feature::Circle(c) => s.circles.push(CircleObs {
                     center: [f64::from(c.center.x), f64::from(c.center.y)],
@@ -129,23 +130,27 @@ pub fn matched_lines<'a>(
     a.lines
         .iter()
         .filter(|l| l.points >= MIN_LINE_POINTS)
-        .filter_map(|l| {
-            let moved = change.line(l);
-            b.lines
-                .iter()
-                .filter_map(|c| {
-                    let (d, s, alpha) = moved.difference(c);
-                    let gated = d[0].abs() < GATE_ALPHA && d[1].abs() < GATE_RHO_MM;
-                    let (m0, m1) = moved.extent_along(c);
-                    let (c0, c1) = c.extent_along(c);
-                    let overlap = m0 <= c1 && c0 <= m1;
-                    let cost = (d[0] / GATE_ALPHA).powi(2) + (d[1] / GATE_RHO_MM).powi(2);
-                    (gated && overlap).then_some((cost, Innovation { d, s, alpha }))
-                })
-                .min_by(|x, y| x.0.total_cmp(&y.0))
-                .map(|(_, inn)| (l, inn))
-        })
+        .filter_map(|l| rematch(l, b, change).map(|inn| (l, inn)))
         .collect()
+}
+
+/// The difference of scan k's line `l`, moved by `change`, from the nearest line of `b` within
+/// the gate whose extent overlaps it; `None` when it does not re-appear.
+pub fn rematch(l: &LineObs, b: &Seen, change: &FrameChange) -> Option<Innovation> {
+    let moved = change.line(l);
+    b.lines
+        .iter()
+        .filter_map(|c| {
+            let (d, s, alpha) = moved.difference(c);
+            let gated = d[0].abs() < GATE_ALPHA && d[1].abs() < GATE_RHO_MM;
+            let (m0, m1) = moved.extent_along(c);
+            let (c0, c1) = c.extent_along(c);
+            let overlap = m0 <= c1 && c0 <= m1;
+            let cost = (d[0] / GATE_ALPHA).powi(2) + (d[1] / GATE_RHO_MM).powi(2);
+            (gated && overlap).then_some((cost, Innovation { d, s, alpha }))
+        })
+        .min_by(|x, y| x.0.total_cmp(&y.0))
+        .map(|(_, inn)| inn)
 }
 
 impl PairTally {

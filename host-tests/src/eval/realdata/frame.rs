@@ -35,6 +35,8 @@ pub struct LineObs {
     pub end: [f64; 2],
     /// Valid points fitted.
     pub points: usize,
+    /// First and last beam of its span.
+    pub beams: [usize; 2],
 }
 
 impl LineObs {
@@ -132,6 +134,7 @@ impl FrameChange {
             start: self.point(l.start),
             end: self.point(l.end),
             points: l.points,
+            beams: l.beams,
         };
         if rho < 0.0 {
             moved.flipped()
@@ -215,6 +218,7 @@ mod tests {
             start: [0.0; 2],
             end: [0.0; 2],
             points: 10,
+            beams: [0, 9],
         }
     }
 

@@ -7,7 +7,9 @@
 //!   fraction that re-appears, the median |Δρ| and |Δα|, the median NIS of (α, ρ) with both
 //!   lines' full covariance carried across the frame change ([`frame`]), raw and after a
 //!   per-pair pose refit ([`refit`]);
-//! - circles that re-appear and their centre NIS.
+//! - circles that re-appear and their centre NIS;
+//! - pfe `default`'s lines against each other method's on the beams both hold in lines
+//!   ([`shared`]).
 //!
 //! A pair is compared when both scans have a pose. Scan times are not used: in the shared
 //! logs consecutive scans are about 1 m apart (0.1 m in freiburg-079; the corrected logs keep a
@@ -19,6 +21,7 @@ pub mod coverage;
 pub mod frame;
 pub mod refit;
 pub mod report;
+pub mod shared;
 mod svg;
 #[cfg(test)]
 mod tests;
@@ -158,6 +161,8 @@ pub struct LogReport {
     pub beams: usize,
     /// Per method.
     pub methods: Vec<Summary>,
+    /// The first method (pfe `default`) against each other method on shared beams.
+    pub shared: Vec<shared::Shared>,
 }
 
 /// Runs `methods` over `records` (at most `max_scans`, 0 = all), each scan declared as `sweeps`
@@ -176,6 +181,11 @@ pub fn run_records(
     };
     let mut tallies = vec![Tally::default(); methods.len()];
     let mut previous: Vec<Option<Seen>> = vec![None; methods.len()];
+    let mut shared: Vec<shared::Shared> = methods
+        .iter()
+        .skip(1)
+        .map(|m| shared::Shared::new(m.name()))
+        .collect();
     let mut first = true;
     let mut beams = 0;
     for record in records.take(limit) {
@@ -185,6 +195,7 @@ pub fn run_records(
         }
         let pose = pose_of(&record);
         let context = context_of(&record, sweeps);
+        let mut classed = Vec::with_capacity(methods.len());
         for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
             let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
             tally.scans += 1;
@@ -195,11 +206,20 @@ pub fn run_records(
             ));
             let seen = pose.map(|p| Seen::new(p, &ex.features));
             match (prev.as_ref(), seen.as_ref()) {
-                (Some(a), Some(b)) => tally.pairs.add(a, b),
+                (Some(a), Some(b)) => {
+                    tally.pairs.add(a, b);
+                    classed.push(shared::beam_lines(a, b, record.ranges_mm.len()));
+                }
                 _ if !first => tally.pairs_skipped += 1,
                 _ => {}
             }
             *prev = seen;
+        }
+        // Every method sees the same poses, so each has a pair here or none does.
+        if let Some((reference, others)) = classed.split_first() {
+            for (s, other) in shared.iter_mut().zip(others) {
+                s.add(reference, other);
+            }
         }
         first = false;
     }
@@ -211,6 +231,7 @@ pub fn run_records(
             .zip(&tallies)
             .map(|(m, t)| t.summary(m.name()))
             .collect(),
+        shared,
     })
 }
 

@@ -8,6 +8,7 @@ use anyhow::Context;
 use super::compare::{CONSISTENT_DRAWS, GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, MIN_LINE_POINTS};
 use super::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
 use super::refit::{MIN_LINES, MIN_SPREAD};
+use super::shared::Shared;
 use super::svg::grouped_bars;
 use super::{LogReport, Summary};
 
@@ -62,6 +63,39 @@ fn row(s: &Summary) -> [String; 16] {
     ]
 }
 
+const SHARED_HEADER: [&str; 7] = [
+    "against",
+    "shared beams",
+    "default re-found%",
+    "its re-found%",
+    "only default",
+    "re-found%",
+    "only it (re-found%)",
+];
+
+fn shared_row(s: &Shared) -> [String; 7] {
+    let pct = |a: usize, b: usize| {
+        if b == 0 {
+            f64::NAN
+        } else {
+            100.0 * a as f64 / b as f64
+        }
+    };
+    [
+        s.method.clone(),
+        s.both.to_string(),
+        num(pct(s.both_reference_refound, s.both), 1),
+        num(pct(s.both_other_refound, s.both), 1),
+        s.only_reference.to_string(),
+        num(pct(s.only_reference_refound, s.only_reference), 1),
+        format!(
+            "{} ({})",
+            s.only_other,
+            num(pct(s.only_other_refound, s.only_other), 1)
+        ),
+    ]
+}
+
 fn title(r: &LogReport) -> String {
     let pairs = r.methods.first().map_or(0, |s| s.pairs);
     let scans = r.methods.first().map_or(0, |s| s.scans);
@@ -74,13 +108,25 @@ fn title(r: &LogReport) -> String {
 /// One log's text table.
 pub fn table(r: &LogReport) -> String {
     let rows: Vec<[String; 16]> = r.methods.iter().map(row).collect();
-    let mut widths: Vec<usize> = HEADER.iter().map(|h| h.chars().count()).collect();
-    for cells in &rows {
+    let mut out = format!("{}\n", title(r));
+    aligned(&mut out, &HEADER, &rows);
+    let _ = writeln!(
+        out,
+        "pfe-default's lines of ≥ {MIN_LINE_POINTS} points against each method's, by beam:"
+    );
+    let shared: Vec<[String; 7]> = r.shared.iter().map(shared_row).collect();
+    aligned(&mut out, &SHARED_HEADER, &shared);
+    out
+}
+
+/// `header` and `rows` as right-aligned text columns, appended to `out`.
+fn aligned<const N: usize>(out: &mut String, header: &[&str; N], rows: &[[String; N]]) {
+    let mut widths: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
+    for cells in rows {
         for (w, c) in widths.iter_mut().zip(cells) {
             *w = (*w).max(c.chars().count());
         }
     }
-    let mut out = format!("{}\n", title(r));
     let line = |cells: &mut dyn Iterator<Item = &str>| {
         let mut s = String::new();
         for (k, (c, w)) in cells.zip(&widths).enumerate() {
@@ -93,11 +139,10 @@ pub fn table(r: &LogReport) -> String {
         }
         s.trim_end().to_string()
     };
-    let _ = writeln!(out, "{}", line(&mut HEADER.iter().copied()));
-    for cells in &rows {
+    let _ = writeln!(out, "{}", line(&mut header.iter().copied()));
+    for cells in rows {
         let _ = writeln!(out, "{}", line(&mut cells.iter().map(String::as_str)));
     }
-    out
 }
 
 /// The Markdown of `docs/REALDATA.md` (plots referenced by file name, written by
@@ -155,6 +200,14 @@ splits both by class of line.\n\
 centres by the pair's pose refit from its lines (pairs with a refit; the refit is fitted to \
 the lines only, so it costs the circles no degree of freedom; its own uncertainty, the inverse \
 of its normal matrix, is added to the centres' covariance).\n\n\
+Under each log's table, pfe `default`'s lines against each other method's, beam by beam \
+(`shared`): lines% weighs each method's own lines, so a method that also makes lines where \
+another makes none is scored over other beams. **shared beams**: beams of scan k that both \
+hold in lines of ≥ {MIN_LINE_POINTS} points (over all pairs); **default re-found%** and \
+**its re-found%**: of those, the beams whose line (pfe `default`'s, the other method's) \
+re-appears in k+1, matched as for lines%; **only default**: beams only pfe `default` holds in \
+such lines, with the share re-found; **only it**: beams only the other method holds, and the \
+share re-found.\n\n\
 Figures are over the whole log; `–` = nothing to measure.\n\n",
         f64::from(SMOOTH_STEP_MM) / 1000.0,
         f64::from(SMOOTH_STEP_MM) / 1000.0,
@@ -170,6 +223,14 @@ Figures are over the whole log; `–` = nothing to measure.\n\n",
             let _ = writeln!(md, "| {} |", row(s).join(" | "));
         }
         md.push('\n');
+        if !r.shared.is_empty() {
+            let _ = writeln!(md, "| {} |", SHARED_HEADER.join(" | "));
+            let _ = writeln!(md, "|{}", "---|".repeat(SHARED_HEADER.len()));
+            for s in &r.shared {
+                let _ = writeln!(md, "| {} |", shared_row(s).join(" | "));
+            }
+            md.push('\n');
+        }
     }
     md.push_str("## Plots\n\n");
     for (file, what) in PLOTS {

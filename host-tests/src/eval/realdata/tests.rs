@@ -199,3 +199,55 @@ fn the_lines_pose_refit_removes_a_pose_error_from_the_circles() {
         "{refit_exact}"
     );
 }
+
+#[test]
+fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
+    // The room seen from three poses 0.3 m apart, given exactly: every wall is found again.
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let poses = [
+        [3000.0, 3500.0, 0.0],
+        [3300.0, 3500.0, 0.05],
+        [3600.0, 3600.0, 0.1],
+    ];
+    let scenario = Scenario::new(SceneKind::Office, 0).with_sigma(SIGMA_R);
+    let records: Vec<_> = poses
+        .iter()
+        .enumerate()
+        .map(|(k, &pose)| {
+            let shapes: Vec<Shape> = room().iter().map(|s| s.to_frame(pose)).collect();
+            let sim = render(&shapes, &scenario, &mut rng);
+            Ok(crate::formats::Record {
+                id: k as u64,
+                geometry: sim.geometry,
+                ranges_mm: sim.ranges_mm,
+                time: None,
+                pose: Some([pose[0] / 1000.0, pose[1] / 1000.0, pose[2]]),
+            })
+        })
+        .collect();
+    let beams = records
+        .first()
+        .map_or(0, |r: &Result<crate::formats::Record, _>| {
+            r.as_ref().map_or(0, |r| r.ranges_mm.len())
+        });
+    let mut methods = super::methods(SIGMA_R);
+    let r = super::run_records("room", records.into_iter(), &mut methods, 0, Some(1)).unwrap();
+    let names: Vec<&str> = r.shared.iter().map(|s| s.method.as_str()).collect();
+    assert_eq!(names, ["pfe-paper", "split-merge", "acf"]);
+    for s in &r.shared {
+        // Two pairs: no beam is counted twice, and the room's walls are mostly lines.
+        assert!(
+            s.both + s.only_reference + s.only_other <= 2 * beams,
+            "{s:?}"
+        );
+        assert!(s.both_reference_refound <= s.both && s.both_other_refound <= s.both);
+        assert!(s.only_reference_refound <= s.only_reference);
+        assert!(s.only_other_refound <= s.only_other);
+    }
+    let sm = &r.shared[1];
+    assert!(sm.both > beams, "{sm:?}");
+    assert_eq!(sm.both_reference_refound, sm.both, "{sm:?}");
+    // pfe-default's own lines% counts the same re-found beams: its long lines' points.
+    let default = &r.methods[0];
+    assert!(default.lines_reappear_pct > 95.0, "{default:?}");
+}
