@@ -161,12 +161,14 @@ pub struct LogReport {
     pub beams: usize,
     /// Per method.
     pub methods: Vec<Summary>,
-    /// The first method (pfe `default`) against each other method on shared beams.
+    /// The first method (pfe `default` in [`methods`]) against each other method, beam by
+    /// beam ([`shared`]).
     pub shared: Vec<shared::Shared>,
 }
 
 /// Runs `methods` over `records` (at most `max_scans`, 0 = all), each scan declared as `sweeps`
-/// interleaved sweeps (`None`: a SICK LMS2xx's for its resolution).
+/// interleaved sweeps (`None`: a SICK LMS2xx's for its resolution). The first method is the
+/// reference the others are compared with beam by beam ([`LogReport::shared`]).
 pub fn run_records(
     log: &str,
     records: impl Iterator<Item = Result<Record, InputError>>,
@@ -188,6 +190,8 @@ pub fn run_records(
         .collect();
     let mut first = true;
     let mut beams = 0;
+    // Beams of the previous scan (scan k of the next pair).
+    let mut prev_beams = 0;
     for record in records.take(limit) {
         let record = record.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
         if beams == 0 {
@@ -208,7 +212,7 @@ pub fn run_records(
             match (prev.as_ref(), seen.as_ref()) {
                 (Some(a), Some(b)) => {
                     tally.pairs.add(a, b);
-                    classed.push(shared::beam_lines(a, b, record.ranges_mm.len()));
+                    classed.push(shared::beam_lines(a, b, prev_beams));
                 }
                 _ if !first => tally.pairs_skipped += 1,
                 _ => {}
@@ -221,6 +225,7 @@ pub fn run_records(
                 s.add(reference, other);
             }
         }
+        prev_beams = record.ranges_mm.len();
         first = false;
     }
     Ok(LogReport {

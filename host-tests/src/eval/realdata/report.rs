@@ -63,17 +63,16 @@ fn row(s: &Summary) -> [String; 16] {
     ]
 }
 
-const SHARED_HEADER: [&str; 7] = [
+const SHARED_HEADER: [&str; 6] = [
     "against",
     "shared beams",
     "default re-found%",
-    "its re-found%",
-    "only default",
-    "re-found%",
-    "only it (re-found%)",
+    "other re-found%",
+    "only default (re-found%)",
+    "only other (re-found%)",
 ];
 
-fn shared_row(s: &Shared) -> [String; 7] {
+fn shared_row(s: &Shared) -> [String; 6] {
     let pct = |a: usize, b: usize| {
         if b == 0 {
             f64::NAN
@@ -86,8 +85,11 @@ fn shared_row(s: &Shared) -> [String; 7] {
         s.both.to_string(),
         num(pct(s.both_reference_refound, s.both), 1),
         num(pct(s.both_other_refound, s.both), 1),
-        s.only_reference.to_string(),
-        num(pct(s.only_reference_refound, s.only_reference), 1),
+        format!(
+            "{} ({})",
+            s.only_reference,
+            num(pct(s.only_reference_refound, s.only_reference), 1)
+        ),
         format!(
             "{} ({})",
             s.only_other,
@@ -114,7 +116,7 @@ pub fn table(r: &LogReport) -> String {
         out,
         "pfe-default's lines of ≥ {MIN_LINE_POINTS} points against each method's, by beam:"
     );
-    let shared: Vec<[String; 7]> = r.shared.iter().map(shared_row).collect();
+    let shared: Vec<[String; 6]> = r.shared.iter().map(shared_row).collect();
     aligned(&mut out, &SHARED_HEADER, &shared);
     out
 }
@@ -200,14 +202,15 @@ splits both by class of line.\n\
 centres by the pair's pose refit from its lines (pairs with a refit; the refit is fitted to \
 the lines only, so it costs the circles no degree of freedom; its own uncertainty, the inverse \
 of its normal matrix, is added to the centres' covariance).\n\n\
-Under each log's table, pfe `default`'s lines against each other method's, beam by beam \
-(`shared`): lines% weighs each method's own lines, so a method that also makes lines where \
-another makes none is scored over other beams. **shared beams**: beams of scan k that both \
-hold in lines of ≥ {MIN_LINE_POINTS} points (over all pairs); **default re-found%** and \
-**its re-found%**: of those, the beams whose line (pfe `default`'s, the other method's) \
-re-appears in k+1, matched as for lines%; **only default**: beams only pfe `default` holds in \
-such lines, with the share re-found; **only it**: beams only the other method holds, and the \
-share re-found.\n\n\
+Under each log's table, pfe `default`'s lines against each other method's, beam by beam. \
+lines% weighs each method's lines by their own points, so a method that also makes lines \
+where another makes none is not scored on the same beams as it; this table is. A beam of scan \
+k is held by a line of ≥ {MIN_LINE_POINTS} points when it lies between the line's first and \
+last beam, and counts once per pair of scans (re-found if any line holding it is). \
+**shared beams**: beams both methods hold in such lines; **default re-found%** and **other \
+re-found%**: of those, the share whose line (pfe `default`'s, the other method's) re-appears \
+in k+1, matched as for lines%; **only default** and **only other**: beams only that method \
+holds in such lines, with the share re-found.\n\n\
 Figures are over the whole log; `–` = nothing to measure.\n\n",
         f64::from(SMOOTH_STEP_MM) / 1000.0,
         f64::from(SMOOTH_STEP_MM) / 1000.0,

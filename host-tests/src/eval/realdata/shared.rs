@@ -1,8 +1,10 @@
-//! Lines on the beams two methods share. lines% weighs each method's own lines, so a method
-//! that also makes lines where another makes none is scored over other beams than it. Here
-//! each beam of scan k is classed per method by the line of ≥ [`MIN_LINE_POINTS`] points
-//! holding it (none, re-found in k+1, not re-found), and pfe `default` is compared with each
-//! other method on the beams both hold in such lines, and on the beams only one of them does.
+//! Lines on the beams two methods share. lines% weighs each method's lines by their own
+//! points, so a method that also makes lines where another makes none is not scored on the
+//! same beams as it. Here each beam of scan k is classed per method by the line of
+//! ≥ [`MIN_LINE_POINTS`] points whose span (first to last beam) holds it: none, re-found in
+//! k+1, or not re-found; pfe `default` is then compared with each other method on the beams
+//! both hold in such lines, and on the beams only one of them does. A beam counts once per
+//! pair of scans.
 
 use serde::Serialize;
 
@@ -70,7 +72,7 @@ pub struct Shared {
     pub both_reference_refound: usize,
     /// Of those, beams whose other method's line re-appears.
     pub both_other_refound: usize,
-    /// Beams only the reference holds in lines, and those re-found.
+    /// Beams only the reference holds in lines.
     pub only_reference: usize,
     /// Of `only_reference`, re-found.
     pub only_reference_refound: usize,

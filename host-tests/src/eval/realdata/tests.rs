@@ -200,54 +200,118 @@ fn the_lines_pose_refit_removes_a_pose_error_from_the_circles() {
     );
 }
 
+/// A method that finds nothing.
+struct Blind;
+
+impl crate::methods::Method for Blind {
+    fn name(&self) -> &str {
+        "blind"
+    }
+    fn extract(&mut self, _: &pfe_core::ScanGeometry, _: &[f32]) -> crate::methods::Extraction {
+        crate::methods::Extraction::default()
+    }
+}
+
 #[test]
 fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
-    // The room seen from three poses 0.3 m apart, given exactly: every wall is found again.
+    // The room seen from three poses 0.3 m apart, given exactly; the box (shapes 4..=7) is
+    // taken away before the third scan, so only its lines of the second scan are not found
+    // again.
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let poses = [
         [3000.0, 3500.0, 0.0],
         [3300.0, 3500.0, 0.05],
         [3600.0, 3600.0, 0.1],
     ];
+    let box_shapes = 4..=7;
     let scenario = Scenario::new(SceneKind::Office, 0).with_sigma(SIGMA_R);
+    let mut box_beams = Vec::new();
     let records: Vec<_> = poses
         .iter()
         .enumerate()
         .map(|(k, &pose)| {
-            let shapes: Vec<Shape> = room().iter().map(|s| s.to_frame(pose)).collect();
+            let shapes: Vec<Shape> = room()
+                .iter()
+                .enumerate()
+                .filter(|(s, _)| k < 2 || !box_shapes.contains(s))
+                .map(|(_, s)| s.to_frame(pose))
+                .collect();
             let sim = render(&shapes, &scenario, &mut rng);
-            Ok(crate::formats::Record {
+            // Shape ids index the shapes rendered: the box's hold while it is there.
+            let on_box = |p: &Option<usize>| k < 2 && p.is_some_and(|p| box_shapes.contains(&p));
+            box_beams.push(sim.beam_primitive.iter().filter(|p| on_box(p)).count());
+            crate::formats::Record {
                 id: k as u64,
                 geometry: sim.geometry,
                 ranges_mm: sim.ranges_mm,
                 time: None,
                 pose: Some([pose[0] / 1000.0, pose[1] / 1000.0, pose[2]]),
-            })
+            }
         })
         .collect();
-    let beams = records
-        .first()
-        .map_or(0, |r: &Result<crate::formats::Record, _>| {
-            r.as_ref().map_or(0, |r| r.ranges_mm.len())
-        });
+    // pfe-default's beams in lines of ≥ 10 points in scans 0 and 1 (the first of each pair),
+    // counted here from its features.
+    let mut default = super::methods(SIGMA_R).remove(0);
+    let in_lines: usize = records
+        .iter()
+        .take(2)
+        .map(|r| {
+            let context = super::context_of(r, Some(1));
+            let ex = default.extract_in(&r.geometry, &r.ranges_mm, &context);
+            let mut held = vec![false; r.ranges_mm.len()];
+            for f in &ex.features {
+                if let Feature::Line(l) = f {
+                    if usize::from(l.points) >= super::compare::MIN_LINE_POINTS {
+                        let span = usize::from(l.first)..=usize::from(l.last);
+                        held.iter_mut()
+                            .take(*span.end() + 1)
+                            .skip(*span.start())
+                            .for_each(|h| *h = true);
+                    }
+                }
+            }
+            held.iter().filter(|&&h| h).count()
+        })
+        .collect::<Vec<_>>()
+        .iter()
+        .sum();
     let mut methods = super::methods(SIGMA_R);
-    let r = super::run_records("room", records.into_iter(), &mut methods, 0, Some(1)).unwrap();
-    let names: Vec<&str> = r.shared.iter().map(|s| s.method.as_str()).collect();
-    assert_eq!(names, ["pfe-paper", "split-merge", "acf"]);
-    for s in &r.shared {
-        // Two pairs: no beam is counted twice, and the room's walls are mostly lines.
-        assert!(
-            s.both + s.only_reference + s.only_other <= 2 * beams,
-            "{s:?}"
-        );
-        assert!(s.both_reference_refound <= s.both && s.both_other_refound <= s.both);
-        assert!(s.only_reference_refound <= s.only_reference);
-        assert!(s.only_other_refound <= s.only_other);
-    }
-    let sm = &r.shared[1];
-    assert!(sm.both > beams, "{sm:?}");
-    assert_eq!(sm.both_reference_refound, sm.both, "{sm:?}");
-    // pfe-default's own lines% counts the same re-found beams: its long lines' points.
-    let default = &r.methods[0];
-    assert!(default.lines_reappear_pct > 95.0, "{default:?}");
+    methods.truncate(1);
+    methods.push(Box::new(Blind));
+    methods.push(super::methods(SIGMA_R).remove(0));
+    let r = super::run_records(
+        "room",
+        records.into_iter().map(Ok),
+        &mut methods,
+        0,
+        Some(1),
+    )
+    .unwrap();
+    let [blind, twin] = &r.shared[..] else {
+        panic!("{:?}", r.shared);
+    };
+    assert_eq!(
+        (blind.method.as_str(), twin.method.as_str()),
+        ("blind", "pfe-default")
+    );
+    // Against a method that finds nothing, every beam of pfe-default's lines is its alone.
+    assert!(in_lines > 300, "{in_lines}");
+    assert_eq!(
+        (blind.only_reference, blind.both, blind.only_other),
+        (in_lines, 0, 0)
+    );
+    // Against itself, every such beam is shared and found again alike.
+    assert_eq!(
+        (twin.both, twin.only_reference, twin.only_other),
+        (in_lines, 0, 0)
+    );
+    assert_eq!(twin.both_reference_refound, twin.both_other_refound);
+    assert_eq!(blind.only_reference_refound, twin.both_reference_refound);
+    // What is not found again is the box, seen in scan 1 and gone from scan 2 (a line's span
+    // may reach a beam or two past it).
+    let lost = blind.only_reference - blind.only_reference_refound;
+    assert!(
+        lost > box_beams[1] / 2 && lost <= box_beams[1] + 4,
+        "{lost} {box_beams:?}"
+    );
 }
