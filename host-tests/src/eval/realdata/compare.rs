@@ -9,7 +9,7 @@
 
 use pfe_core::Feature;
 
-use super::frame::{nis, FrameChange, LineObs, Pose};
+use super::frame::{nis, Cov2, FrameChange, LineObs, Pose};
 use rand::SeedableRng;
 
 use super::refit::{
@@ -197,27 +197,39 @@ impl PairTally {
                 self.circles_matched += 1;
                 let s = super::frame::add(&moved.cov, &o.cov);
                 self.circle_nis.extend(nis(d, &s));
-                if let Some(([dx, dy, dth], p)) = delta {
-                    // The extra motion δ of frame k+1 moves a point p to R(δθ) p + (δx, δy);
-                    // δ's covariance P enters through J = ∂/∂δ = [[1, 0, −y], [0, 1, x]].
-                    let (sin, cos) = dth.sin_cos();
-                    let [mx, my] = moved.center;
-                    let r = [
-                        cos * mx - sin * my + dx - o.center[0],
-                        sin * mx + cos * my + dy - o.center[1],
-                    ];
-                    let j = [[1.0, 0.0, -my], [0.0, 1.0, mx]];
-                    let mut s = s;
-                    for (a, ja) in j.iter().enumerate() {
-                        for (b, jb) in j.iter().enumerate() {
-                            s[a][b] += (0..3)
-                                .map(|k| (0..3).map(|l| ja[k] * p[k][l] * jb[l]).sum::<f64>())
-                                .sum::<f64>();
-                        }
-                    }
+                if let Some(delta) = &delta {
+                    let (r, s) = refit_centre(&moved, o, delta);
                     self.circle_nis_refit.extend(nis(r, &s));
                 }
             }
         }
     }
+}
+
+/// A pair's pose correction from its lines ([`correction`]) and its covariance.
+pub type Correction = ([f64; 3], [[f64; 3]; 3]);
+
+/// The difference of scan k's circle centre, moved into k+1's frame (`moved`), from `o` after
+/// the pair's pose correction `delta`, and its covariance: both centres' plus the
+/// correction's own.
+pub fn refit_centre(moved: &CircleObs, o: &CircleObs, delta: &Correction) -> ([f64; 2], Cov2) {
+    let ([dx, dy, dth], p) = delta;
+    // The extra motion δ of frame k+1 moves a point p to R(δθ) p + (δx, δy); δ's covariance
+    // P enters through J = ∂/∂δ = [[1, 0, −y], [0, 1, x]].
+    let (sin, cos) = dth.sin_cos();
+    let [mx, my] = moved.center;
+    let r = [
+        cos * mx - sin * my + dx - o.center[0],
+        sin * mx + cos * my + dy - o.center[1],
+    ];
+    let j = [[1.0, 0.0, -my], [0.0, 1.0, mx]];
+    let mut s = super::frame::add(&moved.cov, &o.cov);
+    for (a, ja) in j.iter().enumerate() {
+        for (b, jb) in j.iter().enumerate() {
+            s[a][b] += (0..3)
+                .map(|k| (0..3).map(|l| ja[k] * p[k][l] * jb[l]).sum::<f64>())
+                .sum::<f64>();
+        }
+    }
+    (r, s)
 }

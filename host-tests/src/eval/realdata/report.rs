@@ -201,7 +201,8 @@ splits both by class of line.\n\
 χ²₂ median {CHI2_2_MEDIAN:.2} when consistent; **circ NIS refit**: the same after moving k's \
 centres by the pair's pose refit from its lines (pairs with a refit; the refit is fitted to \
 the lines only, so it costs the circles no degree of freedom; its own uncertainty, the inverse \
-of its normal matrix, is added to the centres' covariance).\n\n\
+of its normal matrix, is added to the centres' covariance). `cargo run -p host-tests --release \
+--example realdata_circles -- LOG` splits it by class of circle.\n\n\
 Under each log's table, pfe `default`'s lines against each other method's, beam by beam. \
 lines% weighs each method's lines by their own points, so a method that also makes lines \
 where another makes none is not scored on the same beams as it; this table is. A beam of scan \
