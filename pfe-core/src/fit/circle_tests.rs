@@ -43,8 +43,8 @@ fn arc_sums_match_the_two_pass_fits() -> Result<(), FitError> {
     Ok(())
 }
 
-/// Points on one line have no Kåsa circle in the arc test's sums (their determinant is
-/// rounding only, far below 1e-10 of the spread squared); a gentle arc does.
+/// Points on one line, or nearly (a determinant below 1e-10 of the spread squared), have no
+/// Kåsa circle in the arc test's sums; a gentle arc does.
 #[test]
 fn arc_sums_of_collinear_points_have_no_circle() {
     for (x0, y0, dx, dy) in [
@@ -56,6 +56,13 @@ fn arc_sums_of_collinear_points_have_no_circle() {
         let sums = ArcSums::of(&pts);
         assert!(sums.is_some_and(|s| s.kasa().is_none()), "{x0} {y0}");
     }
+    // Bowed by 1.6e-4 mm over 0.8 m (radius 5e8 mm): its determinant (about 0.02) is far
+    // above rounding but below 1e-10 of the spread squared (36).
+    let bow: [Point; 9] = core::array::from_fn(|i| {
+        let k = i as f32 - 4.0;
+        Point::new(2000.0 + 100.0 * k, 1e-5 * k * k)
+    });
+    assert!(ArcSums::of(&bow).is_some_and(|s| s.kasa().is_none()));
     let arc: [Point; 9] = core::array::from_fn(|i| {
         let t = 0.05 * i as f32;
         Point::new(5000.0 * t.cos(), 5000.0 * t.sin())
