@@ -23,6 +23,7 @@ pub mod formats;
 pub mod foxglove;
 pub mod link;
 pub mod methods;
+pub mod outfile;
 pub mod plot;
 pub mod qemu;
 pub mod scene;

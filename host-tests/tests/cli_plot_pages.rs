@@ -39,7 +39,11 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let page = std::fs::read_to_string(&html).unwrap();
-    assert!(page.starts_with("<!DOCTYPE html>"));
+    // pfe's mark first (comments may precede the doctype), then the page.
+    let rest = page
+        .strip_prefix(host_tests::outfile::MARK)
+        .unwrap_or_default();
+    assert!(rest.trim_start().starts_with("<!DOCTYPE html>"));
     // B - A + 1 plots, one per scan, the first shown.
     assert_eq!(page.matches("<svg xmlns=").count(), 2);
     assert!(page.contains(r#"<div class="scan" data-scan="0""#));
@@ -64,7 +68,10 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
     references_resolve_once(&page);
 
     let svg = std::fs::read_to_string(&sheet).unwrap();
-    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    let body = svg
+        .strip_prefix(host_tests::outfile::MARK)
+        .unwrap_or_default();
+    assert!(body.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     // The sheet, a cell per scan, each holding its plot.
     assert_eq!(svg.matches("<svg").count(), 1 + 2 * 2);
     assert_eq!(svg.matches("</svg>").count(), 1 + 2 * 2);

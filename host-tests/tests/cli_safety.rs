@@ -510,3 +510,52 @@ fn skip_helper_child() {
     skip("optional_test", "local choice", Need::Optional);
     skip("demo_test", "no widget", Need::InCi);
 }
+
+#[test]
+fn report_and_plot_commands_never_replace_a_users_file() {
+    let dir = scratch("reports");
+    let read = |p: &Path| std::fs::read_to_string(p).unwrap();
+    let room = fixture("room.csv");
+    let plot = |out: &Path, force: bool| {
+        let mut args = vec!["plot", "--format", "csv", arg(&room), "--scan", "1", "-o"];
+        args.push(arg(out));
+        if force {
+            args.push("--force");
+        }
+        pfe(&args)
+    };
+    // A user's file: refused with exit 2 and left as it was.
+    let mine = dir.join("figure.svg");
+    std::fs::write(&mine, "<svg>my figure</svg>").unwrap();
+    let out = plot(&mine, false);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("--force"), "{}", stderr(&out));
+    assert_eq!(read(&mine), "<svg>my figure</svg>");
+    // pfe's own output is replaced by the next run; a user's file with --force.
+    let ours = dir.join("plot.svg");
+    for _ in 0..2 {
+        let out = plot(&ours, false);
+        assert!(out.status.success(), "{}", stderr(&out));
+    }
+    assert!(read(&ours).trim_end().ends_with("</svg>"));
+    assert!(plot(&mine, true).status.success());
+    assert!(!read(&mine).contains("my figure"));
+    // Reports are checked before they run, their plots next to them too: nothing written.
+    let theirs = dir.join("realdata-nis.svg");
+    std::fs::write(&theirs, "my plot").unwrap();
+    let md = dir.join("report.md");
+    let out = pfe(&["realdata", arg(&fixture("room.log")), "--md", arg(&md)]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(!md.exists());
+    assert_eq!(read(&theirs), "my plot");
+    std::fs::write(dir.join("eval-time.svg"), "my timings").unwrap();
+    let out = pfe(&["eval", "--scans", "1", "--out", arg(&dir)]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(!dir.join("EVALUATION.md").exists());
+    let notes = dir.join("notes.md");
+    std::fs::write(&notes, "# my notes\n").unwrap();
+    let out = pfe(&["bench", "--sim-scans", "1", "--md", arg(&notes)]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert_eq!(read(&notes), "# my notes\n");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -68,6 +68,7 @@ impl Opts {
                 name,
                 &format!("`{command}`"),
                 &format!("Reproduce: `{command}`\n\n{md}"),
+                false,
             )?;
         }
         Ok(())

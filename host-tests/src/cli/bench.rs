@@ -30,6 +30,9 @@ pub struct Args {
     /// plot next to it (`perf-scaling.svg`).
     #[arg(long)]
     md: Option<PathBuf>,
+    /// Replace --md and its plot even when no pfe command wrote them.
+    #[arg(long, requires = "md")]
+    force: bool,
     /// Report the budgets but exit 0 when one is broken (CI: host timings depend on the
     /// machine and its load, so they are reported there, not asserted).
     #[arg(long)]
@@ -43,6 +46,10 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
 
 /// Runs `pfe bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(md) = &args.md {
+        let plot = md.with_file_name("perf-scaling.svg");
+        crate::outfile::check([md.as_path(), plot.as_path()], args.force)?;
+    }
     if args.carmen.exists() && !args.carmen.is_dir() {
         return Err(super::Exit::bad_input(format!(
             "--carmen {}: not a directory (give the folder of CARMEN logs)",
@@ -66,7 +73,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(md) = &args.md {
         let sweep = scaling(args.sim_scans.clamp(1, 50), args.seed, args.reps);
-        write_markdown(md, &report, &budgets, &sweep)?;
+        write_markdown(md, &report, &budgets, &sweep, args.force)?;
         eprintln!("wrote {} and perf-scaling.svg next to it", md.display());
     }
     if !met && !args.report_only {

@@ -3,17 +3,17 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context as _;
-
 use crate::eval::{default_methods, evaluate, report, svg, EvalOptions};
 use crate::scene::SceneKind;
 
 const HELP: &str =
     "pfe eval [--kind mixed|office|clutter|pillars|corridor] [--scans 100] [--seed 1]
          [--sigma 5] [--sweep 1,2,5,10] [--passes 5] [--out docs | --no-write] [--command TEXT]
+         [--force]
 
 Runs PFE paper, PFE default, ACF and split-and-merge on simulated LMS200 scans with ground truth,
-prints the tables and writes OUT/EVALUATION.md and OUT/eval-*.svg. Build in release for times.";
+prints the tables and writes OUT/EVALUATION.md and OUT/eval-*.svg. Build in release for times.
+Files in OUT that no pfe command wrote are not replaced (exit 2) unless --force.";
 
 /// Arguments of `pfe eval` (defaults: [`EvalOptions::default`]).
 #[derive(clap::Args, Debug)]
@@ -38,6 +38,8 @@ pub struct Args {
     no_write: bool,
     #[arg(long)]
     command: Option<String>,
+    #[arg(long)]
+    force: bool,
 }
 
 impl Args {
@@ -65,6 +67,7 @@ impl Args {
                 self.out.or(d.out)
             },
             command: self.command.unwrap_or(d.command),
+            force: self.force,
         };
         let bad = |s: f32| s.is_nan() || s < 0.0;
         if o.scans == 0 || bad(o.sigma) || o.sweep.iter().any(|s| bad(*s)) {
@@ -98,26 +101,34 @@ fn run_options(options: &EvalOptions) -> anyhow::Result<()> {
     if cfg!(debug_assertions) {
         eprintln!("warning: debug build: times are not representative (use --release)");
     }
+    const FILES: [&str; 5] = [
+        "EVALUATION.md",
+        "eval-errors.svg",
+        "eval-ratios.svg",
+        "eval-time.svg",
+        "eval-scenes.svg",
+    ];
+    if let Some(dir) = &options.out {
+        let paths: Vec<PathBuf> = FILES.iter().map(|f| dir.join(f)).collect();
+        crate::outfile::check(paths.iter().map(PathBuf::as_path), options.force)?;
+    }
     let mut methods = default_methods();
     let ev = evaluate(&mut methods, options);
     let md = report::markdown(&ev);
     print!("{}", report::text(&ev));
     if let Some(dir) = &options.out {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        let write = |name: &str, body: String| -> anyhow::Result<()> {
-            let p = dir.join(name);
-            std::fs::write(&p, body).with_context(|| format!("cannot write {}", p.display()))?;
-            eprintln!("wrote {}", p.display());
-            Ok(())
-        };
-        write("EVALUATION.md", md)?;
-        write("eval-errors.svg", svg::errors_vs_noise(&ev))?;
-        write("eval-ratios.svg", svg::ratios_vs_noise(&ev))?;
-        write("eval-time.svg", svg::time_per_scan(&ev))?;
-        write(
-            "eval-scenes.svg",
+        let bodies = [
+            md,
+            svg::errors_vs_noise(&ev),
+            svg::ratios_vs_noise(&ev),
+            svg::time_per_scan(&ev),
             svg::scene_gallery(options.seed, options.sigma),
-        )?;
+        ];
+        for (name, body) in FILES.iter().zip(bodies) {
+            let p = dir.join(name);
+            crate::outfile::write(&p, &body, options.force)?;
+            eprintln!("wrote {}", p.display());
+        }
     }
     Ok(())
 }

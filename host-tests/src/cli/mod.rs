@@ -104,7 +104,13 @@ impl Failure {
         let text = text.strip_prefix("error: ").unwrap_or(&text);
         let code = if let Some(exit) = e.downcast_ref::<Exit>() {
             exit.code
-        } else if e.is::<crate::device::record::OutputExists>() || e.is::<clap::Error>() {
+        } else if e.is::<crate::device::record::OutputExists>()
+            || e.is::<clap::Error>()
+            || matches!(
+                e.downcast_ref::<crate::outfile::OutError>(),
+                Some(crate::outfile::OutError::Exists(_))
+            )
+        {
             2
         } else {
             1

@@ -37,6 +37,10 @@ pub struct Args {
     /// One SVG with the scans of --scans as a grid of small plots.
     #[arg(long, value_name = "OUT.svg", requires = "scans")]
     sheet: Option<PathBuf>,
+    /// Replace output files even when no pfe command wrote them (without it such a file is
+    /// left alone: exit 2).
+    #[arg(long)]
+    force: bool,
 }
 
 /// `A..B`: scan IDs from A to B, both included, at most [`MAX_PAGE_SCANS`] of them.
@@ -70,6 +74,12 @@ pub fn run(a: Args) -> Result<(), Failure> {
         (None, Some(k)) => k..=k,
         (None, None) => return Err(Failure::input("--scan K or --scans A..B is required")),
     };
+    let outputs = [&a.output, &a.html, &a.sheet];
+    let files = outputs
+        .iter()
+        .filter_map(|o| o.as_deref())
+        .filter(|p| p.as_os_str() != "-");
+    crate::outfile::check(files, a.force).map_err(|e| Failure::input(e.to_string()))?;
     let mut method = a.method.method();
     let input = open_scans(file, format, a.method.topic.as_deref())?;
     let bar = input.bar.clone();
@@ -120,7 +130,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
         })
         .collect();
     if let (Some(output), [plot]) = (&a.output, plots.as_slice()) {
-        write_output(output, &plot.svg)?;
+        write_output(output, &plot.svg, a.force)?;
         eprintln!(
             "pfe: wrote {} ({} marks, {} features)",
             if output.as_os_str() == "-" {
@@ -143,11 +153,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
     }
     let heading = format!("{name} — scans {}..{}", wanted.start(), wanted.end());
     if let Some(html) = &a.html {
-        write_output(html, &html_page(&heading, &plots))?;
+        write_output(html, &html_page(&heading, &plots), a.force)?;
         eprintln!("pfe: wrote {} ({} scans)", html.display(), plots.len());
     }
     if let Some(sheet) = &a.sheet {
-        write_output(sheet, &sheet_svg(&heading, &plots))?;
+        write_output(sheet, &sheet_svg(&heading, &plots), a.force)?;
         eprintln!("pfe: wrote {} ({} scans)", sheet.display(), plots.len());
     }
     Ok(())
@@ -174,7 +184,7 @@ fn title(name: &str, s: &Scan, method: &str) -> String {
     }
 }
 
-fn write_output(output: &Path, text: &str) -> Result<(), Failure> {
+fn write_output(output: &Path, text: &str, force: bool) -> Result<(), Failure> {
     if output.as_os_str() == "-" {
         let mut out = std::io::stdout().lock();
         match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
@@ -184,8 +194,10 @@ fn write_output(output: &Path, text: &str) -> Result<(), Failure> {
             _ => Ok(()),
         }
     } else {
-        std::fs::write(output, text)
-            .map_err(|e| Failure::other(format!("{}: cannot write: {e}", output.display())))
+        crate::outfile::write(output, text, force).map_err(|e| match e {
+            crate::outfile::OutError::Exists(_) => Failure::input(e.to_string()),
+            crate::outfile::OutError::Io(..) => Failure::other(e.to_string()),
+        })
     }
 }
 

@@ -24,6 +24,9 @@ pub struct Args {
     /// LMS2xx's (2 at 0.5°, 4 at 0.25°). pfe aligns declared sweeps whose offset shows.
     #[arg(long, default_value = "auto", value_parser = crate::cli::input::sweeps_arg)]
     sweeps: crate::cli::input::Sweeps,
+    /// Replace --md and its plots even when no pfe command wrote them.
+    #[arg(long, requires = "md")]
+    force: bool,
     /// The command named in the Markdown report.
     #[arg(long, default_value = "pfe realdata")]
     command: String,
@@ -31,6 +34,11 @@ pub struct Args {
 
 /// Runs `pfe realdata`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    // Refused outputs are known before the run, not after it.
+    if let Some(md) = &args.md {
+        let files = report::output_files(md);
+        crate::outfile::check(files.iter().map(PathBuf::as_path), args.force)?;
+    }
     let mut reports = Vec::new();
     for log in &args.logs {
         let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0)?;
@@ -38,7 +46,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         reports.push(r);
     }
     if let Some(md) = &args.md {
-        report::write_markdown(md, &reports, &args.command)?;
+        report::write_markdown(md, &reports, &args.command, args.force)?;
         eprintln!("wrote {} and its plots", md.display());
     }
     Ok(())

@@ -376,12 +376,13 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
 }
 
 /// Writes the `host` section of `md` (the report and the scaling sweep) and
-/// `perf-scaling.svg` next to it.
+/// `perf-scaling.svg` next to it; neither replaces a file no `pfe` command wrote unless `force`.
 pub fn write_markdown(
     md: &Path,
     report: &BenchReport,
     budgets: &[String],
     sweep: &[(usize, Vec<(String, f64)>)],
+    force: bool,
 ) -> anyhow::Result<()> {
     use std::fmt::Write as _;
     let mut body = format!(
@@ -454,9 +455,10 @@ pub fn write_markdown(
         &xs,
         &curves,
     );
-    let dir = md.parent().unwrap_or(Path::new("."));
-    std::fs::write(dir.join("perf-scaling.svg"), svg).context("writing perf-scaling.svg")?;
-    crate::docs::write_section(md, "host", "`pfe bench`", &body)
+    let plot = md.with_file_name("perf-scaling.svg");
+    crate::outfile::check([md, plot.as_path()], force)?;
+    crate::outfile::write(&plot, &svg, force)?;
+    crate::docs::write_section(md, "host", "`pfe bench`", &body, force)
 }
 
 #[cfg(test)]

@@ -128,6 +128,8 @@ pub struct EvalOptions {
     pub out: Option<std::path::PathBuf>,
     /// The command line to name in the report's header.
     pub command: String,
+    /// Replace the report's files in `out` even when no `pfe` command wrote them.
+    pub force: bool,
 }
 
 impl Default for EvalOptions {
@@ -141,6 +143,7 @@ impl Default for EvalOptions {
             passes: 5,
             out: Some(std::path::PathBuf::from("docs")),
             command: "cargo xtask eval".to_string(),
+            force: false,
         }
     }
 }

@@ -1,9 +1,9 @@
 //! The real-data benchmark as a text table, and `docs/REALDATA.md` with its plots.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use crate::outfile;
 
 use super::compare::{CONSISTENT_DRAWS, GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, MIN_LINE_POINTS};
 use super::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
@@ -329,15 +329,26 @@ pub fn plots(reports: &[LogReport]) -> Vec<String> {
         .collect()
 }
 
-/// Writes [`markdown`] to `path` and the plots next to it.
-pub fn write_markdown(path: &Path, reports: &[LogReport], command: &str) -> anyhow::Result<()> {
-    let dir = path.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    std::fs::write(path, markdown(reports, command))
-        .with_context(|| format!("writing {}", path.display()))?;
-    for ((file, _), svg) in PLOTS.iter().zip(plots(reports)) {
-        let p = dir.join(file);
-        std::fs::write(&p, svg).with_context(|| format!("writing {}", p.display()))?;
+/// The files [`write_markdown`] writes for `path`: it, then its plots next to it.
+pub fn output_files(path: &Path) -> Vec<PathBuf> {
+    std::iter::once(path.to_path_buf())
+        .chain(PLOTS.iter().map(|(file, _)| path.with_file_name(file)))
+        .collect()
+}
+
+/// Writes [`markdown`] to `path` and the plots next to it; none of them replaces a file no
+/// `pfe` command wrote unless `force` ([`outfile`]).
+pub fn write_markdown(
+    path: &Path,
+    reports: &[LogReport],
+    command: &str,
+    force: bool,
+) -> anyhow::Result<()> {
+    let files = output_files(path);
+    outfile::check(files.iter().map(PathBuf::as_path), force)?;
+    outfile::write(path, &markdown(reports, command), force)?;
+    for (p, svg) in files.iter().skip(1).zip(plots(reports)) {
+        outfile::write(p, &svg, force)?;
     }
     Ok(())
 }
