@@ -17,7 +17,7 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
-use std::io::Read;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 /// The first line of every file a `pfe` command writes: a comment in Markdown, SVG and HTML
@@ -27,10 +27,21 @@ pub const MARK: &str = "<!-- written by pfe: a later pfe run may replace this fi
 /// Why a file was not written.
 #[derive(Debug)]
 pub enum OutError {
-    /// The file exists and no `pfe` command wrote it.
+    /// The file exists and no `pfe` command wrote it (`--force` replaces it).
     Exists(PathBuf),
+    /// The path is a directory or a device other than a character device or a pipe: never
+    /// written, whatever `--force` says.
+    NotAFile(PathBuf),
     /// Writing failed.
     Io(PathBuf, std::io::Error),
+}
+
+impl OutError {
+    /// Whether the user gave a path that cannot or may not be written (bad input), not a
+    /// failure of the system.
+    pub fn is_refusal(&self) -> bool {
+        matches!(self, Self::Exists(_) | Self::NotAFile(_))
+    }
 }
 
 impl std::fmt::Display for OutError {
@@ -41,6 +52,7 @@ impl std::fmt::Display for OutError {
                 "{}: the file exists and pfe did not write it (not replaced; --force replaces it)",
                 p.display()
             ),
+            Self::NotAFile(p) => write!(f, "{}: not a file pfe can write", p.display()),
             Self::Io(p, e) => write!(f, "{}: cannot write: {e}", p.display()),
         }
     }
@@ -48,41 +60,121 @@ impl std::fmt::Display for OutError {
 
 impl std::error::Error for OutError {}
 
-/// Whether `path` may be written without `--force`: it does not exist, a `pfe` command wrote
-/// it (its first line is [`MARK`]), or it is no file to lose (a device such as `/dev/null`, a
-/// pipe).
-pub fn may_write(path: &Path) -> bool {
-    let Ok(meta) = std::fs::metadata(path) else {
-        return path.symlink_metadata().is_err();
-    };
-    if meta.is_dir() {
-        return false;
-    }
-    if !meta.is_file() {
-        return true;
-    }
-    let mut head = vec![0u8; MARK.len()];
-    std::fs::File::open(path).is_ok_and(|mut f| f.read_exact(&mut head).is_ok())
-        && head == MARK.as_bytes()
+/// What is at an output path.
+enum Target {
+    /// Nothing (nor a dangling link).
+    New,
+    /// A regular file, possibly through a link: empty, or its first line [`MARK`] or not.
+    File { ours: bool, link: bool },
+    /// A character device (`/dev/null`) or a pipe: written through, nothing to lose.
+    Stream,
+    /// A directory, a block device, a socket, a dangling link.
+    Other,
 }
 
-/// `Err(Exists)` for the first of `paths` that may not be written (unless `force`): check
-/// every output of a command before writing any.
-pub fn check<'a>(paths: impl IntoIterator<Item = &'a Path>, force: bool) -> Result<(), OutError> {
-    match paths.into_iter().find(|p| !force && !may_write(p)) {
-        Some(p) => Err(OutError::Exists(p.to_path_buf())),
-        None => Ok(()),
+fn target(path: &Path) -> Target {
+    use std::os::unix::fs::FileTypeExt;
+    let Ok(meta) = std::fs::metadata(path) else {
+        return if path.symlink_metadata().is_err() {
+            Target::New
+        } else {
+            Target::Other
+        };
+    };
+    let kind = meta.file_type();
+    if kind.is_file() {
+        let mut head = vec![0u8; MARK.len()];
+        let marked = std::fs::File::open(path).is_ok_and(|mut f| f.read_exact(&mut head).is_ok())
+            && head == MARK.as_bytes();
+        let link = path
+            .symlink_metadata()
+            .is_ok_and(|m| m.file_type().is_symlink());
+        Target::File {
+            ours: marked || meta.len() == 0,
+            link,
+        }
+    } else if kind.is_char_device() || kind.is_fifo() {
+        Target::Stream
+    } else {
+        Target::Other
     }
+}
+
+/// Whether `path` may be written without `--force`: it does not exist, a `pfe` command wrote
+/// it (its first line is [`MARK`]), it is empty, or it is no file to lose (a character device
+/// such as `/dev/null`, a pipe).
+pub fn may_write(path: &Path) -> bool {
+    matches!(
+        target(path),
+        Target::New | Target::Stream | Target::File { ours: true, .. }
+    )
+}
+
+/// The first of `paths` that may not be written (unless `force`), as an error: check every
+/// output of a command before writing any.
+pub fn check<'a>(paths: impl IntoIterator<Item = &'a Path>, force: bool) -> Result<(), OutError> {
+    for p in paths {
+        match target(p) {
+            Target::Other => return Err(OutError::NotAFile(p.to_path_buf())),
+            Target::File { ours: false, .. } if !force => {
+                return Err(OutError::Exists(p.to_path_buf()))
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// Writes [`MARK`], a newline and `body` to `path`, creating its directory; refuses a file
-/// no `pfe` command wrote unless `force`.
+/// no `pfe` command wrote unless `force`. A new file is created only if nothing appeared at
+/// the path since the check (and removed if the write is cut short); an existing file is
+/// replaced whole (a temporary file beside it, renamed over it); a link to a file, a device
+/// or a pipe is written through.
 pub fn write(path: &Path, body: &str, force: bool) -> Result<(), OutError> {
     check([path], force)?;
+    let io = |e| OutError::Io(path.to_path_buf(), e);
+    let text = format!("{MARK}\n{body}");
+    let (new, through) = match target(path) {
+        Target::New => (true, false),
+        Target::File { link, .. } => (false, link),
+        Target::Stream => (false, true),
+        Target::Other => return Err(OutError::NotAFile(path.to_path_buf())),
+    };
+    if through {
+        return std::fs::write(path, text).map_err(io);
+    }
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| OutError::Io(dir.to_path_buf(), e))?;
     }
-    std::fs::write(path, format!("{MARK}\n{body}")).map_err(|e| OutError::Io(path.into(), e))
+    if new {
+        // Fails if anything appeared there since the check; removed again if cut short.
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(path)
+            .map_err(|e| {
+                if e.kind() == std::io::ErrorKind::AlreadyExists {
+                    OutError::Exists(path.to_path_buf())
+                } else {
+                    io(e)
+                }
+            })?;
+        return f.write_all(text.as_bytes()).map_err(|e| {
+            let _ = std::fs::remove_file(path);
+            io(e)
+        });
+    }
+    let name = path.file_name().map(|n| n.to_string_lossy().to_string());
+    let tmp = path.with_file_name(format!(
+        ".{}.pfe-{}.tmp",
+        name.unwrap_or_default(),
+        std::process::id()
+    ));
+    let done = std::fs::write(&tmp, text).and_then(|()| std::fs::rename(&tmp, path));
+    if done.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    done.map_err(io)
 }
 
 #[cfg(test)]
@@ -129,18 +221,48 @@ mod tests {
     }
 
     #[test]
-    fn a_directory_in_the_way_is_an_error_not_a_panic() {
+    fn a_directory_in_the_way_is_refused_even_when_forced() {
         let d = dir("dir");
         let sub = d.join("sub");
         std::fs::create_dir_all(&sub).unwrap();
-        assert!(write(&sub, "x", false).is_err());
-        assert!(write(&sub, "x", true).is_err());
+        assert!(matches!(
+            write(&sub, "x", false),
+            Err(OutError::NotAFile(_))
+        ));
+        assert!(matches!(write(&sub, "x", true), Err(OutError::NotAFile(_))));
+        assert!(sub.is_dir());
         // A new file in a new directory; a device is no file to lose.
         write(&d.join("new/deeper/x.svg"), "<svg/>", false).unwrap();
         assert!(may_write(Path::new("/dev/null")));
         // A dangling link is not followed into a new file.
         std::os::unix::fs::symlink(d.join("nowhere"), d.join("link")).unwrap();
         assert!(!may_write(&d.join("link")));
+        assert!(!d.join("nowhere").exists());
+        // An empty file holds nothing to lose (a shell redirection, mktemp).
+        let empty = d.join("empty.svg");
+        std::fs::write(&empty, "").unwrap();
+        write(&empty, "<svg/>", false).unwrap();
+        // A link to pfe's file is written through: the link stays a link.
+        let ours = d.join("ours.svg");
+        write(&ours, "1", false).unwrap();
+        let via = d.join("via.svg");
+        std::os::unix::fs::symlink(&ours, &via).unwrap();
+        write(&via, "2", false).unwrap();
+        assert!(via.symlink_metadata().unwrap().file_type().is_symlink());
+        assert_eq!(
+            std::fs::read_to_string(&ours).unwrap(),
+            format!("{MARK}\n2")
+        );
+        // No temporary file is left behind.
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .flatten()
+            .map(|e| e.file_name())
+            .collect();
+        assert!(
+            names.iter().all(|n| !n.to_string_lossy().ends_with(".tmp")),
+            "{names:?}"
+        );
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -530,6 +530,7 @@ fn report_and_plot_commands_never_replace_a_users_file() {
     let out = plot(&mine, false);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("--force"), "{}", stderr(&out));
+    assert!(stderr(&out).contains(arg(&mine)), "{}", stderr(&out));
     assert_eq!(read(&mine), "<svg>my figure</svg>");
     // pfe's own output is replaced by the next run; a user's file with --force.
     let ours = dir.join("plot.svg");
@@ -546,6 +547,7 @@ fn report_and_plot_commands_never_replace_a_users_file() {
     let md = dir.join("report.md");
     let out = pfe(&["realdata", arg(&fixture("room.log")), "--md", arg(&md)]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains(arg(&theirs)), "{}", stderr(&out));
     assert!(!md.exists());
     assert_eq!(read(&theirs), "my plot");
     std::fs::write(dir.join("eval-time.svg"), "my timings").unwrap();
@@ -557,5 +559,10 @@ fn report_and_plot_commands_never_replace_a_users_file() {
     let out = pfe(&["bench", "--sim-scans", "1", "--md", arg(&notes)]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert_eq!(read(&notes), "# my notes\n");
+    assert!(!dir.join("perf-scaling.svg").exists());
+    // A directory is never written, even with --force.
+    let out = plot(&dir, true);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(dir.is_dir());
     std::fs::remove_dir_all(&dir).unwrap();
 }

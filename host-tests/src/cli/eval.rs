@@ -117,6 +117,9 @@ fn run_options(options: &EvalOptions) -> anyhow::Result<()> {
     let md = report::markdown(&ev);
     print!("{}", report::text(&ev));
     if let Some(dir) = &options.out {
+        // Again: a file may have appeared during the run; write all or none.
+        let paths: Vec<PathBuf> = FILES.iter().map(|f| dir.join(f)).collect();
+        crate::outfile::check(paths.iter().map(PathBuf::as_path), options.force)?;
         let bodies = [
             md,
             svg::errors_vs_noise(&ev),

@@ -106,10 +106,8 @@ impl Failure {
             exit.code
         } else if e.is::<crate::device::record::OutputExists>()
             || e.is::<clap::Error>()
-            || matches!(
-                e.downcast_ref::<crate::outfile::OutError>(),
-                Some(crate::outfile::OutError::Exists(_))
-            )
+            || e.downcast_ref::<crate::outfile::OutError>()
+                .is_some_and(crate::outfile::OutError::is_refusal)
         {
             2
         } else {

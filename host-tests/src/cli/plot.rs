@@ -194,9 +194,12 @@ fn write_output(output: &Path, text: &str, force: bool) -> Result<(), Failure> {
             _ => Ok(()),
         }
     } else {
-        crate::outfile::write(output, text, force).map_err(|e| match e {
-            crate::outfile::OutError::Exists(_) => Failure::input(e.to_string()),
-            crate::outfile::OutError::Io(..) => Failure::other(e.to_string()),
+        crate::outfile::write(output, text, force).map_err(|e| {
+            if e.is_refusal() {
+                Failure::input(e.to_string())
+            } else {
+                Failure::other(e.to_string())
+            }
         })
     }
 }
