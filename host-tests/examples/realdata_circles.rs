@@ -12,17 +12,18 @@
 //! along the line of sight; a shape that is not a circle, seen from elsewhere, moves it
 //! either way.
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use host_tests::eval::realdata::compare::{matched_lines, refit_centre, GATE_CENTER_MM};
 use host_tests::eval::realdata::frame::nis;
 use host_tests::eval::realdata::refit::{correction, correction_covariance};
-use host_tests::eval::realdata::{log_scans, methods, FrameChange, LogScan, Seen};
+use host_tests::eval::realdata::{methods, FrameChange, Seen};
 use host_tests::eval::score::quantile;
-use host_tests::formats::Format;
+use host_tests::formats::{Format, Record};
+use host_tests::methods::Extraction;
 use pfe_core::Feature;
 
 mod common;
-use common::LogArgs;
+use common::{for_each_pair_with, LogArgs};
 
 /// A class of circles: its name and whether a circle (radius mm, points, reduced χ²) is in it.
 type Class = (&'static str, fn(f64, usize, f64) -> bool);
@@ -57,29 +58,11 @@ fn main() -> Result<()> {
     let log = &args.log;
     let mut ms = methods(sigma_r);
     ms.truncate(1);
-    let Some(pfe) = ms.first_mut() else {
-        bail!("no method");
-    };
     let var = f64::from(sigma_r) * f64::from(sigma_r);
-    let mut prev: Option<(Seen, Vec<Traits>)> = None;
     let mut samples: Vec<Sample> = Vec::new();
-    let mut scans = 0usize;
-    for scan in log_scans(std::path::Path::new(log))? {
-        let LogScan {
-            record,
-            context,
-            pose,
-        } = scan?;
-        scans += 1;
-        let Some(pose) = pose else {
-            prev = None;
-            continue;
-        };
-        let ex = pfe.extract_in(&record.geometry, &record.ranges_mm, &context);
-        let seen = Seen::new(pose, &ex.features);
-        // Per circle, in the order of `seen.circles`.
-        let classes: Vec<Traits> = ex
-            .features
+    // Per circle of a scan, in the order of its `Seen::circles`.
+    let traits = |record: &Record, ex: &Extraction| -> Vec<Traits> {
+        ex.features
             .iter()
             .filter_map(|f| match f {
                 Feature::Circle(c) => Some(c),
@@ -97,15 +80,11 @@ fn main() -> Result<()> {
                 let chi2 = sse / (var * (n as f64 - 3.0).max(1.0));
                 (f64::from(c.radius), n, chi2)
             })
-            .collect();
-        if let Some((a, a_classes)) = &prev {
-            samples.extend(pair_samples(a, a_classes, &seen));
-        }
-        prev = Some((seen, classes));
-    }
-    if scans < 2 {
-        bail!("{log}: fewer than two scans");
-    }
+            .collect()
+    };
+    for_each_pair_with(log, &mut ms, traits, |_, (a, a_traits), (b, _)| {
+        samples.extend(pair_samples(a, a_traits, b));
+    })?;
     println!("{log}: σ_r {sigma_r} mm; pfe-default's matched circles after the lines' pose refit");
     println!(
         "{:18} {:>6} {:>6} | {:>8} {:>8} | {:>8} {:>8}",

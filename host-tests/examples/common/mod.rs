@@ -7,7 +7,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
 use host_tests::eval::realdata::{log_scans, LogScan, Seen};
-use host_tests::methods::Method;
+use host_tests::formats::Record;
+use host_tests::methods::{Extraction, Method};
 
 /// A real-data example's command line: `NAME LOG [OPTION VALUE]…`.
 pub struct LogArgs {
@@ -67,7 +68,18 @@ pub fn for_each_pair(
     methods: &mut [Box<dyn Method>],
     mut pair: impl FnMut(usize, &Seen, &Seen),
 ) -> Result<()> {
-    let mut prev: Vec<Option<Seen>> = vec![None; methods.len()];
+    for_each_pair_with(log, methods, |_, _| (), |m, a, b| pair(m, &a.0, &b.0))
+}
+
+/// [`for_each_pair`] with what `keep(record, extraction)` takes from each scan beside what a
+/// method saw in it.
+pub fn for_each_pair_with<T>(
+    log: &str,
+    methods: &mut [Box<dyn Method>],
+    mut keep: impl FnMut(&Record, &Extraction) -> T,
+    mut pair: impl FnMut(usize, &(Seen, T), &(Seen, T)),
+) -> Result<()> {
+    let mut prev: Vec<Option<(Seen, T)>> = methods.iter().map(|_| None).collect();
     let mut scans = 0usize;
     for scan in log_scans(std::path::Path::new(log))? {
         let LogScan {
@@ -77,7 +89,7 @@ pub fn for_each_pair(
         } = scan?;
         for (m, (method, prev)) in methods.iter_mut().zip(&mut prev).enumerate() {
             let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
-            let seen = pose.map(|p| Seen::new(p, &ex.features));
+            let seen = pose.map(|p| (Seen::new(p, &ex.features), keep(&record, &ex)));
             if let (Some(a), Some(b)) = (prev.as_ref(), seen.as_ref()) {
                 pair(m, a, b);
             }
