@@ -72,14 +72,16 @@ const SHARED_HEADER: [&str; 6] = [
     "only other (re-found%)",
 ];
 
+/// `a` of `b` in %, NaN when `b` is 0.
+fn pct(a: usize, b: usize) -> f64 {
+    if b == 0 {
+        f64::NAN
+    } else {
+        100.0 * a as f64 / b as f64
+    }
+}
+
 fn shared_row(s: &Shared) -> [String; 6] {
-    let pct = |a: usize, b: usize| {
-        if b == 0 {
-            f64::NAN
-        } else {
-            100.0 * a as f64 / b as f64
-        }
-    };
     [
         s.method.clone(),
         s.both.to_string(),
@@ -243,8 +245,12 @@ Figures are over the whole log; `–` = nothing to measure.\n\n",
     md
 }
 
-const PLOTS: [(&str, &str); 5] = [
+const PLOTS: [(&str, &str); 6] = [
     ("realdata-lines.svg", "lines of ≥ 10 points that re-appear"),
+    (
+        "realdata-shared.svg",
+        "lines re-found on the beams pfe-default and split-and-merge both hold in lines",
+    ),
     ("realdata-bare.svg", "bare beams of smooth runs"),
     ("realdata-nis.svg", "line NIS median after the pose refit"),
     ("realdata-circles.svg", "circle centre NIS median"),
@@ -321,12 +327,43 @@ pub fn plots(reports: &[LogReport]) -> Vec<String> {
             true,
         ),
     ];
-    charts
+    let mut out: Vec<String> = charts
         .iter()
         .map(|&(title, ylabel, metric, reference, log_y)| {
             grouped_bars(title, ylabel, &groups, &series(&metric), reference, log_y)
         })
-        .collect()
+        .collect();
+    out.insert(1, shared_chart(reports, &groups));
+    out
+}
+
+/// pfe-default's and split-and-merge's lines re-found on the beams both hold in lines, and
+/// pfe-default's on the beams only it holds, per log.
+fn shared_chart(reports: &[LogReport], groups: &[String]) -> String {
+    let series = |name: &str, f: fn(&Shared) -> f64| {
+        let ys = reports
+            .iter()
+            .map(|r| {
+                let against = r.shared.iter().find(|s| s.method == "split-merge");
+                against.map_or(f64::NAN, f)
+            })
+            .collect();
+        (name.to_string(), ys)
+    };
+    grouped_bars(
+        "Line beams re-found: pfe-default vs split-and-merge, beam by beam",
+        "% of the beams",
+        groups,
+        &[
+            series("default, shared", |s| pct(s.both_reference_refound, s.both)),
+            series("split-merge, shared", |s| pct(s.both_other_refound, s.both)),
+            series("default only", |s| {
+                pct(s.only_reference_refound, s.only_reference)
+            }),
+        ],
+        None,
+        false,
+    )
 }
 
 /// The files [`write_markdown`] writes for `path`: it, then its plots next to it.
