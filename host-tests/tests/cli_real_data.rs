@@ -394,3 +394,98 @@ fn carmen_angle_convention() {
         "for n even the 180°/n step should match the wall directions"
     );
 }
+
+/// A CARMEN log's `FLASER` lines as the newer logger writes the same scans: a `RAWLASER1`
+/// (no pose) and a `ROBOTLASER1` (its own start angle, step and maximum range, the laser's
+/// pose, the robot's) for each, by the documented angle convention (n odd: π/(n−1), n even:
+/// π/n) and the maximum range the `FLASER` reader applies (`r_max_m`).
+fn as_robotlaser1(flaser_log: &str, r_max_m: f64) -> String {
+    let mut out = String::new();
+    for line in flaser_log.lines() {
+        let t: Vec<&str> = line.split_ascii_whitespace().collect();
+        if t.first() != Some(&"FLASER") {
+            out.push_str(line);
+            out.push('\n');
+            continue;
+        }
+        let n: usize = t[1].parse().unwrap();
+        let (ranges, rest) = t[2..].split_at(n);
+        let step = std::f64::consts::PI / if n % 2 == 1 { n - 1 } else { n } as f64;
+        let head = format!(
+            "0 {:.9} {:.9} {step:.12} {r_max_m} 0.01 0 {n} {}",
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::PI,
+            ranges.join(" ")
+        );
+        let (pose, odom, stamp) = (&rest[0..3], &rest[3..6], &rest[6..9]);
+        out.push_str(&format!("RAWLASER1 {head} 0 {}\n", stamp.join(" ")));
+        out.push_str(&format!(
+            "ROBOTLASER1 {head} 0 {} {} 0.0 0.0 0.5 0.3 0.0 {}\n",
+            pose.join(" "),
+            odom.join(" "),
+            stamp.join(" ")
+        ));
+    }
+    out
+}
+
+/// The same scans read from `ROBOTLASER1` lines as from `FLASER` lines: the same ranges,
+/// poses and times, bearings within 1 µrad, and the same `pfe realdata` table (csail: 361
+/// beams at 0.5°, two sweeps; intel: 180 at 1°).
+#[test]
+fn robotlaser1_logs_read_as_their_flaser_lines() {
+    use std::io::Read;
+    let Some(d) = data_dir("cli_real_data::robotlaser1_logs_read_as_their_flaser_lines") else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("pfe-robotlaser1-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in ["csail", "intel"] {
+        let path = d.join(format!("carmen/{name}-corrected.log.gz"));
+        let mut text = String::new();
+        flate2::read::GzDecoder::new(std::fs::File::open(&path).unwrap())
+            .read_to_string(&mut text)
+            .unwrap();
+        let converted = dir.join(format!("{name}.log"));
+        std::fs::write(&converted, as_robotlaser1(&text, 50.0)).unwrap();
+        let read = |p: &std::path::Path| -> Vec<Record> {
+            let input = formats::open_for(p, formats::Format::Carmen, |r| r).unwrap();
+            Reader::new(input).map(Result::unwrap).collect()
+        };
+        let (a, b) = (read(&path), read(&converted));
+        assert_eq!(a.len(), b.len(), "{name}");
+        assert!(a.len() > 400, "{name}: {}", a.len());
+        for (x, y) in a.iter().zip(&b) {
+            let same = |u: &[f32], v: &[f32]| {
+                u.len() == v.len() && u.iter().zip(v).all(|(p, q)| p.to_bits() == q.to_bits())
+            };
+            assert!(same(&x.ranges_mm, &y.ranges_mm), "{name} scan {}", x.id);
+            assert_eq!((x.id, x.pose, x.time), (y.id, y.pose, y.time), "{name}");
+            let n = x.ranges_mm.len() - 1;
+            for i in [0, n / 2, n] {
+                let (p, q) = (x.geometry.bearing(i), y.geometry.bearing(i));
+                assert!((p - q).abs() < 1e-6, "{name} beam {i}: {p} {q}");
+            }
+            assert_eq!(x.geometry.r_max, y.geometry.r_max, "{name}");
+        }
+        let table = |p: &std::path::Path| {
+            let out = Command::new(env!("CARGO_BIN_EXE_pfe"))
+                .args(["realdata", "--max-scans", "120"])
+                .arg(p)
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            // Without the first line, which names the log.
+            let text = String::from_utf8(out.stdout).unwrap();
+            text.lines().skip(1).collect::<Vec<_>>().join("\n")
+        };
+        let (ta, tb) = (table(&path), table(&converted));
+        assert!(ta.contains("pfe-default"), "{ta}");
+        assert_eq!(ta, tb, "{name}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -39,9 +39,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let files = report::output_files(md);
         crate::outfile::check(files.iter().map(PathBuf::as_path), args.force)?;
     }
+    // Unreadable logs are known before the run, not after the first ones.
+    for log in &args.logs {
+        std::fs::File::open(log)
+            .map_err(|e| super::Exit::bad_input(format!("{}: {e}", log.display())))?;
+    }
     let mut reports = Vec::new();
     for log in &args.logs {
-        let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0)?;
+        let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0).map_err(|e| {
+            // A malformed line is bad input (the scans before it were read).
+            match e.downcast_ref::<crate::formats::InputError>() {
+                Some(_) => super::Exit::bad_input(format!("{e:#}")).into(),
+                None => e,
+            }
+        })?;
+        if r.methods.first().map_or(0, |m| m.pairs) == 0 {
+            let scans = r.methods.first().map_or(0, |m| m.scans);
+            return Err(super::Exit::bad_input(format!(
+                "{}: {scans} scan(s) and no two consecutive ones with a pose: nothing to \
+                 compare (the benchmark needs a CARMEN log whose FLASER or ROBOTLASER1 lines \
+                 give poses)",
+                log.display()
+            ))
+            .into());
+        }
         println!("{}", report::table(&r));
         reports.push(r);
     }

@@ -1,21 +1,31 @@
-//! CARMEN logs: `FLASER n r_1 ... r_n x y θ odom_x odom_y odom_θ timestamp host logger_ts`.
+//! CARMEN logs: the front laser's scans, from one kind of line ([`Reader`]):
+//! - `FLASER n r_1 ... r_n x y θ odom_x odom_y odom_θ timestamp host logger_ts` (old format):
+//!   180° field (see the angle convention below), the first pose taken as the laser's;
+//! - `ROBOTLASER1 laser_type start_angle field_of_view angular_resolution maximum_range accuracy
+//!   remission_mode n r_1 ... r_n num_remissions remission_1 ... laser_x laser_y laser_θ robot_x
+//!   robot_y robot_θ tv rv forward_safety_dist side_safety_dist turn_axis timestamp host
+//!   logger_ts` (new format; older lines without the remissions and the turn axis are read
+//!   too): beam i at `start_angle + i·angular_resolution`, no return at or beyond
+//!   `maximum_range`, the laser's pose;
+//! - `RAWLASER1` (the same up to the remissions, then `timestamp host logger_ts`): no pose.
 //!
-//! Ranges are in metres; the field of view is 180°, centred on x (x forward, y left, beams
-//! counter-clockwise from the right). Every other line (`ODOM`, `PARAM`, `NEFF`, `RLASER`,
-//! `TRUEPOS`, … — any upper-case message name — and `#` comments) is skipped; a line that is
-//! neither is an error. The first pose (`x y θ`, m and rad: in the shared `*-corrected` logs the
-//! corrected pose, taken as the laser's) and the timestamp (s) go to [`Record::pose`] and
-//! [`Record::time`] when they are numbers (`None` otherwise).
+//! Ranges are in metres (x forward, y left, beams counter-clockwise from the right). Every
+//! other line (`ODOM`, `PARAM`, `NEFF`, `RLASER`, `ROBOTLASER2`, `TRUEPOS`, … — any upper-case
+//! message name — and `#` comments) is skipped; a line that is neither is an error. The pose
+//! (`x y θ`, m and rad: in the shared `*-corrected` logs the corrected pose) and the timestamp
+//! (s) go to [`Record::pose`] and [`Record::time`] when they are numbers (`None` otherwise).
 //!
 //! # No return
-//! A reading is no return when it is at or beyond the maximum range `r_max`: 50 m by default,
+//! A reading is no return when it is 0 or at or beyond the maximum range `r_max`. For
+//! `ROBOTLASER1` and `RAWLASER1` lines that is the line's `maximum_range` (at most 81.83 m, the
+//! LMS "8183" code). For `FLASER` lines it is 50 m by default,
 //! which removes the 81.83 / 81.91 codes (the LMS "8183"/"8191" in cm) and the ≈ 50–51.2 m
 //! no-return values some loggers write. When the log declares `PARAM robot_front_laser_max` of
 //! 80 m or more (the Freiburg logs, in the 80 m mode) `r_max` is 81.83 m instead, so that the
 //! genuine 50–80 m returns of outdoor logs (freiburg-campus) are kept.
 //!
 //! # Angle convention
-//! The line stores no angles. [`AngleConvention::Auto`] (the default) uses, for n beams:
+//! A `FLASER` line stores no angles. [`AngleConvention::Auto`] (the default) uses, for n beams:
 //! - n odd (181, 361): bearing_i = −90° + i·180°/(n−1), both end beams present;
 //! - n even (180, 360): bearing_i = −90° + i·180°/n, the +90° end beam dropped.
 //!
@@ -107,12 +117,57 @@ impl AngleConvention {
     }
 }
 
-/// Streaming reader of the `FLASER` scans of a CARMEN log.
+/// The front laser's messages a CARMEN log may hold, each scan once per kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Laser {
+    /// `FLASER`: 180° field (see the angle convention), the robot's pose.
+    Flaser,
+    /// `ROBOTLASER1`: its own start angle, step and maximum range, the laser's pose.
+    RobotLaser1,
+    /// `RAWLASER1`: its own start angle, step and maximum range, no pose.
+    RawLaser1,
+}
+
+impl Laser {
+    /// The kind of the message named `name`, if it is one of the front laser's.
+    fn of(name: &str) -> Option<Self> {
+        match name {
+            "FLASER" => Some(Self::Flaser),
+            "ROBOTLASER1" => Some(Self::RobotLaser1),
+            "RAWLASER1" => Some(Self::RawLaser1),
+            _ => None,
+        }
+    }
+
+    /// The message's name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Flaser => "FLASER",
+            Self::RobotLaser1 => "ROBOTLASER1",
+            Self::RawLaser1 => "RAWLASER1",
+        }
+    }
+}
+
+/// `RAWLASER1` scans held while no message with a pose has come (see [`Reader`]).
+const HOLD: usize = 16;
+
+/// Streaming reader of the front laser's scans of a CARMEN log.
+///
+/// A log may hold each scan several times: as `FLASER` (old format), `ROBOTLASER1` (new
+/// format, with the laser's pose) and `RAWLASER1` (the driver's, no pose). The reader takes
+/// one kind, the first of `FLASER` and `ROBOTLASER1` in the log, and skips the others; a log
+/// with neither (no `FLASER` or `ROBOTLASER1` line among its first [`HOLD`] `RAWLASER1` scans)
+/// is read from its `RAWLASER1` lines.
 pub struct Reader {
     lines: Lines,
     convention: AngleConvention,
     r_max: f32,
     count: u64,
+    /// The kind read, once known.
+    laser: Option<Laser>,
+    /// `RAWLASER1` scans (or the error of one) read before the kind is known.
+    held: std::collections::VecDeque<Result<Record, InputError>>,
 }
 
 impl Reader {
@@ -121,14 +176,21 @@ impl Reader {
         Self::with_convention(input, AngleConvention::Auto)
     }
 
-    /// Reads scans from `input` with `convention`.
+    /// Reads scans from `input` with `convention` (for `FLASER` lines).
     pub fn with_convention(input: Box<dyn BufRead>, convention: AngleConvention) -> Self {
         Self {
             lines: Lines::new(input),
             convention,
             r_max: DEFAULT_MAX_RANGE_MM,
             count: 0,
+            laser: None,
+            held: std::collections::VecDeque::new(),
         }
+    }
+
+    /// The kind of message read (`None` before the first scan).
+    pub fn laser(&self) -> Option<Laser> {
+        self.laser
     }
 
     fn flaser(&mut self, line: u64, rest: &str) -> Result<Record, InputError> {
@@ -136,13 +198,9 @@ impl Reader {
         let n: usize = number(line, "beam count", tokens.next())?;
         check_beams(line, n)?;
         let r_max = self.r_max;
-        let ranges = ranges_mm(
-            line,
-            ("FLASER", n),
-            &mut tokens,
-            |r| (!(r.is_finite() && r >= 0.0)).then_some("not a range in metres"),
-            |mm| mm > 0.0 && mm < r_max,
-        )?;
+        let ranges = ranges_mm(line, ("FLASER", n), &mut tokens, not_metres, |mm| {
+            mm > 0.0 && mm < r_max
+        })?;
         // The laser pose, odometry pose and timestamp must follow the ranges.
         let Some(x) = tokens.next() else {
             return Err(InputError::line(
@@ -152,18 +210,119 @@ impl Reader {
         };
         let rest: Vec<&str> = tokens.take(6).collect();
         let field = |k: usize| rest.get(k).and_then(|t| t.parse::<f64>().ok());
-        let pose = match (x.parse::<f64>().ok(), field(0), field(1)) {
-            (Some(x), Some(y), Some(t)) if x.is_finite() && y.is_finite() && t.is_finite() => {
-                Some([x, y, t])
-            }
-            _ => None,
-        };
         let geometry = self.convention.geometry(n, self.r_max);
-        let mut record = checked_record(line, self.count, geometry, ranges)?;
-        record.pose = pose;
+        let mut record = checked_record(line, 0, geometry, ranges)?;
+        record.pose = pose([x.parse::<f64>().ok(), field(0), field(1)]);
         record.time = field(5).filter(|t| t.is_finite());
-        self.count += 1;
         Ok(record)
+    }
+
+    /// A `ROBOTLASER1` or `RAWLASER1` line: `laser_type start_angle field_of_view
+    /// angular_resolution maximum_range accuracy remission_mode n r_1 … r_n num_remissions
+    /// remission_1 … [laser_x laser_y laser_θ robot_x robot_y robot_θ tv rv
+    /// forward_safety_dist side_safety_dist turn_axis] timestamp host logger_timestamp`.
+    /// Older `ROBOTLASER1` lines without the remissions (and the turn axis) are read too.
+    fn laser_line(&mut self, line: u64, rest: &str, laser: Laser) -> Result<Record, InputError> {
+        let name = laser.name();
+        let mut tokens = rest.split_ascii_whitespace();
+        let mut header = [0.0f64; 7];
+        let what = [
+            "laser type",
+            "start angle",
+            "field of view",
+            "angular resolution",
+            "maximum range",
+            "accuracy",
+            "remission mode",
+        ];
+        for (v, what) in header.iter_mut().zip(what) {
+            *v = number(line, what, tokens.next())?;
+        }
+        let [_, start, fov, step, max, _, _] = header;
+        let n: usize = number(line, "beam count", tokens.next())?;
+        check_beams(line, n)?;
+        // The LMS "8183" no-return code is no return whatever maximum the log states.
+        let r_max = if max.is_finite() && max > 0.0 {
+            ((max * 1000.0) as f32).min(LONG_MAX_RANGE_MM)
+        } else {
+            self.r_max
+        };
+        let ranges = ranges_mm(line, (name, n), &mut tokens, not_metres, |mm| {
+            mm > 0.0 && mm < r_max
+        })?;
+        let rest: Vec<&str> = tokens.collect();
+        // The remissions: a count written as an integer, then that many values.
+        let after = match rest.first() {
+            Some(t) if t.bytes().all(|b| b.is_ascii_digit()) => {
+                let m: usize = number(line, "remission count", Some(t))?;
+                if rest.len() <= m {
+                    return Err(InputError::line(
+                        line,
+                        format!("{name} declares {m} remissions but has {}", rest.len() - 1),
+                    ));
+                }
+                1 + m
+            }
+            _ => 0,
+        };
+        let tail = rest.get(after..).unwrap_or_default();
+        let field = |k: usize| tail.get(k).and_then(|t| t.parse::<f64>().ok());
+        // Beams evenly spread over the field when the step is not usable.
+        let step = if step.is_finite() && step != 0.0 {
+            step
+        } else {
+            fov / n.saturating_sub(1).max(1) as f64
+        };
+        let geometry = ScanGeometry {
+            start_angle: start as f32,
+            angle_step: step as f32,
+            r_max,
+        };
+        let mut record = checked_record(line, 0, geometry, ranges)?;
+        let time = match laser {
+            Laser::RobotLaser1 => {
+                if tail.is_empty() {
+                    return Err(InputError::line(
+                        line,
+                        format!("{name} line truncated after the ranges (no pose)"),
+                    ));
+                }
+                record.pose = pose([field(0), field(1), field(2)]);
+                // Six poses, then tv rv and the safety distances, with or without the turn
+                // axis, then timestamp host logger_timestamp.
+                match tail.len().checked_sub(6) {
+                    Some(k) if k >= 8 => field(11),
+                    Some(7) => field(10),
+                    _ => None,
+                }
+            }
+            _ => field(0),
+        };
+        record.time = time.filter(|t| t.is_finite());
+        Ok(record)
+    }
+
+    /// Reads a scan of kind `laser` from the rest of line `line`.
+    fn read(&mut self, line: u64, rest: &str, laser: Laser) -> Result<Record, InputError> {
+        match laser {
+            Laser::Flaser => self.flaser(line, rest),
+            _ => self.laser_line(line, rest, laser),
+        }
+    }
+
+    /// Numbers a scan read for the caller (or passes on the error that ends the stream).
+    fn emit(&mut self, r: Result<Record, InputError>) -> Result<Record, InputError> {
+        match r {
+            Ok(mut record) => {
+                record.id = self.count;
+                self.count += 1;
+                Ok(record)
+            }
+            Err(e) => {
+                self.lines.stop();
+                Err(e)
+            }
+        }
     }
 }
 
@@ -172,17 +331,48 @@ impl Iterator for Reader {
 
     fn next(&mut self) -> Option<Self::Item> {
         loop {
-            let (line, text) = match self.lines.next_line()? {
-                Ok(l) => l,
-                Err(e) => return Some(Err(e)),
+            if self.laser == Some(Laser::RawLaser1) {
+                if let Some(r) = self.held.pop_front() {
+                    return Some(self.emit(r));
+                }
+            }
+            let (line, text) = match self.lines.next_line() {
+                Some(Ok(l)) => l,
+                Some(Err(e)) => return Some(Err(e)),
+                None if !self.held.is_empty() => {
+                    // A log with only RAWLASER1 scans.
+                    self.laser = Some(Laser::RawLaser1);
+                    continue;
+                }
+                None => return None,
             };
             let t = text.trim_start();
             let (kind, rest) = t.split_once(char::is_whitespace).unwrap_or((t, ""));
             let rest = rest.to_string();
-            let r = match kind {
+            if let Some(laser) = Laser::of(kind) {
+                match self.laser {
+                    Some(l) if l != laser => continue,
+                    Some(_) => {}
+                    None if laser == Laser::RawLaser1 => {
+                        let r = self.read(line, &rest, laser);
+                        let failed = r.is_err();
+                        self.held.push_back(r);
+                        if failed || self.held.len() >= HOLD {
+                            self.laser = Some(Laser::RawLaser1);
+                        }
+                        continue;
+                    }
+                    None => {
+                        self.laser = Some(laser);
+                        self.held.clear();
+                    }
+                }
+                let r = self.read(line, &rest, laser);
+                return Some(self.emit(r));
+            }
+            match kind {
                 "" => continue,
                 _ if kind.starts_with('#') => continue,
-                "FLASER" => self.flaser(line, &rest),
                 "PARAM" => {
                     let mut p = rest.split_ascii_whitespace();
                     if p.next() == Some("robot_front_laser_max") {
@@ -197,16 +387,30 @@ impl Iterator for Reader {
                     continue;
                 }
                 _ if is_message_name(kind) => continue,
-                _ => Err(InputError::line(
-                    line,
-                    format!("not a CARMEN log line (starts with {:?})", truncate(kind)),
-                )),
-            };
-            if r.is_err() {
-                self.lines.stop();
+                _ => {
+                    let e = InputError::line(
+                        line,
+                        format!("not a CARMEN log line (starts with {:?})", truncate(kind)),
+                    );
+                    return Some(self.emit(Err(e)));
+                }
             }
-            return Some(r);
         }
+    }
+}
+
+/// Why a range in metres is an error (`None`: it is fine).
+fn not_metres(r: f32) -> Option<&'static str> {
+    (!(r.is_finite() && r >= 0.0)).then_some("not a range in metres")
+}
+
+/// A pose from its three fields, when all are finite numbers.
+fn pose(fields: [Option<f64>; 3]) -> Option<[f64; 3]> {
+    match fields {
+        [Some(x), Some(y), Some(t)] if x.is_finite() && y.is_finite() && t.is_finite() => {
+            Some([x, y, t])
+        }
+        _ => None,
     }
 }
 
@@ -237,6 +441,102 @@ mod tests {
         let r = first("FLASER 5 1 2 3 4 5 1.5 -2.25 0.5 9 9 9 32.9068 host 33.5\n");
         assert_eq!(r.pose, Some([1.5, -2.25, 0.5]));
         assert_eq!(r.time, Some(32.9068));
+    }
+
+    fn all(log: &'static str) -> Vec<Result<Record, InputError>> {
+        Reader::new(Box::new(log.as_bytes())).collect()
+    }
+
+    /// A `ROBOTLASER1` line of the CARMEN logger: 5 beams from −45° a quarter of π apart,
+    /// 8 m maximum (the 8.5 m reading and the 0 are no return), 2 remissions, the laser's pose
+    /// (1, 2, 0.5) and the robot's (0.9, 2, 0.5), then tv rv, the safety distances, the turn
+    /// axis, and the timestamp.
+    const ROBOT: &str = "ROBOTLASER1 0 -0.785398 3.141593 0.785398 8.0 0.01 0 5 \
+        1.0 8.5 2.5 0 3.0 2 7 9 1.0 2.0 0.5 0.9 2.0 0.5 0.1 0.0 0.3 0.2 0.0 12.5 host 12.6\n";
+
+    #[test]
+    fn robotlaser1_gives_its_own_geometry_and_the_laser_pose() {
+        let r = first(ROBOT);
+        assert!((r.geometry.start_angle + std::f32::consts::FRAC_PI_4).abs() < 1e-6);
+        assert!((r.geometry.angle_step - std::f32::consts::FRAC_PI_4).abs() < 1e-6);
+        assert_eq!(r.geometry.r_max, 8000.0);
+        let valid: Vec<bool> = r.ranges_mm.iter().map(|v| v.is_finite()).collect();
+        assert_eq!(valid, [true, false, true, false, true]);
+        assert_eq!((r.ranges_mm[0], r.ranges_mm[4]), (1000.0, 3000.0));
+        assert_eq!(r.pose, Some([1.0, 2.0, 0.5]));
+        assert_eq!(r.time, Some(12.5));
+        // Beam 4 lies at +135°.
+        let (x, y) = r.point(4).unwrap_or_default();
+        assert!(
+            (x + 2121.32).abs() < 0.1 && (y - 2121.32).abs() < 0.1,
+            "{x} {y}"
+        );
+    }
+
+    /// Older `ROBOTLASER1` lines have no remissions and no turn axis.
+    #[test]
+    fn robotlaser1_without_remissions_is_read_too() {
+        let r = first(
+            "ROBOTLASER1 0 -1.570796 3.141593 0.017453 81.9 0.01 0 3 1 2 3 \
+             4.0 -1.5 0.25 3.9 -1.5 0.25 0.0 0.0 0.3 0.2 77.25 host 77.3\n",
+        );
+        assert_eq!(r.pose, Some([4.0, -1.5, 0.25]));
+        assert_eq!(r.time, Some(77.25));
+        assert_eq!(r.geometry.r_max, LONG_MAX_RANGE_MM);
+        // Nothing after the ranges, or fewer remissions than declared: errors.
+        let truncated = all("ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3\n");
+        assert!(matches!(&truncated[..], [Err(e)] if e.message.contains("no pose")));
+        let short = all("ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 9 1 2\n");
+        assert!(matches!(&short[..], [Err(e)] if e.message.contains("9 remissions")));
+    }
+
+    #[test]
+    fn rawlaser1_gives_its_geometry_and_time_but_no_pose() {
+        let r = first("RAWLASER1 0 -1.570796 3.141593 0.008727 81.9 0.01 0 3 1 2 3 0 5.5 h 5.6\n");
+        assert!((r.geometry.angle_step - 0.5f32.to_radians()).abs() < 1e-6);
+        assert_eq!((r.pose, r.time), (None, Some(5.5)));
+    }
+
+    /// One kind of laser message per log: the first with a pose; `RAWLASER1` only when no
+    /// message with a pose comes among the first [`HOLD`] of them. Scans are numbered from 0.
+    #[test]
+    fn each_scan_is_read_once_from_one_kind_of_message() {
+        let kinds = |log: String| -> Vec<(u64, Option<f64>)> {
+            let reader = Reader::new(Box::new(std::io::Cursor::new(log.into_bytes())));
+            reader
+                .map(|r| r.map(|r| (r.id, r.time)))
+                .collect::<Result<_, _>>()
+                .unwrap_or_else(|e| panic!("{e}"))
+        };
+        let flaser = |t: u32| format!("FLASER 5 1 2 3 4 5 0 0 0 0 0 0 {t} h {t}\n");
+        let robot = |t: u32| {
+            format!(
+                "ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 0 0 0 0 0 0 0 0 0 0 0 0 {t} h {t}\n"
+            )
+        };
+        let raw = |t: u32| format!("RAWLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 0 {t} h {t}\n");
+        let log = |f: &dyn Fn(u32) -> String, g: &dyn Fn(u32) -> String, n: u32| {
+            (0..n).map(|t| f(t) + &g(t + 100)).collect::<String>()
+        };
+        let times =
+            |v: &[(u64, Option<f64>)]| v.iter().map(|(_, t)| t.unwrap_or(-1.0)).collect::<Vec<_>>();
+        let ids = |v: &[(u64, Option<f64>)]| v.iter().map(|(i, _)| *i).collect::<Vec<_>>();
+        let a = kinds(log(&flaser, &robot, 3));
+        assert_eq!(times(&a), [0.0, 1.0, 2.0]);
+        let b = kinds(log(&robot, &flaser, 3));
+        assert_eq!(times(&b), [0.0, 1.0, 2.0]);
+        // RAWLASER1 before ROBOTLASER1: the robot's scans, numbered from 0.
+        let c = kinds(log(&raw, &robot, 3));
+        assert_eq!(
+            (times(&c), ids(&c)),
+            (vec![100.0, 101.0, 102.0], vec![0, 1, 2])
+        );
+        // Only RAWLASER1: all of them, fewer or more than HOLD.
+        let d = kinds((0..3).map(raw).collect());
+        assert_eq!(times(&d), [0.0, 1.0, 2.0]);
+        let n = HOLD as u32 + 4;
+        let e = kinds((0..n).map(raw).collect::<String>() + &robot(99));
+        assert_eq!(ids(&e), (0..u64::from(n)).collect::<Vec<_>>());
     }
 
     #[test]

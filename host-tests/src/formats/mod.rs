@@ -1,5 +1,5 @@
-//! Readers for recorded scans: one scan per line of `csv`, CARMEN `FLASER` logs, Hokuyo text
-//! dumps, and raw byte captures of a SICK LMS200 serial line.
+//! Readers for recorded scans: one scan per line of `csv`, CARMEN logs (`FLASER`, `ROBOTLASER1`
+//! or `RAWLASER1` lines), Hokuyo text dumps, and raw byte captures of a SICK LMS200 serial line.
 //!
 //! Every reader streams (line by line, or chunk by chunk for LMS200 captures), so files larger
 //! than memory are fine, and reads gzip transparently (detected by its magic bytes). Each scan
@@ -41,7 +41,8 @@ use crate::methods::{Extraction, MAX_BEAMS};
 pub enum Format {
     /// `ID,START_DEG,STEP_DEG,R_0,...,R_{N-1}`, ranges in mm (0 or ≥ 8183 = no return).
     Csv,
-    /// CARMEN log, `FLASER` lines (metres, 180° field, gzip allowed).
+    /// CARMEN log: `FLASER` (180° field), `ROBOTLASER1` or `RAWLASER1` lines (metres, gzip
+    /// allowed).
     Carmen,
     /// Raw byte capture of an LMS200 serial line (0xB0 telegrams, damage skipped).
     Lms200,

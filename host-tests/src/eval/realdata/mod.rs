@@ -193,7 +193,7 @@ pub fn run_records(
     // Beams of the previous scan (scan k of the next pair).
     let mut prev_beams = 0;
     for record in records.take(limit) {
-        let record = record.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
+        let record = record.map_err(|e| anyhow::Error::new(e).context(log.to_string()))?;
         if beams == 0 {
             beams = record.ranges_mm.len();
         }
