@@ -227,6 +227,7 @@ fn step_error_estimator_on_synthetic_rooms() {
                 ranges_mm: ranges.clone(),
                 time: None,
                 pose: None,
+                sweeps: None,
             });
         }
     }

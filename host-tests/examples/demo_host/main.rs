@@ -497,6 +497,7 @@ fn demo(o: &Opts) -> Result<()> {
                                 ranges_mm: sim.ranges_mm.clone(),
                                 time: None,
                                 pose: None,
+                                sweeps: None,
                             };
                             let title = format!(
                                 "pfe-qemu scan 0 ({config}): {} features from the firmware",

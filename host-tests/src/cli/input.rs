@@ -134,6 +134,7 @@ impl MethodArgs {
             sweeps: usize::from(
                 self.sweeps
                     .0
+                    .or(record.sweeps)
                     .unwrap_or_else(|| crate::formats::sweeps_of(self.format, geometry)),
             ),
             quantum: crate::formats::range_quantum(&record.ranges_mm, geometry.r_max),

@@ -191,6 +191,7 @@ impl Plots {
             ranges_mm: vec![f32::NAN; 361],
             time: None,
             pose: None,
+            sweeps: None,
         };
         let ex = Extraction {
             marks: Vec::new(),

@@ -6,7 +6,8 @@
 //!   robot_y robot_θ tv rv forward_safety_dist side_safety_dist turn_axis timestamp host
 //!   logger_ts` (new format; older lines without the remissions and the turn axis are read
 //!   too): beam i at `start_angle + i·angular_resolution`, no return at or beyond
-//!   `maximum_range`, the laser's pose;
+//!   `maximum_range`, the laser's pose; a `laser_type` of a scanner that is not a SICK LMS
+//!   (2–6: Hokuyo URG, simulated, S300, emulated) declares one sweep ([`Record::sweeps`]);
 //! - `RAWLASER1` (the same up to the remissions, then `timestamp host logger_ts`): no pose.
 //!
 //! Ranges are in metres (x forward, y left, beams counter-clockwise from the right). Every
@@ -279,6 +280,11 @@ impl Reader {
             r_max,
         };
         let mut record = checked_record(line, 0, geometry, ranges)?;
+        // CARMEN's laser types: 0 a SICK LMS, 1 a SICK PLS, 2 a Hokuyo URG, 3 simulated, 4 a
+        // SICK S300, 5 and 6 emulated from cameras, 99 unknown. Only an LMS interleaves sweeps.
+        if (2.0..=6.0).contains(&header[0]) {
+            record.sweeps = Some(1);
+        }
         let time = match laser {
             Laser::RobotLaser1 => {
                 if tail.is_empty() {
@@ -490,11 +496,15 @@ mod tests {
         assert!(matches!(&short[..], [Err(e)] if e.message.contains("9 remissions")));
     }
 
+    /// A SICK LMS (laser type 0) at 0.5° is left to the format's rule (two sweeps); a Hokuyo URG
+    /// (type 2) at the same step is one sweep.
     #[test]
     fn rawlaser1_gives_its_geometry_and_time_but_no_pose() {
         let r = first("RAWLASER1 0 -1.570796 3.141593 0.008727 81.9 0.01 0 3 1 2 3 0 5.5 h 5.6\n");
         assert!((r.geometry.angle_step - 0.5f32.to_radians()).abs() < 1e-6);
-        assert_eq!((r.pose, r.time), (None, Some(5.5)));
+        assert_eq!((r.pose, r.time, r.sweeps), (None, Some(5.5), None));
+        let r = first("RAWLASER1 2 -1.570796 3.141593 0.008727 5.6 0.01 0 3 1 2 3 0 5.5 h 5.6\n");
+        assert_eq!(r.sweeps, Some(1));
     }
 
     /// One kind of laser message per log: the first with a pose; `RAWLASER1` only when no

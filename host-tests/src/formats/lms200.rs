@@ -101,6 +101,7 @@ impl Telegram {
                 .collect(),
             time: None,
             pose: None,
+            sweeps: None,
         })
     }
 }

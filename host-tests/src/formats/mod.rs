@@ -105,6 +105,10 @@ pub struct Record {
     pub time: Option<f64>,
     /// Pose of the scanner (x m, y m, θ rad) when the format gives one (CARMEN).
     pub pose: Option<[f64; 3]>,
+    /// The interleaved sweeps the input says the scan is made of (a CARMEN `ROBOTLASER1` or
+    /// `RAWLASER1` line of a laser that is not a SICK LMS: 1); `None`: its format's rule
+    /// ([`sweeps_of`]).
+    pub sweeps: Option<u8>,
 }
 
 impl Record {
@@ -396,6 +400,7 @@ pub(crate) fn checked_record(
         ranges_mm,
         time: None,
         pose: None,
+        sweeps: None,
     })
 }
 
@@ -589,7 +594,8 @@ impl ScanJson {
 
 /// The interleaved sweeps of a scan of `geometry` read as `format`: a SICK LMS2xx's (LMS200
 /// telegrams and CARMEN logs) at 0.5° are 2, at 0.25° 4 ([`pfe_core::BeamTiming::lms2xx`]);
-/// 1 otherwise, and for every other format (no interleaving known).
+/// 1 otherwise (1° or a step no LMS2xx has), and for every other format (no interleaving
+/// known). A record's own [`Record::sweeps`] comes first.
 ///
 /// ```
 /// use host_tests::formats::{sweeps_of, Format};
@@ -597,12 +603,23 @@ impl ScanJson {
 /// assert_eq!(sweeps_of(Format::Carmen, &ScanGeometry::lms200(180.0, 0.5)), 2);
 /// assert_eq!(sweeps_of(Format::Lms200, &ScanGeometry::lms200(100.0, 0.25)), 4);
 /// assert_eq!(sweeps_of(Format::Carmen, &ScanGeometry::lms200(180.0, 1.0)), 1);
+/// // Not an LMS2xx's step (a Hokuyo URG's 360° / 1024).
+/// assert_eq!(sweeps_of(Format::Carmen, &ScanGeometry::lms200(240.0, 0.3515625)), 1);
 /// assert_eq!(sweeps_of(Format::Csv, &ScanGeometry::lms200(180.0, 0.5)), 1);
 /// ```
 pub fn sweeps_of(format: Format, geometry: &pfe_core::ScanGeometry) -> u8 {
     match format {
         Format::Lms200 | Format::Carmen => {
-            pfe_core::BeamTiming::lms2xx(geometry.angle_step.abs().to_degrees()).sweeps
+            let deg = geometry.angle_step.abs().to_degrees();
+            // Only an LMS2xx's own steps: another scanner's (a Hokuyo URG's 0.352°) is one sweep.
+            let lms = [0.25f32, 0.5, 1.0]
+                .iter()
+                .any(|r| (deg / r - 1.0).abs() < 0.01);
+            if lms {
+                pfe_core::BeamTiming::lms2xx(deg).sweeps
+            } else {
+                1
+            }
         }
         _ => 1,
     }

@@ -223,6 +223,7 @@ mod tests {
             ranges_mm: vec![1000.0; 361],
             time: None,
             pose: None,
+            sweeps: None,
         }
     }
 

@@ -104,6 +104,7 @@ fn the_plot_draws_uncertainty_and_explains_bare_marks() {
         ranges_mm: ranges,
         time: None,
         pose: None,
+        sweeps: None,
     };
     let mut m = Pfe::new("pfe", pfe_core::Config::default().with_sigma_r(5.0));
     let ex = m.extract(&record.geometry, &record.ranges_mm);

@@ -248,7 +248,9 @@ pub fn context_of(record: &Record, sweeps: Option<u8>) -> ScanContext {
     ScanContext {
         odometry: None,
         sweeps: usize::from(
-            sweeps.unwrap_or_else(|| crate::formats::sweeps_of(carmen, &record.geometry)),
+            sweeps
+                .or(record.sweeps)
+                .unwrap_or_else(|| crate::formats::sweeps_of(carmen, &record.geometry)),
         ),
         quantum: crate::formats::range_quantum(&record.ranges_mm, record.geometry.r_max),
     }

@@ -246,6 +246,7 @@ fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
                 ranges_mm: sim.ranges_mm,
                 time: None,
                 pose: Some([pose[0] / 1000.0, pose[1] / 1000.0, pose[2]]),
+                sweeps: None,
             }
         })
         .collect();

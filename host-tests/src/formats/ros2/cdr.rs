@@ -237,6 +237,7 @@ impl LaserScanMsg {
             ranges_mm,
             time: Some(f64::from(self.sec) + f64::from(self.nanosec) * 1e-9),
             pose: None,
+            sweeps: None,
         })
     }
 }
