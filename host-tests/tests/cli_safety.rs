@@ -569,7 +569,8 @@ fn report_and_plot_commands_never_replace_a_users_file() {
 
 /// `pfe realdata` answers a log it cannot compare with exit 2 and no table: no two
 /// consecutive scans with a pose (one scan; scans of `RAWLASER1` lines only), a malformed
-/// line, a missing file. The room's scans as `ROBOTLASER1` lines give the `FLASER` lines' table.
+/// line, a missing file; among other logs, it names it and compares the others. The room's
+/// scans as `ROBOTLASER1` lines give the `FLASER` lines' table.
 #[test]
 fn realdata_refuses_logs_with_nothing_to_compare() {
     let dir = scratch("realdata-refuses");
@@ -631,5 +632,22 @@ fn realdata_refuses_logs_with_nothing_to_compare() {
         assert!(stderr(&out).contains(says), "{path:?}: {}", stderr(&out));
         assert!(out.stdout.is_empty(), "{path:?}");
     }
+    // Among other logs: named and left out, the others still compared (exit 2).
+    let out = pfe(&[
+        "realdata",
+        arg(&fixture("truncated.log")),
+        arg(&fixture("room.log")),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("1 of 2 logs left out"),
+        "{}",
+        stderr(&out)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(
+        text.starts_with("room:") && text.contains(&flaser),
+        "{text}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

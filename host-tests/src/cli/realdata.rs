@@ -44,31 +44,58 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         std::fs::File::open(log)
             .map_err(|e| super::Exit::bad_input(format!("{}: {e}", log.display())))?;
     }
+    // A log that cannot be compared is named and left out; the others are still compared.
     let mut reports = Vec::new();
+    let mut refused = Vec::new();
     for log in &args.logs {
-        let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0).map_err(|e| {
-            // A malformed line is bad input (the scans before it were read).
-            match e.downcast_ref::<crate::formats::InputError>() {
-                Some(_) => super::Exit::bad_input(format!("{e:#}")).into(),
-                None => e,
+        match compared(log, &args) {
+            Ok(r) => {
+                println!("{}", report::table(&r));
+                reports.push(r);
             }
-        })?;
-        if r.methods.first().map_or(0, |m| m.pairs) == 0 {
-            let scans = r.methods.first().map_or(0, |m| m.scans);
-            return Err(super::Exit::bad_input(format!(
-                "{}: {scans} scan(s) and no two consecutive ones with a pose: nothing to \
-                 compare (the benchmark needs a CARMEN log whose FLASER or ROBOTLASER1 lines \
-                 give poses)",
-                log.display()
-            ))
-            .into());
+            Err(e) if e.is::<super::Exit>() => {
+                eprintln!("pfe: realdata: {e:#}");
+                refused.push(log.display().to_string());
+            }
+            Err(e) => return Err(e),
         }
-        println!("{}", report::table(&r));
-        reports.push(r);
     }
-    if let Some(md) = &args.md {
+    if let (Some(md), false) = (&args.md, reports.is_empty()) {
         report::write_markdown(md, &reports, &args.command, args.force)?;
         eprintln!("wrote {} and its plots", md.display());
     }
+    if !refused.is_empty() {
+        return Err(super::Exit::bad_input(format!(
+            "{} of {} logs left out: {}",
+            refused.len(),
+            args.logs.len(),
+            refused.join(", ")
+        ))
+        .into());
+    }
     Ok(())
+}
+
+/// The benchmark's report of `log`, or bad input ([`super::Exit`]) when it holds a malformed
+/// line or no two consecutive scans with a pose.
+fn compared(
+    log: &std::path::Path,
+    args: &Args,
+) -> anyhow::Result<crate::eval::realdata::LogReport> {
+    let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0).map_err(|e| {
+        match e.downcast_ref::<crate::formats::InputError>() {
+            Some(_) => super::Exit::bad_input(format!("{e:#}")).into(),
+            None => e,
+        }
+    })?;
+    if r.methods.first().map_or(0, |m| m.pairs) == 0 {
+        let scans = r.methods.first().map_or(0, |m| m.scans);
+        return Err(super::Exit::bad_input(format!(
+            "{}: {scans} scan(s) and no two consecutive ones with a pose: nothing to compare \
+             (the benchmark needs a CARMEN log whose FLASER or ROBOTLASER1 lines give poses)",
+            log.display()
+        ))
+        .into());
+    }
+    Ok(r)
 }

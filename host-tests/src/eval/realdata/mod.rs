@@ -299,9 +299,11 @@ pub fn run_log(
         .file_name()
         .map(|n| n.to_string_lossy().to_string())
         .unwrap_or_default();
+    let name = name.trim_end_matches(".gz");
     let name = name
-        .trim_end_matches(".gz")
-        .trim_end_matches(".log")
+        .strip_suffix(".log")
+        .or_else(|| name.strip_suffix(".clf"))
+        .unwrap_or(name)
         .trim_end_matches("-corrected")
         .to_string();
     let reader = crate::formats::carmen::Reader::new(input);
