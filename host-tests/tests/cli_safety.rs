@@ -624,7 +624,10 @@ fn realdata_refuses_logs_with_nothing_to_compare() {
     for (path, says) in [
         (one, "1 scan(s)"),
         (raw, "2 scan(s)"),
-        (fixture("truncated.log"), "line"),
+        (
+            fixture("truncated.log"),
+            "line 3: FLASER declares 181 ranges",
+        ),
         (dir.join("absent.log"), "absent.log"),
     ] {
         let out = pfe(&["realdata", arg(&path)]);

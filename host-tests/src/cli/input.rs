@@ -72,7 +72,9 @@ pub struct MethodArgs {
     pub topic: Option<String>,
     /// Interleaved sweeps a scan is made of (1, 2 or 4: beam i in sweep i mod N), whose
     /// offset (a moving robot's) is then estimated from the scan and removed where it shows;
-    /// `auto`: a SICK LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4 at 0.25°), else 1.
+    /// `auto`: what a CARMEN ROBOTLASER1/RAWLASER1 line's laser type says (1 for a scanner
+    /// that is not a SICK LMS), else a SICK LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4
+    /// at 0.25°, 1 for a step no LMS2xx has), else 1.
     #[arg(long, default_value = "auto", value_parser = sweeps_arg)]
     pub sweeps: Sweeps,
 }

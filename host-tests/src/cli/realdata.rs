@@ -20,8 +20,9 @@ pub struct Args {
     /// Also write this Markdown report, with its plots (SVG) next to it.
     #[arg(long)]
     md: Option<PathBuf>,
-    /// Interleaved sweeps each scan is declared to be made of (1 to 4), or `auto`: a SICK
-    /// LMS2xx's (2 at 0.5°, 4 at 0.25°). pfe aligns declared sweeps whose offset shows.
+    /// Interleaved sweeps each scan is declared to be made of (1 to 4), or `auto`: one for a
+    /// ROBOTLASER1/RAWLASER1 line whose laser is not a SICK LMS, else a SICK LMS2xx's (2 at
+    /// 0.5°, 4 at 0.25°, 1 otherwise). pfe aligns declared sweeps whose offset shows.
     #[arg(long, default_value = "auto", value_parser = crate::cli::input::sweeps_arg)]
     sweeps: crate::cli::input::Sweeps,
     /// Replace --md and its plots even when no pfe command wrote them.

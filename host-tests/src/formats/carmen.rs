@@ -7,7 +7,8 @@
 //!   logger_ts` (new format; older lines without the remissions and the turn axis are read
 //!   too): beam i at `start_angle + i·angular_resolution`, no return at or beyond
 //!   `maximum_range`, the laser's pose; a `laser_type` of a scanner that is not a SICK LMS
-//!   (2–6: Hokuyo URG, simulated, S300, emulated) declares one sweep ([`Record::sweeps`]);
+//!   (2–6: Hokuyo URG, simulated, S300, and in some CARMEN versions lasers emulated from
+//!   cameras) declares one sweep ([`Record::sweeps`]);
 //! - `RAWLASER1` (the same up to the remissions, then `timestamp host logger_ts`): no pose.
 //!
 //! Ranges are in metres (x forward, y left, beams counter-clockwise from the right). Every
@@ -121,7 +122,7 @@ impl AngleConvention {
 /// The front laser's messages a CARMEN log may hold, each scan once per kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Laser {
-    /// `FLASER`: 180° field (see the angle convention), the robot's pose.
+    /// `FLASER`: 180° field (see the angle convention), a pose taken as the laser's.
     Flaser,
     /// `ROBOTLASER1`: its own start angle, step and maximum range, the laser's pose.
     RobotLaser1,
@@ -150,16 +151,17 @@ impl Laser {
     }
 }
 
-/// `RAWLASER1` scans held while no message with a pose has come (see [`Reader`]).
-const HOLD: usize = 16;
+/// `RAWLASER1` lines held (unread) while no message with a pose has come (see [`Reader`]).
+const HOLD: usize = 512;
 
 /// Streaming reader of the front laser's scans of a CARMEN log.
 ///
 /// A log may hold each scan several times: as `FLASER` (old format), `ROBOTLASER1` (new
 /// format, with the laser's pose) and `RAWLASER1` (the driver's, no pose). The reader takes
 /// one kind, the first of `FLASER` and `ROBOTLASER1` in the log, and skips the others; a log
-/// with neither (no `FLASER` or `ROBOTLASER1` line among its first [`HOLD`] `RAWLASER1` scans)
-/// is read from its `RAWLASER1` lines.
+/// with neither (no `FLASER` or `ROBOTLASER1` line among its first 512 `RAWLASER1` lines)
+/// is read from its `RAWLASER1` lines. Lines of a kind it skips are not read, so they cannot
+/// fail it.
 pub struct Reader {
     lines: Lines,
     convention: AngleConvention,
@@ -167,8 +169,10 @@ pub struct Reader {
     count: u64,
     /// The kind read, once known.
     laser: Option<Laser>,
-    /// `RAWLASER1` scans (or the error of one) read before the kind is known.
-    held: std::collections::VecDeque<Result<Record, InputError>>,
+    /// `RAWLASER1` lines (number, text after the name) met before the kind is known.
+    held: std::collections::VecDeque<(u64, String)>,
+    /// An error met while lines were held: it comes after them.
+    deferred: Option<InputError>,
 }
 
 impl Reader {
@@ -186,6 +190,7 @@ impl Reader {
             count: 0,
             laser: None,
             held: std::collections::VecDeque::new(),
+            deferred: None,
         }
     }
 
@@ -252,21 +257,7 @@ impl Reader {
             mm > 0.0 && mm < r_max
         })?;
         let rest: Vec<&str> = tokens.collect();
-        // The remissions: a count written as an integer, then that many values.
-        let after = match rest.first() {
-            Some(t) if t.bytes().all(|b| b.is_ascii_digit()) => {
-                let m: usize = number(line, "remission count", Some(t))?;
-                if rest.len() <= m {
-                    return Err(InputError::line(
-                        line,
-                        format!("{name} declares {m} remissions but has {}", rest.len() - 1),
-                    ));
-                }
-                1 + m
-            }
-            _ => 0,
-        };
-        let tail = rest.get(after..).unwrap_or_default();
+        let tail = laser_tail(line, laser, &rest)?;
         let field = |k: usize| tail.get(k).and_then(|t| t.parse::<f64>().ok());
         // Beams evenly spread over the field when the step is not usable.
         let step = if step.is_finite() && step != 0.0 {
@@ -281,30 +272,20 @@ impl Reader {
         };
         let mut record = checked_record(line, 0, geometry, ranges)?;
         // CARMEN's laser types: 0 a SICK LMS, 1 a SICK PLS, 2 a Hokuyo URG, 3 simulated, 4 a
-        // SICK S300, 5 and 6 emulated from cameras, 99 unknown. Only an LMS interleaves sweeps.
+        // SICK S300 (5 and 6, in some versions, a laser emulated from a Kinect or a stereo
+        // camera), 99 unknown. Only an LMS interleaves sweeps.
         if (2.0..=6.0).contains(&header[0]) {
             record.sweeps = Some(1);
         }
-        let time = match laser {
-            Laser::RobotLaser1 => {
-                if tail.is_empty() {
-                    return Err(InputError::line(
-                        line,
-                        format!("{name} line truncated after the ranges (no pose)"),
-                    ));
-                }
-                record.pose = pose([field(0), field(1), field(2)]);
-                // Six poses, then tv rv and the safety distances, with or without the turn
-                // axis, then timestamp host logger_timestamp.
-                match tail.len().checked_sub(6) {
-                    Some(k) if k >= 8 => field(11),
-                    Some(7) => field(10),
-                    _ => None,
-                }
-            }
-            _ => field(0),
-        };
-        record.time = time.filter(|t| t.is_finite());
+        if laser == Laser::RobotLaser1 {
+            record.pose = pose([field(0), field(1), field(2)]);
+        }
+        // The timestamp is third from the end (then the host and the logger's timestamp).
+        record.time = tail
+            .len()
+            .checked_sub(3)
+            .and_then(field)
+            .filter(|t| t.is_finite());
         Ok(record)
     }
 
@@ -325,7 +306,10 @@ impl Reader {
                 Ok(record)
             }
             Err(e) => {
+                // An error ends the stream.
                 self.lines.stop();
+                self.held.clear();
+                self.deferred = None;
                 Err(e)
             }
         }
@@ -338,12 +322,21 @@ impl Iterator for Reader {
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             if self.laser == Some(Laser::RawLaser1) {
-                if let Some(r) = self.held.pop_front() {
+                if let Some((line, rest)) = self.held.pop_front() {
+                    let r = self.read(line, &rest, Laser::RawLaser1);
                     return Some(self.emit(r));
+                }
+                if let Some(e) = self.deferred.take() {
+                    return Some(self.emit(Err(e)));
                 }
             }
             let (line, text) = match self.lines.next_line() {
                 Some(Ok(l)) => l,
+                Some(Err(e)) if !self.held.is_empty() => {
+                    self.laser = Some(Laser::RawLaser1);
+                    self.deferred = Some(e);
+                    continue;
+                }
                 Some(Err(e)) => return Some(Err(e)),
                 None if !self.held.is_empty() => {
                     // A log with only RAWLASER1 scans.
@@ -360,10 +353,8 @@ impl Iterator for Reader {
                     Some(l) if l != laser => continue,
                     Some(_) => {}
                     None if laser == Laser::RawLaser1 => {
-                        let r = self.read(line, &rest, laser);
-                        let failed = r.is_err();
-                        self.held.push_back(r);
-                        if failed || self.held.len() >= HOLD {
+                        self.held.push_back((line, rest));
+                        if self.held.len() >= HOLD {
                             self.laser = Some(Laser::RawLaser1);
                         }
                         continue;
@@ -398,11 +389,61 @@ impl Iterator for Reader {
                         line,
                         format!("not a CARMEN log line (starts with {:?})", truncate(kind)),
                     );
+                    if !self.held.is_empty() {
+                        // The held scans come first.
+                        self.laser = Some(Laser::RawLaser1);
+                        self.deferred = Some(e);
+                        continue;
+                    }
                     return Some(self.emit(Err(e)));
                 }
             }
         }
     }
+}
+
+/// The fields of a `ROBOTLASER1` or `RAWLASER1` line after its ranges, past the remissions:
+/// for `RAWLASER1` the timestamp, host and logger timestamp; for `ROBOTLASER1` the laser's and
+/// the robot's pose, tv rv and the two safety distances, with or without the turn axis, then
+/// those three. The remissions (a count, then that many values) are told apart from an older
+/// `ROBOTLASER1` line without them by the number of fields.
+fn laser_tail<'a>(
+    line: u64,
+    laser: Laser,
+    rest: &'a [&'a str],
+) -> Result<&'a [&'a str], InputError> {
+    let name = laser.name();
+    let after: &[usize] = match laser {
+        Laser::RobotLaser1 => &[13, 14],
+        _ => &[3],
+    };
+    let count = rest
+        .first()
+        .filter(|t| t.bytes().all(|b| b.is_ascii_digit()))
+        .and_then(|t| t.parse::<usize>().ok());
+    if let Some(m) = count {
+        let tail = rest.get(1..).and_then(|r| r.get(m.min(r.len())..));
+        if let Some(tail) = tail.filter(|t| m < rest.len() && after.contains(&t.len())) {
+            return Ok(tail);
+        }
+    }
+    if laser == Laser::RobotLaser1 && after.contains(&rest.len()) {
+        return Ok(rest);
+    }
+    let expected = match laser {
+        Laser::RobotLaser1 => {
+            "the remission count, the remissions and 13 or 14 fields (two poses, \
+            tv rv, the safety distances, the turn axis or not, timestamp host logger_timestamp)"
+        }
+        _ => "the remission count, the remissions, timestamp host logger_timestamp",
+    };
+    Err(InputError::line(
+        line,
+        format!(
+            "{name}: {} fields after the ranges; expected {expected}",
+            rest.len()
+        ),
+    ))
 }
 
 /// Why a range in metres is an error (`None`: it is fine).
@@ -434,6 +475,7 @@ fn truncate(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::formats::Location;
 
     fn first(log: &'static str) -> Record {
         match Reader::new(Box::new(log.as_bytes())).next() {
@@ -447,10 +489,6 @@ mod tests {
         let r = first("FLASER 5 1 2 3 4 5 1.5 -2.25 0.5 9 9 9 32.9068 host 33.5\n");
         assert_eq!(r.pose, Some([1.5, -2.25, 0.5]));
         assert_eq!(r.time, Some(32.9068));
-    }
-
-    fn all(log: &'static str) -> Vec<Result<Record, InputError>> {
-        Reader::new(Box::new(log.as_bytes())).collect()
     }
 
     /// A `ROBOTLASER1` line of the CARMEN logger: 5 beams from −45° a quarter of π apart,
@@ -489,11 +527,33 @@ mod tests {
         assert_eq!(r.pose, Some([4.0, -1.5, 0.25]));
         assert_eq!(r.time, Some(77.25));
         assert_eq!(r.geometry.r_max, LONG_MAX_RANGE_MM);
-        // Nothing after the ranges, or fewer remissions than declared: errors.
-        let truncated = all("ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3\n");
-        assert!(matches!(&truncated[..], [Err(e)] if e.message.contains("no pose")));
-        let short = all("ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 9 1 2\n");
-        assert!(matches!(&short[..], [Err(e)] if e.message.contains("9 remissions")));
+        // A laser x written as an integer is not a remission count: 13 fields follow the
+        // ranges, as in a line without remissions.
+        let r = first(
+            "ROBOTLASER1 0 -1.570796 3.141593 0.785398 8.0 0.01 0 5 1 2 3 2 1 \
+             0 1.5 0.25 0.1 1.5 0.25 0.0 0.0 0.3 0.2 77.25 host 77.3\n",
+        );
+        assert_eq!((r.pose, r.time), (Some([0.0, 1.5, 0.25]), Some(77.25)));
+        // The count and its remissions, then 13 fields (no turn axis).
+        let r = first(
+            "ROBOTLASER1 0 -1.570796 3.141593 0.785398 8.0 0.01 0 5 1 2 3 2 1 \
+             2 7 8 3 1.5 0.25 0.1 1.5 0.25 0.0 0.0 0.3 0.2 77.25 host 77.3\n",
+        );
+        assert_eq!((r.pose, r.time), (Some([3.0, 1.5, 0.25]), Some(77.25)));
+        // Nothing after the ranges, fewer remissions than declared, fields missing: errors.
+        for line in [
+            "ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3\n",
+            "ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 9 1 2\n",
+            "ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 0 1 2 3 4 5 6 7 8 9 1 2\n",
+            "RAWLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3\n",
+            "RAWLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 2 7 8 1.5 h\n",
+        ] {
+            let r: Vec<_> = Reader::new(Box::new(line.as_bytes())).collect();
+            assert!(
+                matches!(&r[..], [Err(e)] if e.message.contains("fields after the ranges")),
+                "{line}: {r:?}"
+            );
+        }
     }
 
     /// A SICK LMS (laser type 0) at 0.5° is left to the format's rule (two sweeps); a Hokuyo URG
@@ -541,12 +601,40 @@ mod tests {
             (times(&c), ids(&c)),
             (vec![100.0, 101.0, 102.0], vec![0, 1, 2])
         );
-        // Only RAWLASER1: all of them, fewer or more than HOLD.
+        // Only RAWLASER1: all of them, fewer or more than HOLD. A ROBOTLASER1 after HOLD − 1 of
+        // them is read; after HOLD, not.
         let d = kinds((0..3).map(raw).collect());
         assert_eq!(times(&d), [0.0, 1.0, 2.0]);
-        let n = HOLD as u32 + 4;
-        let e = kinds((0..n).map(raw).collect::<String>() + &robot(99));
+        let n = HOLD as u32;
+        let e = kinds((0..n).map(raw).collect::<String>() + &robot(9999));
         assert_eq!(ids(&e), (0..u64::from(n)).collect::<Vec<_>>());
+        let f = kinds((0..n - 1).map(raw).collect::<String>() + &robot(9999));
+        assert_eq!(times(&f), [9999.0]);
+    }
+
+    /// A malformed line after held `RAWLASER1` lines comes after their scans, as in a log of
+    /// one kind; a malformed `RAWLASER1` line among the lines of the kind read is not read.
+    #[test]
+    fn an_error_comes_after_the_scans_before_it() {
+        let raw = |t: u32| format!("RAWLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 0 {t} h {t}\n");
+        let robot = |t: u32| {
+            format!(
+                "ROBOTLASER1 0 -1.5 3.1 0.01 8 0.01 0 3 1 2 3 0 0 0 0 0 0 0 0 0 0 0 0 {t} h {t}\n"
+            )
+        };
+        let log = raw(0) + &raw(1) + "oops\n" + &raw(2);
+        let r: Vec<_> = Reader::new(Box::new(std::io::Cursor::new(log.into_bytes()))).collect();
+        assert!(
+            matches!(&r[..], [Ok(a), Ok(b), Err(e)]
+            if a.time == Some(0.0) && b.time == Some(1.0) && e.location == Location::Line(3)),
+            "{r:?}"
+        );
+        let log = robot(0) + "RAWLASER1 0 x\n" + &robot(1);
+        let r: Vec<_> = Reader::new(Box::new(std::io::Cursor::new(log.into_bytes()))).collect();
+        assert!(
+            matches!(&r[..], [Ok(_), Ok(b)] if b.time == Some(1.0)),
+            "{r:?}"
+        );
     }
 
     #[test]

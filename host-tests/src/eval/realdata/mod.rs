@@ -155,7 +155,7 @@ impl Tally {
 /// One log's figures, one [`Summary`] per method.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct LogReport {
-    /// Log name (file name without `.log.gz`).
+    /// Log name (file name without `.gz`, `.log` or `.clf`, and `-corrected`).
     pub log: String,
     /// Beams per scan (of the first scan).
     pub beams: usize,
@@ -167,7 +167,8 @@ pub struct LogReport {
 }
 
 /// Runs `methods` over `records` (at most `max_scans`, 0 = all), each scan declared as `sweeps`
-/// interleaved sweeps (`None`: a SICK LMS2xx's for its resolution). The first method is the
+/// interleaved sweeps (`None`: the record's own, else a SICK LMS2xx's for its resolution,
+/// [`context_of`]). The first method is the
 /// reference the others are compared with beam by beam ([`LogReport::shared`]).
 pub fn run_records(
     log: &str,
@@ -241,7 +242,8 @@ pub fn run_records(
 }
 
 /// What the benchmark tells a method about a scan of a CARMEN log: no odometry, `sweeps`
-/// interleaved sweeps (`None`: a SICK LMS2xx's for its resolution) and the grid its ranges lie
+/// interleaved sweeps (`None`: the record's own [`Record::sweeps`], else a SICK LMS2xx's for its
+/// resolution, [`crate::formats::sweeps_of`]) and the grid its ranges lie
 /// on.
 pub fn context_of(record: &Record, sweeps: Option<u8>) -> ScanContext {
     let carmen = crate::formats::Format::Carmen;
@@ -265,7 +267,8 @@ pub fn pose_of(record: &Record) -> Option<Pose> {
 pub struct LogScan {
     /// The record.
     pub record: Record,
-    /// What a method is told about it ([`context_of`], the sweeps of a SICK LMS2xx).
+    /// What a method is told about it ([`context_of`]: the sweeps its line says, else a SICK
+    /// LMS2xx's).
     pub context: ScanContext,
     /// Its pose, mm and rad.
     pub pose: Option<Pose>,

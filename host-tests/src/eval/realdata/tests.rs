@@ -316,3 +316,21 @@ fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
         "{lost} {box_beams:?}"
     );
 }
+
+/// A scan's declared sweeps: `--sweeps` first, then the record's own (a CARMEN line of a
+/// scanner that is not a SICK LMS says 1), then an LMS2xx's for the step (2 at 0.5°).
+#[test]
+fn the_sweeps_told_are_the_options_then_the_records_then_the_lms2xx_rule() {
+    let record = |sweeps: Option<u8>| crate::formats::Record {
+        id: 0,
+        geometry: pfe_core::ScanGeometry::lms200(180.0, 0.5),
+        ranges_mm: vec![1000.0; 361],
+        time: None,
+        pose: None,
+        sweeps,
+    };
+    assert_eq!(super::context_of(&record(None), None).sweeps, 2);
+    assert_eq!(super::context_of(&record(Some(1)), None).sweeps, 1);
+    assert_eq!(super::context_of(&record(Some(1)), Some(4)).sweeps, 4);
+    assert_eq!(super::context_of(&record(None), Some(1)).sweeps, 1);
+}
