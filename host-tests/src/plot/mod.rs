@@ -10,7 +10,14 @@
 //! use pfe_core::ScanGeometry;
 //! let g = ScanGeometry::LMS200_180_050;
 //! let ranges: Vec<f32> = (0..361).map(|i| 2000.0 / g.bearing(i).cos().max(0.3)).collect();
-//! let record = Record { id: 0, geometry: g, ranges_mm: ranges, time: None, pose: None };
+//! let record = Record {
+//!     id: 0,
+//!     geometry: g,
+//!     ranges_mm: ranges,
+//!     time: None,
+//!     pose: None,
+//!     sweeps: None,
+//! };
 //! let ex = Pfe::default_config().extract(&record.geometry, &record.ranges_mm);
 //! let svg = host_tests::plot::svg(&record, &ex, "a wall");
 //! assert!(svg.starts_with("<svg") && svg.contains("a wall"));
