@@ -110,6 +110,12 @@ pub fn may_write(path: &Path) -> bool {
     )
 }
 
+/// Where a file that goes with the output `path` (a report's plot) is written: beside it, or
+/// nowhere when `path` is a stream such as `/dev/null` (the directory is not the user's).
+pub fn beside(path: &Path, name: &str) -> Option<PathBuf> {
+    (!matches!(target(path), Target::Stream)).then(|| path.with_file_name(name))
+}
+
 /// The first of `paths` that may not be written (unless `force`), as an error: check every
 /// output of a command before writing any.
 pub fn check<'a>(paths: impl IntoIterator<Item = &'a Path>, force: bool) -> Result<(), OutError> {
@@ -263,6 +269,18 @@ mod tests {
             names.iter().all(|n| !n.to_string_lossy().ends_with(".tmp")),
             "{names:?}"
         );
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// A report's plots go beside it, but not beside a device: `/dev/null`'s would land in
+    /// /dev.
+    #[test]
+    fn companions_go_beside_a_file_and_nowhere_beside_a_device() {
+        let d = dir("beside");
+        assert_eq!(beside(&d.join("r.md"), "p.svg"), Some(d.join("p.svg")));
+        std::fs::write(d.join("r.md"), "x").unwrap();
+        assert_eq!(beside(&d.join("r.md"), "p.svg"), Some(d.join("p.svg")));
+        assert_eq!(beside(Path::new("/dev/null"), "p.svg"), None);
         std::fs::remove_dir_all(&d).unwrap();
     }
 }

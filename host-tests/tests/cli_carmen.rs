@@ -93,3 +93,22 @@ fn realdata_refuses_logs_with_nothing_to_compare() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--md /dev/null` writes the report to the device and no plots: they would land in /dev.
+#[test]
+fn realdata_writes_no_plots_beside_a_device() {
+    let strays = || -> Vec<String> {
+        std::fs::read_dir("/dev")
+            .map(|d| {
+                d.flatten()
+                    .map(|e| e.file_name().to_string_lossy().into_owned())
+                    .filter(|n| n.starts_with("realdata-"))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    assert!(strays().is_empty(), "{:?}", strays());
+    let out = pfe(&["realdata", arg(&fixture("room.log")), "--md", "/dev/null"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(strays().is_empty(), "{:?}", strays());
+}

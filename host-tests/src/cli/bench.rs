@@ -47,8 +47,11 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
 /// Runs `pfe bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(md) = &args.md {
-        let plot = md.with_file_name("perf-scaling.svg");
-        crate::outfile::check([md.as_path(), plot.as_path()], args.force)?;
+        let plot = crate::outfile::beside(md, "perf-scaling.svg");
+        crate::outfile::check(
+            std::iter::once(md.as_path()).chain(plot.as_deref()),
+            args.force,
+        )?;
     }
     if args.carmen.exists() && !args.carmen.is_dir() {
         return Err(super::Exit::bad_input(format!(

@@ -63,7 +63,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let (Some(md), false) = (&args.md, reports.is_empty()) {
         report::write_markdown(md, &reports, &args.command, args.force)?;
-        eprintln!("wrote {} and its plots", md.display());
+        let plots = report::output_files(md).len() > 1;
+        let and = if plots { " and its plots" } else { "" };
+        eprintln!("wrote {}{and}", md.display());
     }
     if !refused.is_empty() {
         return Err(super::Exit::bad_input(format!(

@@ -455,9 +455,11 @@ pub fn write_markdown(
         &xs,
         &curves,
     );
-    let plot = md.with_file_name("perf-scaling.svg");
-    crate::outfile::check([md, plot.as_path()], force)?;
-    crate::outfile::write(&plot, &svg, force)?;
+    let plot = crate::outfile::beside(md, "perf-scaling.svg");
+    crate::outfile::check(std::iter::once(md).chain(plot.as_deref()), force)?;
+    if let Some(plot) = &plot {
+        crate::outfile::write(plot, &svg, force)?;
+    }
     crate::docs::write_section(md, "host", "`pfe bench`", &body, force)
 }
 

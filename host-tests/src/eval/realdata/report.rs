@@ -366,10 +366,15 @@ fn shared_chart(reports: &[LogReport], groups: &[String]) -> String {
     )
 }
 
-/// The files [`write_markdown`] writes for `path`: it, then its plots next to it.
+/// The files [`write_markdown`] writes for `path`: it, then its plots next to it (none when
+/// `path` is a device or a pipe, [`outfile::beside`]).
 pub fn output_files(path: &Path) -> Vec<PathBuf> {
     std::iter::once(path.to_path_buf())
-        .chain(PLOTS.iter().map(|(file, _)| path.with_file_name(file)))
+        .chain(
+            PLOTS
+                .iter()
+                .filter_map(|(file, _)| outfile::beside(path, file)),
+        )
         .collect()
 }
 
