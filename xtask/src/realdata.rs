@@ -26,7 +26,7 @@ pub fn run(args: &[String]) -> Result<()> {
         .with_context(|| format!("reading {}", dir.display()))?
         .filter_map(|e| e.ok())
         .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| is_carmen_log(n))
+        .filter(|n| host_tests::formats::carmen::is_log_name(n))
         .map(|n| format!("{LOGS}/{n}"))
         .collect();
     logs.sort();
@@ -45,28 +45,4 @@ pub fn run(args: &[String]) -> Result<()> {
             .args(args);
     }
     util::run(&mut cmd)
-}
-
-/// Whether the file name `n` is a CARMEN log's: `*.log` or `*.clf`, gzipped or not.
-fn is_carmen_log(n: &str) -> bool {
-    let n = n.strip_suffix(".gz").unwrap_or(n);
-    n.ends_with(".log") || n.ends_with(".clf")
-}
-
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn carmen_logs_are_log_and_clf_files_gzipped_or_not() {
-        for (n, is) in [
-            ("intel-corrected.log.gz", true),
-            ("fr079.clf", true),
-            ("mit-killian.clf.gz", true),
-            ("run.log", true),
-            ("README.md", false),
-            ("notes.gz", false),
-            ("x.log.gz.bak", false),
-        ] {
-            assert_eq!(super::is_carmen_log(n), is, "{n}");
-        }
-    }
 }

@@ -13,7 +13,8 @@ pub struct Args {
     /// Seed of the simulated scans.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Directory of CARMEN logs (*.log.gz); skipped with a message when absent.
+    /// Directory of CARMEN logs (*.log, *.clf, gzipped or not); skipped with a message when
+    /// absent.
     #[arg(long, default_value = "../shared/data/carmen")]
     carmen: PathBuf,
     /// At most this many scans from each CARMEN log (0 = all).

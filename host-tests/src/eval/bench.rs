@@ -223,12 +223,16 @@ pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
         .collect()
 }
 
-/// Scans of every `*.log.gz` in `dir` (sorted by name), at most `per_log` from each (0 = all).
+/// Scans of every CARMEN log in `dir` (`*.log`, `*.clf`, gzipped or not, sorted by name), at
+/// most `per_log` from each (0 = all).
 pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>> {
     let mut logs: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("reading {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.to_string_lossy().ends_with(".log.gz"))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| crate::formats::carmen::is_log_name(&n.to_string_lossy()))
+        })
         .collect();
     logs.sort();
     let mut out = Vec::new();
@@ -255,7 +259,8 @@ pub struct BenchOptions {
     pub sim_scans: usize,
     /// Seed of the simulated scans.
     pub seed: u64,
-    /// Directory of CARMEN logs (*.log.gz); skipped with a message when absent.
+    /// Directory of CARMEN logs (*.log, *.clf, gzipped or not); skipped with a message when
+    /// absent.
     pub carmen: PathBuf,
     /// At most this many scans from each CARMEN log (0 = all).
     pub per_log: usize,

@@ -323,6 +323,22 @@ fn pose(fields: [Option<f64>; 3]) -> Option<[f64; 3]> {
     }
 }
 
+/// Whether the file name `name` is a CARMEN log's: `*.log` or `*.clf`, gzipped or not.
+///
+/// ```
+/// use host_tests::formats::carmen::is_log_name;
+/// for name in ["intel-corrected.log.gz", "fr079.clf", "mit-killian.clf.gz", "run.log"] {
+///     assert!(is_log_name(name), "{name}");
+/// }
+/// for name in ["README.md", "notes.gz", "x.log.gz.bak"] {
+///     assert!(!is_log_name(name), "{name}");
+/// }
+/// ```
+pub fn is_log_name(name: &str) -> bool {
+    let n = name.strip_suffix(".gz").unwrap_or(name);
+    n.ends_with(".log") || n.ends_with(".clf")
+}
+
 /// CARMEN message names: upper-case letters, digits and `_`, starting with a letter.
 fn is_message_name(s: &str) -> bool {
     s.starts_with(|c: char| c.is_ascii_uppercase())
