@@ -25,6 +25,11 @@ pub struct Args {
     /// 0.5°, 4 at 0.25°, 1 otherwise). pfe aligns declared sweeps whose offset shows.
     #[arg(long, default_value = "auto", value_parser = crate::cli::input::sweeps_arg)]
     sweeps: crate::cli::input::Sweeps,
+    /// Tell the methods each scan's motion, from the poses and times of the scans before and
+    /// after it (when they are at most 1 s apart): pfe's two modes de-skew the beams with it,
+    /// interleaved sweeps by the LMS2xx's beam timing (split-and-merge and ACF take none).
+    #[arg(long)]
+    odometry_from_poses: bool,
     /// Replace --md and its plots even when no pfe command wrote them.
     #[arg(long, requires = "md")]
     force: bool,
@@ -85,7 +90,11 @@ fn compared(
     log: &std::path::Path,
     args: &Args,
 ) -> anyhow::Result<crate::eval::realdata::LogReport> {
-    let r = run_log(log, args.sigma_r, args.max_scans, args.sweeps.0).map_err(|e| {
+    let told = crate::eval::realdata::Told {
+        sweeps: args.sweeps.0,
+        odometry_from_poses: args.odometry_from_poses,
+    };
+    let r = run_log(log, args.sigma_r, args.max_scans, told).map_err(|e| {
         match e.downcast_ref::<crate::formats::InputError>() {
             Some(_) => super::Exit::bad_input(format!("{e:#}")).into(),
             None => e,

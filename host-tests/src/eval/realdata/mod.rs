@@ -166,16 +166,80 @@ pub struct LogReport {
     pub shared: Vec<shared::Shared>,
 }
 
-/// Runs `methods` over `records` (at most `max_scans`, 0 = all), each scan declared as `sweeps`
-/// interleaved sweeps (`None`: the record's own, else a SICK LMS2xx's for its resolution,
-/// [`context_of`]). The first method is the
-/// reference the others are compared with beam by beam ([`LogReport::shared`]).
+/// What the benchmark tells every method about a scan besides its ranges.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Told {
+    /// Interleaved sweeps each scan is declared as (`None`: the record's own, else a SICK
+    /// LMS2xx's for its resolution, [`context_of`]).
+    pub sweeps: Option<u8>,
+    /// Odometry of each scan from its neighbours' poses and times ([`motion_between`]); none
+    /// by default (the logs' own odometry fields are zero).
+    pub odometry_from_poses: bool,
+}
+
+/// Most time between the two neighbours of a scan whose poses give its odometry, s: the
+/// mean motion over longer has little to do with the motion during the scan.
+pub const ODOMETRY_SPAN_S: f64 = 1.0;
+
+/// The motion during `record` from the poses and times of the scans before and after it
+/// (`before`, `after`: pose [x m, y m, θ rad] and time s): the forward speed along the
+/// record's heading and the turn rate, as a SICK LMS2xx of the record's resolution takes its
+/// beams ([`pfe_core::BeamTiming::lms2xx`]). `None` without the poses or times, or when the
+/// neighbours are more than [`ODOMETRY_SPAN_S`] apart.
+///
+/// ```
+/// use host_tests::eval::realdata::motion_between;
+/// use host_tests::formats::Record;
+/// let mut r = Record {
+///     id: 1,
+///     geometry: pfe_core::ScanGeometry::lms200(180.0, 0.5),
+///     ranges_mm: vec![1000.0; 361],
+///     time: Some(10.25),
+///     pose: Some([1.0, 2.0, 3.1]),
+///     sweeps: None,
+/// };
+/// // 0.5 m/s along the heading, turning at 0.2 rad/s across θ = π.
+/// let (before, after) = (([0.9, 2.0, 3.05], 10.0), ([1.15, 2.0, 3.15 - std::f64::consts::TAU], 10.5));
+/// let (c, s) = (3.1f64.cos(), 3.1f64.sin());
+/// let m = motion_between(Some(before), Some(after), &r).unwrap();
+/// assert!((m.v - (250.0 * c) as f32 / 0.5).abs() < 1e-3 && (m.omega - 0.2).abs() < 1e-5);
+/// assert_eq!(m.timing, pfe_core::BeamTiming::lms2xx(0.5));
+/// assert!(motion_between(Some(before), Some(([1.15, 2.0, 3.15], 11.5)), &r).is_none());
+/// r.time = None;
+/// assert!(motion_between(Some(before), Some(after), &r).is_none());
+/// ```
+pub fn motion_between(
+    before: Option<([f64; 3], f64)>,
+    after: Option<([f64; 3], f64)>,
+    record: &Record,
+) -> Option<pfe_core::Motion> {
+    let ((a, ta), (b, tb)) = (before?, after?);
+    let (t, th) = (record.time?, record.pose?[2]);
+    let dt = tb - ta;
+    if !(dt > 0.0 && dt <= ODOMETRY_SPAN_S && ta <= t && t <= tb) {
+        return None;
+    }
+    let along = (b[0] - a[0]) * th.cos() + (b[1] - a[1]) * th.sin();
+    let turn = (b[2] - a[2] + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+        - std::f64::consts::PI;
+    let step = record.geometry.angle_step.abs().to_degrees();
+    let m = pfe_core::Motion {
+        v: (1000.0 * along / dt) as f32,
+        omega: (turn / dt) as f32,
+        timing: pfe_core::BeamTiming::lms2xx(step),
+    };
+    m.is_valid().then_some(m)
+}
+
+/// Runs `methods` over `records` (at most `max_scans`, 0 = all), telling them what `told`
+/// says. The first method is the reference the others are compared with beam by beam
+/// ([`LogReport::shared`]).
 pub fn run_records(
     log: &str,
     records: impl Iterator<Item = Result<Record, InputError>>,
     methods: &mut [Box<dyn Method>],
     max_scans: usize,
-    sweeps: Option<u8>,
+    told: Told,
 ) -> anyhow::Result<LogReport> {
     let limit = if max_scans == 0 {
         usize::MAX
@@ -193,13 +257,24 @@ pub fn run_records(
     let mut beams = 0;
     // Beams of the previous scan (scan k of the next pair).
     let mut prev_beams = 0;
-    for record in records.take(limit) {
+    let mut records = records.take(limit).peekable();
+    // The scan before's pose and time, for the odometry.
+    let mut before: Option<([f64; 3], f64)> = None;
+    while let Some(record) = records.next() {
         let record = record.map_err(|e| anyhow::Error::new(e).context(log.to_string()))?;
         if beams == 0 {
             beams = record.ranges_mm.len();
         }
         let pose = pose_of(&record);
-        let context = context_of(&record, sweeps);
+        let mut context = context_of(&record, told.sweeps);
+        if told.odometry_from_poses && record.sweeps.is_none() {
+            let after = records
+                .peek()
+                .and_then(|r| r.as_ref().ok())
+                .and_then(|r| r.pose.zip(r.time));
+            context.odometry = motion_between(before, after, &record);
+        }
+        before = record.pose.zip(record.time);
         let mut classed = Vec::with_capacity(methods.len());
         for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
             let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
@@ -294,7 +369,7 @@ pub fn run_log(
     path: &Path,
     sigma_r: f32,
     max_scans: usize,
-    sweeps: Option<u8>,
+    told: Told,
 ) -> anyhow::Result<LogReport> {
     let input = crate::formats::open_for(path, crate::formats::Format::Carmen, |r| r)
         .with_context(|| format!("opening {}", path.display()))?;
@@ -310,5 +385,5 @@ pub fn run_log(
         .trim_end_matches("-corrected")
         .to_string();
     let reader = crate::formats::carmen::Reader::new(input);
-    run_records(&name, reader, &mut methods(sigma_r), max_scans, sweeps)
+    run_records(&name, reader, &mut methods(sigma_r), max_scans, told)
 }

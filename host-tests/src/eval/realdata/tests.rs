@@ -285,7 +285,10 @@ fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
         records.into_iter().map(Ok),
         &mut methods,
         0,
-        Some(1),
+        super::Told {
+            sweeps: Some(1),
+            ..super::Told::default()
+        },
     )
     .unwrap();
     let [blind, twin] = &r.shared[..] else {
@@ -333,4 +336,70 @@ fn the_sweeps_told_are_the_options_then_the_records_then_the_lms2xx_rule() {
     assert_eq!(super::context_of(&record(Some(1)), None).sweeps, 1);
     assert_eq!(super::context_of(&record(Some(1)), Some(4)).sweeps, 4);
     assert_eq!(super::context_of(&record(None), Some(1)).sweeps, 1);
+}
+
+/// A method that notes the odometry it is told and finds nothing.
+struct Probe(std::rc::Rc<std::cell::RefCell<Vec<Option<pfe_core::Motion>>>>);
+
+impl crate::methods::Method for Probe {
+    fn name(&self) -> &str {
+        "probe"
+    }
+    fn extract(&mut self, _: &pfe_core::ScanGeometry, _: &[f32]) -> crate::methods::Extraction {
+        crate::methods::Extraction::default()
+    }
+    fn extract_in(
+        &mut self,
+        _: &pfe_core::ScanGeometry,
+        _: &[f32],
+        context: &crate::methods::ScanContext,
+    ) -> crate::methods::Extraction {
+        self.0.borrow_mut().push(context.odometry);
+        crate::methods::Extraction::default()
+    }
+}
+
+/// With `odometry_from_poses` each scan with a neighbour on both sides at most
+/// `ODOMETRY_SPAN_S` apart is told the motion between them (0.4 m/s along the heading, 0.3
+/// rad/s, 0.5° LMS2xx timing); the first and last scans, a scan after a gap, and every scan
+/// without the option are told none.
+#[test]
+fn odometry_from_poses_is_the_motion_between_the_neighbours() {
+    let record = |k: usize, t: f64| {
+        let th = 0.3 * t;
+        crate::formats::Record {
+            id: k as u64,
+            geometry: pfe_core::ScanGeometry::lms200(180.0, 0.5),
+            ranges_mm: vec![2000.0; 361],
+            time: Some(t),
+            // 0.4 m/s along the heading θ = 0.3 t (and 0.12 t m/s across it): the chord between
+            // the neighbours, projected on the heading, gives 0.4 m/s within 2 mm/s.
+            pose: Some([0.4 * t * th.cos(), 0.4 * t * th.sin(), th]),
+            sweeps: None,
+        }
+    };
+    // Scans 0.25 s apart, then a 3 s gap before the last two.
+    let times = [0.0, 0.25, 0.5, 0.75, 3.75, 4.0];
+    let run = |told: super::Told| {
+        let seen = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
+        let mut methods: Vec<Box<dyn crate::methods::Method>> = vec![Box::new(Probe(seen.clone()))];
+        let records = times.iter().enumerate().map(|(k, &t)| Ok(record(k, t)));
+        super::run_records("probe", records, &mut methods, 0, told).unwrap();
+        let v = seen.borrow().clone();
+        v
+    };
+    let told = run(super::Told {
+        odometry_from_poses: true,
+        ..super::Told::default()
+    });
+    let given: Vec<bool> = told.iter().map(Option::is_some).collect();
+    assert_eq!(given, [false, true, true, false, false, false]);
+    for m in told.iter().flatten() {
+        assert!(
+            (m.v - 400.0).abs() < 2.0 && (m.omega - 0.3).abs() < 1e-4,
+            "{m:?}"
+        );
+        assert_eq!(m.timing, pfe_core::BeamTiming::lms2xx(0.5));
+    }
+    assert!(run(super::Told::default()).iter().all(Option::is_none));
 }
