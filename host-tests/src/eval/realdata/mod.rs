@@ -198,11 +198,13 @@ pub const ODOMETRY_SPAN_S: f64 = 1.0;
 ///     pose: Some([1.0, 2.0, 3.1]),
 ///     sweeps: None,
 /// };
-/// // 0.5 m/s along the heading, turning at 0.2 rad/s across θ = π.
-/// let (before, after) = (([0.9, 2.0, 3.05], 10.0), ([1.15, 2.0, 3.15 - std::f64::consts::TAU], 10.5));
-/// let (c, s) = (3.1f64.cos(), 3.1f64.sin());
+/// // 0.5 m/s towards +x, backwards for a heading of 3.1 rad, and a turn of 0.2 rad/s
+/// // across θ = ±π.
+/// let before = ([0.9, 2.0, 3.05], 10.0);
+/// let after = ([1.15, 2.0, 3.15 - std::f64::consts::TAU], 10.5);
 /// let m = motion_between(Some(before), Some(after), &r).unwrap();
-/// assert!((m.v - (250.0 * c) as f32 / 0.5).abs() < 1e-3 && (m.omega - 0.2).abs() < 1e-5);
+/// let v = 0.25 * 3.1f64.cos() / 0.5 * 1000.0;
+/// assert!(v < -499.0 && (m.v - v as f32).abs() < 1e-3 && (m.omega - 0.2).abs() < 1e-5);
 /// assert_eq!(m.timing, pfe_core::BeamTiming::lms2xx(0.5));
 /// assert!(motion_between(Some(before), Some(([1.15, 2.0, 3.15], 11.5)), &r).is_none());
 /// r.time = None;
