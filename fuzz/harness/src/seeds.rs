@@ -98,6 +98,33 @@ pub fn real_records(data: &Path) -> Vec<(String, Format, Vec<String>, Vec<Record
     out
 }
 
+/// A CARMEN `FLASER` line as a `RAWLASER1` and a `ROBOTLASER1` line (180°, n odd: 180° /
+/// (n − 1) apart, n even: 180° / n; two remissions), any other line as it is.
+fn newer_carmen(line: &str) -> String {
+    let t: Vec<&str> = line.split_ascii_whitespace().collect();
+    let n: usize = match (t.first(), t.get(1).and_then(|n| n.parse().ok())) {
+        (Some(&"FLASER"), Some(n)) => n,
+        _ => return format!("{line}\n"),
+    };
+    let (Some(ranges), Some(rest)) = (t.get(2..2 + n), t.get(2 + n..)) else {
+        return format!("{line}\n");
+    };
+    let step = std::f64::consts::PI / if n % 2 == 1 { n - 1 } else { n }.max(1) as f64;
+    let head = format!(
+        "0 -1.570796 3.141593 {step:.9} 81.9 0.01 1 {n} {} 2 0.5 0.7",
+        ranges.join(" ")
+    );
+    let field = |k: usize| rest.get(k).copied().unwrap_or("0");
+    let poses: Vec<&str> = (0..6).map(field).collect();
+    let stamp: Vec<&str> = (6..9).map(field).collect();
+    format!(
+        "RAWLASER1 {head} {}\nROBOTLASER1 {head} {} 0.4 0.1 0.5 0.3 0 {}\n",
+        stamp.join(" "),
+        poses.join(" "),
+        stamp.join(" ")
+    )
+}
+
 fn mm_u16(r: f32) -> u16 {
     if r.is_finite() && r > 0.0 {
         r.round().min(65535.0) as u16
@@ -246,6 +273,15 @@ pub fn generate(out: &Path, shared: &Path) -> io::Result<usize> {
             name,
             &[&[sel][..], lines.join("\n").as_bytes(), b"\n"].concat(),
         )?;
+        if *format == Format::Carmen {
+            // The same scans as the newer logger writes them (RAWLASER1, ROBOTLASER1).
+            let newer: String = lines.iter().map(|l| newer_carmen(l)).collect();
+            put(
+                "readers",
+                &format!("{name}.robotlaser1"),
+                &[&[sel][..], newer.as_bytes()].concat(),
+            )?;
+        }
         let csv: String = records
             .iter()
             .enumerate()

@@ -111,6 +111,22 @@ fn generated_seeds_pass_and_decode() {
     assert!(files >= 20, "{files} seed files");
     let replayed: usize = replay(&out).iter().map(|c| c.1).sum();
     assert_eq!(replayed, files);
+    // Each real log's scans as the newer CARMEN logger writes them read as its FLASER lines do.
+    let mut newer = 0;
+    for e in std::fs::read_dir(out.join("readers")).unwrap().flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(flaser) = name.strip_suffix(".robotlaser1") else {
+            continue;
+        };
+        let read = |f: &str| {
+            pfe_fuzz_harness::readers(&std::fs::read(out.join("readers").join(f)).unwrap())
+        };
+        let n = read(&name);
+        assert!(n > 0 && n == read(flaser), "{name}: {n}");
+        newer += 1;
+    }
+    let logs = std::fs::read_dir(shared.join("data/carmen")).map_or(0, |d| d.count());
+    assert!(newer > 0 && newer == logs, "{newer} of {logs} CARMEN logs");
     // The protocol vectors decode as telegrams.
     let vectors = pfe_fuzz_harness::seeds::protocol_vectors(&shared.join("docs")).unwrap();
     assert_eq!(vectors.len(), 21);
