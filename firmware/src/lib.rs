@@ -1,27 +1,26 @@
-//! Firmware library: the LMS200 telegram codec and driver, the application loop around
-//! pfe-core, and the framed feature output. Host-testable (`no_std`, generic over
-//! `embedded-io` / `embedded-hal` traits); the binaries (`firmware/qemu`, `firmware/board`)
-//! add the hardware glue.
+//! pfe's firmware application, host-testable (`no_std`, generic over `embedded-io` /
+//! `embedded-hal` traits): the loop from the LMS2xx driver's scans through pfe-core's
+//! extractor to feature frames, and the UART receive ring. The binaries (`firmware/qemu`,
+//! `firmware/board`) add the hardware glue.
 //!
-//! # Layers (the data path, in folder order)
+//! # The data path
 //!
 //! ```text
 //! UART bytes
-//!   → rx_ring       the receive interrupt's lock-free ring (counts what it loses)
-//!   → lms::codec    sans-IO telegram codec: framing, CRC-16, resync, commands, replies
-//!   → lms::driver   the device over a UART: init, retries, re-init; delivers ScanData
-//!   → app           the only bridge to pfe-core: ScanData → RawScan → pfe_core::Scan,
-//!                   Extractor<401, 48>, counters → output header
-//!   → output        wire types → encoder (postcard) → CRC-32 → COBS → UART bytes
-//!                   (and the host-side decoder)
+//!   → rx_ring              the receive interrupt's lock-free ring (counts what it loses)
+//!   → lms2xx::codec        sans-IO telegram codec: framing, CRC-16, resync, commands, replies
+//!   → lms2xx::driver       the device over a UART: init, retries, re-init; delivers ScanData
+//!   → app                  the only bridge to pfe-core: ScanData → RawScan → pfe_core::Scan,
+//!                          Extractor<401, 48>, counters → frame header
+//!   → pfe_frame            wire types → encoder (postcard) → CRC-32 → COBS → UART bytes
 //! ```
 //!
-//! Imports go down the list only: [`lms::codec`] imports nothing else of the crate and no
-//! pfe-core; [`lms::driver`] imports the codec; [`app`] imports the driver, the output and
-//! pfe-core; [`output`] imports pfe-core's feature types only.
+//! This crate imports `lms2xx`, `pfe-frame` and pfe-core; none of them imports it, and
+//! `lms2xx` imports neither pfe-core nor `pfe-frame`.
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+#![deny(clippy::indexing_slicing)]
 
 /// `defmt::$level!(...)` with the `defmt` feature, nothing without it.
 macro_rules! log {
@@ -34,6 +33,4 @@ macro_rules! log {
 }
 
 pub mod app;
-pub mod lms;
-pub mod output;
 pub mod rx_ring;

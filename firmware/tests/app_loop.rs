@@ -8,8 +8,8 @@
 )]
 
 use firmware::app::{App, AppError, ConfigChoice, RawScan, ScanSource};
-use firmware::output::{Counters, Feed, Frame, FrameDecoder, ScanStatus};
 use pfe_core::{Extractor, Feature, Scan, ScanGeometry};
+use pfe_frame::{Counters, Feed, Frame, FrameDecoder, ScanStatus};
 
 const G: ScanGeometry = ScanGeometry::LMS200_180_050;
 

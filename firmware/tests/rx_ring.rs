@@ -10,13 +10,15 @@
     clippy::panic
 )]
 
+/// The simulated clock of lms2xx's driver tests (one definition for both crates).
+#[path = "../lms2xx/tests/common/mod.rs"]
 mod common;
 
 use common::Time;
-use firmware::lms::driver::{Config, Driver, SetBaud};
-use firmware::lms::frame::encode_telegram;
-use firmware::lms::Error;
 use firmware::rx_ring::{RxConsumer, RxCounters, RxLoss, RxProducer, RxQueue, RING_SLOTS};
+use lms2xx::codec::frame::encode_telegram;
+use lms2xx::driver::Error;
+use lms2xx::driver::{Config, Driver, SetBaud};
 
 /// The driver's UART over the ring's consumer end (as `ScannerUart` on the board).
 struct RingUart<'a> {

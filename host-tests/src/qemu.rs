@@ -9,8 +9,8 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
-use firmware::output::{DecodeError, Feed, Frame, FrameDecoder};
+use lms2xx::codec::frame::{encode_telegram, DEVICE_ADDRESS};
+use pfe_frame::{DecodeError, Feed, Frame, FrameDecoder};
 
 /// The Cortex-M target.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
@@ -428,7 +428,7 @@ pub fn host_features(
     choice: firmware::app::ConfigChoice,
 ) -> Result<Vec<pfe_core::Feature>> {
     use firmware::app::{App, RawScan};
-    use firmware::lms::Variant;
+    use lms2xx::codec::types::Variant;
     let v = Variant::A180_R050;
     let mut g = pfe_core::ScanGeometry::lms200(f32::from(v.angle_deg), v.resolution_deg());
     g.r_max = f32::from(pfe_core::LMS_MAX_VALID_8M);
@@ -437,7 +437,7 @@ pub fn host_features(
     let mut out = VecWriter(Vec::new());
     app.process(
         &RawScan::lms_8m(g, &codes, 1.0),
-        firmware::output::Counters::default(),
+        pfe_frame::Counters::default(),
         &mut out,
     )
     .map_err(|e| anyhow::anyhow!("{e}"))?;

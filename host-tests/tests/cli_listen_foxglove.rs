@@ -11,10 +11,10 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use firmware::output::{write_scan, ScanHeader};
 use host_tests::foxglove::{scene_update, FEATURES_TOPIC};
 use host_tests::qemu::VecWriter;
 use pfe_core::{CircleFeature, Feature, LineFeature, Point};
+use pfe_frame::{write_scan, ScanHeader};
 use serde_json::{json, Value};
 use tungstenite::client::IntoClientRequest;
 use tungstenite::Message;

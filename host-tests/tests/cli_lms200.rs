@@ -4,8 +4,8 @@
 
 use std::io::BufReader;
 
-use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
 use host_tests::formats::lms200::{Reader, Telegram, Unit};
+use lms2xx::codec::frame::{encode_telegram, DEVICE_ADDRESS};
 use serde_json::Value;
 
 mod common;

@@ -119,7 +119,7 @@ fn record_never_empties_an_existing_file() {
 
 /// B0 telegrams in a raw capture.
 fn b0_count(bytes: &[u8]) -> usize {
-    use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
+    use lms2xx::codec::frame::{Decoder, Event, MAX_TELEGRAM};
     let mut dec = Decoder::<MAX_TELEGRAM>::new();
     let (mut rest, mut n) = (bytes, 0);
     loop {

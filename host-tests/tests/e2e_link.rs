@@ -9,11 +9,11 @@
 use host_tests::qemu;
 
 use firmware::app::{App, ConfigChoice};
-use firmware::lms::{Config, Driver};
-use firmware::output::{Frame, ScanStatus};
 use host_tests::device::emulator::{Emulator, EmulatorConfig, Faults, Link};
 use host_tests::methods::Extraction;
 use host_tests::scene::{Scenario, SceneKind, SimScan};
+use lms2xx::driver::{Config, Driver};
+use pfe_frame::{Frame, ScanStatus};
 
 fn sims(seed: u64, n: u64) -> Vec<SimScan> {
     (seed..seed + n)

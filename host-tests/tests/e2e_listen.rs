@@ -13,11 +13,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use firmware::lms::types::Unit;
 use host_tests::device::emulator::serve::{serve_on, Pty};
 use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
 use host_tests::link::run_qemu::RunQemu;
 use host_tests::qemu;
+use lms2xx::codec::types::Unit;
 use serde_json::Value;
 
 const SCANS: u32 = 12;

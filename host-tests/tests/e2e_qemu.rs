@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use firmware::app::ConfigChoice;
-use firmware::output::{Header, Report, ScanStatus};
+use pfe_frame::{Header, Report, ScanStatus};
 
 fn firmware_elf() -> Option<PathBuf> {
     qemu::test_firmware("e2e_qemu", "pfe-qemu", "e2e-firmware")

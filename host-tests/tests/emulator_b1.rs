@@ -3,10 +3,10 @@
 //! changes a field: operating mode (8), measuring mode (102), scan angle (107–108),
 //! resolution (109–110), baud word (116–117), unit (122).
 
-use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
-use firmware::lms::reply::ConfigBlock;
-use firmware::lms::types::{MeasuringMode, Unit};
 use host_tests::device::emulator::{Emulator, EmulatorConfig};
+use lms2xx::codec::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
+use lms2xx::codec::reply::ConfigBlock;
+use lms2xx::codec::types::{MeasuringMode, Unit};
 
 const OPERATING_MODE: usize = 8;
 const DEVICE_STATUS: usize = 9;

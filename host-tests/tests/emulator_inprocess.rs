@@ -1,12 +1,13 @@
 //! The firmware driver against the emulated LMS200 over the in-process link (virtual time).
 
-use firmware::lms::driver::{Config, Driver};
-use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
-use firmware::lms::reply::{parse_reply, ConfigBlock, Reply, ReplyOptions};
-use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
+use firmware::app::ScanDataExt;
 use host_tests::device::emulator::{
     Emulator, EmulatorConfig, HostPort, Link, LinkClock, LinkDelay, SourceKind, TaggedSource,
 };
+use lms2xx::codec::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
+use lms2xx::codec::reply::{parse_reply, ConfigBlock, Reply, ReplyOptions};
+use lms2xx::codec::types::{Baud, MeasuringMode, Unit, Variant};
+use lms2xx::driver::{Config, Driver};
 
 type Lms = Driver<HostPort, LinkDelay, LinkClock>;
 
@@ -328,7 +329,7 @@ fn invalid_variant_is_rejected_by_config_check() {
     );
     assert!(matches!(
         lms.init(),
-        Err(firmware::lms::Error::InvalidConfig)
+        Err(lms2xx::driver::Error::InvalidConfig)
     ));
 }
 

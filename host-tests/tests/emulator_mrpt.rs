@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use firmware::lms::types::{Baud, MeasuringMode, Unit};
 use host_tests::device::emulator::serve::Pty;
 use host_tests::device::emulator::{Emulator, EmulatorConfig, RangeSource, TaggedSource};
+use lms2xx::codec::types::{Baud, MeasuringMode, Unit};
 
 mod common;
 

@@ -4,10 +4,10 @@
 mod common;
 
 use common::{arg, PtyServer};
-use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
-use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
 use host_tests::device::emulator::serve::Pty;
 use host_tests::device::emulator::{Emulator, EmulatorConfig, SourceKind};
+use lms2xx::codec::frame::{Decoder, Event, MAX_TELEGRAM};
+use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
 
 #[test]
 fn record_over_pty_captures_sent_scans() {
@@ -62,7 +62,7 @@ fn record_over_pty_captures_sent_scans() {
     assert_sent_in_order(&scans, &sent);
     assert_eq!(
         report.scans.last().map(|s| s.unit),
-        Some(firmware::lms::Unit::Mm)
+        Some(lms2xx::codec::types::Unit::Mm)
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -5,11 +5,11 @@ use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::time::Duration;
 
-use firmware::lms::driver::{Config, Driver, SetBaud};
 use host_tests::device::emulator::{
     serve_tcp, EmulatorConfig, RunLimits, SourceKind, TaggedSource,
 };
 use host_tests::device::tty::{StdClock, StdDelay};
+use lms2xx::driver::{Config, Driver, SetBaud};
 
 struct TcpPort {
     s: TcpStream,

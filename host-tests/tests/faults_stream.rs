@@ -3,11 +3,11 @@
 
 use std::collections::BTreeSet;
 
-use firmware::lms::driver::{Config, Counters, Driver};
-use firmware::lms::types::Baud;
 use host_tests::device::emulator::{
     Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource,
 };
+use lms2xx::codec::types::Baud;
+use lms2xx::driver::{Config, Counters, Driver};
 
 struct Run {
     delivered: Vec<u32>,

@@ -4,9 +4,9 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
 use firmware::app::{App, ConfigChoice, RawScan};
-use firmware::output::{Counters, Feed, FrameDecoder};
 use host_tests::link::listen::ListenJson;
 use host_tests::qemu::VecWriter;
+use pfe_frame::{Counters, Feed, FrameDecoder};
 use serde_json::{json, Value};
 
 fn doc() -> String {

@@ -23,8 +23,8 @@ use std::sync::{Mutex, OnceLock};
 use std::time::Duration;
 
 use firmware::app::ConfigChoice;
-use firmware::output::{Header, Report};
 use host_tests::qemu::{self, Session};
+use pfe_frame::{Header, Report};
 
 /// Ring capacity, bytes (`firmware::rx_ring::RING_SLOTS` − 1).
 const CAPACITY: u32 = 2047;

@@ -4,7 +4,7 @@
 //!
 //! Without `--firmware` it mutates pfe-core and runs pfe-core's own tests (the crate users
 //! depend on carries its own proof); with it, the firmware's codec and output
-//! (`firmware/src/lms/**` and `firmware/src/output/**`) against the firmware's tests. `--shard
+//! (`firmware/lms2xx/src/**` and `firmware/frame/src/**`) against the firmware's tests. `--shard
 //! K/N` takes every N-th mutant from the K-th (round-robin), a sample of the whole set. Tests
 //! are built at opt-level 3 (the Monte Carlo and property tests take minutes unoptimised per
 //! mutant); the unit and integration tests run, not the doctests (examples, each compiled on
@@ -65,11 +65,13 @@ fn mutants_args(firmware: bool, shard: Option<&str>, timeout: u64, out: &Path) -
         a.extend(
             [
                 "-p",
-                "firmware",
+                "lms2xx",
+                "-p",
+                "pfe-frame",
                 "--file",
-                "firmware/src/lms/**",
+                "firmware/lms2xx/src/**",
                 "--file",
-                "firmware/src/output/**",
+                "firmware/frame/src/**",
             ]
             .map(String::from),
         );
@@ -160,7 +162,7 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     println!(
         "\nmutants of {} (command: cargo xtask mutants{}{}): {} caught, {} missed, {} timeout, {} unviable; score {:.1} %",
-        if firmware { "firmware::lms + firmware::output" } else { "pfe-core" },
+        if firmware { "lms2xx + pfe_frame" } else { "pfe-core" },
         if firmware { " --firmware" } else { "" },
         shard.as_deref().map(|s| format!(" --shard {s}")).unwrap_or_default(),
         n.caught,
@@ -215,7 +217,7 @@ mod tests {
     fn the_firmware_run_is_limited_to_the_codec_and_output() {
         let a = mutants_args(true, Some("1/25"), 60, Path::new("/o")).join(" ");
         assert!(
-            a.contains("-p firmware --file firmware/src/lms/** --file firmware/src/output/**"),
+            a.contains("-p lms2xx -p pfe-frame --file firmware/lms2xx/src/** --file firmware/frame/src/**"),
             "{a}"
         );
         assert!(a.contains("--shard 1/25 --sharding round-robin"), "{a}");

@@ -8,6 +8,7 @@
 //!
 //! `cargo run --release` in this directory flashes it with probe-rs (see `.cargo/config.toml`).
 #![cfg_attr(target_os = "none", no_std, no_main)]
+#![deny(clippy::indexing_slicing)]
 
 #[cfg(not(target_os = "none"))]
 fn main() {
@@ -37,7 +38,7 @@ mod fw {
     use crate::scanner_uart::ScannerUart;
     use crate::watchdog;
     use firmware::app::{AppError, ConfigChoice, LmsApp};
-    use firmware::lms::{Clock, Config, Driver};
+    use lms2xx::driver::{Clock, Config, Driver};
 
     /// System clock, Hz.
     const SYSCLK_HZ: u32 = 96_000_000;

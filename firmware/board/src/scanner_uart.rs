@@ -31,8 +31,8 @@ use stm32f4xx_hal::{
     serial::{self, config::Config as SerialConfig, Rx, Serial, Tx},
 };
 
-use firmware::lms::SetBaud;
 use firmware::rx_ring::{RxConsumer, RxCounters, RxLoss, RxProducer, RxQueue};
+use lms2xx::driver::SetBaud;
 
 /// The handler's half: the receiver and the ring's producer end.
 struct RxSide {

@@ -3,7 +3,7 @@
 /// CRC-32/ISO-HDLC of `data`, continuing from `crc` (start with `0`).
 ///
 /// ```
-/// assert_eq!(firmware::output::crc32(0, b"123456789"), 0xCBF4_3926);
+/// assert_eq!(pfe_frame::crc32(0, b"123456789"), 0xCBF4_3926);
 /// ```
 pub fn crc32(crc: u32, data: &[u8]) -> u32 {
     !data.iter().fold(!crc, |c, &b| crc32_byte(c, b))

@@ -206,7 +206,7 @@ mod tests {
     /// integers at every varint length and every status.
     #[test]
     fn scan_header_bytes_are_postcards() -> Result<(), postcard::Error> {
-        use crate::output::Counters;
+        use crate::Counters;
         let edges = [
             0u32,
             1,

@@ -1,4 +1,5 @@
-//! Features on the wire: postcard + COBS frames with a CRC-32.
+//! pfe's feature frame on the wire: postcard + COBS frames with a CRC-32, written by the
+//! firmware and read by the host. `no_std`, no allocation, no panic on any input.
 //!
 //! # Frame format (version [`WIRE_VERSION`]; the specification is `docs/FRAME.md`)
 //!
@@ -25,7 +26,7 @@
 //! The decoder ([`FrameDecoder`]) is sans-IO: feed it byte chunks, get frames out.
 //!
 //! ```
-//! use firmware::output::{write_scan, Counters, FrameDecoder, Header, ScanHeader, Feed};
+//! use pfe_frame::{write_scan, Counters, FrameDecoder, Header, ScanHeader, Feed};
 //! use pfe_core::{Feature, LineFeature, Point};
 //! let f = Feature::Line(LineFeature {
 //!     first: 10, last: 40, points: 31, alpha: 0.1, rho: 2000.0, var_alpha: 1e-6,
@@ -46,6 +47,11 @@
 //! assert_eq!(frame.features[0], f);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
+
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![deny(clippy::indexing_slicing)]
 
 mod cobs;
 mod crc;

@@ -7,11 +7,11 @@
     clippy::indexing_slicing
 )]
 
-use firmware::output::{
+use pfe_core::{CircleFeature, Feature, LineFeature, Point};
+use pfe_frame::{
     crc32, max_frame_len, write_report, write_scan, Counters, DecodeError, Feed, Frame,
     FrameDecoder, Header, Report, ScanHeader, ScanStatus, Stage, MAX_FEATURES, WIRE_VERSION,
 };
-use pfe_core::{CircleFeature, Feature, LineFeature, Point};
 
 fn line(i: u16) -> Feature {
     Feature::Line(LineFeature {

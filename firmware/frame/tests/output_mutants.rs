@@ -7,11 +7,11 @@
     clippy::indexing_slicing
 )]
 
-use firmware::output::{
+use pfe_core::{CircleFeature, Feature, Point};
+use pfe_frame::{
     decode_frame, max_frame_len, write_scan, Counters, DecodeError, EncodeError, Feed,
     FrameDecoder, Header, ScanHeader, ScanStatus, MAX_FEATURE_LEN, WIRE_VERSION,
 };
-use pfe_core::{CircleFeature, Feature, Point};
 
 /// `embedded_io::Write` for a `Vec` (the firmware crate has no `std` feature of embedded-io).
 struct Writer<'a>(&'a mut Vec<u8>);

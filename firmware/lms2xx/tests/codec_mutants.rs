@@ -10,16 +10,16 @@
 
 mod common;
 
-use firmware::lms::command::{Command, PASSWORD};
-use firmware::lms::frame::{encode_parts, encode_telegram, Decoder, Event, MAX_TELEGRAM};
-use firmware::lms::reply::{parse_reply, Reply, ReplyOptions, Status};
-use firmware::lms::types::{Baud, Variant};
+use lms2xx::codec::command::{Command, PASSWORD};
+use lms2xx::codec::frame::{encode_parts, encode_telegram, Decoder, Event, MAX_TELEGRAM};
+use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions, Status};
+use lms2xx::codec::types::{Baud, Variant};
 
 /// Command codes and their reply codes (§4 table; reply = request + 0x80, `20 xx` → A0,
 /// `10` → 91).
 #[test]
 fn command_codes_and_reply_codes_follow_the_table() {
-    let block = firmware::lms::reply::ConfigBlock::default_mm();
+    let block = lms2xx::codec::reply::ConfigBlock::default_mm();
     let cases: [(Command<'_>, u8, u8); 13] = [
         (Command::Install(&PASSWORD), 0x20, 0xA0),
         (Command::SetBaud(Baud::B38400), 0x20, 0xA0),
@@ -205,7 +205,7 @@ fn error_log_is_pairs() {
 /// Count-word unit bits 14–15 (§7): 00 cm, 01 mm, 10 dm (CARMEN), 11 undefined.
 #[test]
 fn count_word_unit_bits() {
-    use firmware::lms::types::Unit;
+    use lms2xx::codec::types::Unit;
     assert_eq!(Unit::from_count_bits(0), Some(Unit::Cm));
     assert_eq!(Unit::from_count_bits(1), Some(Unit::Mm));
     assert_eq!(Unit::from_count_bits(2), Some(Unit::Dm));
@@ -272,7 +272,7 @@ fn variant_start_angles_follow_s7() {
 /// (§5, §6: 0 cm, 1 mm, S5 2 dm).
 #[test]
 fn unit_codes_of_count_word_and_config() {
-    use firmware::lms::types::Unit;
+    use lms2xx::codec::types::Unit;
     for (unit, code) in [(Unit::Cm, 0u8), (Unit::Mm, 1), (Unit::Dm, 2)] {
         assert_eq!(unit.count_bits(), u16::from(code), "{unit:?}");
         assert_eq!(Unit::from_config(code), Some(unit), "{code}");
@@ -287,7 +287,7 @@ fn unit_codes_of_count_word_and_config() {
 /// 32767, so in the 16-bit modes (0x0F immediate, 0x3F reflectivity) every word is a value.
 #[test]
 fn largest_valid_code_per_measuring_mode() {
-    use firmware::lms::types::MeasuringMode;
+    use lms2xx::codec::types::MeasuringMode;
     for m in [0x00, 0x01, 0x02] {
         assert_eq!(MeasuringMode(m).max_valid(), 8182, "mode {m:#04x}");
     }
@@ -303,8 +303,8 @@ fn largest_valid_code_per_measuring_mode() {
 /// 806, §1), both CRCs (the vector `20 24` has CRC 0x0834, §1), a reply's code and lengths.
 #[test]
 fn error_messages_name_their_values() {
-    use firmware::lms::frame::FrameError;
-    use firmware::lms::reply::ReplyError;
+    use lms2xx::codec::frame::FrameError;
+    use lms2xx::codec::reply::ReplyError;
     let s = FrameError::BadLength(900).to_string();
     assert!(s.contains("900") && s.contains("806"), "{s}");
     let s = FrameError::Crc {
@@ -340,7 +340,7 @@ fn error_messages_name_their_values() {
 #[test]
 fn telegram_framing_errors_and_address() {
     use common::lms::{crc16, device_telegram};
-    use firmware::lms::frame::{FrameError, Telegram};
+    use lms2xx::codec::frame::{FrameError, Telegram};
     let with_crc = |mut t: Vec<u8>| {
         let c = crc16(&t);
         t.extend_from_slice(&c.to_le_bytes());
@@ -448,7 +448,7 @@ fn dropped_counts_every_rejected_candidate_and_reset_zeroes() {
     assert_eq!(s.dropped(), 3);
     assert!(s.bytes_skipped > 0);
     dec.reset_stats();
-    assert_eq!(dec.stats(), firmware::lms::DecoderStats::default());
+    assert_eq!(dec.stats(), lms2xx::codec::frame::DecoderStats::default());
     assert_eq!(dec.stats().dropped(), 0);
     assert_eq!(dec.stats().bytes_skipped, 0);
 }
@@ -503,7 +503,7 @@ fn error_log_length_counts_pairs() {
 /// a block. Byte 4 is availability, flag 0x02 the real-time scan index.
 #[test]
 fn config_block_lengths_and_availability_byte() {
-    use firmware::lms::reply::ConfigBlock;
+    use lms2xx::codec::reply::ConfigBlock;
     let opts = ReplyOptions::default();
     for n in [32usize, 34] {
         let mut p = vec![0xF4];

@@ -12,8 +12,9 @@ mod common;
 
 use common::lms::{crc16, Lms};
 use common::Time;
-use firmware::lms::driver::{Config, Driver};
-use firmware::lms::{Baud, Error, MeasuringMode};
+use lms2xx::codec::types::{Baud, MeasuringMode};
+use lms2xx::driver::Error;
+use lms2xx::driver::{Config, Driver};
 
 type Lms200 = Driver<Lms, Time, Time>;
 
@@ -222,10 +223,10 @@ fn scans_in_another_unit_are_used_with_their_unit() {
     let mut d = Driver::new(lms, t.clone(), t, Config::default());
     for _ in 0..3 {
         let s = d.next_scan().unwrap();
-        assert_eq!(s.unit(), firmware::lms::Unit::Cm);
+        assert_eq!(s.unit(), lms2xx::codec::types::Unit::Cm);
         assert_eq!(s.range_mm(0), Some(10_000.0));
     }
-    assert_eq!(d.device().unit, Some(firmware::lms::Unit::Cm));
+    assert_eq!(d.device().unit, Some(lms2xx::codec::types::Unit::Cm));
     assert_eq!(d.counters().reinits, 1);
 }
 
@@ -385,11 +386,11 @@ fn config_refused_counts_only_refusals() {
     let mut lms = Lms::new(t.clone(), 38400);
     let refuse = common::lms::device_telegram(&[0x92, 0x10]);
     lms.replace_reply = Some((5, [&[0x06][..], &refuse].concat()));
-    let cfg = Config::default().with_unit(firmware::lms::Unit::Cm);
+    let cfg = Config::default().with_unit(lms2xx::codec::types::Unit::Cm);
     let mut d = Driver::new(lms, t.clone(), t, cfg);
     d.init().unwrap();
     assert_eq!(d.counters().config_refused, 1);
-    assert_eq!(d.device().unit, Some(firmware::lms::Unit::Mm));
+    assert_eq!(d.device().unit, Some(lms2xx::codec::types::Unit::Mm));
     let (uart, _, _) = d.release();
     assert_eq!(uart.sent(0x77).len(), 1);
 }
@@ -410,7 +411,7 @@ impl embedded_hal::delay::DelayNs for Recorded {
 #[derive(Clone)]
 struct Ticking(Time);
 
-impl firmware::lms::driver::Clock for Ticking {
+impl lms2xx::driver::Clock for Ticking {
     fn now_ms(&mut self) -> u32 {
         self.0 .0.set(self.0 .0.get() + 1);
         (self.0 .0.get() / 1000) as u32
@@ -486,7 +487,7 @@ fn the_value_count_names_the_variant_the_device_kept() {
     let mut d = Driver::new(lms, t.clone(), t, Config::default());
     let s = d.next_scan().unwrap();
     assert_eq!(s.len(), 181);
-    assert_eq!(s.variant, firmware::lms::Variant::A180_R100);
+    assert_eq!(s.variant, lms2xx::codec::types::Variant::A180_R100);
     assert_eq!(d.counters().variant_refused, 1);
 }
 
@@ -507,7 +508,7 @@ fn next_scan_gives_up_after_its_reinitialisations() {
 /// scripted device's value 0 is 1000 mm with no flag; there is no value 361.
 #[test]
 fn scan_measurements_split_the_value_words() {
-    use firmware::lms::reply::{Measurement, RangeCode};
+    use lms2xx::codec::reply::{Measurement, RangeCode};
     let mut d = driver(38400, Config::default());
     let s = d.next_scan().unwrap();
     assert_eq!(

@@ -8,7 +8,7 @@ mod common;
 
 use common::lms::Lms;
 use common::Time;
-use firmware::lms::driver::{Config, Driver};
+use lms2xx::driver::{Config, Driver};
 
 type Lms200 = Driver<Lms, Time, Time>;
 
@@ -54,7 +54,7 @@ fn a_variant_answered_not_set_is_a_refusal() {
 /// init goes on in the device's unit; it is no bad reply.
 #[test]
 fn a_configuration_answered_not_taken_is_a_refusal() {
-    let cm = Config::default().with_unit(firmware::lms::Unit::Cm);
+    let cm = Config::default().with_unit(lms2xx::codec::types::Unit::Cm);
     let at = index_of(0x77, cm, |_| {});
     let mut reply = vec![0xF7, 0x00, 0x46, 0, 0, 0, 0, 1];
     reply.resize(36, 0);
@@ -62,7 +62,7 @@ fn a_configuration_answered_not_taken_is_a_refusal() {
     let mut d = answering(at, &reply, cm, |_| {});
     d.init().unwrap();
     assert_eq!(d.counters().config_refused, 1);
-    assert_eq!(d.device().unit, Some(firmware::lms::Unit::Mm));
+    assert_eq!(d.device().unit, Some(lms2xx::codec::types::Unit::Mm));
 }
 
 /// `A0 01`: the device refuses a mode change with a code (§4, e.g. a wrong password for the
@@ -70,12 +70,12 @@ fn a_configuration_answered_not_taken_is_a_refusal() {
 /// goes on in the device's unit and sends no `77`.
 #[test]
 fn a_mode_change_answered_with_a_code_is_a_refusal() {
-    let cm = Config::default().with_unit(firmware::lms::Unit::Cm);
+    let cm = Config::default().with_unit(lms2xx::codec::types::Unit::Cm);
     let at = index_of(0x77, cm, |_| {}) - 1;
     let mut d = answering(at, &[0xA0, 0x01, common::lms::STATUS], cm, |_| {});
     d.init().unwrap();
     assert_eq!(d.counters().config_refused, 1);
-    assert_eq!(d.device().unit, Some(firmware::lms::Unit::Mm));
+    assert_eq!(d.device().unit, Some(lms2xx::codec::types::Unit::Mm));
     let (uart, _, _) = d.release();
     assert!(
         uart.sent(0x77).is_empty(),

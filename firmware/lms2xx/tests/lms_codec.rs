@@ -7,10 +7,10 @@
     clippy::panic
 )]
 
-use firmware::lms::crc::crc16;
-use firmware::lms::frame::{encode_telegram, Decoder, Event, Telegram, MAX_TELEGRAM};
-use firmware::lms::reply::{parse_reply, RangeCode, Reply, ReplyOptions};
-use firmware::lms::types::{MeasuringMode, Unit};
+use lms2xx::codec::crc::crc16;
+use lms2xx::codec::frame::{encode_telegram, Decoder, Event, Telegram, MAX_TELEGRAM};
+use lms2xx::codec::reply::{parse_reply, RangeCode, Reply, ReplyOptions};
+use lms2xx::codec::types::{MeasuringMode, Unit};
 
 /// (description, telegram hex, CRC) from lms200-test-vectors.txt.
 const VECTORS: &[(&str, &str, u16)] = &[
@@ -151,7 +151,7 @@ fn run<const N: usize>(dec: &mut Decoder<N>, chunks: &[&[u8]]) -> Vec<Ev> {
     out
 }
 
-fn decode(chunks: &[&[u8]]) -> (Vec<Ev>, firmware::lms::DecoderStats) {
+fn decode(chunks: &[&[u8]]) -> (Vec<Ev>, lms2xx::codec::frame::DecoderStats) {
     let mut d = Decoder::<MAX_TELEGRAM>::new();
     let ev = run(&mut d, chunks);
     (ev, d.stats())
@@ -182,8 +182,8 @@ fn crc_of_full_b0_telegram() {
 
 #[test]
 fn encoders_reproduce_command_vectors() {
-    use firmware::lms::command::{Command, PASSWORD};
-    use firmware::lms::types::{Baud, Variant};
+    use lms2xx::codec::command::{Command, PASSWORD};
+    use lms2xx::codec::types::{Baud, Variant};
     let cases: Vec<(Command, &str)> = vec![
         (Command::Continuous, "cmd 20 24 (continuous)"),
         (Command::OnRequest, "cmd 20 25 (request mode)"),
@@ -226,8 +226,8 @@ fn encoders_reproduce_command_vectors() {
 
 #[test]
 fn set_config_and_reset_encode_with_valid_crc() {
-    use firmware::lms::command::Command;
-    use firmware::lms::reply::ConfigBlock;
+    use lms2xx::codec::command::Command;
+    use lms2xx::codec::reply::ConfigBlock;
     let mut cfg = ConfigBlock::default_mm();
     cfg.set_unit(Unit::Cm);
     let mut buf = [0u8; 64];
@@ -256,7 +256,7 @@ fn replies_parse() {
         r.reply,
         Reply::Variant {
             ok: true,
-            variant: firmware::lms::Variant::A180_R050
+            variant: lms2xx::codec::types::Variant::A180_R050
         }
     );
 
@@ -278,7 +278,7 @@ fn replies_parse() {
             assert_eq!(c.unit(), Some(Unit::Mm));
             assert_eq!(c.measuring_mode(), MeasuringMode(0));
             assert!(!c.realtime_index());
-            assert_eq!(c, firmware::lms::reply::ConfigBlock::default_mm());
+            assert_eq!(c, lms2xx::codec::reply::ConfigBlock::default_mm());
         }
         other => panic!("{other:?}"),
     }
@@ -332,8 +332,8 @@ fn b1_status_fields() {
     let Reply::Status(s) = r.reply else { panic!() };
     assert_eq!(s.software_version(), Some(&b"V02.10 "[..]));
     assert_eq!(s.measuring_mode(), Some(MeasuringMode(6)));
-    assert_eq!(s.variant(), Some(firmware::lms::Variant::A180_R050));
-    assert_eq!(s.baud(), Some(firmware::lms::Baud::B38400));
+    assert_eq!(s.variant(), Some(lms2xx::codec::types::Variant::A180_R050));
+    assert_eq!(s.baud(), Some(lms2xx::codec::types::Baud::B38400));
     assert_eq!(s.unit(), Some(Unit::Mm));
     // A short B1 gives None, never a panic.
     let short = parse_reply(&p[..50], ReplyOptions::default()).unwrap();
@@ -456,9 +456,9 @@ fn reserved_codes_per_mode() {
         Valid(0xFFFF)
     );
     // Flag bits per mode: 0x01 reflectivity in bits 13-15.
-    let m = firmware::lms::reply::Measurement::decode(0xE005, MeasuringMode(1));
+    let m = lms2xx::codec::reply::Measurement::decode(0xE005, MeasuringMode(1));
     assert_eq!((m.code, m.flags), (5, 7));
-    let m = firmware::lms::reply::Measurement::decode(0xC005, MeasuringMode(3));
+    let m = lms2xx::codec::reply::Measurement::decode(0xC005, MeasuringMode(3));
     assert_eq!((m.code, m.flags), (5, 3));
 }
 
@@ -715,7 +715,7 @@ mod props {
 /// of values, output length and measuring mode, with flag bits set in the words.
 #[test]
 fn range_codes_match_value_by_value() {
-    use firmware::lms::reply::MeasuredValues;
+    use lms2xx::codec::reply::MeasuredValues;
     for n in 0..=9usize {
         let mut payload = vec![0xB0, n as u8, 0x00];
         for i in 0..n {

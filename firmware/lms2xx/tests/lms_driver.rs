@@ -10,8 +10,8 @@
 mod common;
 
 use common::Time;
-use firmware::lms::driver::{Config, Driver, SetBaud};
-use firmware::lms::Error;
+use lms2xx::driver::Error;
+use lms2xx::driver::{Config, Driver, SetBaud};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct E;
@@ -104,7 +104,7 @@ fn write_returning_zero_is_an_error() {
 #[test]
 fn invalid_variant_refused_before_any_byte() {
     let t = Time::default();
-    let cfg = Config::default().with_variant(firmware::lms::Variant::new(180, 25));
+    let cfg = Config::default().with_variant(lms2xx::codec::types::Variant::new(180, 25));
     let mut d = Driver::new(dead(false, false), t.clone(), t, cfg);
     assert_eq!(d.init(), Err(Error::InvalidConfig));
     assert_eq!(d.release().0.written, 0);

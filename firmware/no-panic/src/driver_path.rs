@@ -5,7 +5,8 @@
 use core::convert::Infallible;
 
 use embedded_hal::delay::DelayNs;
-use firmware::lms::{Baud, Clock, Config, Driver, MeasuringMode, SetBaud, Unit, Variant};
+use lms2xx::codec::types::{Baud, MeasuringMode, Unit, Variant};
+use lms2xx::driver::{Clock, Config, Driver, SetBaud};
 
 use crate::board::{Uart, DATA, STATE, STATE_RX_FULL, STATE_TX_FULL, UART0, UART1};
 

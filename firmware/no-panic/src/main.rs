@@ -4,8 +4,8 @@
 //! The scan path: bytes arrive from UART0 (read with volatile loads, so the optimiser knows nothing about
 //! them) → [`Decoder`] → [`parse_reply`] → range codes → [`App::process`] with
 //! `Config::paper()` and with `Config::default()` (pfe-core extraction, then the output frame
-//! streamed to UART1). The driver path ([`driver_path`]): [`firmware::lms::Driver`] over
-//! the same UART with a delay and a clock read from registers and a [`firmware::lms::Config`]
+//! streamed to UART1). The driver path ([`driver_path`]): [`lms2xx::driver::Driver`] over
+//! the same UART with a delay and a clock read from registers and a [`lms2xx::driver::Config`]
 //! made of register bits, through `init` (baud probe, baud switch, configuration), `next_scan`
 //! (re-initialisation on silence or reset), `poll`, `stop` and `reset_device`. The
 //! `#[panic_handler]` calls `__pfe_panic_path_survived`, a symbol
@@ -27,11 +27,12 @@ mod board {
     use core::convert::Infallible;
 
     use firmware::app::{App, ConfigChoice, RawScan};
-    use firmware::lms::frame::MAX_TELEGRAM;
-    use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
-    use firmware::lms::{Decoder, Event, MeasuringMode};
-    use firmware::output::Counters;
+    use lms2xx::codec::frame::MAX_TELEGRAM;
+    use lms2xx::codec::frame::{Decoder, Event};
+    use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
+    use lms2xx::codec::types::MeasuringMode;
     use pfe_core::ScanGeometry;
+    use pfe_frame::Counters;
 
     /// Most values in one B0 telegram (100° at 0.25°).
     const VALUES: usize = 401;

@@ -9,6 +9,7 @@
 #![cfg_attr(target_os = "none", no_std)]
 #![deny(missing_docs)]
 #![deny(unsafe_code)]
+#![deny(clippy::indexing_slicing)]
 
 #[cfg(target_os = "none")]
 pub mod uart;

@@ -5,7 +5,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 
 use cortex_m_rt::{exception, ExceptionFrame};
 use firmware::app::{ConfigChoice, LmsApp, LmsExtractor};
-use firmware::output::{self, Report};
+use pfe_frame::Report;
 
 use crate::uart::Uart;
 use crate::{scanner_uart, sys, time};
@@ -21,7 +21,7 @@ pub fn start_clock() {
 
 /// Sends `r` as a report frame on `out`; exits with [`sys::EXIT_OUTPUT`] when that fails.
 pub fn report(out: &mut Uart, r: Report) {
-    if output::write_report(out, &r).is_err() {
+    if pfe_frame::write_report(out, &r).is_err() {
         sys::exit(sys::EXIT_OUTPUT);
     }
 }

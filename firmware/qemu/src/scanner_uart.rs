@@ -18,8 +18,8 @@ use core::cell::RefCell;
 
 use cortex_m::interrupt::{self as irq, InterruptNumber, Mutex};
 use cortex_m::peripheral::NVIC;
-use firmware::lms::SetBaud;
 use firmware::rx_ring::{RxConsumer, RxCounters, RxLoss, RxProducer, RxQueue};
+use lms2xx::driver::SetBaud;
 
 use crate::uart::{Uart, UART0};
 

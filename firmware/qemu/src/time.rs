@@ -74,7 +74,7 @@ impl embedded_hal::delay::DelayNs for Delay {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Clock;
 
-impl firmware::lms::Clock for Clock {
+impl lms2xx::driver::Clock for Clock {
     fn now_ms(&mut self) -> u32 {
         (ticks() / (TICK_HZ / 1000)) as u32
     }

@@ -162,7 +162,7 @@ impl embedded_io::Write for Uart {
 
 /// QEMU passes BAUDDIV on to a tty backend (`-serial /dev/pts/N`), so the emulated LMS200
 /// on a pty sees the rate the firmware chose; on a TCP backend it has no effect.
-impl firmware::lms::SetBaud for Uart {
+impl lms2xx::driver::SetBaud for Uart {
     fn set_baud(&mut self, baud: u32) -> Result<(), Infallible> {
         self.write_reg(Reg::BaudDiv, bauddiv(baud));
         Ok(())

@@ -3,7 +3,7 @@
 //!
 //! [`App`] owns a statically sized [`Extractor`] (put the `App` in a `static`: about
 //! `9·N + 64·M` bytes) and turns each [`RawScan`] into one output frame
-//! ([`crate::output::write_scan`]). Where the scans come from is a [`ScanSource`]: the LMS200
+//! ([`pfe_frame::write_scan`]). Where the scans come from is a [`ScanSource`]: the LMS200
 //! driver on a board, a test double on the host.
 //!
 //! - `scan`: [`RawScan`], the driver's scan as pfe-core input (the one adapter).
@@ -11,7 +11,7 @@
 //!
 //! ```
 //! use firmware::app::{App, ConfigChoice, RawScan};
-//! use firmware::output::{Counters, Feed, FrameDecoder};
+//! use pfe_frame::{Counters, Feed, FrameDecoder};
 //! use pfe_core::ScanGeometry;
 //! // A wall 2 m ahead, as raw LMS200 codes in mm.
 //! let g = ScanGeometry::LMS200_180_050;
@@ -39,14 +39,14 @@
 use embedded_io::Write;
 use pfe_core::{Config, ExtractError, Extractor};
 
-use crate::lms::types::Variant;
-use crate::output::{self, Counters, EncodeError, ScanHeader, ScanStatus};
+use lms2xx::codec::types::Variant;
+use pfe_frame::{Counters, EncodeError, ScanHeader, ScanStatus};
 
 mod scan;
 mod source;
 
-pub use scan::RawScan;
-pub use source::ScanSource;
+pub use scan::{RawScan, ScanDataExt};
+pub use source::{link_counters, ScanSource};
 
 /// The named pfe-core configurations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -216,7 +216,7 @@ impl<const N: usize, const M: usize> App<N, M> {
             status,
         };
         self.seq = self.seq.wrapping_add(1);
-        output::write_scan(out, &header, features)?;
+        pfe_frame::write_scan(out, &header, features)?;
         Ok(header)
     }
 

@@ -3,8 +3,8 @@
 
 use pfe_core::{Ranges, Scan, ScanGeometry};
 
-use crate::lms::driver::ScanData;
-use crate::lms::types::MeasuringMode;
+use lms2xx::codec::types::MeasuringMode;
+use lms2xx::driver::ScanData;
 
 /// One scan as the driver delivers it: raw range codes (measuring-mode flag bits removed).
 #[derive(Clone, Copy, Debug)]
@@ -51,11 +51,27 @@ impl<'a> RawScan<'a> {
     }
 }
 
-/// The geometry of the scan's variant and the scan as
-/// pfe-core input.
-impl ScanData {
+/// The driver's [`ScanData`] as pfe-core input: the geometry of the scan's variant, the scan as
+/// a [`RawScan`] and as a [`Scan`] (raw codes, no copy). A trait because `ScanData` lives in
+/// `lms2xx`, which knows nothing of pfe-core.
+///
+/// ```
+/// use firmware::app::ScanDataExt;
+/// use lms2xx::driver::ScanData;
+/// let scan = ScanData::default();
+/// assert_eq!(scan.raw().values.len(), scan.len());
+/// ```
+pub trait ScanDataExt {
     /// Beam geometry (centred field, value 0 on the right, counter-clockwise).
-    pub fn geometry(&self) -> ScanGeometry {
+    fn geometry(&self) -> ScanGeometry;
+    /// The scan as [`RawScan`] (raw codes, no copy).
+    fn raw(&self) -> RawScan<'_>;
+    /// The scan as pfe-core input (raw codes, no copy).
+    fn as_pfe_scan(&self) -> Scan<'_>;
+}
+
+impl ScanDataExt for ScanData {
+    fn geometry(&self) -> ScanGeometry {
         let mut g = ScanGeometry::lms200(
             f32::from(self.variant.angle_deg),
             self.variant.resolution_deg(),
@@ -64,8 +80,7 @@ impl ScanData {
         g
     }
 
-    /// The scan as [`RawScan`] (raw codes, no copy).
-    pub fn raw(&self) -> RawScan<'_> {
+    fn raw(&self) -> RawScan<'_> {
         RawScan {
             geometry: self.geometry(),
             values: self.codes(),
@@ -75,8 +90,7 @@ impl ScanData {
         }
     }
 
-    /// The scan as pfe-core input (raw codes, no copy).
-    pub fn as_pfe_scan(&self) -> Scan<'_> {
+    fn as_pfe_scan(&self) -> Scan<'_> {
         self.raw().to_pfe()
     }
 }

@@ -3,9 +3,9 @@
 use embedded_hal::delay::DelayNs;
 use embedded_io::{Read, ReadReady, Write};
 
-use super::RawScan;
-use crate::lms::driver::{self, Clock, Driver, SetBaud};
-use crate::output::Counters;
+use super::{RawScan, ScanDataExt};
+use lms2xx::driver::{self, Clock, Driver, SetBaud};
+use pfe_frame::Counters;
 
 /// Where scans come from (the LMS200 driver through a small adapter, or a test double).
 pub trait ScanSource {
@@ -18,14 +18,12 @@ pub trait ScanSource {
 
 /// The driver's counters as the output frame's link counters (`crc_dropped` = CRC errors +
 /// bad lengths / overflows).
-impl From<&driver::Counters> for Counters {
-    fn from(c: &driver::Counters) -> Self {
-        Counters {
-            telegrams_ok: c.telegrams_ok,
-            crc_dropped: c.crc_errors.saturating_add(c.bad_length),
-            bytes_skipped: c.bytes_skipped,
-            reinits: c.reinits,
-        }
+pub fn link_counters(c: &driver::Counters) -> Counters {
+    Counters {
+        telegrams_ok: c.telegrams_ok,
+        crc_dropped: c.crc_errors.saturating_add(c.bad_length),
+        bytes_skipped: c.bytes_skipped,
+        reinits: c.reinits,
     }
 }
 
@@ -38,11 +36,11 @@ where
     D: DelayNs,
     C: Clock,
 {
-    type Error = crate::lms::Error<U::Error>;
+    type Error = lms2xx::driver::Error<U::Error>;
 
     fn next_scan(&mut self) -> Result<(RawScan<'_>, Counters), Self::Error> {
         Driver::next_scan(self)?;
-        let counters = Counters::from(&self.counters());
+        let counters = link_counters(&self.counters());
         Ok((self.last_scan().raw(), counters))
     }
 }

@@ -22,12 +22,13 @@ pub use lms_driver::lms_driver;
 
 use std::io::Cursor;
 
-use firmware::lms::frame::{encode_telegram, Telegram, MAX_TELEGRAM, STX};
-use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
-use firmware::lms::{Decoder, DecoderStats, Event, MeasuringMode};
-use firmware::output::{write_report, write_scan, Feed, Frame, FrameDecoder, Header};
 use host_tests::formats::{scans, Format};
+use lms2xx::codec::frame::{encode_telegram, Telegram, MAX_TELEGRAM, STX};
+use lms2xx::codec::frame::{Decoder, DecoderStats, Event};
+use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
+use lms2xx::codec::types::MeasuringMode;
 use pfe_core::{Config, ExtractError, Extractor, Feature, Scan, ScanGeometry};
+use pfe_frame::{write_report, write_scan, Feed, Frame, FrameDecoder, Header};
 
 /// A deterministic chunking of a byte stream, chosen by the fuzzer's first two bytes.
 #[derive(Clone, Copy, Debug)]

@@ -35,9 +35,11 @@ use std::collections::VecDeque;
 use std::convert::Infallible;
 use std::rc::Rc;
 
-use firmware::lms::{Baud, Clock, Config, Driver, MeasuringMode, SetBaud, Unit, Variant};
+use lms2xx::codec::types::{Baud, MeasuringMode, Unit, Variant};
+
 use host_tests::device::emulator::telegram::device_telegram;
 use host_tests::device::emulator::{Emulator, EmulatorConfig};
+use lms2xx::driver::{Clock, Config, Driver, SetBaud};
 
 /// Setting bytes before the script.
 pub const SETTINGS: usize = 9;
@@ -277,14 +279,14 @@ pub fn lms_driver(data: &[u8]) -> usize {
             }
             3 => {
                 if let Ok(Some(s)) = lms.poll() {
-                    assert!(s.len() <= firmware::lms::driver::MAX_VALUES);
+                    assert!(s.len() <= lms2xx::driver::MAX_VALUES);
                     scans += 1;
                 }
                 ("poll", OVERSHOOT_MS)
             }
             _ => {
                 if let Ok(s) = lms.next_scan() {
-                    assert!(s.len() <= firmware::lms::driver::MAX_VALUES);
+                    assert!(s.len() <= lms2xx::driver::MAX_VALUES);
                     assert_eq!(s.codes().len(), s.len());
                     scans += 1;
                 }

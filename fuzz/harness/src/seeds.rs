@@ -6,10 +6,10 @@ use std::fs;
 use std::io::{self, BufRead};
 use std::path::{Path, PathBuf};
 
-use firmware::lms::frame::{encode_parts, ACK, DEVICE_ADDRESS, MAX_TELEGRAM};
-use firmware::output::{write_report, write_scan, Report, ScanHeader};
 use host_tests::formats::{self, Format, Record};
+use lms2xx::codec::frame::{encode_parts, ACK, DEVICE_ADDRESS, MAX_TELEGRAM};
 use pfe_core::{Config, Extractor, Scan};
+use pfe_frame::{write_report, write_scan, Report, ScanHeader};
 
 use crate::ExtractorInput;
 

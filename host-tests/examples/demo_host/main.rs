@@ -16,8 +16,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use firmware::output::{Header, Report, Stage};
 use host_tests::scene::{Scenario, SceneKind};
+use pfe_frame::{Header, Report, Stage};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

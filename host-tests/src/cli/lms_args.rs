@@ -1,6 +1,6 @@
 //! The LMS200 settings that `emulate` and `record` take.
 
-use firmware::lms::types::{Baud, Unit, Variant};
+use lms2xx::codec::types::{Baud, Unit, Variant};
 
 /// `--baud BPS`: one of the LMS200's rates.
 pub fn baud(s: &str) -> Result<Baud, String> {

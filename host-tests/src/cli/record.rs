@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use firmware::lms::driver::Config;
+use lms2xx::driver::Config;
 
 use super::lms_args::LmsArgs;
 use super::Exit;

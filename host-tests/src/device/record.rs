@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use anyhow::{Context, Result};
-use firmware::lms::driver::{Config, Driver};
+use lms2xx::driver::{Config, Driver};
 
 use super::tty::{StdClock, StdDelay, TtyPort};
 

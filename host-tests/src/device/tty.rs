@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use firmware::lms::driver::{Clock, SetBaud};
+use lms2xx::driver::{Clock, SetBaud};
 use nix::sys::termios::{self, BaudRate, SetArg};
 
 /// A tty opened raw and non-blocking, usable as an `embedded-io` UART by the firmware driver.

@@ -10,8 +10,10 @@ use std::io::BufRead;
 
 use pfe_core::ScanGeometry;
 
-use firmware::lms::reply::MeasuredValues;
-use firmware::lms::{Decoder, Event, MeasuringMode, ReplyOptions, Unit as LmsUnit, MAX_TELEGRAM};
+use lms2xx::codec::frame::{Decoder, Event, MAX_TELEGRAM};
+use lms2xx::codec::reply::MeasuredValues;
+use lms2xx::codec::reply::ReplyOptions;
+use lms2xx::codec::types::{MeasuringMode, Unit as LmsUnit};
 
 use super::{InputError, Location, Record};
 

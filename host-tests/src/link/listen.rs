@@ -6,7 +6,7 @@
 //! output line: `pfe extract`'s [`ScanJson`] plus what only the link knows (see `docs/JSON.md`).
 //!
 //! ```
-//! use firmware::output::{write_scan, Counters, ScanHeader};
+//! use pfe_frame::{write_scan, Counters, ScanHeader};
 //! use host_tests::link::listen::{Listener, ListenJson};
 //! use host_tests::qemu::VecWriter;
 //! let mut w = VecWriter(vec![0x55, 0x00]); // a damaged tail, then a frame
@@ -28,11 +28,11 @@ use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use firmware::output::{
+use nix::sys::termios::{self, SetArg};
+use pfe_frame::{
     max_frame_len, DecodeError, Feed, Frame, FrameDecoder, Header, ScanHeader, ScanStatus,
     MAX_FEATURES,
 };
-use nix::sys::termios::{self, SetArg};
 use serde::Serialize;
 
 use crate::device::tty::baud_rate;

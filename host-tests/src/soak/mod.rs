@@ -28,10 +28,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
-use firmware::app::{App, ConfigChoice};
-use firmware::lms::driver::{Clock, Config, Driver, ScanData, SetBaud};
-use firmware::lms::types::Baud;
-use firmware::output::{self, Feed, FrameDecoder};
+use firmware::app::{App, ConfigChoice, ScanDataExt};
+use lms2xx::codec::types::Baud;
+use lms2xx::driver::{Clock, Config, Driver, ScanData, SetBaud};
+use pfe_frame::{self as output, Feed, FrameDecoder};
 pub mod qemu;
 
 use crate::device::emulator::{
@@ -286,7 +286,7 @@ fn tag_and_copy(s: &ScanData) -> Result<Delivered> {
     })
 }
 
-fn counters_of(c: &firmware::lms::driver::Counters) -> output::Counters {
+fn counters_of(c: &lms2xx::driver::Counters) -> output::Counters {
     output::Counters {
         telegrams_ok: c.telegrams_ok,
         crc_dropped: c.crc_errors,
@@ -398,7 +398,7 @@ mod tty {
     use std::path::Path;
     use std::time::{Duration, Instant};
 
-    use firmware::lms::driver::{Clock, SetBaud};
+    use lms2xx::driver::{Clock, SetBaud};
     use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
     use nix::sys::termios::{self, BaudRate, SetArg};
 

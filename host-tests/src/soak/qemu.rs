@@ -21,8 +21,8 @@ use crate::device::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimit
 use crate::scene::{Scenario, SceneKind};
 use anyhow::{Context, Result};
 use firmware::app::ConfigChoice;
-use firmware::output::{Counters, Frame, Header, Report};
 use pfe_core::Feature;
+use pfe_frame::{Counters, Frame, Header, Report};
 
 use crate::qemu;
 

@@ -525,7 +525,7 @@ impl Bound {
 }
 
 /// A short form of a demangled name for the docs: generic arguments and `<… as …>` dropped,
-/// the last two path segments kept (`<firmware::lms::driver::Driver<…>>::init` →
+/// the last two path segments kept (`<lms2xx::driver::Driver<…>>::init` →
 /// `Driver::init`).
 pub fn short(name: &str) -> String {
     // Drop generic arguments: a `<` that follows an identifier character or `::`.

@@ -211,7 +211,7 @@ fn mnemonics() {
 #[test]
 fn short_names() {
     assert_eq!(
-        short("<firmware::lms::driver::Driver<firmware_qemu::scanner_uart::ScannerUart, firmware_qemu::time::Delay>>::init"),
+        short("<lms2xx::driver::Driver<firmware_qemu::scanner_uart::ScannerUart, firmware_qemu::time::Delay>>::init"),
         "Driver::init"
     );
     assert_eq!(

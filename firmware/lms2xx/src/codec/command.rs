@@ -75,11 +75,11 @@ impl Command<'_> {
     /// Writes the complete telegram (STX … CRC) into `out`; returns its length.
     ///
     /// ```
-    /// use firmware::lms::command::Command;
+    /// use lms2xx::codec::command::Command;
     /// let mut buf = [0u8; 64];
     /// let n = Command::Status.encode(&mut buf)?;
     /// assert_eq!(&buf[..n], &[0x02, 0x00, 0x01, 0x00, 0x31, 0x15, 0x12]);
-    /// # Ok::<(), firmware::lms::frame::FrameError>(())
+    /// # Ok::<(), lms2xx::codec::frame::FrameError>(())
     /// ```
     pub fn encode(&self, out: &mut [u8]) -> Result<usize, FrameError> {
         let enc = |parts: &[&[u8]], out: &mut [u8]| encode_parts(HOST_ADDRESS, parts, out);

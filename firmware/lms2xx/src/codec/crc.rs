@@ -49,7 +49,7 @@ const TOP: [u16; 256] = {
 /// and eight bytes add to `S` as `L⁸(S) ^ Σ bⱼ << (7 − j)`: shifts and one table lookup.
 ///
 /// ```
-/// use firmware::lms::crc::Crc;
+/// use lms2xx::codec::crc::Crc;
 /// let mut c = Crc::new();
 /// c.update(&[0x02, 0x00, 0x02]);
 /// c.update(&[0x00, 0x20, 0x24]);
@@ -116,7 +116,7 @@ fn add8(s: u16, b: [u8; 8]) -> u16 {
 /// Checksum of `bytes` (STX up to the last byte before the CRC).
 ///
 /// ```
-/// use firmware::lms::crc::crc16;
+/// use lms2xx::codec::crc::crc16;
 /// assert_eq!(crc16(&[0x02, 0x00, 0x02, 0x00, 0x20, 0x24]), 0x0834);
 /// ```
 pub fn crc16(bytes: &[u8]) -> u16 {

@@ -36,11 +36,11 @@ impl<'a> Telegram<'a> {
     /// Checks framing, length and CRC of a complete telegram in `raw` (exact length).
     ///
     /// ```
-    /// use firmware::lms::frame::Telegram;
+    /// use lms2xx::codec::frame::Telegram;
     /// let t = Telegram::parse(&[0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A])?;
     /// assert_eq!(t.command(), 0xA0);
     /// assert_eq!(t.payload(), &[0xA0, 0x00, 0x10]);
-    /// # Ok::<(), firmware::lms::frame::FrameError>(())
+    /// # Ok::<(), lms2xx::codec::frame::FrameError>(())
     /// ```
     pub fn parse(raw: &'a [u8]) -> Result<Self, FrameError> {
         let (head, _) = raw.split_first_chunk::<4>().ok_or(FrameError::Truncated)?;
@@ -94,11 +94,11 @@ impl<'a> Telegram<'a> {
 /// Writes a telegram `STX | adr | LEN | payload | CRC` into `out`; returns its length.
 ///
 /// ```
-/// use firmware::lms::frame::{encode_telegram, HOST_ADDRESS};
+/// use lms2xx::codec::frame::{encode_telegram, HOST_ADDRESS};
 /// let mut buf = [0u8; 16];
 /// let n = encode_telegram(HOST_ADDRESS, &[0x20, 0x24], &mut buf)?;
 /// assert_eq!(&buf[..n], &[0x02, 0x00, 0x02, 0x00, 0x20, 0x24, 0x34, 0x08]);
-/// # Ok::<(), firmware::lms::frame::FrameError>(())
+/// # Ok::<(), lms2xx::codec::frame::FrameError>(())
 /// ```
 pub fn encode_telegram(adr: u8, payload: &[u8], out: &mut [u8]) -> Result<usize, FrameError> {
     encode_parts(adr, &[payload], out)
@@ -189,7 +189,7 @@ enum Settle {
 /// started inside a damaged one survives.
 ///
 /// ```
-/// use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
+/// use lms2xx::codec::frame::{Decoder, Event, MAX_TELEGRAM};
 /// let stream = [0xFF, 0x06, 0x02, 0x80, 0x03, 0x00, 0xA0, 0x00, 0x10, 0x16, 0x0A];
 /// let mut dec = Decoder::<MAX_TELEGRAM>::new();
 /// let mut rest = &stream[..];

@@ -7,11 +7,12 @@
 //! - [`reply`]: device → host replies ([`reply::parse_reply`]), measured values, status,
 //!   configuration block.
 //! - [`types`]: baud rates, scan variants, units, measuring modes.
-//! - [`error`]: why bytes are not a telegram or a payload not a reply.
+//! - why bytes are not a telegram ([`frame::FrameError`]) or a payload not a reply
+//!   ([`reply::ReplyError`]).
 
 pub mod command;
 pub mod crc;
-pub mod error;
+mod error;
 pub mod frame;
 pub mod reply;
 pub mod types;

@@ -126,11 +126,11 @@ pub enum Reply<'a> {
 /// Parses a reply payload (reply code … status byte).
 ///
 /// ```
-/// use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
+/// use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
 /// let r = parse_reply(&[0xA0, 0x00, 0x10], ReplyOptions::default())?;
 /// assert_eq!(r.reply, Reply::Mode(0));
 /// assert_eq!(r.status.0, 0x10);
-/// # Ok::<(), firmware::lms::reply::ReplyError>(())
+/// # Ok::<(), lms2xx::codec::reply::ReplyError>(())
 /// ```
 pub fn parse_reply(payload: &[u8], opts: ReplyOptions) -> Result<ParsedReply<'_>, ReplyError> {
     let (&code, rest) = payload.split_first().ok_or(ReplyError::Empty)?;
@@ -240,8 +240,8 @@ impl Measurement {
     /// Splits value word `word` per measuring mode `mode` (fact sheet §5 table).
     ///
     /// ```
-    /// use firmware::lms::reply::{Measurement, RangeCode};
-    /// use firmware::lms::types::MeasuringMode;
+    /// use lms2xx::codec::reply::{Measurement, RangeCode};
+    /// use lms2xx::codec::types::MeasuringMode;
     /// let m = Measurement::decode(0x23EB, MeasuringMode(0));
     /// assert_eq!((m.code, m.flags, m.kind), (0x3EB, 1, RangeCode::Valid(1003)));
     /// ```

@@ -1,6 +1,6 @@
 //! Driver settings.
 
-use crate::lms::codec::types::{Baud, MeasuringMode, Unit, Variant};
+use crate::codec::types::{Baud, MeasuringMode, Unit, Variant};
 
 /// Driver settings. `#[non_exhaustive]`: start from [`Config::default`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,8 +1,8 @@
 //! The driver's error type.
 
-use crate::lms::frame::FrameError;
+use crate::codec::frame::FrameError;
 
-/// Errors of the LMS200 [`Driver`](crate::lms::driver::Driver), generic over the bus error `E`.
+/// Errors of the LMS200 [`Driver`](crate::driver::Driver), generic over the bus error `E`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]

@@ -6,10 +6,10 @@ use embedded_io::{Read, ReadReady, Write};
 
 use super::config::poll_interval;
 use super::{Clock, Driver, SetBaud};
-use crate::lms::codec::command::{code, Command, PASSWORD};
-use crate::lms::codec::reply::{ConfigBlock, Reply, StatusInfo};
-use crate::lms::codec::types::Baud;
-use crate::lms::error::Error;
+use crate::codec::command::{code, Command, PASSWORD};
+use crate::codec::reply::{ConfigBlock, Reply, StatusInfo};
+use crate::codec::types::Baud;
+use crate::driver::Error;
 
 impl<U, D, C> Driver<U, D, C>
 where

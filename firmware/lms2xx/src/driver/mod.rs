@@ -9,24 +9,25 @@
 //! a timeout; commands are tried [`Config::tries`] times; silence or a device reset triggers a
 //! re-initialisation. No allocation, no panic.
 //!
-//! One file per job: [`traits`] (what the platform provides), [`config`], [`state`] (device
-//! state and counters), [`scan`] (the delivered scan), `pump` (bytes and command
-//! transactions), `init` (initialisation), `stream` (scans and re-initialisation), [`error`].
+//! One file per job: `traits` (what the platform provides: [`Clock`], [`SetBaud`]), `config`
+//! ([`Config`]), `state` ([`DeviceState`], [`Counters`]), `scan` (the delivered [`ScanData`]),
+//! `pump` (bytes and command transactions), `init` (initialisation), `stream` (scans and
+//! re-initialisation), `error` ([`Error`]). Every item is public here, at `lms2xx::driver::`.
 
 use embedded_hal::delay::DelayNs;
 use embedded_io::{Read, ReadReady, Write};
 
-use crate::lms::codec::frame::{Decoder, MAX_TELEGRAM};
-use crate::lms::codec::types::Baud;
+use crate::codec::frame::{Decoder, MAX_TELEGRAM};
+use crate::codec::types::Baud;
 
-pub mod config;
-pub mod error;
+mod config;
+mod error;
 mod init;
 mod pump;
-pub mod scan;
-pub mod state;
+mod scan;
+mod state;
 mod stream;
-pub mod traits;
+mod traits;
 
 use config::poll_interval;
 pub use config::Config;
@@ -39,10 +40,10 @@ pub use traits::{Clock, SetBaud};
 /// The LMS200 driver. See the module docs for the sequence.
 ///
 /// ```no_run
-/// # fn demo<U, D, C>(uart: U, delay: D, clock: C) -> Result<(), firmware::lms::error::Error<U::Error>>
-/// # where U: embedded_io::Read + embedded_io::Write + embedded_io::ReadReady + firmware::lms::driver::SetBaud,
-/// #       D: embedded_hal::delay::DelayNs, C: firmware::lms::driver::Clock {
-/// use firmware::lms::driver::{Config, Driver};
+/// # fn demo<U, D, C>(uart: U, delay: D, clock: C) -> Result<(), lms2xx::driver::Error<U::Error>>
+/// # where U: embedded_io::Read + embedded_io::Write + embedded_io::ReadReady + lms2xx::driver::SetBaud,
+/// #       D: embedded_hal::delay::DelayNs, C: lms2xx::driver::Clock {
+/// use lms2xx::driver::{Config, Driver};
 /// let mut lms = Driver::new(uart, delay, clock, Config::default());
 /// lms.init()?;
 /// loop {

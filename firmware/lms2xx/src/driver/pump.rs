@@ -5,10 +5,10 @@ use embedded_hal::delay::DelayNs;
 use embedded_io::{Read, ReadReady, Write};
 
 use super::{Clock, Driver, SetBaud};
-use crate::lms::codec::command::Command;
-use crate::lms::codec::frame::Event;
-use crate::lms::codec::reply::{code as rcode, parse_reply, ParsedReply, Reply, ReplyOptions};
-use crate::lms::error::Error;
+use crate::codec::command::Command;
+use crate::codec::frame::Event;
+use crate::codec::reply::{code as rcode, parse_reply, ParsedReply, Reply, ReplyOptions};
+use crate::driver::Error;
 
 /// What a pumped telegram was, copied out of the decoder.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,7 +1,7 @@
 //! The scan the driver delivers: one B0 telegram's values in a fixed buffer.
 
-use crate::lms::codec::reply::{self, Measurement, Status};
-use crate::lms::codec::types::{MeasuringMode, Unit, Variant};
+use crate::codec::reply::{self, Measurement, Status};
+use crate::codec::types::{MeasuringMode, Unit, Variant};
 
 /// Most values in one B0 telegram (the largest LMS2xx scan: 100° at 0.25°).
 pub const MAX_VALUES: usize = Variant::MAX_VALUES;

@@ -1,6 +1,6 @@
 //! What the driver knows about the device, and its counters.
 
-use crate::lms::codec::types::{Baud, MeasuringMode, Unit, Variant};
+use crate::codec::types::{Baud, MeasuringMode, Unit, Variant};
 
 /// What the driver knows about the device after initialisation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

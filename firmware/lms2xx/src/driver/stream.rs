@@ -5,9 +5,9 @@ use embedded_io::{Read, ReadReady, Write};
 
 use super::pump::Rx;
 use super::{Clock, Driver, ScanData, SetBaud};
-use crate::lms::codec::reply::code as rcode;
-use crate::lms::codec::types::Variant;
-use crate::lms::error::Error;
+use crate::codec::reply::code as rcode;
+use crate::codec::types::Variant;
+use crate::driver::Error;
 
 impl<U, D, C> Driver<U, D, C>
 where

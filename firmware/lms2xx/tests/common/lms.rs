@@ -378,7 +378,7 @@ impl embedded_io::Write for Lms {
         Ok(())
     }
 }
-impl firmware::lms::driver::SetBaud for Lms {
+impl lms2xx::driver::SetBaud for Lms {
     fn set_baud(&mut self, bps: u32) -> Result<(), E> {
         self.host_bps = bps;
         self.host_bauds.push(bps);

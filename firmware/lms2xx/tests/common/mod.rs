@@ -4,7 +4,7 @@
 use std::cell::Cell;
 use std::rc::Rc;
 
-use firmware::lms::driver::Clock;
+use lms2xx::driver::Clock;
 
 /// Simulated time in µs, shared by every clone: the driver's delays advance it and its clock
 /// reads it, so a test's waits take no real time.
@@ -32,7 +32,7 @@ pub fn b0_telegram(count: u16, first: u16) -> Vec<u8> {
     payload.extend((0..count).flat_map(|i| (first + i).to_le_bytes()));
     payload.push(0x10);
     let mut raw = vec![0u8; 2 * usize::from(count) + 16];
-    let n = firmware::lms::frame::encode_telegram(0x80, &payload, &mut raw).unwrap_or(0);
+    let n = lms2xx::codec::frame::encode_telegram(0x80, &payload, &mut raw).unwrap_or(0);
     raw.truncate(n);
     raw
 }

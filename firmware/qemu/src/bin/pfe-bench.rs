@@ -7,6 +7,7 @@
 //! one `Report::Timing` frame per measurement on UART1, then `Report::Stack` and
 //! `Report::Done`. Instructions = ticks × 10 / 256 (instruction counts, not cycles).
 #![cfg_attr(target_os = "none", no_std, no_main)]
+#![deny(clippy::indexing_slicing)]
 
 #[cfg(not(target_os = "none"))]
 fn main() {
@@ -18,14 +19,16 @@ mod fw {
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
     use firmware::app::{RawScan, LMS_READINGS};
-    use firmware::lms::{frame::Decoder, Event, MeasuredValues, MeasuringMode, ReplyOptions};
-    use firmware::output::{Counters, Report, Stage};
     use firmware_qemu::rt::{self, report};
     use firmware_qemu::{
         sys, time,
         uart::{Uart, UART1},
     };
+    use lms2xx::codec::frame::{Decoder, Event};
+    use lms2xx::codec::reply::{MeasuredValues, ReplyOptions};
+    use lms2xx::codec::types::MeasuringMode;
     use pfe_core::{Config, ExtractError, ScanGeometry};
+    use pfe_frame::{Counters, Report, Stage};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
     /// Values a telegram may hold (the bench's scans have 361).

@@ -1,7 +1,7 @@
 //! The pfe firmware on QEMU `mps2-an386`: LMS200 on UART0 (received through the UART's
 //! interrupt into the firmware's receive ring, as on the board; initialised and streamed by
 //! the driver), pfe-core on every scan, one feature frame per scan on UART1
-//! (`firmware::output`), defmt logs on semihosting stdout.
+//! (`pfe_frame`), defmt logs on semihosting stdout.
 //!
 //! Semihosting arguments: `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every]` (`0` or
 //! none: run forever; baud 9600/19200/38400/500000, default 38400). `slow_ms` makes the
@@ -12,6 +12,7 @@
 //! line_errors=… peak=… capacity=… scan_errors=…`), then exits QEMU with 0; 3 = scanner link
 //! failed, 4 = output failed, 101 = panic, 102 = fault.
 #![cfg_attr(target_os = "none", no_std, no_main)]
+#![deny(clippy::indexing_slicing)]
 
 #[cfg(not(target_os = "none"))]
 fn main() {
@@ -24,15 +25,15 @@ mod fw {
     use defmt_semihosting as _;
     use embedded_hal::delay::DelayNs;
     use firmware::app::{AppError, ConfigChoice};
-    use firmware::lms::types::Baud;
-    use firmware::lms::{Config, Driver};
-    use firmware::output::Report;
     use firmware::rx_ring::RING_SLOTS;
     use firmware_qemu::rt::{self, report};
     use firmware_qemu::scanner_uart::{rx_counters, ScannerUart};
     use firmware_qemu::sys;
     use firmware_qemu::time::{Clock, Delay};
     use firmware_qemu::uart::{Uart, UART1};
+    use lms2xx::codec::types::Baud;
+    use lms2xx::driver::{Config, Driver};
+    use pfe_frame::Report;
 
     /// Consecutive failed scans before giving up.
     const MAX_FAILURES: u32 = 5;

@@ -5,6 +5,7 @@
 //! result has libm's bits (any NaN for NaN), else 10 + the number of differences (at most
 //! 110). Run by `host-tests/tests/qemu_sqrt.rs`.
 #![cfg_attr(target_os = "none", no_std, no_main)]
+#![deny(clippy::indexing_slicing)]
 
 #[cfg(not(target_os = "none"))]
 fn main() {

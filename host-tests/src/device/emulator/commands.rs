@@ -1,9 +1,9 @@
 //! The commands the emulated device answers.
 
-use firmware::lms::command::{code as ccode, mode as cmode, PASSWORD};
-use firmware::lms::frame::{ACK, NAK};
-use firmware::lms::reply::{code as rcode, status_offset, ConfigBlock};
-use firmware::lms::types::{Baud, Unit, Variant};
+use lms2xx::codec::command::{code as ccode, mode as cmode, PASSWORD};
+use lms2xx::codec::frame::{ACK, NAK};
+use lms2xx::codec::reply::{code as rcode, status_offset, ConfigBlock};
+use lms2xx::codec::types::{Baud, Unit, Variant};
 
 use super::Emulator;
 

@@ -1,7 +1,7 @@
 //! What the emulated device is at power-on and which faults it injects.
 
-use firmware::lms::reply::ConfigBlock;
-use firmware::lms::types::{Baud, Variant};
+use lms2xx::codec::reply::ConfigBlock;
+use lms2xx::codec::types::{Baud, Variant};
 
 use super::SourceKind;
 

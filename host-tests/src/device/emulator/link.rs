@@ -5,7 +5,7 @@
 //! tests of seconds of device time run in milliseconds and are deterministic.
 //!
 //! ```
-//! use firmware::lms::driver::{Config, Driver};
+//! use lms2xx::driver::{Config, Driver};
 //! use host_tests::device::emulator::{Emulator, EmulatorConfig, Link};
 //! // A device at power-on (9600 baud), host UART modelled starting at 9600.
 //! let link = Link::new(Emulator::from_config(EmulatorConfig::default()), Some(9600));
@@ -18,7 +18,7 @@
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use firmware::lms::driver::{Clock, SetBaud};
+use lms2xx::driver::{Clock, SetBaud};
 
 use super::Emulator;
 

@@ -29,9 +29,9 @@ pub use source::{RangeSource, RoomSource, SourceKind, TaggedSource};
 
 use std::collections::VecDeque;
 
-use firmware::lms::frame::{Decoder, Event, HOST_ADDRESS, MAX_TELEGRAM, NAK};
-use firmware::lms::reply::{code as rcode, ConfigBlock};
-use firmware::lms::types::{Baud, Variant};
+use lms2xx::codec::frame::{Decoder, Event, HOST_ADDRESS, MAX_TELEGRAM, NAK};
+use lms2xx::codec::reply::{code as rcode, ConfigBlock};
+use lms2xx::codec::types::{Baud, Variant};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 

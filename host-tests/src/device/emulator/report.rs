@@ -1,6 +1,6 @@
 //! What an emulator run sent and counted.
 
-use firmware::lms::types::{MeasuringMode, Unit};
+use lms2xx::codec::types::{MeasuringMode, Unit};
 
 /// A scan the emulator sent.
 #[derive(Clone, Debug, PartialEq)]

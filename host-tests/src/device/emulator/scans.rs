@@ -1,7 +1,7 @@
 //! The scan telegrams (B0) the emulated device sends: range codes, injected damage, pacing.
 
-use firmware::lms::reply::code as rcode;
-use firmware::lms::types::{MeasuringMode, Unit};
+use lms2xx::codec::reply::code as rcode;
+use lms2xx::codec::types::{MeasuringMode, Unit};
 use rand::Rng;
 
 use super::{telegram, Emulator, SentScan};
