@@ -217,7 +217,9 @@ mod tests {
     fn the_firmware_run_is_limited_to_the_codec_and_output() {
         let a = mutants_args(true, Some("1/25"), 60, Path::new("/o")).join(" ");
         assert!(
-            a.contains("-p lms2xx -p pfe-frame --file firmware/lms2xx/src/** --file firmware/frame/src/**"),
+            a.contains(
+                "-p lms2xx -p pfe-frame --file firmware/lms2xx/src/** --file firmware/frame/src/**"
+            ),
             "{a}"
         );
         assert!(a.contains("--shard 1/25 --sharding round-robin"), "{a}");
