@@ -227,3 +227,26 @@ fn output_errors_propagate() {
     let mut out = &mut tiny[..];
     assert!(app.process(&scan, Counters::default(), &mut out).is_err());
 }
+
+/// The module docs' RAM figure for an `App<N, M>`, about 25·N + 68·M bytes: within 1 KiB of
+/// the real size for short and long scans, few and many features.
+#[test]
+fn app_size_matches_the_documented_figure() {
+    use core::mem::size_of;
+    let sizes = [
+        (181, 16, size_of::<App<181, 16>>()),
+        (401, 48, size_of::<App<401, 48>>()),
+        (401, 96, size_of::<App<401, 96>>()),
+        (801, 48, size_of::<App<801, 48>>()),
+    ];
+    for (n, m, real) in sizes {
+        let figure = 25 * n + 68 * m;
+        assert!(
+            real.abs_diff(figure) < 1024,
+            "App<{n}, {m}>: {real} B, the docs say about {figure} B"
+        );
+    }
+    // The per-point and per-feature parts, not only the total.
+    assert_eq!(sizes[3].2 - sizes[1].2, 25 * 400);
+    assert_eq!(sizes[2].2 - sizes[1].2, 68 * 48);
+}

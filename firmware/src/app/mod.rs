@@ -2,12 +2,14 @@
 //! driver → pfe-core → framed output.
 //!
 //! [`App`] owns a statically sized [`Extractor`] (put the `App` in a `static`: about
-//! `9·N + 64·M` bytes) and turns each [`RawScan`] into one output frame
-//! ([`pfe_frame::write_scan`]). Where the scans come from is a [`ScanSource`]: the LMS200
-//! driver on a board, a test double on the host.
+//! `25·N + 68·M` bytes, 13.2 KiB for `App<401, 48>`) and turns each [`RawScan`] into one
+//! output frame ([`pfe_frame::write_scan`]). Where the scans come from is a [`ScanSource`]:
+//! the LMS200 driver on a board, a test double on the host.
 //!
-//! - `scan`: [`RawScan`], the driver's scan as pfe-core input (the one adapter).
-//! - `source`: [`ScanSource`], implemented by the driver; its counters as the output's.
+//! - `scan`: [`RawScan`] and [`ScanDataExt`], the driver's scan as pfe-core input (the one
+//!   adapter).
+//! - `source`: [`ScanSource`], implemented by the driver; its counters as the output's
+//!   ([`link_counters`]).
 //!
 //! ```
 //! use firmware::app::{App, ConfigChoice, RawScan};
