@@ -11,56 +11,8 @@
 
 use anyhow::{Context, Result};
 
+use crate::fw::{build_fw, demo_host, target_dir, write_section_titled};
 use crate::util;
-
-/// Where the firmware builds go (apart from the host's, so features don't thrash).
-pub fn target_dir() -> std::path::PathBuf {
-    std::env::var_os("CARGO_TARGET_DIR")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| util::root().join("target"))
-}
-
-/// The firmware's optimisation level (one value for xtask and the QEMU tests).
-pub use host_tests::qemu::FIRMWARE_OPT_LEVEL;
-
-/// Builds a firmware-qemu binary in release for thumbv7em into `dir` at
-/// [`FIRMWARE_OPT_LEVEL`] with `DEFMT_LOG=info` (`env` may override both); returns the ELF.
-pub fn build_fw(
-    bin: &str,
-    features: &[&str],
-    env: &[(&str, &std::ffi::OsStr)],
-    dir: &std::path::Path,
-) -> Result<std::path::PathBuf> {
-    let mut all: Vec<(&str, &std::ffi::OsStr)> = vec![
-        ("DEFMT_LOG", "info".as_ref()),
-        (
-            "CARGO_PROFILE_RELEASE_OPT_LEVEL",
-            FIRMWARE_OPT_LEVEL.as_ref(),
-        ),
-    ];
-    all.extend_from_slice(env);
-    eprintln!(
-        "$ cargo build --release -p firmware-qemu --bin {bin} (into {})",
-        dir.display()
-    );
-    host_tests::qemu::build_firmware(bin, features, &all, dir)
-}
-
-/// Runs `demo_host` (host-tests example) with `args`.
-pub fn demo_host(args: &[&std::ffi::OsStr]) -> Result<()> {
-    let mut c = util::cargo();
-    c.args([
-        "run",
-        "--quiet",
-        "-p",
-        "host-tests",
-        "--example",
-        "demo_host",
-        "--",
-    ])
-    .args(args);
-    util::run(&mut c)
-}
 
 /// Runs the command.
 pub fn run(args: &[String]) -> Result<()> {
@@ -83,7 +35,7 @@ pub fn run(args: &[String]) -> Result<()> {
         scans_file.as_os_str(),
     ])?;
     let md = util::root().join("docs").join("PERFORMANCE.md");
-    crate::size::write_section_titled(
+    write_section_titled(
         &md,
         "math-accuracy",
         "libm vs micromath: accuracy",

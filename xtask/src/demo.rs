@@ -7,7 +7,7 @@
 
 use anyhow::{bail, Result};
 
-use crate::bench_mcu::{build_fw, demo_host, target_dir};
+use crate::fw::{build_fw, demo_host, target_dir};
 use crate::util;
 
 /// Runs the command.

@@ -8,6 +8,7 @@ mod conformance;
 mod demo;
 mod eval;
 mod fuzz;
+mod fw;
 mod mutants;
 mod no_panic;
 mod realdata;

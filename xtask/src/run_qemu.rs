@@ -10,7 +10,7 @@ use std::time::Duration;
 use anyhow::{bail, Result};
 use host_tests::link::run_qemu::RunQemu;
 
-use crate::bench_mcu::{build_fw, target_dir};
+use crate::fw::{build_fw, target_dir};
 use crate::util;
 
 const USAGE: &str =

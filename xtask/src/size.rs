@@ -15,7 +15,7 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
-use crate::bench_mcu::{build_fw, demo_host, target_dir, FIRMWARE_OPT_LEVEL};
+use crate::fw::{build_fw, demo_host, target_dir, write_section, FIRMWARE_OPT_LEVEL};
 use crate::util;
 
 const FLASH_BUDGET: u64 = 64 * 1024;
@@ -74,23 +74,6 @@ fn section_size(tool: &Path, elf: &Path, name: &str) -> Result<u64> {
             (it.next() == Some(name)).then(|| it.next()?.parse().ok())?
         })
         .unwrap_or(0))
-}
-
-/// Replaces (or appends) the section between `<!-- name:start -->` and `<!-- name:end -->`.
-pub fn write_section(path: &Path, name: &str, body: &str) -> Result<()> {
-    write_section_titled(path, name, &format!("`cargo xtask {name}`"), name, body)
-}
-
-/// [`write_section`] with its own heading, for a section `name` produced by `cargo xtask {command}`.
-pub fn write_section_titled(
-    path: &Path,
-    name: &str,
-    heading: &str,
-    command: &str,
-    body: &str,
-) -> Result<()> {
-    let body = format!("Reproduce: `cargo xtask {command}`\n\n{body}");
-    host_tests::docs::write_section(path, name, heading, &body, false)
 }
 
 /// Runs the command.

@@ -29,7 +29,7 @@ use std::process::Command;
 
 use anyhow::{bail, Context, Result};
 
-use crate::bench_mcu::{target_dir, FIRMWARE_OPT_LEVEL};
+use crate::fw::{target_dir, write_section_titled, FIRMWARE_OPT_LEVEL};
 use crate::util;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
@@ -621,7 +621,7 @@ pub fn refresh() -> Result<(PathBuf, Bound)> {
         elf.display(),
         bound.text()
     );
-    crate::size::write_section_titled(
+    write_section_titled(
         &util::root().join("docs").join("PERFORMANCE.md"),
         "stack",
         "Static worst-case stack bound",
