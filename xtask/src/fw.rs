@@ -73,4 +73,3 @@ pub fn write_section_titled(
     let body = format!("Reproduce: `cargo xtask {command}`\n\n{body}");
     host_tests::docs::write_section(path, name, heading, &body, false)
 }
-
