@@ -10,7 +10,7 @@ use firmware::lms::crc::crc16;
 use firmware::lms::frame::{encode_telegram, Decoder, DEVICE_ADDRESS};
 use firmware::lms::{Event, MeasuredValues, MeasuringMode, ReplyOptions};
 use firmware::output::{write_scan, Counters, ScanHeader, ScanStatus};
-use host_tests::eval::bench::simulated_scans;
+use pfe_eval::bench::simulated_scans;
 use pfe_core::{Config, Extractor, Scan};
 use std::hint::black_box;
 

@@ -418,7 +418,7 @@ fn plot_writes_a_readable_svg() {
     let text = std::fs::read_to_string(&svg).unwrap();
     // pfe's mark first (a comment: XML allows it before the root), then the plot.
     let body = text
-        .strip_prefix(host_tests::outfile::MARK)
+        .strip_prefix(pfe_formats::outfile::MARK)
         .unwrap_or_default();
     assert!(body.trim_start().starts_with("<svg") && text.trim_end().ends_with("</svg>"));
     assert!(text.contains("circles/arcs (1)") && text.contains("mark points"));
@@ -481,7 +481,7 @@ fn hokuyo_non_finite_ranges_are_no_return_and_negative_is_an_error() {
 
 #[test]
 fn carmen_max_range_follows_the_declared_laser() {
-    use host_tests::formats::carmen::Reader;
+    use pfe_formats::carmen::Reader;
     let scan = "FLASER 181 60.0 50.0 49.9 81.82 81.83 81.91 ".to_string()
         + &"2.0 ".repeat(175)
         + "0 0 0 0 0 0 1.0 host 1.0\n";

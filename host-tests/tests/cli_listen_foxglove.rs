@@ -12,7 +12,7 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use firmware::output::{write_scan, ScanHeader};
-use host_tests::foxglove::{scene_update, FEATURES_TOPIC};
+use pfe_cli::foxglove::{scene_update, FEATURES_TOPIC};
 use host_tests::qemu::VecWriter;
 use pfe_core::{CircleFeature, Feature, LineFeature, Point};
 use serde_json::{json, Value};

@@ -5,7 +5,7 @@
 use std::io::BufReader;
 
 use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
-use host_tests::formats::lms200::{Reader, Telegram, Unit};
+use pfe_formats::lms200::{Reader, Telegram, Unit};
 use serde_json::Value;
 
 mod common;

@@ -41,7 +41,7 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
     let page = std::fs::read_to_string(&html).unwrap();
     // pfe's mark first (comments may precede the doctype), then the page.
     let rest = page
-        .strip_prefix(host_tests::outfile::MARK)
+        .strip_prefix(pfe_formats::outfile::MARK)
         .unwrap_or_default();
     assert!(rest.trim_start().starts_with("<!DOCTYPE html>"));
     // B - A + 1 plots, one per scan, the first shown.
@@ -69,7 +69,7 @@ fn html_page_holds_every_scan_and_a_slider_over_them() {
 
     let svg = std::fs::read_to_string(&sheet).unwrap();
     let body = svg
-        .strip_prefix(host_tests::outfile::MARK)
+        .strip_prefix(pfe_formats::outfile::MARK)
         .unwrap_or_default();
     assert!(body.trim_start().starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
     // The sheet, a cell per scan, each holding its plot.

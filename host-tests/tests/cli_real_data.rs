@@ -5,8 +5,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use host_tests::formats::carmen::{AngleConvention, Reader};
-use host_tests::formats::{self, Record};
+use pfe_formats::carmen::{AngleConvention, Reader};
+use pfe_formats::{self as formats, Record};
 use pfe_core::{fit_line, Point};
 
 fn data_dir(test: &str) -> Option<PathBuf> {
@@ -14,13 +14,13 @@ fn data_dir(test: &str) -> Option<PathBuf> {
     if d.join("carmen").is_dir() {
         Some(d)
     } else {
-        host_tests::skip::skip(
+        pfe_testkit::skip::skip(
             test,
             &format!(
                 "real data folder {} is absent (it sits beside the repository as shared/data)",
                 d.display()
             ),
-            host_tests::skip::Need::InCi,
+            pfe_testkit::skip::Need::InCi,
         );
         None
     }

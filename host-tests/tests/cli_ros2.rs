@@ -2,7 +2,7 @@
 //! `fixtures/ros2/make_bags.py` (Python `mcap-ros2-support`) gives the CARMEN reader's features;
 //! several LaserScan topics are listed (exit 2); an existing `--mcap` file is kept; the Foxglove
 //! file reads back (`fixtures/foxglove/read_foxglove.py`) with one LaserScan and one SceneUpdate
-//! per scan. The Python-backed checks report a skip through `host_tests::skip` without python3
+//! per scan. The Python-backed checks report a skip through `pfe_testkit::skip` without python3
 //! or its packages (a failure under `CI=true`); the bags written here with the `mcap` crate run
 //! everywhere.
 
@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
-use host_tests::skip::{skip, Need};
+use pfe_testkit::skip::{skip, Need};
 use serde_json::Value;
 
 const N_SCANS: usize = 30;

@@ -136,8 +136,8 @@ fn b0_count(bytes: &[u8]) -> usize {
 #[test]
 fn record_interrupted_keeps_what_it_had() {
     use common::PtyServer;
-    use host_tests::device::emulator::serve::Pty;
-    use host_tests::device::emulator::{Emulator, EmulatorConfig};
+    use lms200_emulator::serve::Pty;
+    use lms200_emulator::{Emulator, EmulatorConfig};
 
     let dir = scratch("rec-int");
     let link = dir.join("lms");
@@ -506,7 +506,7 @@ fn a_skip_is_listed_and_fails_in_ci() {
 #[test]
 #[ignore = "a child of a_skip_is_listed_and_fails_in_ci"]
 fn skip_helper_child() {
-    use host_tests::skip::{skip, Need};
+    use pfe_testkit::skip::{skip, Need};
     skip("optional_test", "local choice", Need::Optional);
     skip("demo_test", "no widget", Need::InCi);
 }

@@ -14,9 +14,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use firmware::lms::types::Unit;
-use host_tests::device::emulator::serve::{serve_on, Pty};
-use host_tests::device::emulator::{Emulator, EmulatorConfig, RunLimits};
-use host_tests::link::run_qemu::RunQemu;
+use lms200_emulator::serve::{serve_on, Pty};
+use lms200_emulator::{Emulator, EmulatorConfig, RunLimits};
+use pfe_testkit::run_qemu::RunQemu;
 use host_tests::qemu;
 use serde_json::Value;
 

@@ -6,7 +6,7 @@
 use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::ConfigBlock;
 use firmware::lms::types::{MeasuringMode, Unit};
-use host_tests::device::emulator::{Emulator, EmulatorConfig};
+use lms200_emulator::{Emulator, EmulatorConfig};
 
 const OPERATING_MODE: usize = 8;
 const DEVICE_STATUS: usize = 9;

@@ -4,7 +4,7 @@ use firmware::lms::driver::{Config, Driver};
 use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::{parse_reply, ConfigBlock, Reply, ReplyOptions};
 use firmware::lms::types::{Baud, MeasuringMode, Unit, Variant};
-use host_tests::device::emulator::{
+use lms200_emulator::{
     Emulator, EmulatorConfig, HostPort, Link, LinkClock, LinkDelay, SourceKind, TaggedSource,
 };
 

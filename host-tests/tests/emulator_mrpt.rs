@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use firmware::lms::types::{Baud, MeasuringMode, Unit};
-use host_tests::device::emulator::serve::Pty;
-use host_tests::device::emulator::{Emulator, EmulatorConfig, RangeSource, TaggedSource};
+use lms200_emulator::serve::Pty;
+use lms200_emulator::{Emulator, EmulatorConfig, RangeSource, TaggedSource};
 
 mod common;
 
@@ -41,10 +41,10 @@ fn missing(what: &str) {
     if std::env::var_os("PFE_CONFORMANCE_REQUIRED").is_some() {
         panic!("MRPT conformance needs {what}");
     }
-    host_tests::skip::skip(
+    pfe_testkit::skip::skip(
         "emulator_mrpt",
         &format!("MRPT conformance needs {what} (apt-get install g++ libmrpt-hwdrivers-dev)"),
-        host_tests::skip::Need::InCi,
+        pfe_testkit::skip::Need::InCi,
     );
 }
 

@@ -6,8 +6,8 @@ mod common;
 use common::{arg, PtyServer};
 use firmware::lms::frame::{Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
-use host_tests::device::emulator::serve::Pty;
-use host_tests::device::emulator::{Emulator, EmulatorConfig, SourceKind};
+use lms200_emulator::serve::Pty;
+use lms200_emulator::{Emulator, EmulatorConfig, SourceKind};
 
 #[test]
 fn record_over_pty_captures_sent_scans() {
@@ -34,7 +34,7 @@ fn record_over_pty_captures_sent_scans() {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let res = host_tests::cli::record::cli(&args);
+    let res = pfe_cli::record::cli(&args);
     let (report, _pty) = emu.stop();
     res.unwrap();
 

@@ -6,10 +6,10 @@ use std::net::{TcpListener, TcpStream};
 use std::time::Duration;
 
 use firmware::lms::driver::{Config, Driver, SetBaud};
-use host_tests::device::emulator::{
+use lms200_emulator::{
     serve_tcp, EmulatorConfig, RunLimits, SourceKind, TaggedSource,
 };
-use host_tests::device::tty::{StdClock, StdDelay};
+use pfe_cli::device::tty::{StdClock, StdDelay};
 
 struct TcpPort {
     s: TcpStream,

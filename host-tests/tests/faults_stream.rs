@@ -5,7 +5,7 @@ use std::collections::BTreeSet;
 
 use firmware::lms::driver::{Config, Counters, Driver};
 use firmware::lms::types::Baud;
-use host_tests::device::emulator::{
+use lms200_emulator::{
     Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource,
 };
 

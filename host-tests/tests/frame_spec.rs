@@ -5,7 +5,7 @@
 
 use firmware::app::{App, ConfigChoice, RawScan};
 use firmware::output::{Counters, Feed, FrameDecoder};
-use host_tests::link::listen::ListenJson;
+use pfe_cli::link::listen::ListenJson;
 use host_tests::qemu::VecWriter;
 use serde_json::{json, Value};
 

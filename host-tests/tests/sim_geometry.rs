@@ -1,6 +1,6 @@
 //! Simulator against analytic geometry, determinism and ground-truth invariants.
 
-use host_tests::scene::{
+use pfe_eval::scene::{
     bearing, crb, render, systematic_bias_mm, Resolution, Scenario, SceneKind, Shape, TruthKind,
     MIN_RUN, NO_RETURN_CODE,
 };

@@ -1,7 +1,7 @@
 //! The simulated LMS200's interleaved sweeps, the moving scanner, cm mode and incidence noise,
 //! against analytic truth and against pfe-core's beam-timing model.
 
-use host_tests::scene::{
+use pfe_eval::scene::{
     bearing, incidence_noise_factor, render, RangeMode, Resolution, Scenario, SceneKind, Shape,
     NO_RETURN_CODE,
 };

@@ -21,7 +21,7 @@ pub fn target_dir() -> std::path::PathBuf {
 }
 
 /// The firmware's optimisation level (one value for xtask and the QEMU tests).
-pub use host_tests::qemu::FIRMWARE_OPT_LEVEL;
+pub use pfe_testkit::qemu::FIRMWARE_OPT_LEVEL;
 
 /// Builds a firmware-qemu binary in release for thumbv7em into `dir` at
 /// [`FIRMWARE_OPT_LEVEL`] with `DEFMT_LOG=info` (`env` may override both); returns the ELF.
@@ -43,7 +43,7 @@ pub fn build_fw(
         "$ cargo build --release -p firmware-qemu --bin {bin} (into {})",
         dir.display()
     );
-    host_tests::qemu::build_firmware(bin, features, &all, dir)
+    pfe_testkit::qemu::build_firmware(bin, features, &all, dir)
 }
 
 /// Runs `demo_host` (host-tests example) with `args`.

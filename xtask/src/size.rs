@@ -90,7 +90,7 @@ pub fn write_section_titled(
     body: &str,
 ) -> Result<()> {
     let body = format!("Reproduce: `cargo xtask {command}`\n\n{body}");
-    host_tests::docs::write_section(path, name, heading, &body, false)
+    pfe_formats::docs::write_section(path, name, heading, &body, false)
 }
 
 /// Runs the command.

@@ -26,7 +26,7 @@ use firmware::lms::frame::{encode_telegram, Telegram, MAX_TELEGRAM, STX};
 use firmware::lms::reply::{parse_reply, Reply, ReplyOptions};
 use firmware::lms::{Decoder, DecoderStats, Event, MeasuringMode};
 use firmware::output::{write_report, write_scan, Feed, Frame, FrameDecoder, Header};
-use host_tests::formats::{scans, Format};
+use pfe_formats::{scans, Format};
 use pfe_core::{Config, ExtractError, Extractor, Feature, Scan, ScanGeometry};
 
 /// A deterministic chunking of a byte stream, chosen by the fuzzer's first two bytes.
@@ -560,7 +560,7 @@ pub fn readers(data: &[u8]) -> usize {
             Some(Ok(r)) => {
                 records += 1;
                 assert!(
-                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= host_tests::methods::MAX_BEAMS
+                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= pfe_eval::methods::MAX_BEAMS
                 );
                 assert!(
                     r.geometry.is_valid(),

@@ -36,8 +36,8 @@ use std::convert::Infallible;
 use std::rc::Rc;
 
 use firmware::lms::{Baud, Clock, Config, Driver, MeasuringMode, SetBaud, Unit, Variant};
-use host_tests::device::emulator::telegram::device_telegram;
-use host_tests::device::emulator::{Emulator, EmulatorConfig};
+use lms200_emulator::telegram::device_telegram;
+use lms200_emulator::{Emulator, EmulatorConfig};
 
 /// Setting bytes before the script.
 pub const SETTINGS: usize = 9;

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use firmware::lms::frame::{encode_parts, ACK, DEVICE_ADDRESS, MAX_TELEGRAM};
 use firmware::output::{write_report, write_scan, Report, ScanHeader};
-use host_tests::formats::{self, Format, Record};
+use pfe_formats::{self as formats, Format, Record};
 use pfe_core::{Config, Extractor, Scan};
 
 use crate::ExtractorInput;

@@ -1,8 +1,8 @@
-//! `pfe bench`: host speed of every method on the same scans ([`crate::eval::bench`]).
+//! `pfe bench`: host speed of every method on the same scans ([`pfe_eval::bench`]).
 
 use std::path::PathBuf;
 
-use crate::eval::bench::{budget_lines, scaling, table, write_markdown, BenchOptions};
+use pfe_eval::bench::{budget_lines, scaling, table, write_markdown, BenchOptions};
 
 /// Arguments of `pfe bench`.
 #[derive(clap::Args, Debug)]
@@ -48,8 +48,8 @@ pub fn cli(args: &[String]) -> anyhow::Result<()> {
 /// Runs `pfe bench`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(md) = &args.md {
-        let plot = crate::outfile::beside(md, "perf-scaling.svg");
-        crate::outfile::check(
+        let plot = pfe_formats::outfile::beside(md, "perf-scaling.svg");
+        pfe_formats::outfile::check(
             std::iter::once(md.as_path()).chain(plot.as_deref()),
             args.force,
         )?;
@@ -61,7 +61,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
-    let report = crate::eval::bench::run(&BenchOptions {
+    let report = pfe_eval::bench::run(&BenchOptions {
         sim_scans: args.sim_scans,
         seed: args.seed,
         carmen: args.carmen.clone(),

@@ -6,13 +6,13 @@ use serde::Serialize;
 
 use super::input::{flush, guess, open, stdout, write_json};
 use super::Failure;
-use crate::formats::{lms200, Format};
+use pfe_formats::{lms200, Format};
 
 /// Arguments of `pfe decode`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Input format: only `lms200`, the default (decode reads raw LMS200 captures).
-    #[arg(long, short, default_value = "lms200")]
+    #[arg(long, short, default_value = "lms200", value_parser = crate::input::format_parser())]
     format: Format,
     /// Input file (`-` = stdin).
     file: PathBuf,

@@ -8,8 +8,8 @@ use anyhow::{Context, Result};
 
 use super::lms_args::LmsArgs;
 use super::Exit;
-use crate::device::emulator::serve::clear_stale_link;
-use crate::device::emulator::{
+use lms200_emulator::serve::clear_stale_link;
+use lms200_emulator::{
     serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind,
 };
 

@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use crate::eval::{default_methods, evaluate, report, svg, EvalOptions};
-use crate::scene::SceneKind;
+use pfe_eval::{default_methods, evaluate, report, svg, EvalOptions};
+use pfe_eval::scene::SceneKind;
 
 const HELP: &str =
     "pfe eval [--kind mixed|office|clutter|pillars|corridor] [--scans 100] [--seed 1]
@@ -110,7 +110,7 @@ fn run_options(options: &EvalOptions) -> anyhow::Result<()> {
     ];
     if let Some(dir) = &options.out {
         let paths: Vec<PathBuf> = FILES.iter().map(|f| dir.join(f)).collect();
-        crate::outfile::check(paths.iter().map(PathBuf::as_path), options.force)?;
+        pfe_formats::outfile::check(paths.iter().map(PathBuf::as_path), options.force)?;
     }
     let mut methods = default_methods();
     let ev = evaluate(&mut methods, options);
@@ -119,7 +119,7 @@ fn run_options(options: &EvalOptions) -> anyhow::Result<()> {
     if let Some(dir) = &options.out {
         // Again: a file may have appeared during the run; write all or none.
         let paths: Vec<PathBuf> = FILES.iter().map(|f| dir.join(f)).collect();
-        crate::outfile::check(paths.iter().map(PathBuf::as_path), options.force)?;
+        pfe_formats::outfile::check(paths.iter().map(PathBuf::as_path), options.force)?;
         let bodies = [
             md,
             svg::errors_vs_noise(&ev),
@@ -129,7 +129,7 @@ fn run_options(options: &EvalOptions) -> anyhow::Result<()> {
         ];
         for (name, body) in FILES.iter().zip(bodies) {
             let p = dir.join(name);
-            crate::outfile::write(&p, &body, options.force)?;
+            pfe_formats::outfile::write(&p, &body, options.force)?;
             eprintln!("wrote {}", p.display());
         }
     }

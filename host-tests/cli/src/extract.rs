@@ -8,9 +8,9 @@ use serde::Serialize;
 
 use super::input::{bad_input, flush, nothing_found, open_scans, stdout, write_json, MethodArgs};
 use super::{interrupt, Failure};
-use crate::formats::{ScanJson, StatusJson};
+use pfe_formats::{ScanJson, StatusJson};
 use crate::foxglove::FoxgloveWriter;
-use crate::methods::Method;
+use pfe_eval::methods::Method;
 
 /// Arguments of `pfe extract`.
 #[derive(clap::Args, Debug)]

@@ -12,9 +12,9 @@ use pfe_core::Config;
 use serde::Serialize;
 
 use super::Failure;
-use crate::formats::ros2::{self, Ros2Scan, TopicError};
-use crate::formats::{self, Format, InputError, Record};
-use crate::methods::Pfe;
+use pfe_formats::ros2::{self, Ros2Scan, TopicError};
+use pfe_formats::{self as formats, Format, InputError, Record};
+use pfe_eval::methods::Pfe;
 
 /// Named extractor configurations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -48,11 +48,39 @@ impl ConfigName {
     }
 }
 
+/// [`Format`] on the command line (the names and help of `--format`; pfe-formats has no clap).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum FormatArg {
+    /// `ID,START_DEG,STEP_DEG,R_0,...,R_{N-1}`, ranges in mm (0 or ≥ 8183 = no return).
+    Csv,
+    /// CARMEN log: `FLASER` (180° field), `ROBOTLASER1` or `RAWLASER1` lines (metres, gzip
+    /// allowed).
+    Carmen,
+    /// Raw byte capture of an LMS200 serial line (0xB0 telegrams, damage skipped).
+    Lms200,
+    /// `topic stamp angle_min angle_increment range_min range_max n r_0 ... r_{n-1}`.
+    Hokuyo,
+    /// ROS 2 bag (MCAP) with `sensor_msgs/msg/LaserScan` messages (see [`ros2`]).
+    Mcap,
+}
+
+/// The parser of a `--format` argument.
+pub(crate) fn format_parser() -> impl clap::builder::TypedValueParser<Value = Format> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::EnumValueParser::<FormatArg>::new().map(|f| match f {
+        FormatArg::Csv => Format::Csv,
+        FormatArg::Carmen => Format::Carmen,
+        FormatArg::Lms200 => Format::Lms200,
+        FormatArg::Hokuyo => Format::Hokuyo,
+        FormatArg::Mcap => Format::Mcap,
+    })
+}
+
 /// The input format and the extractor to run on it (`extract`, `plot`).
 #[derive(clap::Args, Debug)]
 pub struct MethodArgs {
     /// Input format.
-    #[arg(long, short)]
+    #[arg(long, short, value_parser = format_parser())]
     pub format: Format,
     /// Extractor configuration.
     #[arg(long, short, default_value = "default")]
@@ -129,17 +157,17 @@ impl MethodArgs {
 
     /// What the extractor is told besides the ranges of `record`: its sweeps and the grid its
     /// ranges lie on.
-    pub fn context(&self, record: &crate::formats::Record) -> crate::methods::ScanContext {
+    pub fn context(&self, record: &pfe_formats::Record) -> pfe_eval::methods::ScanContext {
         let geometry = &record.geometry;
-        crate::methods::ScanContext {
+        pfe_eval::methods::ScanContext {
             odometry: None,
             sweeps: usize::from(
                 self.sweeps
                     .0
                     .or(record.sweeps)
-                    .unwrap_or_else(|| crate::formats::sweeps_of(self.format, geometry)),
+                    .unwrap_or_else(|| pfe_formats::sweeps_of(self.format, geometry)),
             ),
-            quantum: crate::formats::range_quantum(&record.ranges_mm, geometry.r_max),
+            quantum: pfe_formats::range_quantum(&record.ranges_mm, geometry.r_max),
         }
     }
 }
@@ -205,7 +233,7 @@ pub fn guess(file: &Path, format: Format) -> Option<Format> {
     if format != Format::Mcap && starts_as_mcap(file) {
         return Some(Format::Mcap);
     }
-    Format::value_variants()
+    Format::ALL
         .iter()
         .copied()
         .filter(|&f| f != format)

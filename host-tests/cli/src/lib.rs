@@ -14,11 +14,15 @@
 
 pub mod bench;
 pub mod decode;
+pub mod device;
 pub mod emulate;
 pub mod eval;
 pub mod extract;
+pub mod figure;
+pub mod foxglove;
 mod input;
 pub mod interrupt;
+pub mod link;
 pub mod listen;
 mod lms_args;
 pub mod plot;
@@ -106,8 +110,8 @@ impl Failure {
             exit.code
         } else if e.is::<crate::device::record::OutputExists>()
             || e.is::<clap::Error>()
-            || e.downcast_ref::<crate::outfile::OutError>()
-                .is_some_and(crate::outfile::OutError::is_refusal)
+            || e.downcast_ref::<pfe_formats::outfile::OutError>()
+                .is_some_and(pfe_formats::outfile::OutError::is_refusal)
         {
             2
         } else {

@@ -10,11 +10,11 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use super::input::write_json;
 use super::Failure;
-use crate::formats::Record;
+use pfe_formats::Record;
 use crate::foxglove::{self, FoxgloveServer, FoxgloveWriter};
 use crate::link::clock::FirmwareClock;
 use crate::link::listen::{ListenJson, ListenStats, Listener, Source};
-use crate::methods::Extraction;
+use pfe_eval::methods::Extraction;
 
 /// The board's feature UART (USART2 of `firmware/board`).
 const DEFAULT_PORT: &str = "/dev/ttyUSB1";
@@ -198,7 +198,7 @@ impl Plots {
             features: features.to_vec(),
         };
         let title = format!("pfe listen: scan {} at {} ms", j.seq, j.time_ms);
-        std::fs::write(&path, crate::plot::svg(&record, &ex, &title))
+        std::fs::write(&path, crate::figure::svg(&record, &ex, &title))
             .map_err(|e| Failure::other(format!("writing {}: {e}", path.display())))?;
         self.mine.insert(path);
         Ok(())

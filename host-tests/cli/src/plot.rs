@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::input::{bad_input, nothing_found, open_scans, MethodArgs, Scan};
 use super::Failure;
-use crate::methods::{Extraction, Method};
+use pfe_eval::methods::{Extraction, Method};
 
 /// Most scans on one page or sheet.
 pub const MAX_PAGE_SCANS: u64 = 1000;
@@ -79,7 +79,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
         .iter()
         .filter_map(|o| o.as_deref())
         .filter(|p| p.as_os_str() != "-");
-    crate::outfile::check(files, a.force).map_err(|e| Failure::input(e.to_string()))?;
+    pfe_formats::outfile::check(files, a.force).map_err(|e| Failure::input(e.to_string()))?;
     let mut method = a.method.method();
     let input = open_scans(file, format, a.method.topic.as_deref())?;
     let bar = input.bar.clone();
@@ -123,7 +123,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             let title = title(&name, s, method.name());
             Plot {
                 id: s.record.id,
-                svg: crate::plot::svg(&s.record, &ex, &title),
+                svg: crate::figure::svg(&s.record, &ex, &title),
                 title,
                 ex,
             }
@@ -194,7 +194,7 @@ fn write_output(output: &Path, text: &str, force: bool) -> Result<(), Failure> {
             _ => Ok(()),
         }
     } else {
-        crate::outfile::write(output, text, force).map_err(|e| {
+        pfe_formats::outfile::write(output, text, force).map_err(|e| {
             if e.is_refusal() {
                 Failure::input(e.to_string())
             } else {

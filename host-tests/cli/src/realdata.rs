@@ -1,9 +1,9 @@
-//! `pfe realdata`: the real-data benchmark without ground truth ([`crate::eval::realdata`]).
+//! `pfe realdata`: the real-data benchmark without ground truth ([`pfe_eval::realdata`]).
 
 use std::path::PathBuf;
 
-use crate::eval::realdata::{report, run_log};
-use crate::formats::Format;
+use pfe_eval::realdata::{report, run_log};
+use pfe_formats::Format;
 
 /// Arguments of `pfe realdata`.
 #[derive(clap::Args, Debug)]
@@ -23,8 +23,8 @@ pub struct Args {
     /// Interleaved sweeps each scan is declared to be made of (1 to 4), or `auto`: one for a
     /// ROBOTLASER1/RAWLASER1 line whose laser is not a SICK LMS, else a SICK LMS2xx's (2 at
     /// 0.5°, 4 at 0.25°, 1 otherwise). pfe aligns declared sweeps whose offset shows.
-    #[arg(long, default_value = "auto", value_parser = crate::cli::input::sweeps_arg)]
-    sweeps: crate::cli::input::Sweeps,
+    #[arg(long, default_value = "auto", value_parser = crate::input::sweeps_arg)]
+    sweeps: crate::input::Sweeps,
     /// Tell the methods each scan's motion, from the poses and times of the scans before and
     /// after it (when they are at most 1 s apart): pfe's two modes de-skew the beams with it,
     /// interleaved sweeps by the LMS2xx's beam timing (split-and-merge and ACF take none).
@@ -43,7 +43,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Refused outputs are known before the run, not after it.
     if let Some(md) = &args.md {
         let files = report::output_files(md);
-        crate::outfile::check(files.iter().map(PathBuf::as_path), args.force)?;
+        pfe_formats::outfile::check(files.iter().map(PathBuf::as_path), args.force)?;
     }
     // Unreadable logs are known before the run, not after the first ones.
     for log in &args.logs {
@@ -89,13 +89,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 fn compared(
     log: &std::path::Path,
     args: &Args,
-) -> anyhow::Result<crate::eval::realdata::LogReport> {
-    let told = crate::eval::realdata::Told {
+) -> anyhow::Result<pfe_eval::realdata::LogReport> {
+    let told = pfe_eval::realdata::Told {
         sweeps: args.sweeps.0,
         odometry_from_poses: args.odometry_from_poses,
     };
     let r = run_log(log, args.sigma_r, args.max_scans, told).map_err(|e| {
-        match e.downcast_ref::<crate::formats::InputError>() {
+        match e.downcast_ref::<pfe_formats::InputError>() {
             Some(_) => super::Exit::bad_input(format!("{e:#}")).into(),
             None => e,
         }

@@ -9,9 +9,11 @@
 //!   simulator).
 //! * [`link`]: an in-process byte link with virtual time, usable by the firmware driver through
 //!   `embedded-io` (host baud modelled, bytes garbled when it differs from the device's).
-//! * [`serve`]: real-time transports: pseudo-terminal and TCP (`pfe emulate`).
+//! * `serve` (cargo feature `serve`, default): real-time transports: pseudo-terminal and TCP
+//!   (`pfe emulate`).
 
 pub mod link;
+#[cfg(feature = "serve")]
 pub mod serve;
 pub mod source;
 pub mod telegram;
@@ -24,6 +26,7 @@ mod scans;
 pub use config::{EmulatorConfig, Faults};
 pub use link::{HostPort, Link, LinkClock, LinkDelay, LinkError};
 pub use report::{EmulatorReport, SentScan};
+#[cfg(feature = "serve")]
 pub use serve::{serve_pty, serve_tcp, serve_tcp_with, RunLimits};
 pub use source::{RangeSource, RoomSource, SourceKind, TaggedSource};
 

@@ -6,7 +6,7 @@
 //!
 //! ```
 //! use firmware::lms::driver::{Config, Driver};
-//! use host_tests::device::emulator::{Emulator, EmulatorConfig, Link};
+//! use lms200_emulator::{Emulator, EmulatorConfig, Link};
 //! // A device at power-on (9600 baud), host UART modelled starting at 9600.
 //! let link = Link::new(Emulator::from_config(EmulatorConfig::default()), Some(9600));
 //! let mut lms = Driver::new(link.host_port(), link.delay(), link.clock(), Config::default());

@@ -90,10 +90,10 @@ mod tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("../../shared/docs/lms200-test-vectors.txt");
         let Ok(text) = std::fs::read_to_string(&path) else {
-            crate::skip::skip(
+            pfe_testkit::skip::skip(
                 "emulator telegram vectors",
                 &format!("{} is absent", path.display()),
-                crate::skip::Need::InCi,
+                pfe_testkit::skip::Need::InCi,
             );
             return;
         };

@@ -2,7 +2,7 @@
 //!
 //! Data sets: simulated scans ([`crate::scene`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
 //! and, when `../shared/data/carmen` is present, real CARMEN logs read by
-//! [`crate::formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
+//! [`pfe_formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
 //! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
 //! 50 m, or 81.83 m for 80 m-mode logs — are no return). Every method is told the data's
 //! range noise, as a user would configure it and as the `pfe` CLI does: 5 mm for the simulated
@@ -16,7 +16,7 @@
 //! fitting pfe-default's features again, with no segmentation at all.
 //!
 //! ```no_run
-//! host_tests::cli::bench::cli(&["--json".to_string()]).unwrap();
+//! pfe_cli::bench::cli(&["--json".to_string()]).unwrap();
 //! ```
 
 use std::path::{Path, PathBuf};
@@ -26,8 +26,8 @@ use anyhow::Context;
 use pfe_core::{Feature, Point, ScanGeometry};
 use serde::Serialize;
 
-use crate::eval::methods_for;
-use crate::formats::Format;
+use crate::methods_for;
+use pfe_formats::Format;
 use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
 use crate::methods::Method;
 use crate::scene::{Scenario, SceneKind};
@@ -231,15 +231,15 @@ pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
             p.file_name()
-                .is_some_and(|n| crate::formats::carmen::is_log_name(&n.to_string_lossy()))
+                .is_some_and(|n| pfe_formats::carmen::is_log_name(&n.to_string_lossy()))
         })
         .collect();
     logs.sort();
     let mut out = Vec::new();
     for log in logs {
-        let input = crate::formats::open(&log, |r| r)
+        let input = pfe_formats::open(&log, |r| r)
             .with_context(|| format!("opening {}", log.display()))?;
-        let reader = crate::formats::carmen::Reader::new(input);
+        let reader = pfe_formats::carmen::Reader::new(input);
         let limit = if per_log == 0 { usize::MAX } else { per_log };
         for rec in reader.take(limit) {
             let rec = rec.map_err(|e| anyhow::anyhow!("{}: {e}", log.display()))?;
@@ -401,7 +401,7 @@ pub fn write_markdown(
          circle fits and their covariances), without any segmentation: a floor under every \
          method's time, so time(method) / time({FITS_ONLY}) is the most any segmentation \
          could be faster than that method.\n",
-        crate::docs::cpu_model(),
+        pfe_formats::docs::cpu_model(),
         report.reps
     );
     for d in &report.datasets {
@@ -454,18 +454,18 @@ pub fn write_markdown(
             (n.clone(), ys)
         })
         .collect();
-    let svg = crate::eval::svg::line_chart(
+    let svg = crate::svg::line_chart(
         "Time per scan (µs, host) against beams per scan",
         "beams per scan",
         &xs,
         &curves,
     );
-    let plot = crate::outfile::beside(md, "perf-scaling.svg");
-    crate::outfile::check(std::iter::once(md).chain(plot.as_deref()), force)?;
+    let plot = pfe_formats::outfile::beside(md, "perf-scaling.svg");
+    pfe_formats::outfile::check(std::iter::once(md).chain(plot.as_deref()), force)?;
     if let Some(plot) = &plot {
-        crate::outfile::write(plot, &svg, force)?;
+        pfe_formats::outfile::write(plot, &svg, force)?;
     }
-    crate::docs::write_section(md, "host", "`pfe bench`", &body, force)
+    pfe_formats::docs::write_section(md, "host", "`pfe bench`", &body, force)
 }
 
 #[cfg(test)]

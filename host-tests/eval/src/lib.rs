@@ -1,15 +1,17 @@
 //! Evaluation: every [`Method`] on the same simulated scans, scored against ground truth.
 //!
 //! [`quick_report`] is the lead's tuning loop; [`evaluate`] reproduces the paper's comparison, which
-//! `pfe eval` ([`crate::cli::eval`]) writes to `docs/EVALUATION.md` with its plots.
+//! `pfe eval` (pfe-cli) writes to `docs/EVALUATION.md` with its plots.
 
 pub mod bench;
+pub mod methods;
 pub mod realdata;
 pub mod report;
+pub mod scene;
 pub mod score;
 pub mod svg;
 
-use crate::eval::score::{quantile, score_sim, Score};
+use crate::score::{quantile, score_sim, Score};
 use crate::methods::baselines::{Acf, SplitMerge};
 use crate::methods::{Method, Pfe};
 use crate::scene::{Scenario, SceneKind, SimScan};
@@ -401,9 +403,9 @@ pub fn crb_medians(s: &Score) -> [f64; 4] {
 /// the median Cramér–Rao bound of the first method's matched features.
 ///
 /// ```
-/// use host_tests::eval::quick_report;
-/// use host_tests::methods::{Method, Pfe};
-/// use host_tests::scene::SceneKind;
+/// use pfe_eval::quick_report;
+/// use pfe_eval::methods::{Method, Pfe};
+/// use pfe_eval::scene::SceneKind;
 /// let mut pfe = Pfe::paper();
 /// let report = quick_report(&mut [&mut pfe as &mut dyn Method], SceneKind::Office, 2, 5.0, 1);
 /// assert!(report.contains("pfe-paper"));

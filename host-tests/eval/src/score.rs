@@ -19,9 +19,9 @@
 //!   each with the Cramér–Rao bound of its truth feature.
 //!
 //! ```
-//! use host_tests::methods::Extraction;
-//! use host_tests::eval::score::{score, GroundTruth};
-//! use host_tests::scene::{Scenario, SceneKind};
+//! use pfe_eval::methods::Extraction;
+//! use pfe_eval::score::{score, GroundTruth};
+//! use pfe_eval::scene::{Scenario, SceneKind};
 //! let sim = Scenario::new(SceneKind::Office, 1).simulate();
 //! let gt = GroundTruth::from_sim(&sim);
 //! let s = score(&Extraction::default(), &gt);
@@ -186,7 +186,7 @@ impl Score {
 /// Intersection over union of two inclusive index ranges.
 ///
 /// ```
-/// assert_eq!(host_tests::eval::score::iou((0, 9), (5, 14)), 5.0 / 15.0);
+/// assert_eq!(pfe_eval::score::iou((0, 9), (5, 14)), 5.0 / 15.0);
 /// ```
 pub fn iou(a: (usize, usize), b: (usize, usize)) -> f64 {
     let lo = a.0.max(b.0);
@@ -237,7 +237,7 @@ pub fn angle_diff(a: f64, b: f64) -> f64 {
 /// (α_t + π, −ρ_t) (the same line) has its normal within π/2 of α.
 ///
 /// ```
-/// use host_tests::eval::score::line_error;
+/// use pfe_eval::score::line_error;
 /// let (dr, da) = line_error(0.1 + std::f64::consts::PI, 2.0, 0.1, 3.0);
 /// assert!((dr - 5.0).abs() < 1e-9 && da < 1e-9); // x·n = −2 vs x·n = 3
 /// ```
@@ -321,7 +321,7 @@ pub fn score_sim(ex: &Extraction, sim: &SimScan) -> Score {
 /// The `q`-quantile (0–1, nearest rank) of `values`; NaN when empty.
 ///
 /// ```
-/// assert_eq!(host_tests::eval::score::quantile(&[3.0, 1.0, 2.0], 0.5), 2.0);
+/// assert_eq!(pfe_eval::score::quantile(&[3.0, 1.0, 2.0], 0.5), 2.0);
 /// ```
 pub fn quantile(values: &[f64], q: f64) -> f64 {
     let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();

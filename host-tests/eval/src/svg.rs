@@ -1,7 +1,7 @@
 //! Hand-written SVG plots of the evaluation (no plotting crate).
 
 use super::{Evaluation, Level};
-use crate::eval::report::{crb_summary, errors, EFFICIENT_Z};
+use crate::report::{crb_summary, errors, EFFICIENT_Z};
 use std::fmt::Write as _;
 
 /// Colours of the methods, in order.

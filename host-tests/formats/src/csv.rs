@@ -3,11 +3,11 @@
 //! Ranges in mm; 0, `NaN` or ≥ 8183 (the LMS reserved codes) = no return (a discontinuity),
 //! so the maximum range is 8182 mm. Blank lines and lines starting with `#` are skipped. Any
 //! other malformed line (missing field, a field that is not a number, a negative or infinite
-//! range, more than [`MAX_BEAMS`](crate::methods::MAX_BEAMS) ranges, beams spanning more than
+//! range, more than [`MAX_BEAMS`](crate::MAX_BEAMS) ranges, beams spanning more than
 //! 360°) is an error with its line number.
 //!
 //! ```
-//! use host_tests::formats::csv::Reader;
+//! use pfe_formats::csv::Reader;
 //! let mut r = Reader::new(Box::new("1,-90,0.5,1000,9000,1000,1000\n".as_bytes()));
 //! let scan = r.next().unwrap().unwrap();
 //! assert!((scan.geometry.angle_step - 0.5f32.to_radians()).abs() < 1e-7);

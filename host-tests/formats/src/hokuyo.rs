@@ -7,7 +7,7 @@
 //! comments are skipped.
 //!
 //! ```
-//! use host_tests::formats::hokuyo::Reader;
+//! use pfe_formats::hokuyo::Reader;
 //! let text = "/scan 1.5 -1.0 0.5 0.02 5.6 3 1.0 0 0.01\n";
 //! let scan = Reader::new(Box::new(text.as_bytes())).next().unwrap().unwrap();
 //! assert_eq!(scan.geometry.r_max, 5600.0);

@@ -4,7 +4,7 @@ use pfe_core::Feature;
 use serde::Serialize;
 
 use super::Record;
-use crate::methods::Extraction;
+use crate::Extraction;
 
 /// One feature in the `pfe extract` / `pfe listen` JSON output (`docs/JSON.md`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -125,8 +125,8 @@ impl StatusJson {
 /// "status": {...}}`, with `time` and `pose` when the input has them (`docs/JSON.md`).
 ///
 /// ```
-/// use host_tests::formats::ScanJson;
-/// use host_tests::methods::Extraction;
+/// use pfe_formats::ScanJson;
+/// use pfe_eval::methods::Extraction;
 /// let j = ScanJson::new(3, &Extraction { marks: vec![0, 9], features: vec![] });
 /// assert_eq!(
 ///     serde_json::to_string(&j).unwrap(),

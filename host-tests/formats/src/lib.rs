@@ -8,7 +8,7 @@
 //! [`InputError`] carrying the line number (or byte offset) and reading stops there.
 //!
 //! ```
-//! use host_tests::formats::{scans, Format};
+//! use pfe_formats::{scans, Format};
 //! let text = "7,-90,1,1000,0,1000\n";
 //! let records: Vec<_> = scans(Format::Csv, Box::new(text.as_bytes())).collect();
 //! let r = records[0].as_ref().unwrap();
@@ -18,11 +18,15 @@
 
 pub mod carmen;
 pub mod csv;
+pub mod docs;
 pub mod hokuyo;
 pub mod json;
 pub mod lms200;
+pub mod outfile;
 mod quantum;
+#[cfg(feature = "mcap")]
 pub mod ros2;
+#[cfg(feature = "mcap")]
 pub mod ros2_stream;
 
 pub use json::{FeatureJson, ScanJson, StatusJson};
@@ -33,12 +37,24 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
 
-use pfe_core::ScanGeometry;
+use pfe_core::{Feature, ScanGeometry};
 
-use crate::methods::MAX_BEAMS;
+/// Capacity of the host extractor: any scanner up to 2048 beams, 256 features.
+pub const MAX_BEAMS: usize = 2048;
+/// Feature capacity of the host extractor.
+pub const MAX_FEATURES: usize = 256;
+
+/// What a method found in one scan. Indices count every beam, valid or not.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Extraction {
+    /// Mark (boundary) points, increasing.
+    pub marks: Vec<usize>,
+    /// Features in scan order.
+    pub features: Vec<Feature>,
+}
 
 /// Input file formats understood by `pfe`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
     /// `ID,START_DEG,STEP_DEG,R_0,...,R_{N-1}`, ranges in mm (0 or ≥ 8183 = no return).
     Csv,
@@ -54,6 +70,15 @@ pub enum Format {
 }
 
 impl Format {
+    /// Every format, in the order `pfe --help` lists them.
+    pub const ALL: [Format; 5] = [
+        Format::Csv,
+        Format::Carmen,
+        Format::Lms200,
+        Format::Hokuyo,
+        Format::Mcap,
+    ];
+
     /// Range noise assumed for this format's data, mm: the LMS200 data sheet's 5 mm for
     /// mm-mode data (csv, lms200); 10 mm for CARMEN logs (cm-quantised LMS data) and for the
     /// Hokuyo URG-04LX (±10 mm at short range); 10 mm for ROS 2 bags, whose scanners are mostly
@@ -223,7 +248,17 @@ pub fn scans(format: Format, input: Box<dyn BufRead>) -> Scans {
             }
             Err(e) => Some(Err(e)),
         })),
+        #[cfg(feature = "mcap")]
         Format::Mcap => ros2_stream::records(input),
+        #[cfg(not(feature = "mcap"))]
+        Format::Mcap => {
+            drop(input);
+            Box::new(std::iter::once(Err(InputError {
+                location: Location::Byte(0),
+                message: "ROS 2 bags are not read: pfe-formats was built without its `mcap` feature"
+                    .into(),
+            })))
+        }
     }
 }
 
@@ -322,7 +357,7 @@ pub const MAX_QUOTE: usize = 80;
 /// characters with "…" (a garbage "field" may be a megabyte long).
 ///
 /// ```
-/// use host_tests::formats::quote;
+/// use pfe_formats::quote;
 /// assert_eq!(quote("x1000"), r#""x1000""#);
 /// assert_eq!(quote(&"a".repeat(500)).chars().count(), 80 + 3);
 /// ```
@@ -426,7 +461,7 @@ fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
 /// known). A record's own [`Record::sweeps`] comes first.
 ///
 /// ```
-/// use host_tests::formats::{sweeps_of, Format};
+/// use pfe_formats::{sweeps_of, Format};
 /// use pfe_core::ScanGeometry;
 /// assert_eq!(sweeps_of(Format::Carmen, &ScanGeometry::lms200(180.0, 0.5)), 2);
 /// assert_eq!(sweeps_of(Format::Lms200, &ScanGeometry::lms200(100.0, 0.25)), 4);

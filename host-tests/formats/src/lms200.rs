@@ -61,7 +61,7 @@ pub const MAX_VALID: u16 = pfe_core::LMS_MAX_VALID_8M;
 /// Geometry of a scan of `n` values (`None` for a count no LMS200 variant sends).
 ///
 /// ```
-/// use host_tests::formats::lms200::{geometry, Unit};
+/// use pfe_formats::lms200::{geometry, Unit};
 /// let g = geometry(361, Unit::Mm).unwrap();
 /// assert!((g.bearing(360) - std::f32::consts::FRAC_PI_2).abs() < 1e-5);
 /// assert!(geometry(100, Unit::Mm).is_none());
@@ -134,7 +134,7 @@ pub struct Summary {
 /// longer than its count word says is read as carrying the real-time scan index.
 ///
 /// ```
-/// use host_tests::formats::lms200::{Reader, Unit};
+/// use pfe_formats::lms200::{Reader, Unit};
 /// // The protocol fact sheet's test vector: 5 values in mm, status 0x10, after an ACK.
 /// let capture: &'static [u8] = &[0x06, 0x02, 0x80, 0x0E, 0x00, 0xB0, 0x05, 0x40, 0xE8, 0x03, 0xE9, 0x03,
 ///                0xEA, 0x03, 0xEB, 0x03, 0xFF, 0x1F, 0x10, 0x1F, 0x93];

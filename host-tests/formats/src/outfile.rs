@@ -3,7 +3,7 @@
 //! replaced unless they say so (`--force`).
 //!
 //! ```
-//! use host_tests::outfile::{write, OutError, MARK};
+//! use pfe_formats::outfile::{write, OutError, MARK};
 //! let dir = std::env::temp_dir().join(format!("pfe-outfile-doc-{}", std::process::id()));
 //! std::fs::create_dir_all(&dir)?;
 //! let (ours, theirs) = (dir.join("plot.svg"), dir.join("notes.svg"));

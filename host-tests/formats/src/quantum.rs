@@ -12,7 +12,7 @@ const GRIDS_MM: [u32; 8] = [100, 50, 25, 20, 10, 5, 2, 1];
 /// variance q²/12 as systematic (`pfe_core::Scan::quantum`).
 ///
 /// ```
-/// use host_tests::formats::range_quantum;
+/// use pfe_formats::range_quantum;
 /// let grid: Vec<f32> = (0..181).map(|i| 1000.0 + 50.0 * (i % 7) as f32).collect();
 /// assert_eq!(range_quantum(&grid, 80_000.0), 50.0);
 /// let cm: Vec<f32> = (0..181).map(|i| 2000.0 + 10.0 * i as f32).collect();

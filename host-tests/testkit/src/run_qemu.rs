@@ -9,7 +9,6 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 
-use super::listen::is_tty;
 use crate::qemu::qemu_command;
 
 /// A running QEMU firmware with its serial lines in place.
@@ -19,6 +18,12 @@ pub struct RunQemu {
     pub output_device: PathBuf,
     /// The link this run created (removed on drop).
     link: Option<PathBuf>,
+}
+
+/// True when `path` opens as a terminal (a tty or pty).
+fn is_tty(path: &Path) -> bool {
+    use std::io::IsTerminal;
+    std::fs::File::open(path).is_ok_and(|f| f.is_terminal())
 }
 
 /// The tty device behind `path` (a symlink such as `pfe emulate --pty`'s is followed).

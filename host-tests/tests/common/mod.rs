@@ -8,8 +8,8 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use host_tests::device::emulator::serve::{serve_on, Pty};
-use host_tests::device::emulator::{Emulator, EmulatorReport, RunLimits};
+use lms200_emulator::serve::{serve_on, Pty};
+use lms200_emulator::{Emulator, EmulatorReport, RunLimits};
 
 /// A file of `tests/fixtures`.
 pub fn fixture(name: &str) -> PathBuf {
@@ -121,7 +121,7 @@ pub fn python(
     args: &[&str],
     packages: &str,
 ) -> Option<serde_json::Value> {
-    use host_tests::skip::{skip, Need};
+    use pfe_testkit::skip::{skip, Need};
     let out = match Command::new("python3")
         .arg(fixture(script))
         .args(args)

@@ -1,7 +1,7 @@
 //! `pfe`: run the prediction-based feature extractor on recorded scans (see
-//! [`host_tests::cli`]).
+//! [`pfe_cli`]).
 #![forbid(unsafe_code)]
 
 fn main() -> std::process::ExitCode {
-    host_tests::cli::main()
+    pfe_cli::main()
 }

@@ -1,6 +1,5 @@
-//! The device side: an emulated SICK LMS200 ([`emulator`]) and a real one recorded through the
-//! firmware driver ([`record`], over the std adapters of [`tty`]).
+//! A real SICK LMS200 recorded through the firmware driver ([`record`], over the std adapters
+//! of [`tty`]). The emulated one is the `lms200-emulator` crate.
 
-pub mod emulator;
 pub mod record;
 pub mod tty;

@@ -9,7 +9,7 @@ pub const ELLIPSE_SIGMA: f64 = 3.0;
 /// major axis's angle from x, rad.
 ///
 /// ```
-/// let (a, b, th) = host_tests::plot::ellipse([[4.0, 0.0], [0.0, 1.0]], 3.0);
+/// let (a, b, th) = pfe_cli::figure::ellipse([[4.0, 0.0], [0.0, 1.0]], 3.0);
 /// assert!((a - 6.0).abs() < 1e-12 && (b - 3.0).abs() < 1e-12 && th.abs() < 1e-12);
 /// ```
 pub fn ellipse(c: [[f64; 2]; 2], k: f64) -> (f64, f64, f64) {

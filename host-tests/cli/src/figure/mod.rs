@@ -5,8 +5,8 @@
 //! scales on both axes; ticks are in mm or m depending on the extent.
 //!
 //! ```
-//! use host_tests::formats::Record;
-//! use host_tests::methods::{Method, Pfe};
+//! use pfe_formats::Record;
+//! use pfe_eval::methods::{Method, Pfe};
 //! use pfe_core::ScanGeometry;
 //! let g = ScanGeometry::LMS200_180_050;
 //! let ranges: Vec<f32> = (0..361).map(|i| 2000.0 / g.bearing(i).cos().max(0.3)).collect();
@@ -19,7 +19,7 @@
 //!     sweeps: None,
 //! };
 //! let ex = Pfe::default_config().extract(&record.geometry, &record.ranges_mm);
-//! let svg = host_tests::plot::svg(&record, &ex, "a wall");
+//! let svg = pfe_cli::figure::svg(&record, &ex, "a wall");
 //! assert!(svg.starts_with("<svg") && svg.contains("a wall"));
 //! ```
 
@@ -32,8 +32,8 @@ use std::fmt::Write;
 
 use pfe_core::Feature;
 
-use crate::formats::Record;
-use crate::methods::Extraction;
+use pfe_formats::Record;
+use pfe_eval::methods::Extraction;
 use axes::{tick_label, tick_step, Bounds};
 use ellipses::{ellipse_svg, exaggeration, feature_ellipses};
 

@@ -9,7 +9,7 @@ use pfe_core::Feature;
 
 use super::scene::{laser_scan, scene_update};
 use super::schema::{Channel, FEATURES, MESSAGE_ENCODING, SCAN, SCHEMA_ENCODING};
-use crate::formats::Record;
+use pfe_formats::Record;
 
 /// Writes scans and features to a Foxglove MCAP file.
 pub struct FoxgloveWriter {

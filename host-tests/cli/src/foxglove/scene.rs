@@ -3,7 +3,7 @@
 use pfe_core::{CircleFeature, Feature, LineFeature};
 use serde_json::{json, Value};
 
-use crate::formats::Record;
+use pfe_formats::Record;
 
 const MM: f64 = 1e-3;
 

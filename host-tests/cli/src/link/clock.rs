@@ -7,7 +7,7 @@
 //! restart of the firmware: the clock re-anchors to that frame's receive time.
 //!
 //! ```
-//! use host_tests::link::clock::FirmwareClock;
+//! use pfe_cli::link::clock::FirmwareClock;
 //! let mut c = FirmwareClock::new();
 //! assert_eq!(c.stamp_ns(u32::MAX, 5_000_000_000), 5_000_000_000);
 //! assert_eq!(c.stamp_ns(99, 9_000_000_000), 5_100_000_000); // wrapped: 100 ms later

@@ -7,8 +7,8 @@
 //!
 //! ```
 //! use firmware::output::{write_scan, Counters, ScanHeader};
-//! use host_tests::link::listen::{Listener, ListenJson};
-//! use host_tests::qemu::VecWriter;
+//! use pfe_cli::link::listen::{Listener, ListenJson};
+//! use pfe_testkit::qemu::VecWriter;
 //! let mut w = VecWriter(vec![0x55, 0x00]); // a damaged tail, then a frame
 //! let h = ScanHeader { seq: 4, time_ms: 250, ..ScanHeader::default() };
 //! write_scan(&mut w, &h, &[]).unwrap();
@@ -37,7 +37,7 @@ use serde::Serialize;
 
 use crate::device::tty::baud_rate;
 
-use crate::formats::{FeatureJson, ScanJson, StatusJson};
+use pfe_formats::{FeatureJson, ScanJson, StatusJson};
 
 /// Receive buffer: the largest frame the firmware can send.
 const BUF: usize = max_frame_len(MAX_FEATURES);

@@ -3,9 +3,6 @@
 //! - `clock`: [`clock::FirmwareClock`], a frame's firmware time as a Unix timestamp.
 //! - `listen`: [`listen::Listener`] (sans-IO: byte chunks in, decoded scans and counts out),
 //!   [`listen::ListenJson`] (one output line per scan), the byte sources of `pfe listen`.
-//! - `run_qemu`: [`run_qemu::RunQemu`], the QEMU firmware between two serial lines
-//!   (`cargo xtask run-qemu`).
 
 pub mod clock;
 pub mod listen;
-pub mod run_qemu;

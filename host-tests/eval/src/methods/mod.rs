@@ -6,21 +6,9 @@ pub mod pfe;
 
 pub use pfe::Pfe;
 
-use pfe_core::{Feature, Motion, ScanGeometry};
+pub use pfe_formats::{Extraction, MAX_BEAMS, MAX_FEATURES};
 
-/// Capacity of the host extractor: any scanner up to 2048 beams, 256 features.
-pub const MAX_BEAMS: usize = 2048;
-/// Feature capacity of the host extractor.
-pub const MAX_FEATURES: usize = 256;
-
-/// What a method found in one scan. Indices count every beam, valid or not.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Extraction {
-    /// Mark (boundary) points, increasing.
-    pub marks: Vec<usize>,
-    /// Features in scan order.
-    pub features: Vec<Feature>,
-}
+use pfe_core::{Motion, ScanGeometry};
 
 /// A feature extractor working on ranges in mm (NaN, 0 or > r_max = no return).
 pub trait Method {
@@ -49,6 +37,6 @@ pub struct ScanContext {
     /// Number of interleaved sweeps the scan is made of (0 or 1: one).
     pub sweeps: usize,
     /// Grid the ranges lie on, mm (0: unknown; pfe's `Scan::quantum`):
-    /// [`range_quantum`](crate::formats::range_quantum) for recordings.
+    /// [`range_quantum`](pfe_formats::range_quantum) for recordings.
     pub quantum: f32,
 }

@@ -79,7 +79,7 @@ impl Coverage {
 /// range by less than [`SMOOTH_STEP_MM`].
 ///
 /// ```
-/// use host_tests::eval::realdata::coverage::smooth_runs;
+/// use pfe_eval::realdata::coverage::smooth_runs;
 /// use pfe_core::ScanGeometry;
 /// let mut r = vec![2000.0f32; 40];
 /// r[20] = 5000.0; // a jump on both sides: 0..=19 and 21..=39 remain

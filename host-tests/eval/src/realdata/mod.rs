@@ -31,8 +31,8 @@ use std::path::Path;
 use anyhow::Context;
 use serde::Serialize;
 
-use crate::eval::score::quantile;
-use crate::formats::{InputError, Record};
+use crate::score::quantile;
+use pfe_formats::{InputError, Record};
 use crate::methods::baselines::{Acf, SplitMerge};
 use crate::methods::{Method, Pfe, ScanContext};
 
@@ -42,9 +42,9 @@ pub use frame::{CircleObs, FrameChange, LineObs, Pose};
 
 /// The four methods, told the data's range noise `sigma_r` (mm): pfe `default` and `paper`,
 /// split-and-merge and ACF. pfe `default` is also told the LMS200's systematic range error
-/// (CARMEN logs: [`Format::sigma_sys`](crate::formats::Format::sigma_sys)).
+/// (CARMEN logs: [`Format::sigma_sys`](pfe_formats::Format::sigma_sys)).
 pub fn methods(sigma_r: f32) -> Vec<Box<dyn Method>> {
-    let sigma_sys = crate::formats::Format::Carmen.sigma_sys();
+    let sigma_sys = pfe_formats::Format::Carmen.sigma_sys();
     vec![
         Box::new(Pfe::new(
             "pfe-default",
@@ -188,8 +188,8 @@ pub const ODOMETRY_SPAN_S: f64 = 1.0;
 /// neighbours are more than [`ODOMETRY_SPAN_S`] apart.
 ///
 /// ```
-/// use host_tests::eval::realdata::motion_between;
-/// use host_tests::formats::Record;
+/// use pfe_eval::realdata::motion_between;
+/// use pfe_formats::Record;
 /// let mut r = Record {
 ///     id: 1,
 ///     geometry: pfe_core::ScanGeometry::lms200(180.0, 0.5),
@@ -320,18 +320,18 @@ pub fn run_records(
 
 /// What the benchmark tells a method about a scan of a CARMEN log: no odometry, `sweeps`
 /// interleaved sweeps (`None`: the record's own [`Record::sweeps`], else a SICK LMS2xx's for its
-/// resolution, [`crate::formats::sweeps_of`]) and the grid its ranges lie
+/// resolution, [`pfe_formats::sweeps_of`]) and the grid its ranges lie
 /// on.
 pub fn context_of(record: &Record, sweeps: Option<u8>) -> ScanContext {
-    let carmen = crate::formats::Format::Carmen;
+    let carmen = pfe_formats::Format::Carmen;
     ScanContext {
         odometry: None,
         sweeps: usize::from(
             sweeps
                 .or(record.sweeps)
-                .unwrap_or_else(|| crate::formats::sweeps_of(carmen, &record.geometry)),
+                .unwrap_or_else(|| pfe_formats::sweeps_of(carmen, &record.geometry)),
         ),
-        quantum: crate::formats::range_quantum(&record.ranges_mm, record.geometry.r_max),
+        quantum: pfe_formats::range_quantum(&record.ranges_mm, record.geometry.r_max),
     }
 }
 
@@ -353,10 +353,10 @@ pub struct LogScan {
 
 /// The scans of the CARMEN log `path` (gzip allowed), in order.
 pub fn log_scans(path: &Path) -> anyhow::Result<impl Iterator<Item = anyhow::Result<LogScan>>> {
-    let input = crate::formats::open_for(path, crate::formats::Format::Carmen, |r| r)
+    let input = pfe_formats::open_for(path, pfe_formats::Format::Carmen, |r| r)
         .with_context(|| format!("opening {}", path.display()))?;
     let log = path.display().to_string();
-    Ok(crate::formats::carmen::Reader::new(input).map(move |r| {
+    Ok(pfe_formats::carmen::Reader::new(input).map(move |r| {
         let record = r.map_err(|e| anyhow::anyhow!("{log}: {e}"))?;
         Ok(LogScan {
             context: context_of(&record, None),
@@ -373,7 +373,7 @@ pub fn run_log(
     max_scans: usize,
     told: Told,
 ) -> anyhow::Result<LogReport> {
-    let input = crate::formats::open_for(path, crate::formats::Format::Carmen, |r| r)
+    let input = pfe_formats::open_for(path, pfe_formats::Format::Carmen, |r| r)
         .with_context(|| format!("opening {}", path.display()))?;
     let name = path
         .file_name()
@@ -386,6 +386,6 @@ pub fn run_log(
         .unwrap_or(name)
         .trim_end_matches("-corrected")
         .to_string();
-    let reader = crate::formats::carmen::Reader::new(input);
+    let reader = pfe_formats::carmen::Reader::new(input);
     run_records(&name, reader, &mut methods(sigma_r), max_scans, told)
 }

@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::outfile;
+use pfe_formats::outfile;
 
 use super::compare::{CONSISTENT_DRAWS, GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, MIN_LINE_POINTS};
 use super::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};

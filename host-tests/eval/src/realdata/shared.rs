@@ -25,8 +25,8 @@ pub enum BeamLine {
 /// Each of `beams` beams of scan `a` classed by its lines and their match in `b`.
 ///
 /// ```
-/// use host_tests::eval::realdata::shared::{beam_lines, BeamLine};
-/// use host_tests::eval::realdata::{LineObs, Seen};
+/// use pfe_eval::realdata::shared::{beam_lines, BeamLine};
+/// use pfe_eval::realdata::{LineObs, Seen};
 /// // A wall 2 m ahead on beams 2..=13, seen again from the same pose.
 /// let wall = LineObs {
 ///     alpha: 0.0, rho: 2000.0, cov: [[1e-6, 0.0], [0.0, 1.0]],

@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use crate::eval::svg::{esc, fmt_tick, nice_ceiling, COLORS};
+use crate::svg::{esc, fmt_tick, nice_ceiling, COLORS};
 
 /// Bars of every series (`name`, one value per group) side by side in each group; y linear
 /// from 0, or logarithmic (`log_y`, values ≤ 0 or NaN not drawn); a dashed line at

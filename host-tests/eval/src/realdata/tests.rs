@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::compare::{PairTally, Seen};
 use super::report::CHI2_2_MEDIAN;
-use crate::eval::score::quantile;
+use crate::score::quantile;
 use crate::scene::{render, Scenario, SceneKind, Shape, TruthKind};
 
 const SIGMA_R: f32 = 5.0;
@@ -240,7 +240,7 @@ fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
             // Shape ids index the shapes rendered: the box's hold while it is there.
             let on_box = |p: &Option<usize>| k < 2 && p.is_some_and(|p| box_shapes.contains(&p));
             box_beams.push(sim.beam_primitive.iter().filter(|p| on_box(p)).count());
-            crate::formats::Record {
+            pfe_formats::Record {
                 id: k as u64,
                 geometry: sim.geometry,
                 ranges_mm: sim.ranges_mm,
@@ -324,7 +324,7 @@ fn the_run_compares_pfe_default_with_each_method_on_the_beams_both_hold() {
 /// scanner that is not a SICK LMS says 1), then an LMS2xx's for the step (2 at 0.5°).
 #[test]
 fn the_sweeps_told_are_the_options_then_the_records_then_the_lms2xx_rule() {
-    let record = |sweeps: Option<u8>| crate::formats::Record {
+    let record = |sweeps: Option<u8>| pfe_formats::Record {
         id: 0,
         geometry: pfe_core::ScanGeometry::lms200(180.0, 0.5),
         ranges_mm: vec![1000.0; 361],
@@ -367,7 +367,7 @@ impl crate::methods::Method for Probe {
 fn odometry_from_poses_is_the_motion_between_the_neighbours() {
     let record = |k: usize, t: f64| {
         let th = 0.3 * t;
-        crate::formats::Record {
+        pfe_formats::Record {
             id: k as u64,
             geometry: pfe_core::ScanGeometry::lms200(180.0, 0.5),
             ranges_mm: vec![2000.0; 361],

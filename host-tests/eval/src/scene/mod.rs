@@ -16,7 +16,7 @@
 //! the scanner frame; its first and last beams are true mark points.
 //!
 //! ```
-//! use host_tests::scene::{Scenario, SceneKind};
+//! use pfe_eval::scene::{Scenario, SceneKind};
 //! let scan = Scenario::new(SceneKind::Office, 7).simulate();
 //! assert_eq!(scan.ranges_mm.len(), 361);
 //! assert!(scan.truth.iter().all(|f| f.last + 1 - f.first >= 4));

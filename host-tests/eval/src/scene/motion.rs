@@ -33,7 +33,7 @@ impl Resolution {
     /// Time beam `i` is taken, s after beam 0.
     ///
     /// ```
-    /// use host_tests::scene::Resolution;
+    /// use pfe_eval::scene::Resolution;
     /// let r = Resolution::Half;
     /// assert!((r.beam_time(1) - 1.0 / 75.0).abs() < 1e-12); // next mirror turn
     /// assert!((r.beam_time(2) - 1.0 / 75.0 / 360.0).abs() < 1e-12); // 1° later

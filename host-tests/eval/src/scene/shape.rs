@@ -26,7 +26,7 @@ impl Shape {
     /// this shape, or `None`. Rays parallel to a segment do not hit it.
     ///
     /// ```
-    /// use host_tests::scene::Shape;
+    /// use pfe_eval::scene::Shape;
     /// let wall = Shape::Segment { a: [2000.0, -1000.0], b: [2000.0, 1000.0] };
     /// let t = wall.ray_hit([0.0, 0.0], [1.0, 0.0]).unwrap();
     /// assert!((t - 2000.0).abs() < 1e-9);

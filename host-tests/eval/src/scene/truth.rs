@@ -86,7 +86,7 @@ pub struct TruthFeature {
 /// beam, `∂r/∂(a, b) = n / (n·u)`, `∂r/∂R = 1 / (n·u)`. `None` when singular.
 ///
 /// ```
-/// use host_tests::scene::{crb, TruthKind};
+/// use pfe_eval::scene::{crb, TruthKind};
 /// let wall = TruthKind::Line { alpha: 0.0, rho: 2000.0 };
 /// let bearings: Vec<f64> = (0..41).map(|i| (i as f64 - 20.0).to_radians()).collect();
 /// let b = crb(&wall, &bearings, 5.0).unwrap();

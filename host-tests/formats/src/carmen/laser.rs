@@ -4,7 +4,7 @@
 use pfe_core::ScanGeometry;
 
 use super::{not_metres, pose, LONG_MAX_RANGE_MM};
-use crate::formats::{check_beams, checked_record, number, ranges_mm, InputError, Record};
+use crate::{check_beams, checked_record, number, ranges_mm, InputError, Record};
 
 /// The front laser's messages a CARMEN log may hold, each scan once per kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

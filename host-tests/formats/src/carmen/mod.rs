@@ -62,7 +62,7 @@
 //! filler, read as no return).
 //!
 //! ```
-//! use host_tests::formats::carmen::Reader;
+//! use pfe_formats::carmen::Reader;
 //! let log = "ODOM 0 0 0 0 0 0 0 x 0\nFLASER 5 1.0 81.83 2.5 2.5 2.5 0 0 0 0 0 0 0 host 0\n";
 //! let scan = Reader::new(Box::new(log.as_bytes())).next().unwrap().unwrap();
 //! assert_eq!(scan.ranges_mm.len(), 5);
@@ -102,7 +102,7 @@ impl AngleConvention {
     /// Geometry of an `n`-beam scan with maximum range `r_max` mm.
     ///
     /// ```
-    /// use host_tests::formats::carmen::AngleConvention;
+    /// use pfe_formats::carmen::AngleConvention;
     /// let g = AngleConvention::Auto.geometry(181, 50_000.0);
     /// assert!((g.bearing(180) - std::f32::consts::FRAC_PI_2).abs() < 1e-5);
     /// let g = AngleConvention::Auto.geometry(180, 50_000.0);
@@ -326,7 +326,7 @@ fn pose(fields: [Option<f64>; 3]) -> Option<[f64; 3]> {
 /// Whether the file name `name` is a CARMEN log's: `*.log` or `*.clf`, gzipped or not.
 ///
 /// ```
-/// use host_tests::formats::carmen::is_log_name;
+/// use pfe_formats::carmen::is_log_name;
 /// for name in ["intel-corrected.log.gz", "fr079.clf", "mit-killian.clf.gz", "run.log"] {
 ///     assert!(is_log_name(name), "{name}");
 /// }

@@ -1,7 +1,7 @@
 //! The CARMEN reader's unit tests.
 
 use super::*;
-use crate::formats::{Location, Record};
+use crate::{Location, Record};
 
 fn first(log: &'static str) -> Record {
     match Reader::new(Box::new(log.as_bytes())).next() {

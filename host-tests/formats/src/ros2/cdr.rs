@@ -4,8 +4,8 @@ use std::fmt;
 
 use pfe_core::ScanGeometry;
 
-use crate::formats::Record;
-use crate::methods::MAX_BEAMS;
+use crate::Record;
+use crate::MAX_BEAMS;
 
 /// A decoded `sensor_msgs/msg/LaserScan`.
 #[derive(Clone, Debug, PartialEq)]
@@ -145,7 +145,7 @@ impl LaserScanMsg {
     /// Decodes a CDR payload (4-byte encapsulation header, then the message), either byte order.
     ///
     /// ```
-    /// use host_tests::formats::ros2::LaserScanMsg;
+    /// use pfe_formats::ros2::LaserScanMsg;
     /// let mut b = vec![0, 1, 0, 0];                       // CDR, little endian
     /// b.extend(7i32.to_le_bytes());                       // stamp.sec
     /// b.extend(5u32.to_le_bytes());                       // stamp.nanosec

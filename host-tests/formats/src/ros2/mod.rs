@@ -12,7 +12,7 @@
 //! and then one [`InputError`]; reading stops there.
 //!
 //! ```no_run
-//! use host_tests::formats::ros2;
+//! use pfe_formats::ros2;
 //! let scans = ros2::read_laser_scans(std::path::Path::new("bag.mcap"), None)?; // the only LaserScan topic
 //! for scan in scans {
 //!     let scan = scan?;

@@ -10,7 +10,7 @@ use std::rc::Rc;
 use mcap::sans_io::LinearReaderOptions;
 
 use super::MAX_RECORD;
-use crate::formats::{InputError, Location};
+use crate::{InputError, Location};
 
 pub(super) fn open_file(path: &Path) -> Result<BufReader<File>, InputError> {
     File::open(path)

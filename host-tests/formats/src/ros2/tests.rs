@@ -1,7 +1,7 @@
 //! Unit tests of the ROS 2 reader.
 
 use super::*;
-use crate::methods::MAX_BEAMS;
+use crate::MAX_BEAMS;
 
 /// A LaserScan in CDR, `little` or big endian, frame `frame` (its length moves the
 /// alignment of every later field).

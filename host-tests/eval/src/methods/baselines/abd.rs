@@ -39,7 +39,7 @@ impl Abd {
     /// An unusable λ (λ ≤ Δφ, NaN) gives an infinite threshold: no geometric breakpoints.
     ///
     /// ```
-    /// use host_tests::methods::baselines::Abd;
+    /// use pfe_eval::methods::baselines::Abd;
     /// let abd = Abd::default();
     /// let d = abd.d_max(2000.0, 0.5f32.to_radians());
     /// // 2000 · sin 0.5° / sin 9.5° + 3 · 5 ≈ 120.7 mm
@@ -65,7 +65,7 @@ impl Abd {
     /// `points[i]` is beam i's point (`None` = no return). Single points are segments too.
     ///
     /// ```
-    /// use host_tests::methods::baselines::{scan_points, Abd};
+    /// use pfe_eval::methods::baselines::{scan_points, Abd};
     /// use pfe_core::ScanGeometry;
     /// let g = ScanGeometry::LMS200_180_050;
     /// let mut r = vec![2000.0_f32; 361];

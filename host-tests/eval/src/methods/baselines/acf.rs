@@ -56,8 +56,8 @@ use pfe_core::{Point, ScanGeometry};
 /// The adaptive-curvature-function extractor with ABD.
 ///
 /// ```
-/// use host_tests::methods::baselines::Acf;
-/// use host_tests::methods::Method;
+/// use pfe_eval::methods::baselines::Acf;
+/// use pfe_eval::methods::Method;
 /// use pfe_core::ScanGeometry;
 /// let g = ScanGeometry::LMS200_180_050;
 /// // A wall 2 m ahead over ±45°: one line.

@@ -34,8 +34,8 @@ use pfe_core::{fit_line, Point, ScanGeometry};
 /// Split-and-merge with ABD and a circle test.
 ///
 /// ```
-/// use host_tests::methods::baselines::SplitMerge;
-/// use host_tests::methods::Method;
+/// use pfe_eval::methods::baselines::SplitMerge;
+/// use pfe_eval::methods::Method;
 /// use pfe_core::{Feature, ScanGeometry};
 /// let g = ScanGeometry::LMS200_180_050;
 /// // A wall 2 m ahead, perpendicular to the x axis, seen over ±45°.
