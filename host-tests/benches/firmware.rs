@@ -10,8 +10,8 @@ use firmware::lms::crc::crc16;
 use firmware::lms::frame::{encode_telegram, Decoder, DEVICE_ADDRESS};
 use firmware::lms::{Event, MeasuredValues, MeasuringMode, ReplyOptions};
 use firmware::output::{write_scan, Counters, ScanHeader, ScanStatus};
-use pfe_eval::bench::simulated_scans;
 use pfe_core::{Config, Extractor, Scan};
+use pfe_eval::bench::simulated_scans;
 use std::hint::black_box;
 
 /// Discards what it is given (the encoder's cost alone).

@@ -13,14 +13,14 @@
 //! either way.
 
 use anyhow::Result;
+use pfe_core::Feature;
+use pfe_eval::methods::Extraction;
 use pfe_eval::realdata::compare::{matched_lines, refit_centre, GATE_CENTER_MM};
 use pfe_eval::realdata::frame::nis;
 use pfe_eval::realdata::refit::{correction, correction_covariance};
 use pfe_eval::realdata::{methods, FrameChange, Seen};
 use pfe_eval::score::quantile;
 use pfe_formats::{Format, Record};
-use pfe_eval::methods::Extraction;
-use pfe_core::Feature;
 
 mod common;
 use common::{for_each_pair_with, LogArgs};

@@ -3,8 +3,8 @@
 //! `cargo run -p host-tests --release --example score -- --kind mixed --scans 100 --sigma 5 [--seed 1]`
 
 use anyhow::{bail, Context, Result};
-use pfe_eval::quick_report;
 use pfe_eval::methods::{Method, Pfe};
+use pfe_eval::quick_report;
 use pfe_eval::scene::SceneKind;
 
 fn main() -> Result<()> {

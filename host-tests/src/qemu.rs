@@ -119,4 +119,3 @@ pub fn session_with(
         bad_frames,
     })
 }
-

@@ -1,8 +1,8 @@
 //! Property tests: the baselines never panic and always return well-formed output.
 
+use pfe_core::ScanGeometry;
 use pfe_eval::methods::baselines::{Abd, Acf, SplitMerge};
 use pfe_eval::methods::{Extraction, Method};
-use pfe_core::ScanGeometry;
 use proptest::prelude::*;
 
 /// Ranges mixing ordinary values with every kind of invalid reading.

@@ -5,6 +5,7 @@
 //! simulator's ground truth in type and parameters (Cramér–Rao bounds). The firmware side
 //! here is the same code as the host's, in the same process: `e2e_qemu` compares the
 //! Cortex-M4F build under QEMU with the host.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use host_tests::qemu;
 

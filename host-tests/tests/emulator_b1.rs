@@ -2,6 +2,7 @@
 //! (written out here, not taken from the firmware's `status_offset`), after each command that
 //! changes a field: operating mode (8), measuring mode (102), scan angle (107–108),
 //! resolution (109–110), baud word (116–117), unit (122).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
 use firmware::lms::reply::ConfigBlock;

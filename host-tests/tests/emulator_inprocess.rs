@@ -1,4 +1,5 @@
 //! The firmware driver against the emulated LMS200 over the in-process link (virtual time).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use firmware::lms::driver::{Config, Driver};
 use firmware::lms::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};

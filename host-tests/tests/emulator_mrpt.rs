@@ -2,6 +2,7 @@
 //! client, initialises against the emulator on a pseudo-terminal and reads scans equal to what
 //! the emulator sent. Skips with a message when g++ or the MRPT headers are missing, unless
 //! `PFE_CONFORMANCE_REQUIRED` is set (as `cargo xtask conformance` does).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,5 +1,6 @@
 //! `pfe record` (firmware driver over a real tty) against the emulator on a pseudo-terminal:
 //! the capture holds exactly the scans the emulator sent: each one once, in the order sent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 mod common;
 

@@ -6,9 +6,7 @@ use std::net::{TcpListener, TcpStream};
 use std::time::Duration;
 
 use firmware::lms::driver::{Config, Driver, SetBaud};
-use lms200_emulator::{
-    serve_tcp, EmulatorConfig, RunLimits, SourceKind, TaggedSource,
-};
+use lms200_emulator::{serve_tcp, EmulatorConfig, RunLimits, SourceKind, TaggedSource};
 use pfe_cli::device::tty::{StdClock, StdDelay};
 
 struct TcpPort {

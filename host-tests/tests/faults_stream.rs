@@ -1,13 +1,12 @@
 //! Fault injection between the emulated LMS200 and the firmware driver: every intact scan is
 //! delivered exactly once, no damaged one is accepted, the driver recovers, counters tell.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::collections::BTreeSet;
 
 use firmware::lms::driver::{Config, Counters, Driver};
 use firmware::lms::types::Baud;
-use lms200_emulator::{
-    Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource,
-};
+use lms200_emulator::{Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource};
 
 struct Run {
     delivered: Vec<u32>,

@@ -6,6 +6,7 @@
 //! packages the Python-backed tests report a skip through `pfe_testkit::skip` and pass, except
 //! under `CI=true`, where they fail. Bags written here with the `mcap` crate check the error paths (no LaserScan
 //! topic, truncation, damage) everywhere.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -14,10 +15,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Arc;
 
+use pfe_core::{Config, Feature};
+use pfe_eval::methods::{Method, Pfe};
 use pfe_formats::ros2::{self, Ros2Scan, TopicError};
 use pfe_formats::{self as formats, Format, InputError, Record};
-use pfe_eval::methods::{Method, Pfe};
-use pfe_core::{Config, Feature};
 use serde_json::Value;
 
 mod common;

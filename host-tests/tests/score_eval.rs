@@ -1,10 +1,10 @@
 //! The evaluation pipeline end to end on a few scans, with methods of known behaviour.
 
 use pfe_cli::eval::parse_args;
-use pfe_eval::{evaluate, quick_report, report, run_methods, scenarios, svg, EvalOptions};
+use pfe_core::{CircleFeature, Feature, LineFeature, Point, ScanGeometry};
 use pfe_eval::methods::{Extraction, Method};
 use pfe_eval::scene::{Scenario, SceneKind, SimScan, TruthKind};
-use pfe_core::{CircleFeature, Feature, LineFeature, Point, ScanGeometry};
+use pfe_eval::{evaluate, quick_report, report, run_methods, scenarios, svg, EvalOptions};
 
 /// Finds nothing.
 struct Blind;

@@ -560,7 +560,7 @@ pub fn readers(data: &[u8]) -> usize {
             Some(Ok(r)) => {
                 records += 1;
                 assert!(
-                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= pfe_eval::methods::MAX_BEAMS
+                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= pfe_formats::MAX_BEAMS
                 );
                 assert!(
                     r.geometry.is_valid(),

@@ -9,9 +9,7 @@ use anyhow::{Context, Result};
 use super::lms_args::LmsArgs;
 use super::Exit;
 use lms200_emulator::serve::clear_stale_link;
-use lms200_emulator::{
-    serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind,
-};
+use lms200_emulator::{serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind};
 
 const USAGE: &str = "pfe emulate (--pty PATH | --tcp ADDR) [--scans N] [--seconds S] [--seed N]
     [--baud 9600|19200|38400|500000] [--variant 180/0.5] [--unit mm|cm] [--source room|tagged] [--trace]

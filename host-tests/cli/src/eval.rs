@@ -3,8 +3,8 @@
 
 use std::path::PathBuf;
 
-use pfe_eval::{default_methods, evaluate, report, svg, EvalOptions};
 use pfe_eval::scene::SceneKind;
+use pfe_eval::{default_methods, evaluate, report, svg, EvalOptions};
 
 const HELP: &str =
     "pfe eval [--kind mixed|office|clutter|pillars|corridor] [--scans 100] [--seed 1]

@@ -8,9 +8,9 @@ use serde::Serialize;
 
 use super::input::{bad_input, flush, nothing_found, open_scans, stdout, write_json, MethodArgs};
 use super::{interrupt, Failure};
-use pfe_formats::{ScanJson, StatusJson};
 use crate::foxglove::FoxgloveWriter;
 use pfe_eval::methods::Method;
+use pfe_formats::{ScanJson, StatusJson};
 
 /// Arguments of `pfe extract`.
 #[derive(clap::Args, Debug)]

@@ -12,9 +12,9 @@ use pfe_core::Config;
 use serde::Serialize;
 
 use super::Failure;
+use pfe_eval::methods::Pfe;
 use pfe_formats::ros2::{self, Ros2Scan, TopicError};
 use pfe_formats::{self as formats, Format, InputError, Record};
-use pfe_eval::methods::Pfe;
 
 /// Named extractor configurations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]

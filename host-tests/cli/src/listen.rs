@@ -10,11 +10,11 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use super::input::write_json;
 use super::Failure;
-use pfe_formats::Record;
 use crate::foxglove::{self, FoxgloveServer, FoxgloveWriter};
 use crate::link::clock::FirmwareClock;
 use crate::link::listen::{ListenJson, ListenStats, Listener, Source};
 use pfe_eval::methods::Extraction;
+use pfe_formats::Record;
 
 /// The board's feature UART (USART2 of `firmware/board`).
 const DEFAULT_PORT: &str = "/dev/ttyUSB1";

@@ -86,20 +86,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
 
 /// The benchmark's report of `log`, or bad input ([`super::Exit`]) when it holds a malformed
 /// line or no two consecutive scans with a pose.
-fn compared(
-    log: &std::path::Path,
-    args: &Args,
-) -> anyhow::Result<pfe_eval::realdata::LogReport> {
+fn compared(log: &std::path::Path, args: &Args) -> anyhow::Result<pfe_eval::realdata::LogReport> {
     let told = pfe_eval::realdata::Told {
         sweeps: args.sweeps.0,
         odometry_from_poses: args.odometry_from_poses,
     };
-    let r = run_log(log, args.sigma_r, args.max_scans, told).map_err(|e| {
-        match e.downcast_ref::<pfe_formats::InputError>() {
+    let r =
+        run_log(log, args.sigma_r, args.max_scans, told).map_err(|e| match e
+            .downcast_ref::<pfe_formats::InputError>()
+        {
             Some(_) => super::Exit::bad_input(format!("{e:#}")).into(),
             None => e,
-        }
-    })?;
+        })?;
     if r.methods.first().map_or(0, |m| m.pairs) == 0 {
         let scans = r.methods.first().map_or(0, |m| m.scans);
         return Err(super::Exit::bad_input(format!(

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{arg, fixture, pfe, scratch, stderr};
 

@@ -5,8 +5,8 @@
 use std::process::Command;
 
 use firmware::output::{write_scan, Counters, ScanHeader};
-use host_tests::qemu::VecWriter;
 use pfe_core::{Feature, LineFeature, Point};
+use pfe_testkit::qemu::VecWriter;
 use serde_json::Value;
 
 fn frame(seq: u32) -> Vec<u8> {

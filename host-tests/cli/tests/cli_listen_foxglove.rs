@@ -3,6 +3,7 @@
 //! (tungstenite's client side) speaking `foxglove.websocket.v1`.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{arg, scratch};
 use std::io::{BufRead, BufReader, Write};
@@ -13,8 +14,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use firmware::output::{write_scan, ScanHeader};
 use pfe_cli::foxglove::{scene_update, FEATURES_TOPIC};
-use host_tests::qemu::VecWriter;
 use pfe_core::{CircleFeature, Feature, LineFeature, Point};
+use pfe_testkit::qemu::VecWriter;
 use serde_json::{json, Value};
 use tungstenite::client::IntoClientRequest;
 use tungstenite::Message;

@@ -1,6 +1,7 @@
 //! `pfe decode` / `pfe extract --format lms200` on raw LMS200 captures: the committed fixtures
 //! (built from the protocol fact sheet's test vectors, see fixtures/make_fixtures.py), damaged
 //! captures, and scans encoded here with the firmware's telegram encoder.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::io::BufReader;
 
@@ -8,6 +9,7 @@ use firmware::lms::frame::{encode_telegram, DEVICE_ADDRESS};
 use pfe_formats::lms200::{Reader, Telegram, Unit};
 use serde_json::Value;
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{arg, fixture, json_lines, pfe, stderr};
 

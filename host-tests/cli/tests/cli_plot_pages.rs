@@ -1,9 +1,11 @@
 //! `pfe plot --scans A..B --html|--sheet`: a range of scans as one self-contained HTML page (a
 //! slider and prev/next buttons over the plots) or one SVG sheet.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{arg, fixture, scratch, stderr};
 

@@ -1,16 +1,17 @@
 //! The real logs in `../shared/data` (skipped, with a message, when the folder is absent):
 //! `pfe extract` runs over every one of them, and the CARMEN angle convention is checked by the
 //! residual of long straight walls.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::path::PathBuf;
 use std::process::Command;
 
+use pfe_core::{fit_line, Point};
 use pfe_formats::carmen::{AngleConvention, Reader};
 use pfe_formats::{self as formats, Record};
-use pfe_core::{fit_line, Point};
 
 fn data_dir(test: &str) -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data");
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
     if d.join("carmen").is_dir() {
         Some(d)
     } else {

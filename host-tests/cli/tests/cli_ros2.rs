@@ -5,6 +5,7 @@
 //! per scan. The Python-backed checks report a skip through `pfe_testkit::skip` without python3
 //! or its packages (a failure under `CI=true`); the bags written here with the `mcap` crate run
 //! everywhere.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::collections::BTreeMap;
 use std::io::Cursor;
@@ -15,13 +16,14 @@ use serde_json::Value;
 
 const N_SCANS: usize = 30;
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{arg, fixture, json_lines, pfe, python, read_foxglove, stderr, TempDir};
 
 #[test]
 fn a_bag_extracts_as_the_carmen_log_it_was_made_from() {
     const TEST: &str = "cli_ros2::a_bag_extracts_as_the_carmen_log_it_was_made_from";
-    let logs = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../shared/data/carmen");
+    let logs = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data/carmen");
     if !logs.is_dir() {
         skip(
             TEST,

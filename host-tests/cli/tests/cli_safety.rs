@@ -1,10 +1,12 @@
 //! The `pfe` CLI never loses a user's data and never prints nonsense without an error: the
 //! emulator's pty link, `record`'s output file, argument and input validation, exit codes.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::path::Path;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{arg, fixture, pfe, scratch, spawn_pfe, stderr};
 

@@ -2,9 +2,11 @@
 //! scanner 8 mm further and turned 6 mrad (a moving robot, LMS200 interleaving), of a wall
 //! 5 m ahead (ranges ray-cast here, whole mm). Told its two sweeps, the extractor finds the
 //! one wall; told one sweep, it cannot.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use serde_json::Value;
 
+#[path = "../../tests/common/mod.rs"]
 mod common;
 use common::{json_lines, pfe, TempDir};
 

@@ -16,8 +16,8 @@ use std::time::Duration;
 use firmware::lms::types::Unit;
 use lms200_emulator::serve::{serve_on, Pty};
 use lms200_emulator::{Emulator, EmulatorConfig, RunLimits};
+use pfe_testkit::qemu;
 use pfe_testkit::run_qemu::RunQemu;
-use host_tests::qemu;
 use serde_json::Value;
 
 const SCANS: u32 = 12;

@@ -88,7 +88,7 @@ mod tests {
     #[test]
     fn every_published_vector_is_reproduced() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../../shared/docs/lms200-test-vectors.txt");
+            .join("../../../shared/docs/lms200-test-vectors.txt");
         let Ok(text) = std::fs::read_to_string(&path) else {
             pfe_testkit::skip::skip(
                 "emulator telegram vectors",

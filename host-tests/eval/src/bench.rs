@@ -26,11 +26,11 @@ use anyhow::Context;
 use pfe_core::{Feature, Point, ScanGeometry};
 use serde::Serialize;
 
-use crate::methods_for;
-use pfe_formats::Format;
 use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
 use crate::methods::Method;
+use crate::methods_for;
 use crate::scene::{Scenario, SceneKind};
+use pfe_formats::Format;
 
 /// Host budgets (issue: "PFE default ≥ 3× faster than split-and-merge and ≥ 10× faster than
 /// ACF per scan, in the same run, on the same scans"): (method, least `× pfe-default`).
@@ -237,8 +237,8 @@ pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>
     logs.sort();
     let mut out = Vec::new();
     for log in logs {
-        let input = pfe_formats::open(&log, |r| r)
-            .with_context(|| format!("opening {}", log.display()))?;
+        let input =
+            pfe_formats::open(&log, |r| r).with_context(|| format!("opening {}", log.display()))?;
         let reader = pfe_formats::carmen::Reader::new(input);
         let limit = if per_log == 0 { usize::MAX } else { per_log };
         for rec in reader.take(limit) {

@@ -11,10 +11,10 @@ pub mod scene;
 pub mod score;
 pub mod svg;
 
-use crate::score::{quantile, score_sim, Score};
 use crate::methods::baselines::{Acf, SplitMerge};
 use crate::methods::{Method, Pfe};
 use crate::scene::{Scenario, SceneKind, SimScan};
+use crate::score::{quantile, score_sim, Score};
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 

@@ -6,9 +6,9 @@
 use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
+use pfe_eval::methods::{Extraction, Method};
 use pfe_eval::realdata::{log_scans, LogScan, Seen};
 use pfe_formats::Record;
-use pfe_eval::methods::{Extraction, Method};
 
 /// A real-data example's command line: `NAME LOG [OPTION VALUE]…`.
 pub struct LogArgs {

@@ -255,8 +255,9 @@ pub fn scans(format: Format, input: Box<dyn BufRead>) -> Scans {
             drop(input);
             Box::new(std::iter::once(Err(InputError {
                 location: Location::Byte(0),
-                message: "ROS 2 bags are not read: pfe-formats was built without its `mcap` feature"
-                    .into(),
+                message:
+                    "ROS 2 bags are not read: pfe-formats was built without its `mcap` feature"
+                        .into(),
             })))
         }
     }

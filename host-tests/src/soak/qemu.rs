@@ -16,13 +16,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use lms200_emulator::serve::{serve_on, Pty};
-use lms200_emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
-use pfe_eval::scene::{Scenario, SceneKind};
 use anyhow::{Context, Result};
 use firmware::app::ConfigChoice;
 use firmware::output::{Counters, Frame, Header, Report};
+use lms200_emulator::serve::{serve_on, Pty};
+use lms200_emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
 use pfe_core::Feature;
+use pfe_eval::scene::{Scenario, SceneKind};
 
 use crate::qemu;
 

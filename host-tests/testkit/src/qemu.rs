@@ -89,7 +89,11 @@ pub fn build_firmware<V: AsRef<std::ffi::OsStr>>(
 /// `$CARGO_TARGET_DIR/<dir>` (not the outer cargo's target dir: its lock is held while tests
 /// run); `None` after a [`skip`](crate::skip::skip) when `PFE_SKIP_QEMU` is set
 /// (`cargo xtask test --quick`), or when qemu-system-arm or the target is missing (a failure
-/// under `CI=true`).
+/// under `CI=true`). Panics when the firmware does not build: the test fails.
+#[allow(
+    clippy::panic,
+    reason = "a test helper: its panic is the calling test's failure"
+)]
 pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
     use crate::skip::{skip, Need};
     if std::env::var_os("PFE_SKIP_QEMU").is_some() {

@@ -38,6 +38,10 @@ pub fn in_ci() -> bool {
 
 /// Reports that `test` is skipped because of `reason`; panics under `CI=true` when CI
 /// provides what is missing (`need` is [`Need::InCi`]).
+#[allow(
+    clippy::panic,
+    reason = "a test helper: its panic is the calling test's failure"
+)]
 pub fn skip(test: &str, reason: &str, need: Need) {
     let line = format!("SKIPPED: {test}: {reason}");
     eprintln!("{line}");

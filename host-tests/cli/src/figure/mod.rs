@@ -32,10 +32,10 @@ use std::fmt::Write;
 
 use pfe_core::Feature;
 
-use pfe_formats::Record;
-use pfe_eval::methods::Extraction;
 use axes::{tick_label, tick_step, Bounds};
 use ellipses::{ellipse_svg, exaggeration, feature_ellipses};
+use pfe_eval::methods::Extraction;
+use pfe_formats::Record;
 
 const POINT: &str = "#5a6b7d";
 const MARK: &str = "#d62728";

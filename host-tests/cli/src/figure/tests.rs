@@ -86,8 +86,8 @@ fn line_point_cov_is_the_propagated_covariance() {
 
 #[test]
 fn the_plot_draws_uncertainty_and_explains_bare_marks() {
-    use pfe_formats::Record;
     use pfe_eval::methods::{Method, Pfe};
+    use pfe_formats::Record;
     // A wall x = 2000 from −30° to +30°, then three isolated points (a segment too short).
     let mut ranges: Vec<f32> = (0..61)
         .map(|i| 2000.0 / (f64::from(i - 30).to_radians().cos() as f32))

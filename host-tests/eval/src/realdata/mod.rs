@@ -31,10 +31,10 @@ use std::path::Path;
 use anyhow::Context;
 use serde::Serialize;
 
-use crate::score::quantile;
-use pfe_formats::{InputError, Record};
 use crate::methods::baselines::{Acf, SplitMerge};
 use crate::methods::{Method, Pfe, ScanContext};
+use crate::score::quantile;
+use pfe_formats::{InputError, Record};
 
 pub use compare::{PairTally, Seen};
 pub use coverage::Coverage;

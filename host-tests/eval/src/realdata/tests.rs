@@ -12,8 +12,8 @@ use rand_chacha::ChaCha8Rng;
 
 use super::compare::{PairTally, Seen};
 use super::report::CHI2_2_MEDIAN;
-use crate::score::quantile;
 use crate::scene::{render, Scenario, SceneKind, Shape, TruthKind};
+use crate::score::quantile;
 
 const SIGMA_R: f32 = 5.0;
 
