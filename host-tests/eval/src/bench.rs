@@ -15,8 +15,10 @@
 //! times faster pfe-default is. The last row ([`FITS_ONLY`]) is the floor under every method:
 //! fitting pfe-default's features again, with no segmentation at all.
 //!
-//! ```no_run
-//! pfe_cli::bench::cli(&["--json".to_string()]).unwrap();
+//! Run by the `pfe` CLI (pfe-cli):
+//!
+//! ```text
+//! pfe bench --json
 //! ```
 
 use std::path::{Path, PathBuf};

@@ -126,7 +126,7 @@ impl StatusJson {
 ///
 /// ```
 /// use pfe_formats::ScanJson;
-/// use pfe_eval::methods::Extraction;
+/// use pfe_formats::Extraction;
 /// let j = ScanJson::new(3, &Extraction { marks: vec![0, 9], features: vec![] });
 /// assert_eq!(
 ///     serde_json::to_string(&j).unwrap(),
