@@ -68,6 +68,16 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                 "firmware",
                 "-p",
                 "host-tests",
+                "-p",
+                "pfe-cli",
+                "-p",
+                "pfe-formats",
+                "-p",
+                "pfe-eval",
+                "-p",
+                "lms200-emulator",
+                "-p",
+                "pfe-testkit",
             ])
             .env("RUSTDOCFLAGS", "-D warnings"))
     })?;

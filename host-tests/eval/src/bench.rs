@@ -393,7 +393,7 @@ pub fn write_markdown(
 ) -> anyhow::Result<()> {
     use std::fmt::Write as _;
     let mut body = format!(
-        "Reproduce: `cargo run --release -p host-tests --bin pfe -- bench --md docs/PERFORMANCE.md`\n\n\
+        "Reproduce: `cargo run --release -p pfe-cli -- bench --md docs/PERFORMANCE.md`\n\n\
          Host CPU: {}, one thread, release build, `std::time::Instant`; median of {} interleaved \
          passes per method (the machine is shared: compare methods within one run). \
          **× pfe-default** = time(method) / time(pfe-default): above 1, pfe-default is faster. \
