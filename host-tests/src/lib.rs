@@ -10,5 +10,7 @@
 //! (recordings in, JSON out), `pfe-eval` (simulator, baselines, evaluation), `lms200-emulator`
 //! (the device emulator) and `pfe-testkit` (helpers for xtask and the tests).
 
+#![forbid(unsafe_code)]
+
 pub mod qemu;
 pub mod soak;

@@ -11,6 +11,12 @@
 //! with the codes of [`EXIT_CODES`]: 2 for bad input (a bad argument, a malformed line, an
 //! unknown format, an unreadable file, input with no scan), with a one-line error on stderr
 //! (the scans before it are still written); 1 for any other failure; 130 when interrupted.
+//!
+//! Besides the subcommands: [`figure`] (one scan as SVG), [`foxglove`] (Foxglove MCAP file and
+//! WebSocket), [`link`] (the firmware's frames in, JSON lines out), [`device`] (recording a real
+//! LMS200 over a tty).
+
+#![forbid(unsafe_code)]
 
 pub mod bench;
 pub mod decode;

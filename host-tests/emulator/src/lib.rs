@@ -12,6 +12,8 @@
 //! * `serve` (cargo feature `serve`, default): real-time transports: pseudo-terminal and TCP
 //!   (`pfe emulate`).
 
+#![forbid(unsafe_code)]
+
 pub mod link;
 #[cfg(feature = "serve")]
 pub mod serve;

@@ -3,6 +3,8 @@
 //! [`quick_report`] is the lead's tuning loop; [`evaluate`] reproduces the paper's comparison, which
 //! `pfe eval` (pfe-cli) writes to `docs/EVALUATION.md` with its plots.
 
+#![forbid(unsafe_code)]
+
 pub mod bench;
 pub mod methods;
 pub mod realdata;

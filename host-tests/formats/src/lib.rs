@@ -16,6 +16,8 @@
 //! assert!(r.ranges_mm[1].is_nan()); // 0 = no return
 //! ```
 
+#![forbid(unsafe_code)]
+
 pub mod carmen;
 pub mod csv;
 pub mod docs;
