@@ -13,7 +13,7 @@
 //!
 //! A pair is compared when both scans have a pose. Scan times are not used: in the shared
 //! logs consecutive scans are about 1 m apart (0.1 m in freiburg-079; the corrected logs keep a
-//! scan per step of the robot) and several logs' timestamps are 0 or garbage. `pfe realdata` ([`crate::cli::realdata`]) prints the table and
+//! scan per step of the robot) and several logs' timestamps are 0 or garbage. `pfe realdata` (pfe-cli) prints the table and
 //! writes `docs/REALDATA.md` ([`report`]).
 
 pub mod compare;
