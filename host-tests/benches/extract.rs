@@ -5,10 +5,10 @@
 //! Run with `cargo bench -p host-tests --bench extract`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use host_tests::eval::bench::simulated_scans;
-use host_tests::methods::baselines::{Acf, SplitMerge};
-use host_tests::methods::Method;
 use pfe_core::{fit_circle, fit_line, CircleMethod, Config, Extractor, Point, Scan};
+use pfe_eval::bench::simulated_scans;
+use pfe_eval::methods::baselines::{Acf, SplitMerge};
+use pfe_eval::methods::Method;
 use std::hint::black_box;
 
 fn benches(c: &mut Criterion) {

@@ -6,13 +6,13 @@
 //! Run with `cargo bench -p host-tests --bench firmware`.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use host_tests::eval::bench::simulated_scans;
 use lms2xx::codec::crc::crc16;
 use lms2xx::codec::frame::Event;
 use lms2xx::codec::frame::{encode_telegram, Decoder, DEVICE_ADDRESS};
 use lms2xx::codec::reply::{MeasuredValues, ReplyOptions};
 use lms2xx::codec::types::MeasuringMode;
 use pfe_core::{Config, Extractor, Scan};
+use pfe_eval::bench::simulated_scans;
 use pfe_frame::{write_scan, Counters, ScanHeader, ScanStatus};
 use std::hint::black_box;
 

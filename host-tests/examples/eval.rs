@@ -3,5 +3,5 @@
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    host_tests::cli::eval::cli(&args)
+    pfe_cli::eval::cli(&args)
 }

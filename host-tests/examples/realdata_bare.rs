@@ -12,10 +12,10 @@
 use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
-use host_tests::eval::realdata::coverage::smooth_runs;
-use host_tests::eval::realdata::{log_scans, methods, LogScan};
-use host_tests::formats::Format;
 use pfe_core::Feature;
+use pfe_eval::realdata::coverage::smooth_runs;
+use pfe_eval::realdata::{log_scans, methods, LogScan};
+use pfe_formats::Format;
 
 mod common;
 use common::LogArgs;

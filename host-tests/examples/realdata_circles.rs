@@ -13,14 +13,14 @@
 //! either way.
 
 use anyhow::Result;
-use host_tests::eval::realdata::compare::{matched_lines, refit_centre, GATE_CENTER_MM};
-use host_tests::eval::realdata::frame::nis;
-use host_tests::eval::realdata::refit::{correction, correction_covariance};
-use host_tests::eval::realdata::{methods, FrameChange, Seen};
-use host_tests::eval::score::quantile;
-use host_tests::formats::{Format, Record};
-use host_tests::methods::Extraction;
 use pfe_core::Feature;
+use pfe_eval::methods::Extraction;
+use pfe_eval::realdata::compare::{matched_lines, refit_centre, GATE_CENTER_MM};
+use pfe_eval::realdata::frame::nis;
+use pfe_eval::realdata::refit::{correction, correction_covariance};
+use pfe_eval::realdata::{methods, FrameChange, Seen};
+use pfe_eval::score::quantile;
+use pfe_formats::{Format, Record};
 
 mod common;
 use common::{for_each_pair_with, LogArgs};

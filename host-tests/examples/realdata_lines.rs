@@ -8,14 +8,14 @@
 //! (well determined) and above, with the share of each that re-appears; and for the others,
 //! whether k+1 has a line within the gate that does not overlap, an overlapping line outside
 //! the gate (|Δα| ≥ 0.1 rad or |Δρ| ≥ 0.3 m), a circle within 0.3 m of the moved segment, or
-//! none of these. The matching is the benchmark's ([`host_tests::eval::realdata::compare`]).
+//! none of these. The matching is the benchmark's ([`pfe_eval::realdata::compare`]).
 //! σ_α is each method's own: the baselines' covariances are not consistent (their NIS is
 //! 10–100), so the split compares each method with itself rather than with the others.
 
 use anyhow::Result;
-use host_tests::eval::realdata::compare::{GATE_ALPHA, GATE_RHO_MM, MIN_LINE_POINTS};
-use host_tests::eval::realdata::{methods, FrameChange, LineObs, Seen};
-use host_tests::formats::Format;
+use pfe_eval::realdata::compare::{GATE_ALPHA, GATE_RHO_MM, MIN_LINE_POINTS};
+use pfe_eval::realdata::{methods, FrameChange, LineObs, Seen};
+use pfe_formats::Format;
 
 mod common;
 use common::{for_each_pair, LogArgs};

@@ -15,13 +15,13 @@
 use std::collections::BTreeMap;
 
 use anyhow::Result;
-use host_tests::eval::realdata::compare::matched_lines;
-use host_tests::eval::realdata::frame::nis;
-use host_tests::eval::realdata::refit::{drawn, refit_residuals};
-use host_tests::eval::realdata::{FrameChange, LineObs, Seen};
-use host_tests::eval::score::quantile;
-use host_tests::formats::Format;
-use host_tests::methods::{Method, Pfe};
+use pfe_eval::methods::{Method, Pfe};
+use pfe_eval::realdata::compare::matched_lines;
+use pfe_eval::realdata::frame::nis;
+use pfe_eval::realdata::refit::{drawn, refit_residuals};
+use pfe_eval::realdata::{FrameChange, LineObs, Seen};
+use pfe_eval::score::quantile;
+use pfe_formats::Format;
 use rand::SeedableRng;
 
 mod common;

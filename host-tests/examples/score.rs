@@ -3,9 +3,9 @@
 //! `cargo run -p host-tests --release --example score -- --kind mixed --scans 100 --sigma 5 [--seed 1]`
 
 use anyhow::{bail, Context, Result};
-use host_tests::eval::quick_report;
-use host_tests::methods::{Method, Pfe};
-use host_tests::scene::SceneKind;
+use pfe_eval::methods::{Method, Pfe};
+use pfe_eval::quick_report;
+use pfe_eval::scene::SceneKind;
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -1,10 +1,11 @@
 //! The baselines against analytic scans: ranges computed by exact ray casting against known
 //! walls and pillars (independent of the extractors), with and without seeded range noise.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
-use host_tests::methods::baselines::{Acf, SplitMerge};
-use host_tests::methods::{Extraction, Method};
-use host_tests::scene::{self as sim, Shape};
 use pfe_core::{Feature, ScanGeometry};
+use pfe_eval::methods::baselines::{Acf, SplitMerge};
+use pfe_eval::methods::{Extraction, Method};
+use pfe_eval::scene::{self as sim, Shape};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};

@@ -1,8 +1,8 @@
 //! Property tests: the baselines never panic and always return well-formed output.
 
-use host_tests::methods::baselines::{Abd, Acf, SplitMerge};
-use host_tests::methods::{Extraction, Method};
 use pfe_core::ScanGeometry;
+use pfe_eval::methods::baselines::{Abd, Acf, SplitMerge};
+use pfe_eval::methods::{Extraction, Method};
 use proptest::prelude::*;
 
 /// Ranges mixing ordinary values with every kind of invalid reading.
@@ -137,6 +137,6 @@ fn abd_threshold_follows_borges_aldon() {
     }
     // Two points on a wall at 2 m seen head on are ~17 mm apart: no break; 200 mm: a break.
     let g = ScanGeometry::LMS200_180_050;
-    let pts = host_tests::methods::baselines::scan_points(&g, &[2000.0, 2000.0, 2200.0, 2200.0]);
+    let pts = pfe_eval::methods::baselines::scan_points(&g, &[2000.0, 2000.0, 2200.0, 2200.0]);
     assert_eq!(abd.segments(&g, &pts), vec![(0, 1), (2, 3)]);
 }

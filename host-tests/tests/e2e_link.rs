@@ -5,14 +5,15 @@
 //! simulator's ground truth in type and parameters (Cramér–Rao bounds). The firmware side
 //! here is the same code as the host's, in the same process: `e2e_qemu` compares the
 //! Cortex-M4F build under QEMU with the host.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use host_tests::qemu;
 
 use firmware::app::{App, ConfigChoice};
-use host_tests::device::emulator::{Emulator, EmulatorConfig, Faults, Link};
-use host_tests::methods::Extraction;
-use host_tests::scene::{Scenario, SceneKind, SimScan};
+use lms200_emulator::{Emulator, EmulatorConfig, Faults, Link};
 use lms2xx::driver::{Config, Driver};
+use pfe_eval::methods::Extraction;
+use pfe_eval::scene::{Scenario, SceneKind, SimScan};
 use pfe_frame::{Frame, ScanStatus};
 
 fn sims(seed: u64, n: u64) -> Vec<SimScan> {
@@ -27,7 +28,7 @@ fn run(
     sims: &[SimScan],
     scans: usize,
     faults: Faults,
-) -> (Vec<Frame>, host_tests::device::emulator::EmulatorReport) {
+) -> (Vec<Frame>, lms200_emulator::EmulatorReport) {
     let source = qemu::SimSource::new(sims.iter().map(|s| s.ranges_mm.clone()).collect());
     let cfg = EmulatorConfig {
         faults,
@@ -63,7 +64,7 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
     let sims = sims(500, 6);
     let (frames, report) = run(&sims, 6, Faults::default());
     assert_eq!(frames.len(), 6);
-    let mut total = host_tests::eval::score::Score::default();
+    let mut total = pfe_eval::score::Score::default();
     for (k, f) in frames.iter().enumerate() {
         let h = f.scan().unwrap();
         assert_eq!(h.seq, k as u32);
@@ -76,7 +77,7 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
             marks: Vec::new(),
             features: f.features.to_vec(),
         };
-        total.add(&host_tests::eval::score::score_sim(&ex, &sims[k]));
+        total.add(&pfe_eval::score::score_sim(&ex, &sims[k]));
     }
     assert!(total.truth_features > 20);
     assert!(

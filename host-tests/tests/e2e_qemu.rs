@@ -4,6 +4,7 @@
 //!
 //! Skipped (with a message) when `qemu-system-arm` or the `thumbv7em-none-eabihf` target is
 //! missing; `cargo xtask test` installs both, so CI runs it.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use host_tests::qemu;
 

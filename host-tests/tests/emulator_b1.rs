@@ -2,8 +2,9 @@
 //! (written out here, not taken from the firmware's `status_offset`), after each command that
 //! changes a field: operating mode (8), measuring mode (102), scan angle (107–108),
 //! resolution (109–110), baud word (116–117), unit (122).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
-use host_tests::device::emulator::{Emulator, EmulatorConfig};
+use lms200_emulator::{Emulator, EmulatorConfig};
 use lms2xx::codec::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};
 use lms2xx::codec::reply::ConfigBlock;
 use lms2xx::codec::types::{MeasuringMode, Unit};

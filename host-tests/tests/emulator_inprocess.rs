@@ -1,7 +1,8 @@
 //! The firmware driver against the emulated LMS200 over the in-process link (virtual time).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use firmware::app::ScanDataExt;
-use host_tests::device::emulator::{
+use lms200_emulator::{
     Emulator, EmulatorConfig, HostPort, Link, LinkClock, LinkDelay, SourceKind, TaggedSource,
 };
 use lms2xx::codec::frame::{encode_telegram, Decoder, Event, MAX_TELEGRAM};

@@ -2,12 +2,13 @@
 //! client, initialises against the emulator on a pseudo-terminal and reads scans equal to what
 //! the emulator sent. Skips with a message when g++ or the MRPT headers are missing, unless
 //! `PFE_CONFORMANCE_REQUIRED` is set (as `cargo xtask conformance` does).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use host_tests::device::emulator::serve::Pty;
-use host_tests::device::emulator::{Emulator, EmulatorConfig, RangeSource, TaggedSource};
+use lms200_emulator::serve::Pty;
+use lms200_emulator::{Emulator, EmulatorConfig, RangeSource, TaggedSource};
 use lms2xx::codec::types::{Baud, MeasuringMode, Unit};
 
 mod common;
@@ -41,10 +42,10 @@ fn missing(what: &str) {
     if std::env::var_os("PFE_CONFORMANCE_REQUIRED").is_some() {
         panic!("MRPT conformance needs {what}");
     }
-    host_tests::skip::skip(
+    pfe_testkit::skip::skip(
         "emulator_mrpt",
         &format!("MRPT conformance needs {what} (apt-get install g++ libmrpt-hwdrivers-dev)"),
-        host_tests::skip::Need::InCi,
+        pfe_testkit::skip::Need::InCi,
     );
 }
 

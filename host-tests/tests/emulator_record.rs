@@ -1,11 +1,12 @@
 //! `pfe record` (firmware driver over a real tty) against the emulator on a pseudo-terminal:
 //! the capture holds exactly the scans the emulator sent: each one once, in the order sent.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 mod common;
 
 use common::{arg, PtyServer};
-use host_tests::device::emulator::serve::Pty;
-use host_tests::device::emulator::{Emulator, EmulatorConfig, SourceKind};
+use lms200_emulator::serve::Pty;
+use lms200_emulator::{Emulator, EmulatorConfig, SourceKind};
 use lms2xx::codec::frame::{Decoder, Event, MAX_TELEGRAM};
 use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
 
@@ -34,7 +35,7 @@ fn record_over_pty_captures_sent_scans() {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let res = host_tests::cli::record::cli(&args);
+    let res = pfe_cli::record::cli(&args);
     let (report, _pty) = emu.stop();
     res.unwrap();
 

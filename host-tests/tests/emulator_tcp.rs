@@ -5,11 +5,9 @@ use std::io::{ErrorKind, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::time::Duration;
 
-use host_tests::device::emulator::{
-    serve_tcp, EmulatorConfig, RunLimits, SourceKind, TaggedSource,
-};
-use host_tests::device::tty::{StdClock, StdDelay};
+use lms200_emulator::{serve_tcp, EmulatorConfig, RunLimits, SourceKind, TaggedSource};
 use lms2xx::driver::{Config, Driver, SetBaud};
+use pfe_cli::device::tty::{StdClock, StdDelay};
 
 struct TcpPort {
     s: TcpStream,

@@ -1,11 +1,10 @@
 //! Fault injection between the emulated LMS200 and the firmware driver: every intact scan is
 //! delivered exactly once, no damaged one is accepted, the driver recovers, counters tell.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::collections::BTreeSet;
 
-use host_tests::device::emulator::{
-    Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource,
-};
+use lms200_emulator::{Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource};
 use lms2xx::codec::types::Baud;
 use lms2xx::driver::{Config, Counters, Driver};
 

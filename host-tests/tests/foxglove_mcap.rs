@@ -1,15 +1,16 @@
-//! The Foxglove MCAP file of `host_tests::foxglove`, read back by an independent reader
+//! The Foxglove MCAP file of `pfe_cli::foxglove`, read back by an independent reader
 //! (`fixtures/foxglove/read_foxglove.py`: the PyPI `mcap` package and `json`) and compared field
 //! by field with what was written. Without python3 or `mcap` it reports a skip through
-//! `host_tests::skip` and passes, except under `CI=true`, where it fails.
+//! `pfe_testkit::skip` and passes, except under `CI=true`, where it fails.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 mod common;
 use std::path::{Path, PathBuf};
 
-use host_tests::formats::{self, Format, Record};
-use host_tests::foxglove::{FoxgloveWriter, FEATURES_TOPIC, NO_RETURN_M, SCAN_TOPIC};
-use host_tests::methods::{Method, Pfe};
+use pfe_cli::foxglove::{FoxgloveWriter, FEATURES_TOPIC, NO_RETURN_M, SCAN_TOPIC};
 use pfe_core::{Config, Feature};
+use pfe_eval::methods::{Method, Pfe};
+use pfe_formats::{self as formats, Format, Record};
 use serde_json::Value;
 
 fn fixture(name: &str) -> PathBuf {

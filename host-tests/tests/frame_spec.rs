@@ -1,11 +1,16 @@
 //! `docs/FRAME.md` cannot drift: its test vector is what the firmware's app sends for a fixed
 //! scan, the firmware's decoder reads it as the doc's JSON, and so does a minimal decoder
 //! written here from the spec alone (COBS, CRC-32 by crc32fast, varints by hand).
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use firmware::app::{App, ConfigChoice, RawScan};
-use host_tests::link::listen::ListenJson;
 use host_tests::qemu::VecWriter;
+use pfe_cli::link::listen::ListenJson;
 use pfe_frame::{Counters, Feed, FrameDecoder};
 use serde_json::{json, Value};
 

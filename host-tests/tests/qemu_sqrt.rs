@@ -4,7 +4,7 @@
 //! ±inf and NaN. Skipped (listed) without QEMU or the thumbv7em target; CI has both.
 
 use host_tests::qemu;
-use host_tests::skip::{skip, Need};
+use pfe_testkit::skip::{skip, Need};
 
 use std::path::PathBuf;
 use std::time::{Duration, Instant};

@@ -3,9 +3,10 @@
 //! Bags written independently of this code (`fixtures/ros2/make_bags.py`: the Python `mcap` and
 //! `mcap-ros2-support` packages, from the first 50 scans of two shared CARMEN logs) must give
 //! the CARMEN reader's scans and, through pfe-core, its features. Without python3 or those
-//! packages the Python-backed tests report a skip through `host_tests::skip` and pass, except
+//! packages the Python-backed tests report a skip through `pfe_testkit::skip` and pass, except
 //! under `CI=true`, where they fail. Bags written here with the `mcap` crate check the error paths (no LaserScan
 //! topic, truncation, damage) everywhere.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -14,10 +15,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::Arc;
 
-use host_tests::formats::ros2::{self, Ros2Scan, TopicError};
-use host_tests::formats::{self, Format, InputError, Record};
-use host_tests::methods::{Method, Pfe};
 use pfe_core::{Config, Feature};
+use pfe_eval::methods::{Method, Pfe};
+use pfe_formats::ros2::{self, Ros2Scan, TopicError};
+use pfe_formats::{self as formats, Format, InputError, Record};
 use serde_json::Value;
 
 mod common;
@@ -34,10 +35,10 @@ fn shared_carmen() -> Option<PathBuf> {
 /// Reports the skip of the Python-backed test (listed by `cargo xtask test`; a failure under
 /// `CI=true`, where python3, the packages and the shared logs are installed).
 fn skip(why: &str) -> Option<Value> {
-    host_tests::skip::skip(
+    pfe_testkit::skip::skip(
         "ros2_mcap::independent_bags_read_as_the_carmen_logs",
         &format!("{why} (install python3 and `pip install mcap mcap-ros2-support`)"),
-        host_tests::skip::Need::InCi,
+        pfe_testkit::skip::Need::InCi,
     );
     None
 }

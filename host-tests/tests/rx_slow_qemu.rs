@@ -15,7 +15,12 @@
 //!
 //! Skipped (with a message; a failure under `CI=true`) when `qemu-system-arm` or the
 //! `thumbv7em-none-eabihf` target is missing.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)]
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;

@@ -1,11 +1,9 @@
 //! Scorer on hand-made cases, and an oracle extraction on simulated scans.
 
-use host_tests::eval::score::{
-    iou, line_error, match_features, score, score_sim, GroundTruth, Score,
-};
-use host_tests::methods::Extraction;
-use host_tests::scene::{Crb, Scenario, SceneKind, TruthFeature, TruthKind};
 use pfe_core::{fit_circle, fit_line, CircleFeature, CircleMethod, Feature, LineFeature, Point};
+use pfe_eval::methods::Extraction;
+use pfe_eval::scene::{Crb, Scenario, SceneKind, TruthFeature, TruthKind};
+use pfe_eval::score::{iou, line_error, match_features, score, score_sim, GroundTruth, Score};
 use std::f64::consts::PI;
 
 fn truth_line(first: usize, last: usize, alpha: f64, rho: f64) -> TruthFeature {

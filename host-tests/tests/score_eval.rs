@@ -1,10 +1,10 @@
 //! The evaluation pipeline end to end on a few scans, with methods of known behaviour.
 
-use host_tests::cli::eval::parse_args;
-use host_tests::eval::{evaluate, quick_report, report, run_methods, scenarios, svg, EvalOptions};
-use host_tests::methods::{Extraction, Method};
-use host_tests::scene::{Scenario, SceneKind, SimScan, TruthKind};
+use pfe_cli::eval::parse_args;
 use pfe_core::{CircleFeature, Feature, LineFeature, Point, ScanGeometry};
+use pfe_eval::methods::{Extraction, Method};
+use pfe_eval::scene::{Scenario, SceneKind, SimScan, TruthKind};
+use pfe_eval::{evaluate, quick_report, report, run_methods, scenarios, svg, EvalOptions};
 
 /// Finds nothing.
 struct Blind;
@@ -69,7 +69,7 @@ struct Replay {
 
 impl Replay {
     fn new(sims: &[SimScan], swap_circles: bool, extra: bool) -> Self {
-        let feature = |f: &host_tests::scene::TruthFeature| {
+        let feature = |f: &pfe_eval::scene::TruthFeature| {
             let (first, last) = (f.first as u16, f.last as u16);
             let points = last + 1 - first;
             match f.kind {

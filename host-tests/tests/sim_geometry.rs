@@ -1,10 +1,11 @@
 //! Simulator against analytic geometry, determinism and ground-truth invariants.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
-use host_tests::scene::{
+use pfe_core::{fit_line, Point};
+use pfe_eval::scene::{
     bearing, crb, render, systematic_bias_mm, Resolution, Scenario, SceneKind, Shape, TruthKind,
     MIN_RUN, NO_RETURN_CODE,
 };
-use pfe_core::{fit_line, Point};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

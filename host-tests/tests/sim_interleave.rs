@@ -1,11 +1,11 @@
 //! The simulated LMS200's interleaved sweeps, the moving scanner, cm mode and incidence noise,
 //! against analytic truth and against pfe-core's beam-timing model.
 
-use host_tests::scene::{
+use pfe_core::{BeamTiming, LMS_MAX_VALID_8M};
+use pfe_eval::scene::{
     bearing, incidence_noise_factor, render, RangeMode, Resolution, Scenario, SceneKind, Shape,
     NO_RETURN_CODE,
 };
-use pfe_core::{BeamTiming, LMS_MAX_VALID_8M};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 

@@ -16,7 +16,7 @@ pub fn target_dir() -> std::path::PathBuf {
 }
 
 /// The firmware's optimisation level (one value for xtask and the QEMU tests).
-pub use host_tests::qemu::FIRMWARE_OPT_LEVEL;
+pub use pfe_testkit::qemu::FIRMWARE_OPT_LEVEL;
 
 /// Builds a firmware-qemu binary in release for thumbv7em into `dir` at
 /// [`FIRMWARE_OPT_LEVEL`] with `DEFMT_LOG=info` (`env` may override both); returns the ELF.
@@ -38,7 +38,7 @@ pub fn build_fw(
         "$ cargo build --release -p firmware-qemu --bin {bin} (into {})",
         dir.display()
     );
-    host_tests::qemu::build_firmware(bin, features, &all, dir)
+    pfe_testkit::qemu::build_firmware(bin, features, &all, dir)
 }
 
 /// Runs `demo_host` (host-tests example) with `args`.
@@ -71,5 +71,5 @@ pub fn write_section_titled(
     body: &str,
 ) -> Result<()> {
     let body = format!("Reproduce: `cargo xtask {command}`\n\n{body}");
-    host_tests::docs::write_section(path, name, heading, &body, false)
+    pfe_formats::docs::write_section(path, name, heading, &body, false)
 }

@@ -1,7 +1,7 @@
 //! `cargo xtask <command>`: the project's commands (see README.md).
 //!
 //! Each command lives in its own module; `util` holds what they share; generated document
-//! sections are written by `host_tests::docs`, as `pfe bench` writes them.
+//! sections are written by `pfe_formats::docs`, as `pfe bench` writes them.
 
 mod bench_mcu;
 mod conformance;

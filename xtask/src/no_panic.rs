@@ -274,7 +274,7 @@ pub fn run(args: &[String]) -> Result<()> {
         }
     }
     bail!(
-        "no-panic: FAIL — {} panic call site(s) survive optimisation (see above and /work/notes/panics.md)",
+        "no-panic: FAIL — {} panic call site(s) survive optimisation (see above)",
         sites.len()
     )
 }

@@ -15,10 +15,10 @@ pub fn run(args: &[String]) -> Result<()> {
     let dir = util::root().join(LOGS);
     if !dir.is_dir() {
         // Listed with the test step's skips; under CI (which has the data) a failure.
-        host_tests::skip::skip(
+        pfe_testkit::skip::skip(
             "realdata",
             "../shared/data not found",
-            host_tests::skip::Need::InCi,
+            pfe_testkit::skip::Need::InCi,
         );
         return Ok(());
     }
@@ -26,7 +26,7 @@ pub fn run(args: &[String]) -> Result<()> {
         .with_context(|| format!("reading {}", dir.display()))?
         .filter_map(|e| e.ok())
         .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| host_tests::formats::carmen::is_log_name(n))
+        .filter(|n| pfe_formats::carmen::is_log_name(n))
         .map(|n| format!("{LOGS}/{n}"))
         .collect();
     logs.sort();

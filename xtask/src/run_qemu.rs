@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::{bail, Result};
-use host_tests::link::run_qemu::RunQemu;
+use pfe_testkit::run_qemu::RunQemu;
 
 use crate::fw::{build_fw, target_dir};
 use crate::util;
@@ -48,10 +48,7 @@ pub fn run(args: &[String]) -> Result<()> {
         output.display()
     );
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        let _ = ctrlc::set_handler(move || stop.store(true, std::sync::atomic::Ordering::SeqCst));
-    }
+    let _ = signal_hook::flag::register(signal_hook::consts::SIGINT, stop.clone());
     loop {
         if let Some(code) = q.wait(Duration::from_millis(200))? {
             eprintln!("run-qemu: firmware exited with {code}");

@@ -10,7 +10,7 @@
 //! MRPT conformance, the no-panic build, a sampled mutation run of pfe-core (1 mutant in 100,
 //! round-robin; fails below the 90 % target), fuzzing (60 s per target under `CI`, 10 s
 //! otherwise) and a short soak. `--quick` stops after the host tests and skips the QEMU end-to-end test.
-//! It ends with the list of the tests that were skipped and why ([`host_tests::skip`]), or
+//! It ends with the list of the tests that were skipped and why ([`pfe_testkit::skip`]), or
 //! "skipped: none".
 
 use anyhow::Result;
@@ -21,10 +21,10 @@ const THUMB: &str = "thumbv7em-none-eabihf";
 
 /// Runs every step, then lists what was skipped (also after a failure).
 pub fn run_all(quick: bool) -> Result<()> {
-    let skips = host_tests::skip::skips_file();
+    let skips = pfe_testkit::skip::skips_file();
     let _ = std::fs::remove_file(&skips);
     let result = steps(quick, &skips);
-    eprintln!("\n{}", skipped_summary(&host_tests::skip::listed()));
+    eprintln!("\n{}", skipped_summary(&pfe_testkit::skip::listed()));
     result
 }
 
@@ -72,6 +72,16 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                 "firmware",
                 "-p",
                 "host-tests",
+                "-p",
+                "pfe-cli",
+                "-p",
+                "pfe-formats",
+                "-p",
+                "pfe-eval",
+                "-p",
+                "lms200-emulator",
+                "-p",
+                "pfe-testkit",
             ])
             .env("RUSTDOCFLAGS", "-D warnings"))
     })?;

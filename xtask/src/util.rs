@@ -19,21 +19,21 @@ pub fn cargo() -> Command {
     c
 }
 
-/// `cargo run --release -q -p host-tests {target} {name}`, `target` `--bin` or `--example`.
-fn host_tests_run(target: &str, name: &str) -> Command {
+/// `cargo run --release -q -p {package} {target} {name}`, `target` `--bin` or `--example`.
+fn cargo_run(package: &str, target: &str, name: &str) -> Command {
     let mut c = cargo();
-    c.args(["run", "--release", "-q", "-p", "host-tests", target, name]);
+    c.args(["run", "--release", "-q", "-p", package, target, name]);
     c
 }
 
 /// `cargo run --release -q -p host-tests --example {name}` (append `--` and its arguments).
 pub fn host_example(name: &str) -> Command {
-    host_tests_run("--example", name)
+    cargo_run("host-tests", "--example", name)
 }
 
-/// `cargo run --release -q -p host-tests --bin pfe --` (append the `pfe` arguments).
+/// `cargo run --release -q -p pfe-cli --bin pfe --` (append the `pfe` arguments).
 pub fn pfe() -> Command {
-    let mut c = host_tests_run("--bin", "pfe");
+    let mut c = cargo_run("pfe-cli", "--bin", "pfe");
     c.arg("--");
     c
 }

@@ -22,11 +22,11 @@ pub use lms_driver::lms_driver;
 
 use std::io::Cursor;
 
-use host_tests::formats::{scans, Format};
 use lms2xx::codec::frame::{encode_telegram, Telegram, MAX_TELEGRAM, STX};
 use lms2xx::codec::frame::{Decoder, DecoderStats, Event};
 use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
 use lms2xx::codec::types::MeasuringMode;
+use pfe_formats::{scans, Format};
 use pfe_core::{Config, ExtractError, Extractor, Feature, Scan, ScanGeometry};
 use pfe_frame::{write_report, write_scan, Feed, Frame, FrameDecoder, Header};
 
@@ -561,7 +561,7 @@ pub fn readers(data: &[u8]) -> usize {
             Some(Ok(r)) => {
                 records += 1;
                 assert!(
-                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= host_tests::methods::MAX_BEAMS
+                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= pfe_formats::MAX_BEAMS
                 );
                 assert!(
                     r.geometry.is_valid(),

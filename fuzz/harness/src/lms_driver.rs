@@ -37,9 +37,9 @@ use std::rc::Rc;
 
 use lms2xx::codec::types::{Baud, MeasuringMode, Unit, Variant};
 
-use host_tests::device::emulator::telegram::device_telegram;
-use host_tests::device::emulator::{Emulator, EmulatorConfig};
 use lms2xx::driver::{Clock, Config, Driver, SetBaud};
+use lms200_emulator::telegram::device_telegram;
+use lms200_emulator::{Emulator, EmulatorConfig};
 
 /// Setting bytes before the script.
 pub const SETTINGS: usize = 9;

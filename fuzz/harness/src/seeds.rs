@@ -6,8 +6,8 @@ use std::fs;
 use std::io::{self, BufRead};
 use std::path::{Path, PathBuf};
 
-use host_tests::formats::{self, Format, Record};
 use lms2xx::codec::frame::{encode_parts, ACK, DEVICE_ADDRESS, MAX_TELEGRAM};
+use pfe_formats::{self as formats, Format, Record};
 use pfe_core::{Config, Extractor, Scan};
 use pfe_frame::{write_report, write_scan, Report, ScanHeader};
 

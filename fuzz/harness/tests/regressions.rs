@@ -139,7 +139,7 @@ fn generated_seeds_pass_and_decode() {
     std::fs::remove_dir_all(&out).ok();
 }
 
-/// A copy of `host_tests::skip::skip` (this is a separate workspace): prints the skip, lists it
+/// A copy of `pfe_testkit::skip::skip` (this is a separate workspace): prints the skip, lists it
 /// in `$PFE_SKIPS_FILE` (else `../../target/pfe-skips.txt`) for `cargo xtask test`'s summary,
 /// and fails under `CI=true` (CI has `../shared`).
 fn skip(test: &str, reason: &str) {

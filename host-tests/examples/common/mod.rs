@@ -6,9 +6,9 @@
 use std::collections::BTreeMap;
 
 use anyhow::{bail, Context, Result};
-use host_tests::eval::realdata::{log_scans, LogScan, Seen};
-use host_tests::formats::Record;
-use host_tests::methods::{Extraction, Method};
+use pfe_eval::methods::{Extraction, Method};
+use pfe_eval::realdata::{log_scans, LogScan, Seen};
+use pfe_formats::Record;
 
 /// A real-data example's command line: `NAME LOG [OPTION VALUE]…`.
 pub struct LogArgs {

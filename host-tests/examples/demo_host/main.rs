@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use anyhow::{bail, Context, Result};
-use host_tests::scene::{Scenario, SceneKind};
+use pfe_eval::scene::{Scenario, SceneKind};
 use pfe_frame::{Header, Report, Stage};
 
 fn main() -> Result<()> {
@@ -63,7 +63,7 @@ impl Opts {
     /// `command`.
     fn write_section(&self, name: &str, command: &str, md: &str) -> Result<()> {
         if let Some(path) = self.get("md") {
-            host_tests::docs::write_section(
+            pfe_formats::docs::write_section(
                 Path::new(path),
                 name,
                 &format!("`{command}`"),
@@ -84,7 +84,7 @@ impl Opts {
 }
 
 /// Simulated scans (mixed scenes, σ_r 5 mm, 0.5°), seeds `seed..seed+n`.
-fn sim_scans(n: u64, seed: u64) -> Vec<host_tests::scene::SimScan> {
+fn sim_scans(n: u64, seed: u64) -> Vec<pfe_eval::scene::SimScan> {
     (seed..seed + n)
         .map(|s| Scenario::new(SceneKind::Mixed, s).simulate())
         .collect()
@@ -276,7 +276,7 @@ fn bench(o: &Opts) -> Result<()> {
 /// The adversarial scans (structured, then the search's best) as B0 telegrams in `--out`,
 /// one kind a line in `--kinds`.
 fn worst_scans(o: &Opts) -> Result<()> {
-    use host_tests::scene::adversarial;
+    use pfe_eval::scene::adversarial;
     let iterations = usize::try_from(o.num("iterations", 4000)?)?;
     let mut scans = adversarial::structured();
     scans.extend(adversarial::search(o.num("seed", 20)?, iterations, 4));
@@ -386,7 +386,7 @@ fn worst(o: &Opts) -> Result<()> {
         }
     }
     let mut md = String::from(
-        "Worst case per scan: adversarial scans (`host_tests::scene::adversarial`: structured \
+        "Worst case per scan: adversarial scans (`pfe_eval::scene::adversarial`: structured \
          kinds, and the best scans of a hill-climb on pfe-core's work counters) on QEMU \
          `mps2-an386`, `-icount shift=10` (instruction counts, not cycles). The bound is the \
          algorithmic one derived below for the scan's value count. pfe-bench runs every \
@@ -420,7 +420,7 @@ fn worst(o: &Opts) -> Result<()> {
 
 fn demo(o: &Opts) -> Result<()> {
     use firmware::app::ConfigChoice;
-    use host_tests::methods::Extraction;
+    use pfe_eval::methods::Extraction;
     let elf = o.path("elf")?;
     let scans = u32::try_from(o.num("scans", 10)?).context("--scans too large")?;
     let config = o.get("config").unwrap_or("default");
@@ -436,7 +436,7 @@ fn demo(o: &Opts) -> Result<()> {
     if let Some(path) = o.get("defmt-log") {
         std::fs::write(path, &s.run.stdout)?;
     }
-    let mut total = host_tests::eval::score::Score::default();
+    let mut total = pfe_eval::score::Score::default();
     let (mut equal, mut compared, mut worst_ulps) = (0usize, 0usize, 0u32);
     let mut stack = None;
     let mut done = None;
@@ -488,10 +488,10 @@ fn demo(o: &Opts) -> Result<()> {
                         marks: Vec::new(),
                         features: f.features.to_vec(),
                     };
-                    total.add(&host_tests::eval::score::score_sim(&ex, sim));
+                    total.add(&pfe_eval::score::score_sim(&ex, sim));
                     if k == 0 {
                         if let Some(path) = o.get("svg") {
-                            let rec = host_tests::formats::Record {
+                            let rec = pfe_formats::Record {
                                 id: 0,
                                 geometry: sim.geometry,
                                 ranges_mm: sim.ranges_mm.clone(),
@@ -503,7 +503,7 @@ fn demo(o: &Opts) -> Result<()> {
                                 "pfe-qemu scan 0 ({config}): {} features from the firmware",
                                 f.features.len()
                             );
-                            std::fs::write(path, host_tests::plot::svg(&rec, &ex, &title))?;
+                            std::fs::write(path, pfe_cli::figure::svg(&rec, &ex, &title))?;
                             eprintln!("SVG of scan 0 -> {path}");
                         }
                     }

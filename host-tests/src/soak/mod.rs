@@ -34,7 +34,7 @@ use lms2xx::driver::{Clock, Config, Driver, ScanData, SetBaud};
 use pfe_frame::{self as output, Feed, FrameDecoder};
 pub mod qemu;
 
-use crate::device::emulator::{
+use lms200_emulator::{
     Emulator, EmulatorConfig, Faults, Link, RunLimits, SentScan, SourceKind, TaggedSource,
 };
 
@@ -494,7 +494,7 @@ mod tty {
 
 /// The pseudo-terminal run; `Ok(true)` when the account balances.
 pub fn pty(a: &Args) -> Result<bool> {
-    use crate::device::emulator::serve::{serve_on, Pty};
+    use lms200_emulator::serve::{serve_on, Pty};
     let cfg = EmulatorConfig {
         source: SourceKind::Tagged,
         faults: faults(a.damage),

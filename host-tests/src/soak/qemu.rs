@@ -16,12 +16,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use crate::device::emulator::serve::{serve_on, Pty};
-use crate::device::emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
-use crate::scene::{Scenario, SceneKind};
 use anyhow::{Context, Result};
 use firmware::app::ConfigChoice;
+use lms200_emulator::serve::{serve_on, Pty};
+use lms200_emulator::{Emulator, EmulatorConfig, EmulatorReport, RunLimits};
 use pfe_core::Feature;
+use pfe_eval::scene::{Scenario, SceneKind};
 use pfe_frame::{Counters, Frame, Header, Report};
 
 use crate::qemu;
@@ -250,10 +250,10 @@ fn account(r: &QemuRun) -> Result<Account> {
 /// Runs the QEMU soak for `scans` scans (and the warm-up run); `Ok(true)` when it balances.
 pub fn run(a: &super::Args) -> Result<bool> {
     if !qemu::have("qemu-system-arm") || !qemu::have_target() {
-        crate::skip::skip(
+        pfe_testkit::skip::skip(
             "soak (QEMU)",
             "needs qemu-system-arm and the thumbv7em-none-eabihf target",
-            crate::skip::Need::InCi,
+            pfe_testkit::skip::Need::InCi,
         );
         return Ok(true);
     }

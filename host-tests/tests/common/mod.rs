@@ -1,5 +1,6 @@
-//! Helpers shared by the host-tests integration tests.
-#![allow(dead_code)]
+//! Helpers shared by the integration tests of host-tests and of pfe-cli (which includes this
+//! file by path: only its own tests have the `pfe` binary, as `CARGO_BIN_EXE_pfe`).
+#![allow(dead_code, clippy::unwrap_used, clippy::expect_used, clippy::panic)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -8,14 +9,25 @@ use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use host_tests::device::emulator::serve::{serve_on, Pty};
-use host_tests::device::emulator::{Emulator, EmulatorReport, RunLimits};
+use lms200_emulator::serve::{serve_on, Pty};
+use lms200_emulator::{Emulator, EmulatorReport, RunLimits};
 
-/// A file of `tests/fixtures`.
+/// A file of `host-tests/tests/fixtures` (from host-tests or from pfe-cli in `host-tests/cli`).
 pub fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures")
-        .join(name)
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let fixtures = dir.join("tests/fixtures");
+    let fixtures = if fixtures.is_dir() {
+        fixtures
+    } else {
+        dir.join("../tests/fixtures")
+    };
+    fixtures.join(name)
+}
+
+/// The `pfe` binary (pfe-cli's tests only).
+#[allow(clippy::option_env_unwrap, reason = "host-tests' tests never run pfe")]
+pub fn pfe_bin() -> &'static str {
+    option_env!("CARGO_BIN_EXE_pfe").expect("only pfe-cli's tests run the pfe binary")
 }
 
 /// A fresh, empty directory `pfe-TAG-PID` under the system's temporary directory.
@@ -49,10 +61,7 @@ pub fn arg(path: &Path) -> &str {
 
 /// Runs `pfe ARGS` and returns what it did.
 pub fn pfe(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args(args)
-        .output()
-        .unwrap()
+    Command::new(pfe_bin()).args(args).output().unwrap()
 }
 
 /// A run's stdout read as JSON lines.
@@ -66,7 +75,7 @@ pub fn json_lines(out: &Output) -> Vec<serde_json::Value> {
 
 /// Starts `pfe ARGS` with stdin, stdout and stderr piped.
 pub fn spawn_pfe(args: &[&str]) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_pfe"))
+    Command::new(pfe_bin())
         .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -121,7 +130,7 @@ pub fn python(
     args: &[&str],
     packages: &str,
 ) -> Option<serde_json::Value> {
-    use host_tests::skip::{skip, Need};
+    use pfe_testkit::skip::{skip, Need};
     let out = match Command::new("python3")
         .arg(fixture(script))
         .args(args)

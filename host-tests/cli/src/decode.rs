@@ -1,0 +1,90 @@
+//! `pfe decode`: one JSON object per good 0xB0 telegram of an LMS200 capture.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use super::input::{flush, guess, open, stdout, write_json};
+use super::Failure;
+use pfe_formats::{lms200, Format};
+
+/// Arguments of `pfe decode`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Input format: only `lms200`, the default (decode reads raw LMS200 captures).
+    #[arg(long, short, default_value = "lms200", value_parser = crate::input::format_parser())]
+    format: Format,
+    /// Input file (`-` = stdin).
+    file: PathBuf,
+}
+
+/// One line of `pfe decode` output.
+#[derive(Serialize)]
+struct TelegramJson<'a> {
+    scan: u64,
+    unit: &'static str,
+    ranges: &'a [u16],
+    status: u8,
+}
+
+/// Runs `pfe decode`.
+pub fn run(a: Args) -> Result<(), Failure> {
+    let (format, file) = (a.format, a.file.as_path());
+    if format != Format::Lms200 {
+        return Err(Failure::input(format!(
+            "decode reads only --format lms200 (got {format})"
+        )));
+    }
+    let input = open(file, format)?;
+    let bar = input.bar.clone();
+    let mut out = stdout();
+    let mut reader = lms200::Reader::new(input.reader);
+    let mut error = None;
+    for t in reader.by_ref() {
+        let t = match t {
+            Ok(t) => t,
+            Err(e) => {
+                error = Some(Failure::input(format!("{}: {e}", file.display())));
+                break;
+            }
+        };
+        let j = TelegramJson {
+            scan: t.ordinal,
+            unit: t.unit.name(),
+            ranges: &t.ranges,
+            status: t.status,
+        };
+        if !write_json(&mut out, &j)? {
+            break;
+        }
+    }
+    flush(&mut out)?;
+    bar.finish_and_clear();
+    let s = reader.summary();
+    eprintln!(
+        "pfe: {} bytes: {} telegrams good, {} dropped for CRC, {} bytes skipped \
+         ({} dropped for length, {} malformed B0, {} B0 of an unknown value count, {} other telegrams)",
+        s.bytes,
+        s.good,
+        s.crc_errors,
+        s.skipped,
+        s.bad_length,
+        s.malformed,
+        s.unknown_count,
+        s.other_telegrams
+    );
+    if let Some(e) = error {
+        return Err(e);
+    }
+    if s.good == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+        let hint = match guess(file, format) {
+            Some(g) => format!("; is it {g}? try pfe extract --format {g}"),
+            None => String::new(),
+        };
+        return Err(Failure::input(format!(
+            "{}: no LMS200 telegram found in it{hint}",
+            file.display()
+        )));
+    }
+    Ok(())
+}

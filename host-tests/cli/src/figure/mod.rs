@@ -1,0 +1,414 @@
+//! Hand-written SVG plots of one scan and what the extractor found in it, in the style of
+//! Fig. 7 of the paper: scan points, mark points, fitted line segments and circles.
+//!
+//! The scanner is at the origin; x (forward) points right and y (left) points up, with equal
+//! scales on both axes; ticks are in mm or m depending on the extent.
+//!
+//! ```
+//! use pfe_formats::Record;
+//! use pfe_eval::methods::{Method, Pfe};
+//! use pfe_core::ScanGeometry;
+//! let g = ScanGeometry::LMS200_180_050;
+//! let ranges: Vec<f32> = (0..361).map(|i| 2000.0 / g.bearing(i).cos().max(0.3)).collect();
+//! let record = Record {
+//!     id: 0,
+//!     geometry: g,
+//!     ranges_mm: ranges,
+//!     time: None,
+//!     pose: None,
+//!     sweeps: None,
+//! };
+//! let ex = Pfe::default_config().extract(&record.geometry, &record.ranges_mm);
+//! let svg = pfe_cli::figure::svg(&record, &ex, "a wall");
+//! assert!(svg.starts_with("<svg") && svg.contains("a wall"));
+//! ```
+
+mod axes;
+mod ellipses;
+
+pub use ellipses::{ellipse, line_point_cov, ELLIPSE_SIGMA};
+
+use std::fmt::Write;
+
+use pfe_core::Feature;
+
+use axes::{tick_label, tick_step, Bounds};
+use ellipses::{ellipse_svg, exaggeration, feature_ellipses};
+use pfe_eval::methods::Extraction;
+use pfe_formats::Record;
+
+const POINT: &str = "#5a6b7d";
+const MARK: &str = "#d62728";
+const LINE: &str = "#1f77b4";
+const CIRCLE: &str = "#e67e00";
+const GRID: &str = "#e4e4e4";
+const BARE_MARK: &str = "#999999";
+
+/// Width of the plot area, px.
+const PLOT_W: f64 = 820.0;
+/// Largest height of the plot area, px.
+const PLOT_H_MAX: f64 = 760.0;
+const LEFT: f64 = 70.0;
+const TOP: f64 = 44.0;
+const BOTTOM: f64 = 56.0;
+const LEGEND_W: f64 = 250.0;
+
+/// Points of the arc of a circle feature from its first to its last point, the short way.
+fn arc_points(cx: f64, cy: f64, r: f64, a0: f64, a1: f64) -> Vec<(f64, f64)> {
+    let tau = std::f64::consts::TAU;
+    let mut d = (a1 - a0).rem_euclid(tau);
+    if d > std::f64::consts::PI {
+        d -= tau;
+    }
+    let steps = ((d.abs() / 0.05).ceil() as usize).clamp(2, 400);
+    (0..=steps)
+        .map(|k| {
+            let a = a0 + d * k as f64 / steps as f64;
+            (cx + r * a.cos(), cy + r * a.sin())
+        })
+        .collect()
+}
+
+/// The SVG document for one scan: points, mark points, features, axes and a legend.
+pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
+    let pts: Vec<Option<(f64, f64)>> = (0..record.ranges_mm.len())
+        .map(|i| record.point(i).map(|(x, y)| (f64::from(x), f64::from(y))))
+        .collect();
+    // Extent: the points and the scanner (features lie near their points; large circles are
+    // drawn only as far as the view goes).
+    let mut b = Bounds {
+        x0: 0.0,
+        x1: 0.0,
+        y0: 0.0,
+        y1: 0.0,
+    };
+    for &(x, y) in pts.iter().flatten() {
+        b.add(x, y);
+    }
+    for f in &ex.features {
+        if let Feature::Line(l) = f {
+            b.add(f64::from(l.start.x), f64::from(l.start.y));
+            b.add(f64::from(l.end.x), f64::from(l.end.y));
+        }
+    }
+    let span = (b.x1 - b.x0).max(b.y1 - b.y0).max(500.0);
+    let pad = 0.04 * span;
+    let (x0, x1) = (b.x0 - pad, b.x1 + pad);
+    let (mut y0, mut y1) = (b.y0 - pad, b.y1 + pad);
+    // Equal aspect: fit the width, then cap the height (a very tall scene scales down).
+    let mut scale = PLOT_W / (x1 - x0);
+    if (y1 - y0) * scale > PLOT_H_MAX {
+        scale = PLOT_H_MAX / (y1 - y0);
+    }
+    let plot_w = (x1 - x0) * scale;
+    // Keep the plot area at least 40 % as tall as wide so flat scenes stay readable.
+    let min_h = 0.4 * plot_w;
+    if (y1 - y0) * scale < min_h {
+        let extra = (min_h / scale - (y1 - y0)) / 2.0;
+        y0 -= extra;
+        y1 += extra;
+    }
+    let plot_h = (y1 - y0) * scale;
+    let width = LEFT + plot_w + 20.0 + LEGEND_W;
+    let height = TOP + plot_h + BOTTOM;
+    let sx = |x: f64| LEFT + (x - x0) * scale;
+    let sy = |y: f64| TOP + (y1 - y) * scale;
+
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="DejaVu Sans, Helvetica, Arial, sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{:.1}" y="26" font-size="15" font-weight="bold">{}</text>"#,
+        LEFT,
+        escape(title)
+    );
+    // Clip everything drawn in data coordinates to the plot area.
+    let _ = writeln!(
+        s,
+        r#"<defs><clipPath id="plot"><rect x="{LEFT:.1}" y="{TOP:.1}" width="{plot_w:.1}" height="{plot_h:.1}"/></clipPath></defs>"#
+    );
+
+    // Grid and ticks.
+    let step = tick_step((x1 - x0).max(y1 - y0), 8.0);
+    let metres = step >= 100.0 && (x1 - x0).max(y1 - y0) >= 2000.0;
+    let unit = if metres { "m" } else { "mm" };
+    let mut grid = String::new();
+    let mut labels = String::new();
+    let mut t = (x0 / step).ceil() * step;
+    while t <= x1 {
+        let px = sx(t);
+        let _ = write!(grid, "M{px:.1},{TOP:.1}V{:.1}", TOP + plot_h);
+        let _ = writeln!(
+            labels,
+            r#"<line x1="{px:.1}" y1="{:.1}" x2="{px:.1}" y2="{:.1}" stroke="black"/><text x="{px:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
+            TOP + plot_h,
+            TOP + plot_h + 5.0,
+            TOP + plot_h + 19.0,
+            tick_label(t, step, metres)
+        );
+        t += step;
+    }
+    let mut t = (y0 / step).ceil() * step;
+    while t <= y1 {
+        let py = sy(t);
+        let _ = write!(grid, "M{LEFT:.1},{py:.1}H{:.1}", LEFT + plot_w);
+        let _ = writeln!(
+            labels,
+            r#"<line x1="{:.1}" y1="{py:.1}" x2="{LEFT:.1}" y2="{py:.1}" stroke="black"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"#,
+            LEFT - 5.0,
+            LEFT - 8.0,
+            py + 4.0,
+            tick_label(t, step, metres)
+        );
+        t += step;
+    }
+    let _ = writeln!(
+        s,
+        r#"<path d="{grid}" stroke="{GRID}" stroke-width="1" fill="none"/>"#
+    );
+    let _ = writeln!(
+        s,
+        r#"<rect x="{LEFT:.1}" y="{TOP:.1}" width="{plot_w:.1}" height="{plot_h:.1}" fill="none" stroke="black"/>"#
+    );
+    s.push_str(&labels);
+    let _ = writeln!(
+        s,
+        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">x, forward ({unit})</text>"#,
+        LEFT + plot_w / 2.0,
+        TOP + plot_h + 40.0
+    );
+    let _ = writeln!(
+        s,
+        r#"<text transform="translate(18,{:.1}) rotate(-90)" text-anchor="middle">y, left ({unit})</text>"#,
+        TOP + plot_h / 2.0
+    );
+
+    let _ = writeln!(s, r#"<g clip-path="url(#plot)">"#);
+    // Field of view: the first and last beam as faint rays.
+    let reach = span * 2.0;
+    for i in [0, record.ranges_mm.len().saturating_sub(1)] {
+        let a = f64::from(record.geometry.bearing(i));
+        let _ = writeln!(
+            s,
+            r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="silver" stroke-dasharray="4 4"/>"#,
+            sx(0.0),
+            sy(0.0),
+            sx(reach * a.cos()),
+            sy(reach * a.sin())
+        );
+    }
+    // Points.
+    let mut d = String::new();
+    for &(x, y) in pts.iter().flatten() {
+        let _ = write!(d, "M{:.1},{:.1}h0", sx(x), sy(y));
+    }
+    let _ = writeln!(
+        s,
+        r#"<path d="{d}" stroke="{POINT}" stroke-width="3.2" stroke-linecap="round" fill="none"/>"#
+    );
+    // Features.
+    let (mut n_lines, mut n_circles) = (0, 0);
+    for f in &ex.features {
+        match f {
+            Feature::Line(l) => {
+                n_lines += 1;
+                let _ = writeln!(
+                    s,
+                    r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{LINE}" stroke-width="2.5" stroke-linecap="round" opacity="0.85"/>"#,
+                    sx(f64::from(l.start.x)),
+                    sy(f64::from(l.start.y)),
+                    sx(f64::from(l.end.x)),
+                    sy(f64::from(l.end.y))
+                );
+            }
+            Feature::Circle(c) => {
+                n_circles += 1;
+                let (cx, cy, r) = (
+                    f64::from(c.center.x),
+                    f64::from(c.center.y),
+                    f64::from(c.radius),
+                );
+                let _ = writeln!(
+                    s,
+                    r#"<circle cx="{:.1}" cy="{:.1}" r="{:.1}" fill="none" stroke="{CIRCLE}" stroke-width="1" stroke-dasharray="3 3"/>"#,
+                    sx(cx),
+                    sy(cy),
+                    r * scale
+                );
+                let arc: Vec<String> =
+                    arc_points(cx, cy, r, f64::from(c.start_angle), f64::from(c.end_angle))
+                        .iter()
+                        .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+                        .collect();
+                let _ = writeln!(
+                    s,
+                    r#"<polyline points="{}" fill="none" stroke="{CIRCLE}" stroke-width="3" stroke-linecap="round"/>"#,
+                    arc.join(" ")
+                );
+                let _ = writeln!(
+                    s,
+                    r#"<path d="M{:.1},{:.1}m-4,0h8m-4,-4v8" stroke="{CIRCLE}" stroke-width="1.5"/>"#,
+                    sx(cx),
+                    sy(cy)
+                );
+            }
+        }
+    }
+    // Uncertainty: 3σ ellipses, exaggerated by one factor for the whole plot.
+    let ellipses: Vec<_> = ex
+        .features
+        .iter()
+        .flat_map(|f| {
+            let colour = if matches!(f, Feature::Line(_)) {
+                LINE
+            } else {
+                CIRCLE
+            };
+            feature_ellipses(f).into_iter().map(move |e| (e, colour))
+        })
+        .collect();
+    let all: Vec<_> = ellipses.iter().map(|(e, _)| *e).collect();
+    let factor = exaggeration(&all, scale);
+    for ((x, y, e), colour) in &ellipses {
+        if e.0.is_finite() && e.1.is_finite() {
+            s.push_str(&ellipse_svg(sx(*x), sy(*y), *e, factor * scale, colour));
+            s.push('\n');
+        }
+    }
+    // Mark points on top; a mark no feature covers (its segment was too short to fit) grey.
+    let covered = |i: usize| {
+        ex.features.iter().any(|f| {
+            let (a, b) = match f {
+                Feature::Line(l) => (l.first, l.last),
+                Feature::Circle(c) => (c.first, c.last),
+            };
+            (usize::from(a)..=usize::from(b)).contains(&i)
+        })
+    };
+    let mut bare = 0;
+    for &i in &ex.marks {
+        if let Some(Some((x, y))) = pts.get(i) {
+            let colour = if covered(i) {
+                MARK
+            } else {
+                bare += 1;
+                BARE_MARK
+            };
+            let _ = writeln!(
+                s,
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3.8" fill="none" stroke="{colour}" stroke-width="1.3"/>"#,
+                sx(*x),
+                sy(*y)
+            );
+        }
+    }
+    // Scanner.
+    let (ox, oy) = (sx(0.0), sy(0.0));
+    let _ = writeln!(
+        s,
+        r#"<path d="M{:.1},{:.1}l-14,-8v16z" fill="black"/><text x="{:.1}" y="{:.1}" font-size="11">scanner</text>"#,
+        ox + 6.0,
+        oy,
+        ox - 8.0,
+        oy + 22.0
+    );
+    let _ = writeln!(s, "</g>");
+
+    // Legend, right of the plot.
+    let lx = LEFT + plot_w + 20.0;
+    let ly = TOP + 10.0;
+    let valid = pts.iter().flatten().count();
+    let entries = [
+        (
+            format!(
+                r#"<circle cx="{:.1}" cy="{:.1}" r="1.6" fill="{POINT}"/>"#,
+                lx + 12.0,
+                ly
+            ),
+            format!("points ({valid} of {})", pts.len()),
+        ),
+        (
+            format!(
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3.8" fill="none" stroke="{MARK}" stroke-width="1.3"/>"#,
+                lx + 12.0,
+                ly + 22.0
+            ),
+            format!("mark points ({})", ex.marks.len()),
+        ),
+        (
+            format!(
+                r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{LINE}" stroke-width="2.5"/>"#,
+                lx,
+                ly + 44.0,
+                lx + 24.0,
+                ly + 44.0
+            ),
+            format!("lines ({n_lines})"),
+        ),
+        (
+            format!(
+                r#"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="{CIRCLE}" stroke-width="3"/>"#,
+                lx,
+                ly + 66.0,
+                lx + 24.0,
+                ly + 66.0
+            ),
+            format!("circles/arcs ({n_circles})"),
+        ),
+        (
+            format!(
+                r#"<ellipse cx="{:.1}" cy="{:.1}" rx="10" ry="5" fill="{LINE}" fill-opacity="0.18" stroke="{LINE}" stroke-width="0.8"/>"#,
+                lx + 12.0,
+                ly + 88.0
+            ),
+            format!("ellipses: {ELLIPSE_SIGMA}σ × {factor}"),
+        ),
+        (
+            format!(
+                r#"<circle cx="{:.1}" cy="{:.1}" r="3.8" fill="none" stroke="{BARE_MARK}" stroke-width="1.3"/>"#,
+                lx + 12.0,
+                ly + 110.0
+            ),
+            format!("no feature ({bare}): segment too short"),
+        ),
+    ];
+    for (k, (icon, text)) in entries.iter().enumerate() {
+        s.push_str(icon);
+        let _ = writeln!(
+            s,
+            r#"<text x="{:.1}" y="{:.1}">{}</text>"#,
+            lx + 32.0,
+            ly + 22.0 * k as f64 + 4.0,
+            escape(text)
+        );
+    }
+    let g = &record.geometry;
+    let _ = writeln!(
+        s,
+        r#"<text x="{lx:.1}" y="{:.1}" font-size="11" fill="dimgray">{} beams, {:.2}° step</text>"#,
+        ly + 144.0,
+        pts.len(),
+        g.angle_step.to_degrees()
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="{lx:.1}" y="{:.1}" font-size="11" fill="dimgray">max range {:.1} m</text>"#,
+        ly + 160.0,
+        g.r_max / 1000.0
+    );
+    s.push_str("</svg>\n");
+    s
+}
+
+fn escape(t: &str) -> String {
+    t.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,153 @@
+//! End to end through the user's tools: the emulated LMS200 on a pty → the QEMU firmware
+//! between two serial lines (`cargo xtask run-qemu`'s `RunQemu`) → `pfe listen` on its output
+//! pty gives, scan for scan, exactly the features `pfe extract --format lms200` gives on a
+//! capture of the telegrams the emulator sent.
+//!
+//! Without qemu-system-arm or the thumbv7em target it prints `SKIPPED: …` and passes, except
+//! under `CI=true`, where it fails.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use lms200_emulator::serve::{serve_on, Pty};
+use lms200_emulator::{Emulator, EmulatorConfig, RunLimits};
+use lms2xx::codec::types::Unit;
+use pfe_testkit::qemu;
+use pfe_testkit::run_qemu::RunQemu;
+use serde_json::Value;
+
+const SCANS: u32 = 12;
+
+fn skip(why: &str) -> Option<PathBuf> {
+    let msg = format!("SKIPPED: e2e_listen: {why}");
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "{msg} (CI=true)"
+    );
+    eprintln!("{msg}");
+    None
+}
+
+fn firmware_elf() -> Option<PathBuf> {
+    if !qemu::have("qemu-system-arm") {
+        return skip("qemu-system-arm not found");
+    }
+    if !qemu::have_target() {
+        return skip("thumbv7em-none-eabihf target not installed");
+    }
+    let dir = std::env::var_os("CARGO_TARGET_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| qemu::root().join("target"))
+        .join("e2e-firmware");
+    Some(
+        qemu::build_firmware(
+            "pfe-qemu",
+            &[],
+            &[("CARGO_PROFILE_RELEASE_OPT_LEVEL", qemu::FIRMWARE_OPT_LEVEL)],
+            &dir,
+        )
+        .unwrap(),
+    )
+}
+
+fn json_lines(out: &[u8]) -> Vec<Value> {
+    String::from_utf8_lossy(out)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}
+
+#[test]
+fn listen_gives_what_extract_gives_on_the_same_telegrams() {
+    let Some(elf) = firmware_elf() else { return };
+    let tmp = std::env::temp_dir().join(format!("pfe-e2e-listen-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let (lms, out) = (tmp.join("lms200"), tmp.join("features"));
+
+    let mut pty = Pty::open(&lms).unwrap();
+    let stop = Arc::new(AtomicBool::new(false));
+    let limits = RunLimits {
+        stop: Some(stop.clone()),
+        max_time: Some(Duration::from_secs(300)),
+        ..RunLimits::default()
+    };
+    let emu = Emulator::from_config(EmulatorConfig::default());
+    let server = std::thread::spawn(move || serve_on(&mut pty, emu, limits));
+
+    let mut fw = RunQemu::start(&elf, &lms, &out, "default", SCANS).unwrap();
+    let listen = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args([
+            "listen",
+            "--scans",
+            &SCANS.to_string(),
+            "--seconds",
+            "240",
+            "--input",
+        ])
+        .arg(&out)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let listened = listen.wait_with_output().unwrap();
+    let code = fw.wait(Duration::from_secs(60)).unwrap();
+    stop.store(true, Ordering::Relaxed);
+    let report = server.join().unwrap().unwrap();
+    drop(fw);
+    assert_eq!(code, Some(0), "firmware exit code");
+    assert!(
+        listened.status.success(),
+        "pfe listen: {}",
+        String::from_utf8_lossy(&listened.stderr)
+    );
+    let got = json_lines(&listened.stdout);
+    assert_eq!(got.len(), SCANS as usize, "scans received");
+
+    // The capture: every B0 telegram the emulator sent, as bytes.
+    let mut capture = Vec::new();
+    for s in &report.scans {
+        capture.extend(qemu::b0_telegram(&s.words, s.unit == Unit::Mm).unwrap());
+    }
+    let cap = tmp.join("capture.lms");
+    std::fs::write(&cap, &capture).unwrap();
+    // The firmware runs one sweep, without `scrutiny`, where a systematic error is not added:
+    // told one sweep and none.
+    let extracted = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args([
+            "extract",
+            "--format",
+            "lms200",
+            "--sweeps",
+            "1",
+            "--sigma-sys",
+            "0",
+        ])
+        .arg(&cap)
+        .output()
+        .unwrap();
+    assert!(extracted.status.success());
+    let want = json_lines(&extracted.stdout);
+
+    // Firmware seq k is the emulator's telegram k + offset (telegrams sent before the
+    // firmware's driver was streaming are not scans to it).
+    let seq0 = got[0]["seq"].as_u64().unwrap() as usize;
+    let offset = (0..want.len())
+        .find(|&j| want[j]["features"] == got[0]["features"])
+        .expect("the first scan received matches no telegram")
+        .checked_sub(seq0)
+        .expect("offset");
+    for g in &got {
+        let k = g["seq"].as_u64().unwrap() as usize + offset;
+        assert_eq!(
+            g["features"], want[k]["features"],
+            "scan {} (telegram {k})",
+            g["seq"]
+        );
+        assert_eq!(g["status"], want[k]["status"]);
+    }
+    let _ = std::fs::remove_dir_all(&tmp);
+}
