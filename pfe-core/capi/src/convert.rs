@@ -1,0 +1,500 @@
+//! Between the C types and pfe-core's, and the extractor state behind a `pfe_extractor`: all
+//! safe code. Values from C that mean nothing are errors here, before pfe-core sees them.
+
+#![forbid(unsafe_code)]
+
+use pfe_core::{
+    BeamTiming, CircleMethod, Config, ExtractError, Extractor, Feature, Motion, NoiseModel,
+    RangeCorrection, Scan, ScanGeometry, Stats, Threshold, Typing,
+};
+
+use crate::types::pfe_status::{self, *};
+use crate::types::*;
+
+/// The extractor of the C API's capacities.
+pub(crate) type CExtractor = Extractor<PFE_MAX_READINGS, PFE_MAX_FEATURES>;
+
+/// What `pfe_extractor_init` writes in the caller's memory.
+#[repr(C)]
+pub(crate) struct State {
+    /// [`MAGIC`] once initialised (the caller's memory is zero or garbage before).
+    pub(crate) magic: u32,
+    /// 1 when the extractor's output is that of the last `pfe_extract_*` call (0 after a call
+    /// refused before pfe-core ran, so that no stale features are read as its result).
+    pub(crate) current: u32,
+    /// The extractor.
+    pub(crate) ex: CExtractor,
+}
+
+/// Marks a set-up extractor ("pfe1").
+pub(crate) const MAGIC: u32 = u32::from_le_bytes(*b"pfe1");
+
+const _: () = assert!(core::mem::size_of::<State>() <= PFE_EXTRACTOR_SIZE);
+const _: () = assert!(core::mem::align_of::<State>() <= PFE_EXTRACTOR_ALIGN);
+const _: () = assert!(core::mem::align_of::<pfe_extractor>() == PFE_EXTRACTOR_ALIGN);
+// The constant is the 64-bit size (the largest): no more than a cache line wasted there.
+const _: () = assert!(
+    core::mem::size_of::<usize>() != 8 || core::mem::size_of::<State>() + 64 > PFE_EXTRACTOR_SIZE
+);
+
+impl State {
+    /// A set-up extractor with no output.
+    pub(crate) const fn new() -> Self {
+        Self {
+            magic: MAGIC,
+            current: 0,
+            ex: Extractor::new(),
+        }
+    }
+
+    /// Extracts `scan` with `config` (already converted).
+    pub(crate) fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> pfe_status {
+        let r = self.ex.extract(scan, config);
+        self.current = 1;
+        match r {
+            Ok(_) => PFE_OK,
+            Err(e) => status_of(e),
+        }
+    }
+
+    /// The features of the last extraction (none after a refused call).
+    pub(crate) fn features(&self) -> &[Feature] {
+        match self.current {
+            0 => &[],
+            _ => self.ex.features(),
+        }
+    }
+
+    /// The statistics of the last extraction (zero after a refused call).
+    pub(crate) fn stats(&self) -> pfe_stats {
+        match self.current {
+            0 => pfe_stats::default(),
+            _ => stats_to_c(&self.ex.stats()),
+        }
+    }
+
+    /// Writes the mark points of the last extraction into `out` (as many as fit); returns how
+    /// many there are.
+    pub(crate) fn marks(&self, out: &mut [u16]) -> usize {
+        if self.current == 0 {
+            return 0;
+        }
+        let mut n = 0;
+        for i in self.ex.marks() {
+            if let Some(slot) = out.get_mut(n) {
+                // Indices are below PFE_MAX_READINGS < 2^16.
+                *slot = u16::try_from(i).unwrap_or(u16::MAX);
+            }
+            n += 1;
+        }
+        n
+    }
+}
+
+/// The C status of an extraction error.
+pub(crate) fn status_of(e: ExtractError) -> pfe_status {
+    match e {
+        ExtractError::TooManyReadings { .. } => PFE_ERR_TOO_MANY_READINGS,
+        ExtractError::InvalidGeometry => PFE_ERR_INVALID_GEOMETRY,
+        ExtractError::InvalidConfig => PFE_ERR_INVALID_CONFIG,
+        ExtractError::FeatureCapacity { .. } => PFE_ERR_FEATURE_CAPACITY,
+        _ => PFE_ERR_OTHER,
+    }
+}
+
+/// 0 → false, 1 → true, anything else → `None`.
+fn flag(v: u8) -> Option<bool> {
+    match v {
+        0 => Some(false),
+        1 => Some(true),
+        _ => None,
+    }
+}
+
+/// `true` → 1, `false` → 0.
+fn byte(b: bool) -> u8 {
+    u8::from(b)
+}
+
+/// A C count as `usize` (lossless on the 32- and 64-bit targets; saturating elsewhere).
+fn count(v: u32) -> usize {
+    usize::try_from(v).unwrap_or(usize::MAX)
+}
+
+/// A `usize` as a C count, saturating.
+fn count_c(v: usize) -> u32 {
+    u32::try_from(v).unwrap_or(u32::MAX)
+}
+
+/// The C form of `c` (every field set; those of unselected kinds from pfe's default mode).
+pub(crate) fn config_to_c(c: &Config) -> pfe_config {
+    let base = Config::default_config();
+    let noise_default = match base.threshold {
+        Threshold::Noise(m) => m,
+        Threshold::Paper { .. } => NoiseModel {
+            k: 0.0,
+            k_locate: 0.0,
+            floor: 0.0,
+            window: 0,
+            max_window: 0,
+            min_span: 0.0,
+            arc_window: 0,
+            arc_chi2: 0.0,
+            arc_max_radius: 0.0,
+        },
+    };
+    let paper = Config::paper();
+    let (paper_d0, paper_lambda) = match (c.threshold, paper.threshold) {
+        (Threshold::Paper { d0, lambda }, _) | (_, Threshold::Paper { d0, lambda }) => (d0, lambda),
+        _ => (0.0, 0.0),
+    };
+    let (threshold, m) = match c.threshold {
+        Threshold::Paper { .. } => (pfe_threshold::PFE_THRESHOLD_PAPER, noise_default),
+        Threshold::Noise(m) => (pfe_threshold::PFE_THRESHOLD_NOISE, m),
+    };
+    let d_f = match (c.typing, paper.typing) {
+        (Typing::MeanDistance { d_f }, _) | (_, Typing::MeanDistance { d_f }) => d_f,
+        _ => 0.0,
+    };
+    let (chi2, ratio, max_radius) = match (c.typing, base.typing) {
+        (
+            Typing::CompareFits {
+                chi2,
+                ratio,
+                max_radius,
+            },
+            _,
+        )
+        | (
+            _,
+            Typing::CompareFits {
+                chi2,
+                ratio,
+                max_radius,
+            },
+        ) => (chi2, ratio, max_radius),
+        _ => (0.0, 0.0, 0.0),
+    };
+    let typing = match c.typing {
+        Typing::MeanDistance { .. } => pfe_typing::PFE_TYPING_MEAN_DISTANCE,
+        Typing::CompareFits { .. } => pfe_typing::PFE_TYPING_COMPARE_FITS,
+    };
+    let circle_method = match c.circle_method {
+        CircleMethod::Kasa => pfe_circle_method::PFE_CIRCLE_KASA,
+        CircleMethod::Taubin => pfe_circle_method::PFE_CIRCLE_TAUBIN,
+        CircleMethod::Hyper => pfe_circle_method::PFE_CIRCLE_HYPER,
+    };
+    let correction = c.correction.unwrap_or(RangeCorrection::IDENTITY);
+    pfe_config {
+        threshold: threshold as u8,
+        typing: typing as u8,
+        circle_method: circle_method as u8,
+        check_step: byte(c.check_step),
+        scrutiny: byte(c.scrutiny),
+        has_correction: byte(c.correction.is_some()),
+        paper_d0,
+        paper_lambda,
+        noise: pfe_noise_model {
+            k: m.k,
+            k_locate: m.k_locate,
+            floor: m.floor,
+            window: count_c(m.window),
+            max_window: count_c(m.max_window),
+            min_span: m.min_span,
+            arc_window: count_c(m.arc_window),
+            arc_chi2: m.arc_chi2,
+            arc_max_radius: m.arc_max_radius,
+        },
+        mean_distance_d_f: d_f,
+        compare_chi2: chi2,
+        compare_ratio: ratio,
+        compare_max_radius: max_radius,
+        min_points: count_c(c.min_points),
+        circle_refine: count_c(c.circle_refine),
+        sigma_r: c.sigma_r,
+        sigma_sys: c.sigma_sys,
+        correction_coeffs: correction.coeffs,
+        correction_scale: correction.scale,
+    }
+}
+
+/// pfe-core's configuration of `c`, when it is one (`PFE_ERR_INVALID_CONFIG` otherwise).
+pub(crate) fn config_from_c(c: &pfe_config) -> Result<Config, pfe_status> {
+    const BAD: pfe_status = PFE_ERR_INVALID_CONFIG;
+    let m = &c.noise;
+    let threshold = match c.threshold {
+        t if t == pfe_threshold::PFE_THRESHOLD_PAPER as u8 => Threshold::Paper {
+            d0: c.paper_d0,
+            lambda: c.paper_lambda,
+        },
+        t if t == pfe_threshold::PFE_THRESHOLD_NOISE as u8 => Threshold::Noise(NoiseModel {
+            k: m.k,
+            k_locate: m.k_locate,
+            floor: m.floor,
+            window: count(m.window),
+            max_window: count(m.max_window),
+            min_span: m.min_span,
+            arc_window: count(m.arc_window),
+            arc_chi2: m.arc_chi2,
+            arc_max_radius: m.arc_max_radius,
+        }),
+        _ => return Err(BAD),
+    };
+    let typing = match c.typing {
+        t if t == pfe_typing::PFE_TYPING_MEAN_DISTANCE as u8 => Typing::MeanDistance {
+            d_f: c.mean_distance_d_f,
+        },
+        t if t == pfe_typing::PFE_TYPING_COMPARE_FITS as u8 => Typing::CompareFits {
+            chi2: c.compare_chi2,
+            ratio: c.compare_ratio,
+            max_radius: c.compare_max_radius,
+        },
+        _ => return Err(BAD),
+    };
+    let circle_method = match c.circle_method {
+        v if v == pfe_circle_method::PFE_CIRCLE_KASA as u8 => CircleMethod::Kasa,
+        v if v == pfe_circle_method::PFE_CIRCLE_TAUBIN as u8 => CircleMethod::Taubin,
+        v if v == pfe_circle_method::PFE_CIRCLE_HYPER as u8 => CircleMethod::Hyper,
+        _ => return Err(BAD),
+    };
+    let correction = match flag(c.has_correction).ok_or(BAD)? {
+        false => None,
+        true => {
+            let ok = c.correction_coeffs.iter().all(|v| v.is_finite())
+                && c.correction_scale.is_finite()
+                && c.correction_scale > 0.0;
+            if !ok {
+                return Err(BAD);
+            }
+            Some(RangeCorrection {
+                coeffs: c.correction_coeffs,
+                scale: c.correction_scale,
+            })
+        }
+    };
+    // `Config` grows (it is `#[non_exhaustive]`): start from a value and set every field.
+    let mut out = Config::default_config();
+    out.threshold = threshold;
+    out.check_step = flag(c.check_step).ok_or(BAD)?;
+    out.typing = typing;
+    out.min_points = count(c.min_points);
+    out.circle_method = circle_method;
+    out.circle_refine = count(c.circle_refine);
+    out.sigma_r = c.sigma_r;
+    out.sigma_sys = c.sigma_sys;
+    out.correction = correction;
+    out.scrutiny = flag(c.scrutiny).ok_or(BAD)?;
+    match out.is_valid() {
+        true => Ok(out),
+        false => Err(BAD),
+    }
+}
+
+/// pfe-core's geometry of `g` (pfe-core checks it).
+pub(crate) fn geometry_from_c(g: &pfe_geometry) -> ScanGeometry {
+    ScanGeometry {
+        start_angle: g.start_angle,
+        angle_step: g.angle_step,
+        r_max: g.r_max,
+    }
+}
+
+/// The C form of `g`.
+pub(crate) fn geometry_to_c(g: &ScanGeometry) -> pfe_geometry {
+    pfe_geometry {
+        start_angle: g.start_angle,
+        angle_step: g.angle_step,
+        r_max: g.r_max,
+    }
+}
+
+/// The options `pfe_scan_options_default` gives.
+pub(crate) const DEFAULT_OPTIONS: pfe_scan_options = pfe_scan_options {
+    sweeps: 1,
+    has_motion: 0,
+    quantum: 0.0,
+    motion: pfe_motion {
+        v: 0.0,
+        omega: 0.0,
+        beam_dt: 0.0,
+        sweep_dt: 0.0,
+        sweeps: 1,
+    },
+};
+
+/// `scan` with the options `o` applied (`PFE_ERR_INVALID_ARGUMENT` for a quantum or motion
+/// that is not finite, or a flag that is not 0 or 1).
+pub(crate) fn with_options<'a>(
+    mut scan: Scan<'a>,
+    o: &pfe_scan_options,
+) -> Result<Scan<'a>, pfe_status> {
+    const BAD: pfe_status = PFE_ERR_INVALID_ARGUMENT;
+    if !(o.quantum.is_finite() && o.quantum >= 0.0) {
+        return Err(BAD);
+    }
+    scan = scan.with_sweeps(o.sweeps);
+    if o.quantum > 0.0 {
+        scan = scan.with_quantum(o.quantum);
+    }
+    if flag(o.has_motion).ok_or(BAD)? {
+        let m = &o.motion;
+        let motion = Motion {
+            v: m.v,
+            omega: m.omega,
+            timing: BeamTiming::interleaved(m.sweeps, m.sweep_dt, m.beam_dt),
+        };
+        if !motion.is_valid() {
+            return Err(BAD);
+        }
+        scan = scan.with_motion(motion);
+    }
+    Ok(scan)
+}
+
+/// A raw-code unit that can be used: finite and positive.
+pub(crate) fn unit_ok(unit_mm: f32) -> bool {
+    unit_mm.is_finite() && unit_mm > 0.0
+}
+
+/// The C form of `f`.
+pub(crate) fn feature_to_c(f: &Feature) -> pfe_feature {
+    match f {
+        Feature::Line(l) => pfe_feature {
+            kind: pfe_feature_kind::PFE_FEATURE_LINE,
+            first: l.first,
+            last: l.last,
+            points: l.points,
+            shape: pfe_feature_shape {
+                line: pfe_line {
+                    alpha: l.alpha,
+                    rho: l.rho,
+                    var_alpha: l.var_alpha,
+                    var_rho: l.var_rho,
+                    cov_alpha_rho: l.cov_alpha_rho,
+                    start: pfe_point {
+                        x: l.start.x,
+                        y: l.start.y,
+                    },
+                    end: pfe_point {
+                        x: l.end.x,
+                        y: l.end.y,
+                    },
+                },
+            },
+        },
+        Feature::Circle(c) => pfe_feature {
+            kind: pfe_feature_kind::PFE_FEATURE_CIRCLE,
+            first: c.first,
+            last: c.last,
+            points: c.points,
+            shape: pfe_feature_shape {
+                circle: pfe_circle {
+                    center: pfe_point {
+                        x: c.center.x,
+                        y: c.center.y,
+                    },
+                    radius: c.radius,
+                    cov: c.cov,
+                    start_angle: c.start_angle,
+                    end_angle: c.end_angle,
+                },
+            },
+        },
+    }
+}
+
+/// The C form of `s`.
+pub(crate) fn stats_to_c(s: &Stats) -> pfe_stats {
+    pfe_stats {
+        readings: count_c(s.readings),
+        valid: count_c(s.valid),
+        segments: count_c(s.segments),
+        short_segments: count_c(s.short_segments),
+        degenerate: count_c(s.degenerate),
+        features: count_c(s.features),
+        dropped: count_c(s.dropped),
+        predictions: count_c(s.predictions),
+        sweeps_aligned: count_c(s.sweeps_aligned),
+        scan_sigma_um: s.scan_sigma_um,
+    }
+}
+
+/// The static text of a status code.
+pub(crate) fn status_text(status: i32) -> &'static core::ffi::CStr {
+    match status {
+        0 => c"ok",
+        -1 => c"a required pointer is NULL",
+        -2 => c"buffer too small",
+        -3 => c"pointer misaligned",
+        -4 => c"extractor not initialised (pfe_extractor_init)",
+        -5 => c"invalid argument (NaN, infinite or negative unit, quantum or motion; bad flag)",
+        -6 => c"scan has more readings than PFE_MAX_READINGS",
+        -7 => c"invalid scan geometry",
+        -8 => c"invalid configuration",
+        -9 => c"feature buffer full: features dropped (see pfe_stats.dropped)",
+        -10 => c"feature index out of range",
+        -11 => c"unknown extraction error",
+        _ => c"not a pfe status",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn both_named_configurations_survive_the_round_trip() {
+        for c in [
+            Config::paper(),
+            Config::default_config(),
+            Config::paper().with_sigma_r(2.0).with_sigma_sys(15.0),
+        ] {
+            assert_eq!(config_from_c(&config_to_c(&c)), Ok(c));
+        }
+    }
+
+    #[test]
+    fn unknown_kinds_flags_and_nan_parameters_are_refused() {
+        let good = config_to_c(&Config::default_config());
+        let cases: [fn(&mut pfe_config); 9] = [
+            |c| c.threshold = 2,
+            |c| c.typing = 7,
+            |c| c.circle_method = 3,
+            |c| c.check_step = 2,
+            |c| c.scrutiny = 255,
+            |c| c.sigma_r = f32::NAN,
+            |c| c.noise.k = f32::INFINITY,
+            |c| c.min_points = 1,
+            |c| {
+                c.has_correction = 1;
+                c.correction_coeffs[3] = f32::NAN;
+            },
+        ];
+        for (i, edit) in cases.iter().enumerate() {
+            let mut c = good;
+            edit(&mut c);
+            assert_eq!(config_from_c(&c), Err(PFE_ERR_INVALID_CONFIG), "case {i}");
+        }
+    }
+
+    #[test]
+    fn options_reject_nan_quantum_and_motion_and_set_the_scan() {
+        let r = [1000.0_f32; 3];
+        let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &r);
+        let mut o = DEFAULT_OPTIONS;
+        o.sweeps = 2;
+        o.quantum = 10.0;
+        let s = with_options(scan, &o).map_err(|_| ()).unwrap();
+        assert_eq!((s.sweeps, s.quantum, s.motion), (2, 10.0, None));
+        o.quantum = f32::NAN;
+        assert_eq!(with_options(scan, &o).err(), Some(PFE_ERR_INVALID_ARGUMENT));
+        o.quantum = 0.0;
+        o.has_motion = 1;
+        o.motion.v = f32::NAN;
+        assert_eq!(with_options(scan, &o).err(), Some(PFE_ERR_INVALID_ARGUMENT));
+        o.motion.v = 100.0;
+        o.motion.beam_dt = 1e-4;
+        let s = with_options(scan, &o).map_err(|_| ()).unwrap();
+        assert_eq!(s.motion.map(|m| m.v), Some(100.0));
+    }
+}

@@ -1,0 +1,331 @@
+//! The C API from C: `tests/c/pfe_test.c`, compiled with the host's C compiler (`$CC`, else
+//! `cc`) against the static library cargo built for this test run, checks every error path
+//! and extracts the eval's scans (`pfe eval`: the main comparison, the scene kinds, the noise
+//! sweep and the robustness conditions, simulated by host-tests) with the paper's and the
+//! default configuration, from mm and from raw codes. Its output must equal pfe-core's, float
+//! for float, bit for bit; and pfe-core's must be the eval's own (its `Pfe` method).
+//! Skipped loudly (host-tests' skip list) when there is no C compiler.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use host_tests::eval;
+use host_tests::methods::{Method, Pfe};
+use host_tests::scene::{Scenario, SceneKind, SimScan};
+use host_tests::skip::{skip, Need};
+use pfe_core::{Config, ExtractError, Extractor, Feature, Scan};
+
+const N: usize = pfe_capi::PFE_MAX_READINGS;
+const M: usize = pfe_capi::PFE_MAX_FEATURES;
+
+/// The crate's directory.
+fn here() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `libpfe_capi.a` of this build. Cargo builds it beside the test binary (in `deps/`, named
+/// with the hash of this build's features) without copying it up: the newest one that is not
+/// newer than the test binary is the one compiled with the rlib this test links.
+fn static_lib() -> PathBuf {
+    let exe = std::env::current_exe().expect("test binary path");
+    let built = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).ok();
+    let exe_time = built(&exe).expect("test binary time");
+    let deps = exe.parent().expect("target/<profile>/deps");
+    std::fs::read_dir(deps)
+        .expect("read deps/")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("libpfe_capi-") && n.ends_with(".a"))
+        })
+        .filter_map(|p| built(&p).filter(|t| *t <= exe_time).map(|t| (t, p)))
+        .max()
+        .map(|(_, p)| p)
+        .expect("libpfe_capi-*.a in deps/ (cargo builds the staticlib with the test)")
+}
+
+/// The C compiler: `$CC` or `cc`, when it runs.
+fn c_compiler() -> Option<String> {
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+    Command::new(&cc)
+        .arg("--version")
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .map(|_| cc)
+}
+
+/// Compiles `tests/c/pfe_test.c` into the test's temporary directory; `None` (skipped
+/// loudly) without a C compiler.
+fn build_c_test(test: &str) -> Option<PathBuf> {
+    let Some(cc) = c_compiler() else {
+        skip(test, "no C compiler (cc or $CC)", Need::InCi);
+        return None;
+    };
+    let lib = static_lib();
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pfe_test");
+    let status = Command::new(&cc)
+        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-O1", "-o"])
+        .arg(&out)
+        .arg(here().join("tests/c/pfe_test.c"))
+        .arg("-I")
+        .arg(here().join("include"))
+        .arg(&lib)
+        // What Rust's std needs from the C runtime on Linux (rustc --print native-static-libs).
+        .args([
+            "-lgcc_s",
+            "-lutil",
+            "-lrt",
+            "-lpthread",
+            "-lm",
+            "-ldl",
+            "-lc",
+        ])
+        .status()
+        .expect("run the C compiler");
+    assert!(status.success(), "compiling tests/c/pfe_test.c failed");
+    Some(out)
+}
+
+#[test]
+fn every_error_is_a_return_code_from_c() {
+    let Some(exe) = build_c_test("pfe-capi c_api every_error_is_a_return_code_from_c") else {
+        return;
+    };
+    let out = Command::new(&exe)
+        .arg("errors")
+        .output()
+        .expect("run pfe_test");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    eprint!("{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "pfe_test errors: {stdout}");
+    assert!(stdout.contains(", 0 failed"), "{stdout}");
+}
+
+/// The eval's scans (`pfe eval`'s defaults: seed 1, 100 scans, σ_r 5 mm, sweep 1, 2, 5,
+/// 10 mm), each with its σ_r: the main level, each scene kind (50 scans), the sweep's other
+/// levels and every robustness condition.
+fn eval_scans() -> Vec<(f32, SimScan)> {
+    let o = eval::EvalOptions::default();
+    let mut levels: Vec<(f32, Vec<Scenario>)> =
+        vec![(o.sigma, eval::scenarios(o.kind, o.scans, o.sigma, o.seed))];
+    for k in SceneKind::CONCRETE {
+        let n = (o.scans / 2).max(1);
+        levels.push((o.sigma, eval::scenarios(k, n, o.sigma, o.seed)));
+    }
+    for &s in o.sweep.iter().filter(|&&s| s != o.sigma) {
+        levels.push((s, eval::scenarios(o.kind, o.scans, s, o.seed)));
+    }
+    for (_, change) in eval::conditions() {
+        let mut sc = eval::scenarios(o.kind, o.scans, o.sigma, o.seed);
+        sc.iter_mut().for_each(change);
+        levels.push((o.sigma, sc));
+    }
+    levels
+        .into_iter()
+        .flat_map(|(s, sc)| sc.iter().map(|c| (s, c.simulate())).collect::<Vec<_>>())
+        .collect()
+}
+
+/// The scans in `pfe_test extract`'s input format.
+fn write_scans(scans: &[(f32, SimScan)]) -> String {
+    let mut s = String::new();
+    for (id, (sigma, sim)) in scans.iter().enumerate() {
+        let g = sim.geometry;
+        let (has_motion, m) = match sim.odometry {
+            Some(m) => (1, m),
+            None => (0, pfe_core::Motion::uniform(0.0, 0.0, 0.0)),
+        };
+        let b = f32::to_bits;
+        writeln!(
+            s,
+            "S {id} {:x} {} {:x} {:x} {:x} {:x} {:x} {has_motion} {:x} {:x} {:x} {:x} {} {}",
+            b(*sigma),
+            sim.sweeps,
+            b(sim.mm_per_unit),
+            b(sim.mm_per_unit),
+            b(g.start_angle),
+            b(g.angle_step),
+            b(g.r_max),
+            b(m.v),
+            b(m.omega),
+            b(m.timing.beam_dt),
+            b(m.timing.sweep_dt),
+            m.timing.sweeps,
+            sim.ranges_mm.len(),
+        )
+        .ok();
+        write!(s, "R {}", sim.ranges_mm.len()).ok();
+        for r in &sim.ranges_mm {
+            write!(s, " {:x}", r.to_bits()).ok();
+        }
+        write!(s, "\nC {}", sim.raw.len()).ok();
+        for c in &sim.raw {
+            write!(s, " {c}").ok();
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// pfe_test's status code of an extraction.
+fn code(r: Result<pfe_core::Stats, ExtractError>) -> i32 {
+    match r {
+        Ok(_) => 0,
+        Err(ExtractError::TooManyReadings { .. }) => -6,
+        Err(ExtractError::InvalidGeometry) => -7,
+        Err(ExtractError::InvalidConfig) => -8,
+        Err(ExtractError::FeatureCapacity { .. }) => -9,
+        Err(_) => -11,
+    }
+}
+
+/// What pfe_test prints for one extraction, from pfe-core.
+fn print_result(
+    out: &mut String,
+    ex: &Extractor<N, M>,
+    r: Result<pfe_core::Stats, ExtractError>,
+    cfg: &str,
+    path: &str,
+    id: usize,
+) {
+    let st = ex.stats();
+    let f = ex.features();
+    writeln!(out, "X {id} {cfg} {path} {} {}", code(r), f.len()).ok();
+    writeln!(
+        out,
+        "T {} {} {} {} {} {} {} {} {} {}",
+        st.readings,
+        st.valid,
+        st.segments,
+        st.short_segments,
+        st.degenerate,
+        st.features,
+        st.dropped,
+        st.predictions,
+        st.sweeps_aligned,
+        st.scan_sigma_um
+    )
+    .ok();
+    for feature in f {
+        let (tag, first, last, points, values): (_, _, _, _, Vec<f32>) = match feature {
+            Feature::Line(l) => ("L", l.first, l.last, l.points, l.values().to_vec()),
+            Feature::Circle(c) => ("C", c.first, c.last, c.points, c.values().to_vec()),
+        };
+        write!(out, "{tag} {first} {last} {points}").ok();
+        for v in values {
+            write!(out, " {:08x}", v.to_bits()).ok();
+        }
+        out.push('\n');
+    }
+    out.push('M');
+    for m in ex.marks() {
+        write!(out, " {m}").ok();
+    }
+    out.push('\n');
+}
+
+/// `scan` with what the eval tells pfe about `sim` (its `ScanContext`): the odometry and the
+/// sweeps.
+fn with<'a>(mut scan: Scan<'a>, sim: &SimScan) -> Scan<'a> {
+    if let Some(m) = sim.odometry {
+        scan = scan.with_motion(m);
+    }
+    scan.with_sweeps(u8::try_from(sim.sweeps).expect("sweeps fit u8"))
+}
+
+#[test]
+fn c_extracts_the_eval_scans_bit_for_bit_as_rust() {
+    let test = "pfe-capi c_api c_extracts_the_eval_scans_bit_for_bit_as_rust";
+    let scans = eval_scans();
+    // pfe-core's output, the way the C test asks for it; and the eval's own (its `Pfe`
+    // method, with its larger capacities) must be the same.
+    let mut ex = Box::new(Extractor::<N, M>::new());
+    let mut expected = String::new();
+    let mut features = 0;
+    let mut circles = 0;
+    let mut overflows = 0;
+    for (id, (sigma, sim)) in scans.iter().enumerate() {
+        for (cfg, config) in [
+            ("paper", Config::paper().with_sigma_r(*sigma)),
+            ("default", Config::default().with_sigma_r(*sigma)),
+        ] {
+            let scan = with(Scan::from_mm(sim.geometry, &sim.ranges_mm), sim)
+                .with_quantum(sim.mm_per_unit);
+            let r = ex.extract(&scan, &config);
+            let mut method = Pfe::new(cfg, config);
+            let eval = method.extract_in(&sim.geometry, &sim.ranges_mm, &sim.context());
+            assert!(method.last_result().is_ok(), "scan {id} {cfg}");
+            match r {
+                Ok(_) => assert_eq!(eval.features, ex.features(), "scan {id} {cfg}"),
+                // More than M features (the paper's method on mixed pixels): the first M are
+                // the eval's first M, and the rest are counted.
+                Err(ExtractError::FeatureCapacity { dropped }) => {
+                    assert_eq!(
+                        eval.features.get(..M),
+                        Some(ex.features()),
+                        "scan {id} {cfg}"
+                    );
+                    assert_eq!(eval.features.len(), M + dropped, "scan {id} {cfg}");
+                    overflows += 1;
+                }
+                Err(e) => panic!("scan {id} {cfg}: {e:?}"),
+            }
+            assert_eq!(
+                eval.marks,
+                ex.marks().collect::<Vec<_>>(),
+                "scan {id} {cfg}"
+            );
+            features += ex.features().len();
+            circles += ex.features().iter().filter(|f| !f.is_line()).count();
+            print_result(&mut expected, &ex, r, cfg, "mm", id);
+            let scan = with(Scan::from_lms(sim.geometry, &sim.raw, sim.mm_per_unit), sim);
+            let r = ex.extract(&scan, &config);
+            print_result(&mut expected, &ex, r, cfg, "lms", id);
+        }
+    }
+    // The scans exercise the library: many features, circles among them, every kind of scan.
+    assert!(scans.len() >= 1000, "{} scans", scans.len());
+    assert!(
+        features > 20 * scans.len() && circles > scans.len(),
+        "{features} {circles}"
+    );
+    assert!(scans.iter().any(|(_, s)| s.odometry.is_some()));
+    assert!(scans
+        .iter()
+        .any(|(_, s)| s.sweeps == 4 && s.ranges_mm.len() == 721));
+    assert!(scans.iter().any(|(_, s)| s.mm_per_unit == 10.0));
+    assert!(overflows > 0, "no scan fills the feature buffer");
+
+    let Some(exe) = build_c_test(test) else {
+        return;
+    };
+    let input = Path::new(env!("CARGO_TARGET_TMPDIR")).join("eval_scans.txt");
+    std::fs::write(&input, write_scans(&scans)).expect("write the scans");
+    let out = Command::new(&exe)
+        .arg("extract")
+        .arg(&input)
+        .output()
+        .expect("run pfe_test");
+    eprint!("{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "pfe_test extract failed");
+    let got = String::from_utf8(out.stdout).expect("UTF-8 output");
+    if let Some((i, (a, b))) = got
+        .lines()
+        .zip(expected.lines())
+        .enumerate()
+        .find(|(_, (a, b))| a != b)
+    {
+        panic!("line {}: C printed\n  {a}\nRust:\n  {b}", i + 1);
+    }
+    assert_eq!(got.lines().count(), expected.lines().count());
+    eprintln!(
+        "C API bit-identical to pfe-core on {} eval scans × 2 configurations × 2 inputs \
+         ({features} features of which {circles} circles from mm; {overflows} extractions \
+         over PFE_MAX_FEATURES; {} output lines)",
+        scans.len(),
+        expected.lines().count()
+    );
+}
