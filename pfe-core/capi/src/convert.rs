@@ -14,7 +14,8 @@ use crate::types::*;
 /// The extractor of the C API's capacities.
 pub(crate) type CExtractor = Extractor<PFE_MAX_READINGS, PFE_MAX_FEATURES>;
 
-/// What `pfe_extractor_init` writes in the caller's memory.
+/// What `pfe_extractor_init` writes in the caller's memory: zero bytes (an extractor as
+/// `Extractor::new()` makes it, no output) and the mark.
 #[repr(C)]
 pub(crate) struct State {
     /// [`MAGIC`] once initialised (the caller's memory is zero or garbage before).
@@ -38,15 +39,6 @@ const _: () = assert!(
 );
 
 impl State {
-    /// A set-up extractor with no output.
-    pub(crate) const fn new() -> Self {
-        Self {
-            magic: MAGIC,
-            current: 0,
-            ex: Extractor::new(),
-        }
-    }
-
     /// Extracts `scan` with `config` (already converted).
     pub(crate) fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> pfe_status {
         let r = self.ex.extract(scan, config);

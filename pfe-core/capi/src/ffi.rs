@@ -145,8 +145,15 @@ pub unsafe extern "C" fn pfe_extractor_init(mem: *mut pfe_extractor, size: usize
         return PFE_ERR_BUFFER_TOO_SMALL;
     }
     // SAFETY: non-NULL, aligned, at least size_of::<State>() writable bytes (checked, and the
-    // caller's contract). Whatever was there is plain bytes: nothing to drop.
-    unsafe { p.write(State::new()) };
+    // caller's contract); whatever was there is plain bytes, nothing to drop. Zero bytes are
+    // `State::new()` but for its mark: pfe-core's `Extractor::new()` is all zero bytes (so
+    // that a `static` extractor goes to .bss; tests/in_place.rs checks it). Zeroing in place
+    // rather than writing `State::new()` keeps the 31 KiB value off the stack (the compiler
+    // builds it there first, more than many a microcontroller's stack).
+    unsafe {
+        p.write_bytes(0, 1);
+        ptr::addr_of_mut!((*p).magic).write(MAGIC);
+    }
     PFE_OK
 }
 

@@ -27,11 +27,16 @@
 //!     assert_eq!(pfe_extractor_init(ex.as_mut_ptr(), PFE_EXTRACTOR_SIZE), pfe_status::PFE_OK);
 //!     assert_eq!(pfe_geometry_lms200(180.0, 0.5, g.as_mut_ptr()), pfe_status::PFE_OK);
 //!     assert_eq!(pfe_config_default(c.as_mut_ptr()), pfe_status::PFE_OK);
-//!     let ranges = [3000.0_f32; 361]; // a round room of radius 3 m
+//!     let ranges = [1500.0_f32; 361]; // a round room of radius 1.5 m
 //!     let st = pfe_extract_mm(ex.as_mut_ptr(), g.as_ptr(), ranges.as_ptr(), 361, c.as_ptr(),
 //!         core::ptr::null());
 //!     assert_eq!(st, pfe_status::PFE_OK);
 //!     assert_eq!(pfe_feature_count(ex.as_ptr()), 1);
+//!     let mut f = core::mem::MaybeUninit::uninit();
+//!     assert_eq!(pfe_feature_get(ex.as_ptr(), 0, f.as_mut_ptr()), pfe_status::PFE_OK);
+//!     let f = f.assume_init();
+//!     assert_eq!(f.kind, pfe_feature_kind::PFE_FEATURE_CIRCLE);
+//!     assert!((f.shape.circle.radius - 1500.0).abs() < 0.5);
 //! }
 //! ```
 #![no_std]

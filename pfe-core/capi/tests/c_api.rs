@@ -6,6 +6,9 @@
 //! for float, bit for bit; and pfe-core's must be the eval's own (its `Pfe` method).
 //! Skipped loudly (host-tests' skip list) when there is no C compiler.
 
+// Test helpers: a failure to run a tool or read a file fails the test.
+#![allow(clippy::expect_used, clippy::panic, clippy::indexing_slicing)]
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -328,4 +331,59 @@ fn c_extracts_the_eval_scans_bit_for_bit_as_rust() {
         scans.len(),
         expected.lines().count()
     );
+}
+
+#[test]
+fn the_c_example_finds_the_wall_and_the_pillar() {
+    let test = "pfe-capi c_api the_c_example_finds_the_wall_and_the_pillar";
+    let Some(cc) = c_compiler() else {
+        skip(test, "no C compiler (cc or $CC)", Need::InCi);
+        return;
+    };
+    let exe = Path::new(env!("CARGO_TARGET_TMPDIR")).join("static_extractor");
+    let status = Command::new(&cc)
+        .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-o"])
+        .arg(&exe)
+        .arg(here().join("examples/static_extractor.c"))
+        .arg("-I")
+        .arg(here().join("include"))
+        .arg(static_lib())
+        .args(["-lm", "-lpthread", "-ldl"])
+        .status()
+        .expect("run the C compiler");
+    assert!(
+        status.success(),
+        "compiling examples/static_extractor.c failed"
+    );
+    let out = Command::new(&exe).output().expect("run the example");
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    // The scene the example draws: the wall x = 2000 mm (α 0, ρ 2000) on both sides of a
+    // pillar of radius 150 mm at (1200, 600).
+    let numbers = |l: &str| -> Vec<f64> {
+        l.split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))
+            .filter_map(|w| w.parse().ok())
+            .collect()
+    };
+    let lines: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| l.starts_with("line"))
+        .map(numbers)
+        .collect();
+    let circles: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| l.starts_with("circle"))
+        .map(numbers)
+        .collect();
+    assert_eq!((lines.len(), circles.len()), (2, 1), "{text}");
+    for l in &lines {
+        // beams first, last; alpha; rho; sd
+        assert!(l[2].abs() < 1e-3 && (l[3] - 2000.0).abs() < 1.0, "{text}");
+    }
+    let c = &circles[0];
+    assert!(
+        (c[2] - 1200.0).abs() < 5.0 && (c[3] - 600.0).abs() < 5.0,
+        "{text}"
+    );
+    assert!((c[4] - 150.0).abs() < 5.0, "{text}");
 }

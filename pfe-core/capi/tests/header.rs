@@ -2,6 +2,9 @@
 //! that is not regenerated fails here (regenerate with `PFE_BLESS_HEADER=1 cargo test -p
 //! pfe-capi --test header`).
 
+// Test helpers: a failure to run a tool or read a file fails the test.
+#![allow(clippy::expect_used, clippy::panic, clippy::indexing_slicing)]
+
 use std::path::Path;
 
 #[test]
