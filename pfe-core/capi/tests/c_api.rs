@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use host_tests::eval;
+use host_tests::formats::{self, carmen, Format};
 use host_tests::methods::{Method, Pfe};
 use host_tests::scene::{Scenario, SceneKind, SimScan};
 use host_tests::skip::{skip, Need};
@@ -60,15 +61,16 @@ fn c_compiler() -> Option<String> {
         .map(|_| cc)
 }
 
-/// Compiles `tests/c/pfe_test.c` into the test's temporary directory; `None` (skipped
-/// loudly) without a C compiler.
+/// Compiles `tests/c/pfe_test.c` into the test's temporary directory (a program per test:
+/// they run in parallel); `None` (skipped loudly) without a C compiler.
 fn build_c_test(test: &str) -> Option<PathBuf> {
     let Some(cc) = c_compiler() else {
         skip(test, "no C compiler (cc or $CC)", Need::InCi);
         return None;
     };
     let lib = static_lib();
-    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("pfe_test");
+    let name = test.rsplit(' ').next().unwrap_or("pfe_test");
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("pfe_test-{name}"));
     let status = Command::new(&cc)
         .args(["-std=c11", "-Wall", "-Wextra", "-Werror", "-O1", "-o"])
         .arg(&out)
@@ -132,23 +134,87 @@ fn eval_scans() -> Vec<(f32, SimScan)> {
         .collect()
 }
 
+/// One scan for `pfe_test extract`, with what pfe is told about it.
+struct TestScan {
+    geometry: pfe_core::ScanGeometry,
+    ranges_mm: Vec<f32>,
+    /// The same as raw codes of `unit` mm.
+    raw: Vec<u16>,
+    unit: f32,
+    /// The readings' grid, mm (0: unknown).
+    quantum: f32,
+    sweeps: u8,
+    odometry: Option<pfe_core::Motion>,
+    /// The configurations' σ_r and σ_sys, mm.
+    sigma_r: f32,
+    sigma_sys: f32,
+}
+
+impl TestScan {
+    /// A simulated scan as the eval gives it to pfe (`SimScan::context`), σ_r `sigma_r`.
+    fn simulated(sigma_r: f32, sim: &SimScan) -> Self {
+        Self {
+            geometry: sim.geometry,
+            ranges_mm: sim.ranges_mm.clone(),
+            raw: sim.raw.clone(),
+            unit: sim.mm_per_unit,
+            quantum: sim.mm_per_unit,
+            sweeps: u8::try_from(sim.sweeps).expect("sweeps fit u8"),
+            odometry: sim.odometry,
+            sigma_r,
+            sigma_sys: 0.0,
+        }
+    }
+
+    /// The configurations the scan is extracted with: the paper's and the default.
+    fn configs(&self) -> [(&'static str, Config); 2] {
+        [Config::paper(), Config::default()].map(|c| {
+            let name = if c.scrutiny { "default" } else { "paper" };
+            (
+                name,
+                c.with_sigma_r(self.sigma_r).with_sigma_sys(self.sigma_sys),
+            )
+        })
+    }
+
+    /// `scan` with what pfe is told: odometry, sweeps.
+    fn told<'a>(&self, mut scan: Scan<'a>) -> Scan<'a> {
+        if let Some(m) = self.odometry {
+            scan = scan.with_motion(m);
+        }
+        scan.with_sweeps(self.sweeps)
+    }
+
+    /// The scan from mm (with its quantum).
+    fn mm(&self) -> Scan<'_> {
+        self.told(Scan::from_mm(self.geometry, &self.ranges_mm))
+            .with_quantum(self.quantum)
+    }
+
+    /// The scan from raw codes.
+    fn lms(&self) -> Scan<'_> {
+        self.told(Scan::from_lms(self.geometry, &self.raw, self.unit))
+    }
+}
+
 /// The scans in `pfe_test extract`'s input format.
-fn write_scans(scans: &[(f32, SimScan)]) -> String {
+fn write_scans(scans: &[TestScan]) -> String {
     let mut s = String::new();
-    for (id, (sigma, sim)) in scans.iter().enumerate() {
-        let g = sim.geometry;
-        let (has_motion, m) = match sim.odometry {
+    for (id, t) in scans.iter().enumerate() {
+        let g = t.geometry;
+        let (has_motion, m) = match t.odometry {
             Some(m) => (1, m),
             None => (0, pfe_core::Motion::uniform(0.0, 0.0, 0.0)),
         };
         let b = f32::to_bits;
         writeln!(
             s,
-            "S {id} {:x} {} {:x} {:x} {:x} {:x} {:x} {has_motion} {:x} {:x} {:x} {:x} {} {}",
-            b(*sigma),
-            sim.sweeps,
-            b(sim.mm_per_unit),
-            b(sim.mm_per_unit),
+            "S {id} {:x} {:x} {} {:x} {:x} {:x} {:x} {:x} {has_motion} {:x} {:x} {:x} {:x} {} {}",
+            b(t.sigma_r),
+            b(t.sigma_sys),
+            t.sweeps,
+            b(t.quantum),
+            b(t.unit),
             b(g.start_angle),
             b(g.angle_step),
             b(g.r_max),
@@ -157,15 +223,15 @@ fn write_scans(scans: &[(f32, SimScan)]) -> String {
             b(m.timing.beam_dt),
             b(m.timing.sweep_dt),
             m.timing.sweeps,
-            sim.ranges_mm.len(),
+            t.ranges_mm.len(),
         )
         .ok();
-        write!(s, "R {}", sim.ranges_mm.len()).ok();
-        for r in &sim.ranges_mm {
+        write!(s, "R {}", t.ranges_mm.len()).ok();
+        for r in &t.ranges_mm {
             write!(s, " {:x}", r.to_bits()).ok();
         }
-        write!(s, "\nC {}", sim.raw.len()).ok();
-        for c in &sim.raw {
+        write!(s, "\nC {}", t.raw.len()).ok();
+        for c in &t.raw {
             write!(s, " {c}").ok();
         }
         s.push('\n');
@@ -230,83 +296,13 @@ fn print_result(
     out.push('\n');
 }
 
-/// `scan` with what the eval tells pfe about `sim` (its `ScanContext`): the odometry and the
-/// sweeps.
-fn with<'a>(mut scan: Scan<'a>, sim: &SimScan) -> Scan<'a> {
-    if let Some(m) = sim.odometry {
-        scan = scan.with_motion(m);
-    }
-    scan.with_sweeps(u8::try_from(sim.sweeps).expect("sweeps fit u8"))
-}
-
-#[test]
-fn c_extracts_the_eval_scans_bit_for_bit_as_rust() {
-    let test = "pfe-capi c_api c_extracts_the_eval_scans_bit_for_bit_as_rust";
-    let scans = eval_scans();
-    // pfe-core's output, the way the C test asks for it; and the eval's own (its `Pfe`
-    // method, with its larger capacities) must be the same.
-    let mut ex = Box::new(Extractor::<N, M>::new());
-    let mut expected = String::new();
-    let mut features = 0;
-    let mut circles = 0;
-    let mut overflows = 0;
-    for (id, (sigma, sim)) in scans.iter().enumerate() {
-        for (cfg, config) in [
-            ("paper", Config::paper().with_sigma_r(*sigma)),
-            ("default", Config::default().with_sigma_r(*sigma)),
-        ] {
-            let scan = with(Scan::from_mm(sim.geometry, &sim.ranges_mm), sim)
-                .with_quantum(sim.mm_per_unit);
-            let r = ex.extract(&scan, &config);
-            let mut method = Pfe::new(cfg, config);
-            let eval = method.extract_in(&sim.geometry, &sim.ranges_mm, &sim.context());
-            assert!(method.last_result().is_ok(), "scan {id} {cfg}");
-            match r {
-                Ok(_) => assert_eq!(eval.features, ex.features(), "scan {id} {cfg}"),
-                // More than M features (the paper's method on mixed pixels): the first M are
-                // the eval's first M, and the rest are counted.
-                Err(ExtractError::FeatureCapacity { dropped }) => {
-                    assert_eq!(
-                        eval.features.get(..M),
-                        Some(ex.features()),
-                        "scan {id} {cfg}"
-                    );
-                    assert_eq!(eval.features.len(), M + dropped, "scan {id} {cfg}");
-                    overflows += 1;
-                }
-                Err(e) => panic!("scan {id} {cfg}: {e:?}"),
-            }
-            assert_eq!(
-                eval.marks,
-                ex.marks().collect::<Vec<_>>(),
-                "scan {id} {cfg}"
-            );
-            features += ex.features().len();
-            circles += ex.features().iter().filter(|f| !f.is_line()).count();
-            print_result(&mut expected, &ex, r, cfg, "mm", id);
-            let scan = with(Scan::from_lms(sim.geometry, &sim.raw, sim.mm_per_unit), sim);
-            let r = ex.extract(&scan, &config);
-            print_result(&mut expected, &ex, r, cfg, "lms", id);
-        }
-    }
-    // The scans exercise the library: many features, circles among them, every kind of scan.
-    assert!(scans.len() >= 1000, "{} scans", scans.len());
-    assert!(
-        features > 20 * scans.len() && circles > scans.len(),
-        "{features} {circles}"
-    );
-    assert!(scans.iter().any(|(_, s)| s.odometry.is_some()));
-    assert!(scans
-        .iter()
-        .any(|(_, s)| s.sweeps == 4 && s.ranges_mm.len() == 721));
-    assert!(scans.iter().any(|(_, s)| s.mm_per_unit == 10.0));
-    assert!(overflows > 0, "no scan fills the feature buffer");
-
+/// Runs `pfe_test extract` on `scans` and compares its output with `expected`, line by line.
+fn c_output_equals(test: &str, name: &str, scans: &[TestScan], expected: &str) -> bool {
     let Some(exe) = build_c_test(test) else {
-        return;
+        return false;
     };
-    let input = Path::new(env!("CARGO_TARGET_TMPDIR")).join("eval_scans.txt");
-    std::fs::write(&input, write_scans(&scans)).expect("write the scans");
+    let input = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}.txt"));
+    std::fs::write(&input, write_scans(scans)).expect("write the scans");
     let out = Command::new(&exe)
         .arg("extract")
         .arg(&input)
@@ -324,13 +320,179 @@ fn c_extracts_the_eval_scans_bit_for_bit_as_rust() {
         panic!("line {}: C printed\n  {a}\nRust:\n  {b}", i + 1);
     }
     assert_eq!(got.lines().count(), expected.lines().count());
-    eprintln!(
-        "C API bit-identical to pfe-core on {} eval scans × 2 configurations × 2 inputs \
-         ({features} features of which {circles} circles from mm; {overflows} extractions \
-         over PFE_MAX_FEATURES; {} output lines)",
-        scans.len(),
-        expected.lines().count()
+    true
+}
+
+/// What `pfe_test extract` must print for `scans`, from pfe-core: the paper's and the default
+/// configuration, from mm and from raw codes. Calls `check` after each extraction from mm.
+fn expected_output(
+    scans: &[TestScan],
+    mut check: impl FnMut(
+        usize,
+        &TestScan,
+        &str,
+        &Config,
+        &Extractor<N, M>,
+        &Result<pfe_core::Stats, ExtractError>,
+    ),
+) -> String {
+    let mut ex = Box::new(Extractor::<N, M>::new());
+    let mut expected = String::new();
+    for (id, t) in scans.iter().enumerate() {
+        for (cfg, config) in t.configs() {
+            let r = ex.extract(&t.mm(), &config);
+            check(id, t, cfg, &config, &ex, &r);
+            print_result(&mut expected, &ex, r, cfg, "mm", id);
+            let r = ex.extract(&t.lms(), &config);
+            print_result(&mut expected, &ex, r, cfg, "lms", id);
+        }
+    }
+    expected
+}
+
+#[test]
+fn c_extracts_the_eval_scans_bit_for_bit_as_rust() {
+    let test = "pfe-capi c_api c_extracts_the_eval_scans_bit_for_bit_as_rust";
+    let sims = eval_scans();
+    let scans: Vec<TestScan> = sims
+        .iter()
+        .map(|(sigma, sim)| TestScan::simulated(*sigma, sim))
+        .collect();
+    // pfe-core's output, the way the C test asks for it; and the eval's own (its `Pfe`
+    // method, with its larger capacities) must be the same.
+    let mut features = 0;
+    let mut circles = 0;
+    let mut overflows = 0;
+    let expected = expected_output(&scans, |id, _, cfg, config, ex, r| {
+        let (_, sim) = &sims[id];
+        let mut method = Pfe::new(cfg, *config);
+        let eval = method.extract_in(&sim.geometry, &sim.ranges_mm, &sim.context());
+        assert!(method.last_result().is_ok(), "scan {id} {cfg}");
+        match r {
+            Ok(_) => assert_eq!(eval.features, ex.features(), "scan {id} {cfg}"),
+            // More than M features (the paper's method on mixed pixels): the first M are the
+            // eval's first M, and the rest are counted.
+            Err(ExtractError::FeatureCapacity { dropped }) => {
+                assert_eq!(
+                    eval.features.get(..M),
+                    Some(ex.features()),
+                    "scan {id} {cfg}"
+                );
+                assert_eq!(eval.features.len(), M + dropped, "scan {id} {cfg}");
+                overflows += 1;
+            }
+            Err(e) => panic!("scan {id} {cfg}: {e:?}"),
+        }
+        assert_eq!(
+            eval.marks,
+            ex.marks().collect::<Vec<_>>(),
+            "scan {id} {cfg}"
+        );
+        features += ex.features().len();
+        circles += ex.features().iter().filter(|f| !f.is_line()).count();
+    });
+    // The scans exercise the library: many features, circles among them, every kind of scan.
+    assert!(scans.len() >= 1000, "{} scans", scans.len());
+    assert!(
+        features > 20 * scans.len() && circles > scans.len(),
+        "{features} {circles}"
     );
+    assert!(scans.iter().any(|s| s.odometry.is_some()));
+    assert!(scans
+        .iter()
+        .any(|s| s.sweeps == 4 && s.ranges_mm.len() == 721));
+    assert!(scans.iter().any(|s| s.unit == 10.0));
+    assert!(overflows > 0, "no scan fills the feature buffer");
+    if c_output_equals(test, "eval_scans", &scans, &expected) {
+        eprintln!(
+            "C API bit-identical to pfe-core on {} eval scans × 2 configurations × 2 inputs \
+             ({features} features of which {circles} circles from mm; {overflows} extractions \
+             over PFE_MAX_FEATURES; {} output lines)",
+            scans.len(),
+            expected.lines().count()
+        );
+    }
+}
+
+/// Scans read from the real CARMEN logs in `../shared/data` (the first `per_log` of each), as
+/// `pfe extract --format carmen` gives them to pfe: its σ_r and σ_sys for the format, the
+/// sweeps and the readings' grid; raw codes are the ranges rounded to mm. `None` (skipped
+/// loudly) without the data.
+fn real_scans(test: &str, per_log: usize) -> Option<Vec<TestScan>> {
+    let dir = here().join("../../../shared/data/carmen");
+    if !dir.is_dir() {
+        skip(
+            test,
+            &format!("real data folder {} is absent", dir.display()),
+            Need::InCi,
+        );
+        return None;
+    }
+    let mut logs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("read the data folder")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| carmen::is_log_name(&p.to_string_lossy()))
+        .collect();
+    logs.sort();
+    let mut scans = Vec::new();
+    for log in &logs {
+        let input = formats::open_for(log, Format::Carmen, |r| r).expect("open the log");
+        for record in carmen::Reader::new(input).take(per_log) {
+            let r = record.expect("a scan");
+            let g = r.geometry;
+            let raw = r
+                .ranges_mm
+                .iter()
+                .map(|&v| match (0.5..8182.5).contains(&v) {
+                    true => v.round() as u16,
+                    false => 0,
+                })
+                .collect();
+            scans.push(TestScan {
+                geometry: g,
+                quantum: formats::range_quantum(&r.ranges_mm, g.r_max),
+                sweeps: r
+                    .sweeps
+                    .unwrap_or_else(|| formats::sweeps_of(Format::Carmen, &g)),
+                ranges_mm: r.ranges_mm,
+                raw,
+                unit: 1.0,
+                odometry: None,
+                sigma_r: Format::Carmen.sigma_r(),
+                sigma_sys: Format::Carmen.sigma_sys(),
+            });
+        }
+    }
+    assert!(
+        logs.len() >= 10 && scans.len() >= 10 * per_log,
+        "{} logs",
+        logs.len()
+    );
+    Some(scans)
+}
+
+#[test]
+fn c_extracts_real_scans_bit_for_bit_as_rust() {
+    let test = "pfe-capi c_api c_extracts_real_scans_bit_for_bit_as_rust";
+    let Some(scans) = real_scans(test, 40) else {
+        return;
+    };
+    let mut features = 0;
+    let expected = expected_output(&scans, |id, _, cfg, _, ex, r| {
+        assert!(
+            matches!(r, Ok(_) | Err(ExtractError::FeatureCapacity { .. })),
+            "scan {id} {cfg}: {r:?}"
+        );
+        features += ex.features().len();
+    });
+    assert!(features > 10 * scans.len(), "{features} features");
+    if c_output_equals(test, "real_scans", &scans, &expected) {
+        eprintln!(
+            "C API bit-identical to pfe-core on {} real CARMEN scans × 2 configurations × 2 \
+             inputs ({features} features from mm)",
+            scans.len()
+        );
+    }
 }
 
 #[test]

@@ -10,8 +10,8 @@
  *                           with every float as its bits (compared with pfe-core's output)
  *
  * FILE, written by tests/c_api.rs, per scan (floats as the hex of their IEEE-754 bits):
- *   S id sigma sweeps quantum unit start step r_max has_motion v omega beam_dt sweep_dt
- *     timing_sweeps n
+ *   S id sigma_r sigma_sys sweeps quantum unit start step r_max has_motion v omega beam_dt
+ *     sweep_dt timing_sweeps n
  *   R n range bits (mm)
  *   C n raw codes
  */
@@ -261,14 +261,14 @@ static int extract(const char *file) {
         return 2;
     }
     long id;
-    uint32_t sigma, quantum, unit, start, step, r_max, v, omega, beam_dt, sweep_dt;
+    uint32_t sigma, sigma_sys, quantum, unit, start, step, r_max, v, omega, beam_dt, sweep_dt;
     unsigned sweeps, has_motion, timing_sweeps;
     size_t n;
     int scans = 0;
-    while (fscanf(in, " S %ld %" SCNx32 " %u %" SCNx32 " %" SCNx32 " %" SCNx32 " %" SCNx32
+    while (fscanf(in, " S %ld %" SCNx32 " %" SCNx32 " %u %" SCNx32 " %" SCNx32 " %" SCNx32 " %" SCNx32
                       " %" SCNx32 " %u %" SCNx32 " %" SCNx32 " %" SCNx32 " %" SCNx32 " %u %zu",
-                  &id, &sigma, &sweeps, &quantum, &unit, &start, &step, &r_max, &has_motion, &v,
-                  &omega, &beam_dt, &sweep_dt, &timing_sweeps, &n) == 15) {
+                  &id, &sigma, &sigma_sys, &sweeps, &quantum, &unit, &start, &step, &r_max, &has_motion, &v,
+                  &omega, &beam_dt, &sweep_dt, &timing_sweeps, &n) == 16) {
         size_t m;
         if (n > PFE_MAX_READINGS || fscanf(in, " R %zu", &m) != 1 || m != n) {
             fprintf(stderr, "scan %ld: bad R line\n", id);
@@ -310,6 +310,7 @@ static int extract(const char *file) {
                 pfe_config_default(&c);
             }
             c.sigma_r = from_bits(sigma);
+            c.sigma_sys = from_bits(sigma_sys);
             const char *name = k == 0 ? "paper" : "default";
             /* From mm, with the scan's quantum (as the eval gives it). */
             o.quantum = from_bits(quantum);
