@@ -3,8 +3,9 @@
 //! and extracts the eval's scans (`pfe eval`: the main comparison, the scene kinds, the noise
 //! sweep and the robustness conditions, simulated by host-tests) with the paper's and the
 //! default configuration, from mm and from raw codes. Its output must equal pfe-core's, float
-//! for float, bit for bit; and pfe-core's must be the eval's own (its `Pfe` method).
-//! Skipped loudly (host-tests' skip list) when there is no C compiler.
+//! for float, bit for bit; and pfe-core's must be the eval's own (its `Pfe` method). The
+//! same for the first scans of each real CARMEN log in `../shared/data`. Skipped loudly
+//! (host-tests' skip list) without a C compiler or the data.
 
 // Test helpers: a failure to run a tool or read a file fails the test.
 #![allow(clippy::expect_used, clippy::panic, clippy::indexing_slicing)]
