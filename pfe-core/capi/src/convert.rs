@@ -103,11 +103,6 @@ fn flag(v: u8) -> Option<bool> {
     }
 }
 
-/// `true` → 1, `false` → 0.
-fn byte(b: bool) -> u8 {
-    u8::from(b)
-}
-
 /// A C count as `usize` (lossless on the 32- and 64-bit targets; saturating elsewhere).
 fn count(v: u32) -> usize {
     usize::try_from(v).unwrap_or(usize::MAX)
@@ -118,12 +113,24 @@ fn count_c(v: usize) -> u32 {
     u32::try_from(v).unwrap_or(u32::MAX)
 }
 
-/// The C form of `c` (every field set; those of unselected kinds from pfe's default mode).
+/// The C form of `c`. The fields of the kinds `c` does not select hold the named
+/// configurations' values (so that a C program switching kind starts from usable numbers).
 pub(crate) fn config_to_c(c: &Config) -> pfe_config {
-    let base = Config::default_config();
-    let noise_default = match base.threshold {
-        Threshold::Noise(m) => m,
-        Threshold::Paper { .. } => NoiseModel {
+    let correction = c.correction.unwrap_or(RangeCorrection::IDENTITY);
+    let mut out = pfe_config {
+        threshold: 0,
+        typing: 0,
+        circle_method: match c.circle_method {
+            CircleMethod::Kasa => pfe_circle_method::PFE_CIRCLE_KASA,
+            CircleMethod::Taubin => pfe_circle_method::PFE_CIRCLE_TAUBIN,
+            CircleMethod::Hyper => pfe_circle_method::PFE_CIRCLE_HYPER,
+        } as u8,
+        check_step: u8::from(c.check_step),
+        scrutiny: u8::from(c.scrutiny),
+        has_correction: u8::from(c.correction.is_some()),
+        paper_d0: 0.0,
+        paper_lambda: 0.0,
+        noise: pfe_noise_model {
             k: 0.0,
             k_locate: 0.0,
             floor: 0.0,
@@ -134,79 +141,62 @@ pub(crate) fn config_to_c(c: &Config) -> pfe_config {
             arc_chi2: 0.0,
             arc_max_radius: 0.0,
         },
-    };
-    let paper = Config::paper();
-    let (paper_d0, paper_lambda) = match (c.threshold, paper.threshold) {
-        (Threshold::Paper { d0, lambda }, _) | (_, Threshold::Paper { d0, lambda }) => (d0, lambda),
-        _ => (0.0, 0.0),
-    };
-    let (threshold, m) = match c.threshold {
-        Threshold::Paper { .. } => (pfe_threshold::PFE_THRESHOLD_PAPER, noise_default),
-        Threshold::Noise(m) => (pfe_threshold::PFE_THRESHOLD_NOISE, m),
-    };
-    let d_f = match (c.typing, paper.typing) {
-        (Typing::MeanDistance { d_f }, _) | (_, Typing::MeanDistance { d_f }) => d_f,
-        _ => 0.0,
-    };
-    let (chi2, ratio, max_radius) = match (c.typing, base.typing) {
-        (
-            Typing::CompareFits {
-                chi2,
-                ratio,
-                max_radius,
-            },
-            _,
-        )
-        | (
-            _,
-            Typing::CompareFits {
-                chi2,
-                ratio,
-                max_radius,
-            },
-        ) => (chi2, ratio, max_radius),
-        _ => (0.0, 0.0, 0.0),
-    };
-    let typing = match c.typing {
-        Typing::MeanDistance { .. } => pfe_typing::PFE_TYPING_MEAN_DISTANCE,
-        Typing::CompareFits { .. } => pfe_typing::PFE_TYPING_COMPARE_FITS,
-    };
-    let circle_method = match c.circle_method {
-        CircleMethod::Kasa => pfe_circle_method::PFE_CIRCLE_KASA,
-        CircleMethod::Taubin => pfe_circle_method::PFE_CIRCLE_TAUBIN,
-        CircleMethod::Hyper => pfe_circle_method::PFE_CIRCLE_HYPER,
-    };
-    let correction = c.correction.unwrap_or(RangeCorrection::IDENTITY);
-    pfe_config {
-        threshold: threshold as u8,
-        typing: typing as u8,
-        circle_method: circle_method as u8,
-        check_step: byte(c.check_step),
-        scrutiny: byte(c.scrutiny),
-        has_correction: byte(c.correction.is_some()),
-        paper_d0,
-        paper_lambda,
-        noise: pfe_noise_model {
-            k: m.k,
-            k_locate: m.k_locate,
-            floor: m.floor,
-            window: count_c(m.window),
-            max_window: count_c(m.max_window),
-            min_span: m.min_span,
-            arc_window: count_c(m.arc_window),
-            arc_chi2: m.arc_chi2,
-            arc_max_radius: m.arc_max_radius,
-        },
-        mean_distance_d_f: d_f,
-        compare_chi2: chi2,
-        compare_ratio: ratio,
-        compare_max_radius: max_radius,
+        mean_distance_d_f: 0.0,
+        compare_chi2: 0.0,
+        compare_ratio: 0.0,
+        compare_max_radius: 0.0,
         min_points: count_c(c.min_points),
         circle_refine: count_c(c.circle_refine),
         sigma_r: c.sigma_r,
         sigma_sys: c.sigma_sys,
         correction_coeffs: correction.coeffs,
         correction_scale: correction.scale,
+    };
+    // `c` last: its kinds are the ones selected.
+    for source in [Config::paper(), Config::default_config(), *c] {
+        set_kinds(&mut out, &source);
+    }
+    out
+}
+
+/// Selects `c`'s threshold and typing kinds in `out`, with their parameters.
+fn set_kinds(out: &mut pfe_config, c: &Config) {
+    match c.threshold {
+        Threshold::Paper { d0, lambda } => {
+            out.threshold = pfe_threshold::PFE_THRESHOLD_PAPER as u8;
+            out.paper_d0 = d0;
+            out.paper_lambda = lambda;
+        }
+        Threshold::Noise(m) => {
+            out.threshold = pfe_threshold::PFE_THRESHOLD_NOISE as u8;
+            out.noise = pfe_noise_model {
+                k: m.k,
+                k_locate: m.k_locate,
+                floor: m.floor,
+                window: count_c(m.window),
+                max_window: count_c(m.max_window),
+                min_span: m.min_span,
+                arc_window: count_c(m.arc_window),
+                arc_chi2: m.arc_chi2,
+                arc_max_radius: m.arc_max_radius,
+            };
+        }
+    }
+    match c.typing {
+        Typing::MeanDistance { d_f } => {
+            out.typing = pfe_typing::PFE_TYPING_MEAN_DISTANCE as u8;
+            out.mean_distance_d_f = d_f;
+        }
+        Typing::CompareFits {
+            chi2,
+            ratio,
+            max_radius,
+        } => {
+            out.typing = pfe_typing::PFE_TYPING_COMPARE_FITS as u8;
+            out.compare_chi2 = chi2;
+            out.compare_ratio = ratio;
+            out.compare_max_radius = max_radius;
+        }
     }
 }
 
@@ -443,6 +433,19 @@ mod tests {
         ] {
             assert_eq!(config_from_c(&config_to_c(&c)), Ok(c));
         }
+    }
+
+    #[test]
+    fn switching_kind_in_c_starts_from_the_named_configurations_values() {
+        let mut c = config_to_c(&Config::paper());
+        c.threshold = pfe_threshold::PFE_THRESHOLD_NOISE as u8;
+        c.typing = pfe_typing::PFE_TYPING_COMPARE_FITS as u8;
+        let d = Config::default_config();
+        let got = config_from_c(&c);
+        assert_eq!(
+            got.map(|g| (g.threshold, g.typing)),
+            Ok((d.threshold, d.typing))
+        );
     }
 
     #[test]
