@@ -4,8 +4,8 @@
 #![forbid(unsafe_code)]
 
 use pfe_core::{
-    BeamTiming, CircleMethod, Config, ExtractError, Extractor, Feature, Motion, NoiseModel,
-    RangeCorrection, Scan, ScanGeometry, Stats, Threshold, Typing,
+    BeamTiming, CircleMethod, Config, ExtractError, Extractor, Feature, Motion, RangeCorrection,
+    Scan, ScanGeometry, Stats, Threshold, Typing,
 };
 
 use crate::types::pfe_status::{self, *};
@@ -209,17 +209,22 @@ pub(crate) fn config_from_c(c: &pfe_config) -> Result<Config, pfe_status> {
             d0: c.paper_d0,
             lambda: c.paper_lambda,
         },
-        t if t == pfe_threshold::PFE_THRESHOLD_NOISE as u8 => Threshold::Noise(NoiseModel {
-            k: m.k,
-            k_locate: m.k_locate,
-            floor: m.floor,
-            window: count(m.window),
-            max_window: count(m.max_window),
-            min_span: m.min_span,
-            arc_window: count(m.arc_window),
-            arc_chi2: m.arc_chi2,
-            arc_max_radius: m.arc_max_radius,
-        }),
+        t if t == pfe_threshold::PFE_THRESHOLD_NOISE as u8 => {
+            // Field by field over pfe's own (pfe-core's types may become `#[non_exhaustive]`).
+            let Threshold::Noise(mut n) = Config::default_config().threshold else {
+                return Err(PFE_ERR_OTHER);
+            };
+            n.k = m.k;
+            n.k_locate = m.k_locate;
+            n.floor = m.floor;
+            n.window = count(m.window);
+            n.max_window = count(m.max_window);
+            n.min_span = m.min_span;
+            n.arc_window = count(m.arc_window);
+            n.arc_chi2 = m.arc_chi2;
+            n.arc_max_radius = m.arc_max_radius;
+            Threshold::Noise(n)
+        }
         _ => return Err(BAD),
     };
     let typing = match c.typing {
@@ -248,10 +253,10 @@ pub(crate) fn config_from_c(c: &pfe_config) -> Result<Config, pfe_status> {
             if !ok {
                 return Err(BAD);
             }
-            Some(RangeCorrection {
-                coeffs: c.correction_coeffs,
-                scale: c.correction_scale,
-            })
+            let mut r = RangeCorrection::IDENTITY;
+            r.coeffs = c.correction_coeffs;
+            r.scale = c.correction_scale;
+            Some(r)
         }
     };
     // `Config` grows (it is `#[non_exhaustive]`): start from a value and set every field.
@@ -274,11 +279,11 @@ pub(crate) fn config_from_c(c: &pfe_config) -> Result<Config, pfe_status> {
 
 /// pfe-core's geometry of `g` (pfe-core checks it).
 pub(crate) fn geometry_from_c(g: &pfe_geometry) -> ScanGeometry {
-    ScanGeometry {
-        start_angle: g.start_angle,
-        angle_step: g.angle_step,
-        r_max: g.r_max,
-    }
+    let mut out = ScanGeometry::LMS200_180_050;
+    out.start_angle = g.start_angle;
+    out.angle_step = g.angle_step;
+    out.r_max = g.r_max;
+    out
 }
 
 /// The C form of `g`.
@@ -320,11 +325,8 @@ pub(crate) fn with_options<'a>(
     }
     if flag(o.has_motion).ok_or(BAD)? {
         let m = &o.motion;
-        let motion = Motion {
-            v: m.v,
-            omega: m.omega,
-            timing: BeamTiming::interleaved(m.sweeps, m.sweep_dt, m.beam_dt),
-        };
+        let mut motion = Motion::uniform(m.v, m.omega, m.beam_dt);
+        motion.timing = BeamTiming::interleaved(m.sweeps, m.sweep_dt, m.beam_dt);
         if !motion.is_valid() {
             return Err(BAD);
         }
