@@ -8,9 +8,9 @@
 use crate::config::NP;
 use crate::flags::{next_flag, Seek, JUMP, START};
 use crate::geometry::Point;
-use crate::mark::Rule;
 use crate::math;
 use crate::pass::Pass;
+use crate::rule::Rule;
 
 /// Applies the check step to the marks of `pass`.
 pub(crate) fn check(pass: &mut Pass<'_>, rule: &Rule) {

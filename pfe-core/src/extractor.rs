@@ -10,41 +10,15 @@ use crate::error::ExtractError;
 use crate::feature::Feature;
 use crate::flags::{END, START, VALID};
 use crate::geometry::Point;
-use crate::mark::{self, Rule};
+use crate::mark;
+use crate::output::{FeatureSink, Stats};
 use crate::pass::Pass;
-use crate::preprocess::{self, scatter, sweeps};
+use crate::preprocess::{self, scatter};
 use crate::reach;
+use crate::rule::Rule;
 use crate::scan::Scan;
 use crate::segment;
-
-/// What one extraction did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Stats {
-    /// Readings in the scan.
-    pub readings: usize,
-    /// Valid points.
-    pub valid: usize,
-    /// Segments (of any length).
-    pub segments: usize,
-    /// Segments shorter than `min_points`, ignored.
-    pub short_segments: usize,
-    /// Segments whose fit failed (degenerate), ignored.
-    pub degenerate: usize,
-    /// Features stored.
-    pub features: usize,
-    /// Features that did not fit in the buffer.
-    pub dropped: usize,
-    /// Predictions made (N + M in the paper's count).
-    pub predictions: usize,
-    /// Interleaved sweeps moved onto sweep 0 by their estimated offset (scans of several
-    /// sweeps without motion, see [`crate::preprocess::sweeps`]).
-    pub sweeps_aligned: usize,
-    /// The scan's own σ_r in µm, when it scattered well beyond the configured one and the
-    /// extraction used it ([`crate::preprocess::scatter`], with `Config::scrutiny`); else 0.
-    pub scan_sigma_um: u32,
-}
+use crate::sweeps;
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
 /// put it in a `static` on a microcontroller.
@@ -87,23 +61,6 @@ struct Buffers<const N: usize> {
 struct Output<const M: usize> {
     features: Vec<Feature, M>,
     stats: Stats,
-}
-
-/// Where the segment step puts the features (an extractor's buffer, whatever its capacity).
-pub(crate) trait FeatureSink {
-    /// Stores `f`; false when there is no room.
-    fn push(&mut self, f: Feature) -> bool;
-    /// The features stored, in the order pushed.
-    fn features_mut(&mut self) -> &mut [Feature];
-}
-
-impl<const M: usize> FeatureSink for Vec<Feature, M> {
-    fn push(&mut self, f: Feature) -> bool {
-        Vec::push(self, f).is_ok()
-    }
-    fn features_mut(&mut self) -> &mut [Feature] {
-        self
-    }
 }
 
 impl<const N: usize, const M: usize> Default for Extractor<N, M> {
@@ -292,7 +249,9 @@ fn run(
         // §3.1–3.2, §3.6: mark points by prediction.
         mark::mark(&mut pass, &rule);
         // The marks' evidence (many segment starts): no fit is made before aligning.
-        if !(interleaved && sweeps::suspect(&pass, &rule)) {
+        if !(interleaved
+            && sweeps::suspect(pass.flags, pass.neighbours.is_some(), pass.stats.valid))
+        {
             fit(&mut pass, &rule, config, out);
             return outcome(pass.stats);
         }

@@ -9,7 +9,7 @@
 //! | step | paper | module |
 //! |---|---|---|
 //! | readings and beam geometry | | [`scan`] |
-//! | readings to points: range correction, de-skew, interleaved sweeps | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`], [`preprocess::sweeps`]) |
+//! | readings to points: range correction, de-skew, the scan's own noise | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`], [`preprocess::scatter`]) |
 //! | prediction point and its error | §3.1 | [`predict`] |
 //! | mark points: the paper's threshold, or the default mode's walk with boundary refinement | §3.2, §3.6 | `mark` (`paper`, `noise`, `refine`) |
 //! | check step and pairing | §3.3 | `check` |
@@ -42,6 +42,7 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod arc;
 mod beams;
 mod check;
 mod classify;
@@ -54,23 +55,27 @@ mod flags;
 pub mod geometry;
 mod mark;
 mod math;
+mod output;
 mod pass;
 pub mod predict;
 pub mod preprocess;
 mod reach;
+mod rule;
 pub mod scan;
 mod segment;
+pub mod sweeps;
 
 pub use config::{Config, NoiseModel, Threshold, Typing, NP};
 pub use error::{ExtractError, FitError};
-pub use extractor::{Extractor, Stats};
+pub use extractor::Extractor;
 pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
 pub use fit::circle::{
     circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
 };
 pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
+pub use output::Stats;
 pub use preprocess::correction::RangeCorrection;
 pub use preprocess::deskew::{BeamTiming, Motion};
-pub use preprocess::sweeps::SweepOffset;
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};
+pub use sweeps::SweepOffset;

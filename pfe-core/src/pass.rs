@@ -5,9 +5,9 @@
 use heapless::Vec;
 
 use crate::beams::Beams;
-use crate::extractor::Stats;
 use crate::flags::{START, VALID};
 use crate::geometry::Point;
+use crate::output::Stats;
 use crate::predict::{Prediction, WindowLine};
 use crate::preprocess::deskew::Motion;
 #[cfg(test)]
@@ -39,7 +39,7 @@ pub(crate) struct Pass<'a> {
     /// What the extraction did so far.
     pub stats: &'a mut Stats,
     /// The variance a feature's points inherit from the estimated offsets that moved
-    /// interleaved sweeps onto sweep 0 ([`crate::preprocess::sweeps::Offsets::variance`]):
+    /// interleaved sweeps onto sweep 0 ([`crate::sweeps::Offsets::variance`]):
     /// (x mm², y mm², θ rad²), each sweep's over the square of the sweeps. Zero when no sweep
     /// was moved by an estimate.
     pub alignment: [f32; 3],
@@ -198,7 +198,8 @@ pub(crate) fn point_at(points: &[Point], i: usize) -> Point {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::extractor::{Extractor, Stats};
+    use crate::extractor::Extractor;
+    use crate::output::Stats;
     use crate::preprocess::deskew::BeamTiming;
     use crate::scan::ScanGeometry;
     use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};

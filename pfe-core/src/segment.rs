@@ -9,16 +9,17 @@
 
 use heapless::Vec;
 
-use crate::classify::{self, arc::arc_fit};
+use crate::arc::arc_fit;
+use crate::classify;
 use crate::config::{Config, Typing};
-use crate::extractor::FeatureSink;
 use crate::feature::Feature;
 use crate::fit::line::fit_line;
 use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::geometry::Point;
-use crate::mark::{NoiseRule, Rule};
+use crate::output::FeatureSink;
 use crate::pass::Pass;
+use crate::rule::{NoiseRule, Rule};
 
 /// Sizes of the union of two neighbouring segments tested for being one arc (fewer points do
 /// not show an arc above the noise).

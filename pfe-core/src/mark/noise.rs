@@ -5,13 +5,14 @@
 
 use heapless::Vec;
 
+use super::arc::continues_arc;
 use super::refine::{locate, refine_boundary, REFINE_AFTER};
-use super::NoiseRule;
-use crate::classify::arc::{arc_fit, continues_arc};
+use crate::arc::arc_fit;
 use crate::flags::{JUMP, START};
 use crate::geometry::Point;
 use crate::pass::{point_at, Pass};
 use crate::predict::WindowLine;
+use crate::rule::NoiseRule;
 
 /// Size of a new segment at which it is tested for being the same arc as the one before.
 const MERGE_AT: usize = 8;
@@ -332,7 +333,7 @@ fn accepted_run(
 mod tests {
     use super::*;
     use crate::config::Config;
-    use crate::mark::Rule;
+    use crate::rule::Rule;
 
     /// The window grows from `window` (10) points until its far end is `min_span · σ_r` (12 ·
     /// 5 = 60 mm) from the last point, up to `max_window` (24): points 3 mm apart, along y
@@ -490,7 +491,7 @@ mod tests {
         });
         let mut ex = Extractor::<361, 8>::new();
         let predictions = ex.with_pass(&Scan::from_mm(g, &zeros), config, |loaded, rule| {
-            let mut stats = crate::extractor::Stats::default();
+            let mut stats = crate::output::Stats::default();
             let mut pass = Pass::over(
                 loaded.beams,
                 (points, ranges, &mut flags),
@@ -730,7 +731,7 @@ mod tests {
     #[test]
     fn a_window_spans_min_span_sigmas() {
         let config = crate::config::Config::default().with_sigma_r(5.0);
-        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let rule = crate::rule::Rule::new(&config, 8000.0, 1.0);
         let Some(noise) = rule.noise() else {
             panic!("the default rule")
         };

@@ -1,20 +1,17 @@
 //! Pre-processing (§2): readings to points, with the systematic range [`correction`] and
-//! motion de-skewing ([`deskew`]) when configured; for interleaved sweeps without motion, the
-//! extractor may move each sweep onto sweep 0 by its offset estimated from the scan
-//! ([`sweeps`]).
-//! Invalid readings (no return, reserved codes) are not points.
+//! motion de-skewing ([`deskew`]) when configured; the scan's own noise measured from its
+//! points ([`scatter`]). Invalid readings (no return, reserved codes) are not points.
 
 pub mod correction;
 pub mod deskew;
 pub mod scatter;
-pub mod sweeps;
 
 use crate::beams::Beams;
 use crate::config::Config;
-use crate::extractor::Stats;
 use crate::flags::VALID;
 use crate::geometry::Point;
 use crate::math;
+use crate::output::Stats;
 use crate::scan::{max_code, valid_mm, Ranges, Scan};
 use deskew::Motion;
 

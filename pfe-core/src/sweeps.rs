@@ -23,9 +23,7 @@
 
 use crate::flags::{START, VALID};
 use crate::geometry::Point;
-use crate::mark::Rule;
 use crate::math;
-use crate::pass::Pass;
 
 /// Most rows (beams) one sweep's estimate uses: longer sweeps are subsampled evenly.
 pub const MAX_ROWS: usize = 64;
@@ -79,7 +77,7 @@ type Row = [f32; 5];
 /// `None` when too few beams are on smooth surfaces or the geometry does not fix the offset.
 ///
 /// ```
-/// use pfe_core::preprocess::sweeps::estimate;
+/// use pfe_core::sweeps::estimate;
 /// use pfe_core::{Point, ScanGeometry};
 /// // A room 3 m × 4 m; the odd beams from a scanner 8 mm ahead.
 /// let g = ScanGeometry::LMS200_180_050;
@@ -203,13 +201,10 @@ impl Offsets {
 }
 
 /// Whether the default mode's walk over a scan of interleaved sweeps left the marks that
-/// sweeps out of place make: more segment starts than one in [`SUSPECT_EVERY`] valid points,
-/// or more neighbouring starts than the walk notes. The paper's mode is left as published.
-pub(crate) fn suspect(pass: &Pass<'_>, rule: &Rule) -> bool {
-    rule.noise().is_some()
-        && (pass.neighbours.is_none()
-            || pass.flags.iter().filter(|f| **f & START != 0).count() * SUSPECT_EVERY
-                > pass.stats.valid)
+/// sweeps out of place make: more segment starts among `flags` than one in [`SUSPECT_EVERY`]
+/// of the `valid` points, or more neighbouring starts than the walk notes (`noted` false).
+pub(crate) fn suspect(flags: &[u8], noted: bool, valid: usize) -> bool {
+    !noted || flags.iter().filter(|f| **f & START != 0).count() * SUSPECT_EVERY > valid
 }
 
 /// One segment start in this many valid points is more than a scan of sweeps in place makes.
