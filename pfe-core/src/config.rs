@@ -169,6 +169,14 @@ impl Config {
         }
     }
 
+    /// Whether the checks for real scans run: [`Self::scrutiny`], in a build with the
+    /// `scrutiny` feature (without it their code is left out, and [`Self::is_valid`] refuses
+    /// them on). The one switch every step asks.
+    #[inline(always)]
+    pub(crate) const fn scrutinised(&self) -> bool {
+        cfg!(feature = "scrutiny") && self.scrutiny
+    }
+
     /// The same configuration with the checks for real scans ([`Self::scrutiny`]) on or off.
     pub const fn with_scrutiny(mut self, on: bool) -> Self {
         self.scrutiny = on;

@@ -37,16 +37,16 @@ pub(crate) fn segments(
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
-    // Compiled once with and once without `Config::scrutiny`: without, no check of it is left
-    // in the per-segment path.
-    if cfg!(feature = "scrutiny") && config.scrutiny {
+    // Compiled once with and once without the checks for real scans: without, no check of
+    // them is left in the per-segment path.
+    if config.scrutinised() {
         segments_with::<true>(pass, rule, config, out);
     } else {
         segments_with::<false>(pass, rule, config, out);
     }
 }
 
-/// [`segments`] with `Config::scrutiny == SCRUTINY`.
+/// [`segments`] with the checks for real scans when `SCRUTINY`.
 fn segments_with<const SCRUTINY: bool>(
     pass: &mut Pass<'_>,
     rule: &Rule,
