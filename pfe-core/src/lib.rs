@@ -9,7 +9,7 @@
 //! | step | paper | module |
 //! |---|---|---|
 //! | readings and beam geometry | | [`scan`] |
-//! | readings to points: range correction, de-skew, the scan's own noise | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`], [`preprocess::scatter`]) |
+//! | readings to points: range correction, de-skew, the scan's own noise | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`], `preprocess::scatter`) |
 //! | prediction point and its error | §3.1 | [`predict`] |
 //! | mark points: the paper's threshold, or the default mode's walk with boundary refinement | §3.2, §3.6 | `mark` (`paper`, `noise`, `refine`) |
 //! | check step and pairing | §3.3 | `check` |
@@ -63,7 +63,10 @@ mod reach;
 mod rule;
 pub mod scan;
 mod segment;
+#[cfg(feature = "internals")]
 pub mod sweeps;
+#[cfg(not(feature = "internals"))]
+mod sweeps;
 
 pub use config::{Config, NoiseModel, Threshold, Typing, NP};
 pub use error::{ExtractError, FitError};
@@ -78,4 +81,3 @@ pub use output::Stats;
 pub use preprocess::correction::RangeCorrection;
 pub use preprocess::deskew::{BeamTiming, Motion};
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};
-pub use sweeps::SweepOffset;

@@ -27,10 +27,10 @@ pub struct Stats {
     /// Predictions made (N + M in the paper's count).
     pub predictions: usize,
     /// Interleaved sweeps moved onto sweep 0 by their estimated offset (scans of several
-    /// sweeps without motion, see [`crate::sweeps`]).
+    /// sweeps without motion, default mode).
     pub sweeps_aligned: usize,
     /// The scan's own σ_r in µm, when it scattered well beyond the configured one and the
-    /// extraction used it ([`crate::preprocess::scatter`], with `Config::scrutiny`); else 0.
+    /// extraction used it (with [`Config::scrutiny`](crate::Config::scrutiny)); else 0.
     pub scan_sigma_um: u32,
 }
 

@@ -27,7 +27,7 @@ use crate::geometry::Point;
 use crate::math;
 
 /// Most rows (beams) one sweep's estimate uses: longer sweeps are subsampled evenly.
-pub const MAX_ROWS: usize = 64;
+pub(crate) const MAX_ROWS: usize = 64;
 
 /// The pose of one sweep's scanner in the frame of sweep 0, estimated from the scan.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -209,7 +209,7 @@ pub(crate) fn suspect(flags: &[u8], noted: bool, valid: usize) -> bool {
 }
 
 /// One segment start in this many valid points is more than a scan of sweeps in place makes.
-pub const SUSPECT_EVERY: usize = 18;
+pub(crate) const SUSPECT_EVERY: usize = 18;
 
 /// Adds to every feature's covariance what it inherits from the offsets that moved
 /// interleaved sweeps onto sweep 0 (`alignment`: their [`Offsets::variance`]).

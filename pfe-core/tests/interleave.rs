@@ -6,10 +6,8 @@
 mod common;
 
 use common::{cast, Noise, Prim};
-use pfe_core::sweeps::estimate;
-use pfe_core::{
-    BeamTiming, Config, Extractor, Feature, Motion, Point, Scan, ScanGeometry, SweepOffset,
-};
+use pfe_core::sweeps::{estimate, SweepOffset};
+use pfe_core::{BeamTiming, Config, Extractor, Feature, Motion, Point, Scan, ScanGeometry};
 
 /// The robot's motion between sweeps: 0.6 m/s, 0.45 rad/s.
 fn motion(resolution_deg: f32) -> Motion {

@@ -80,7 +80,7 @@ fn a_line_through_the_scanner_predicts_nothing_ahead() {
 #[test]
 fn a_sweep_offset_is_a_rotation_then_a_translation() {
     for dtheta in [0.02f32, -0.3] {
-        let off = pfe_core::SweepOffset {
+        let off = pfe_core::sweeps::SweepOffset {
             dx: 8.0,
             dy: -5.0,
             dtheta,

@@ -1,10 +1,13 @@
 //! Pre-processing (§2): readings to points, with the systematic range [`correction`] and
 //! motion de-skewing ([`deskew`]) when configured; the scan's own noise measured from its
-//! points ([`scatter`]). Invalid readings (no return, reserved codes) are not points.
+//! points (`scatter`). Invalid readings (no return, reserved codes) are not points.
 
 pub mod correction;
 pub mod deskew;
+#[cfg(feature = "internals")]
 pub mod scatter;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod scatter;
 
 use crate::beams::Beams;
 use crate::config::Config;
