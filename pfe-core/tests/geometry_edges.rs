@@ -1,5 +1,5 @@
-//! Small geometric and fitting contracts that cargo-mutants found untested (docs/TESTING.md,
-//! "Mutation testing"), each against exact values or an f64 reference: points and rays,
+//! Small geometric and fitting contracts at their edges, each against exact values or an f64
+//! reference (how they were found: docs/TESTING.md, "Mutation testing"): points and rays,
 //! window lines and predictions, the paper's threshold, a sweep's rigid offset, the circle and
 //! line fits at their edges.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
