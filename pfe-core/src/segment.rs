@@ -287,7 +287,8 @@ fn corner(pts: &[Point], config: &Config) -> Option<usize> {
 }
 
 // The f64 references need libm (the default feature).
-#[cfg(all(test, feature = "libm"))]
+#[cfg(test)]
+#[cfg(feature = "libm")]
 #[allow(clippy::indexing_slicing)]
 mod tests {
     use super::*;
