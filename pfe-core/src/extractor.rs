@@ -242,7 +242,7 @@ fn run(
     let gauge = (scan.geometry.r_max, beams.gap_factor);
     let walk = match checks {
         true => Marking::own(points, config, gauge, stats),
-        false => Marking::of(*config, gauge),
+        false => Marking::of(config, gauge),
     };
     // §3.1–3.2, §3.6: mark points by prediction.
     let uneven = motion.is_some_and(|m| m.sweeps_apart());
@@ -251,7 +251,15 @@ fn run(
     // Ours: interleaved sweeps out of place (no odometry) moved onto sweep 0 and marked again.
     let parts = (beams, scan, config);
     let marks = in_place(parts, (points, ranges, flags), walk, noted, stats);
-    let (rule, config) = (&marks.by.rule, &marks.by.config);
+    let fitted;
+    let config = match checks {
+        true => {
+            fitted = config.with_sigma_r(marks.by.sigma_r);
+            &fitted
+        }
+        false => config,
+    };
+    let rule = &marks.by.rule;
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
     // §3.3: the check step.
     if config.check_step {
@@ -271,34 +279,37 @@ fn run(
     outcome(pass.stats)
 }
 
-/// How a walk marks: the configuration (with the σ_r it takes) and its rule.
+/// How a walk marks: the σ_r it takes (the fits after it take it too) and its rule.
 #[derive(Clone, Copy)]
 struct Marking {
-    config: Config,
+    sigma_r: f32,
     rule: Rule,
 }
 
 impl Marking {
     /// With `config` as it is, for a scanner of maximum range and gap factor `gauge`.
-    fn of(config: Config, (r_max, gap): (f32, f32)) -> Self {
-        let rule = Rule::new(&config, r_max, gap);
-        Self { config, rule }
+    fn of(config: &Config, (r_max, gap): (f32, f32)) -> Self {
+        let rule = Rule::new(config, r_max, gap);
+        Self {
+            sigma_r: config.sigma_r,
+            rule,
+        }
     }
 
     /// With the σ_r of `points` where they scatter well beyond `config`'s ([`scatter`]),
     /// noted in `stats.scan_sigma_um` (0 where not).
     fn own(points: &[Point], config: &Config, gauge: (f32, f32), stats: &mut Stats) -> Self {
-        let config = match scatter::sigma(points, config.sigma_r) {
+        let sigma_r = match scatter::sigma(points, config.sigma_r) {
             Some(sigma) => {
                 stats.scan_sigma_um = (sigma * 1000.0) as u32;
-                config.with_sigma_r(sigma)
+                sigma
             }
             None => {
                 stats.scan_sigma_um = 0;
-                *config
+                config.sigma_r
             }
         };
-        Self::of(config, gauge)
+        Self::of(&config.with_sigma_r(sigma_r), gauge)
     }
 }
 
@@ -351,6 +362,7 @@ impl Marks {
 
 /// [`in_place`] without the checks for real scans: the sweeps are moved when the walk's marks
 /// are suspect ([`sweeps::suspect`]), and walked again with the same rule.
+#[inline(never)]
 fn suspected(
     (beams, scan): (Beams<'_>, &Scan<'_>),
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
@@ -390,6 +402,7 @@ fn suspected(
 ///   segments into pieces of one period, four sweeps drifting apart).
 ///
 /// The fits of moved points use their own σ.
+#[inline(never)]
 fn scrutinised(
     (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
