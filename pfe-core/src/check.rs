@@ -178,7 +178,7 @@ mod tests {
     /// of `k σ + floor`, with 10 mm less than its 43 mm). `jumps` are the marks also set as
     /// jumps.
     fn checked_on_a_passed_wall(sigma_r: f32, jumps: &[usize]) -> heapless::Vec<usize, 64> {
-        use crate::preprocess::deskew::{BeamTiming, Motion};
+        use crate::motion::{BeamTiming, Motion};
         let g = ScanGeometry::LMS200_180_050;
         let (v, omega, d) = (1200.0f64, 0.9f64, -800.0f64);
         let ranges: [f32; 361] = core::array::from_fn(|i| {

@@ -1,8 +1,8 @@
 //! The two named configurations, `paper` and `default`, and every knob of the method.
 
+use crate::correction::RangeCorrection;
 use crate::fit::circle::CircleMethod;
 use crate::math;
-use crate::preprocess::correction::RangeCorrection;
 
 /// How the mark-point threshold is computed.
 #[derive(Clone, Copy, Debug, PartialEq)]

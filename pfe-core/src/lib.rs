@@ -9,7 +9,7 @@
 //!
 //! | step | paper | module |
 //! |---|---|---|
-//! | readings to points: range correction, de-skew | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`]) |
+//! | readings to points: range correction, de-skew | §2 | `preprocess`, with the scanner's models [`correction`], [`motion`] |
 //! | the scan's own σ, where it scatters well beyond σ_r ([`Config::scrutiny`]) | ours | `preprocess::scatter` |
 //! | mark points by prediction: the paper's threshold, or the default mode's walk with boundary refinement and arc continuation | §3.1–3.2, §3.6 | [`predict`], `mark` (`paper`, `noise`, `refine`, `arc`) |
 //! | interleaved sweeps out of place moved onto sweep 0 and marked again | ours | `sweeps` |
@@ -52,6 +52,7 @@ mod beams;
 mod check;
 mod classify;
 pub mod config;
+pub mod correction;
 pub mod error;
 mod extractor;
 pub mod feature;
@@ -60,10 +61,14 @@ mod flags;
 pub mod geometry;
 mod mark;
 mod math;
+pub mod motion;
 mod output;
 mod pass;
 pub mod predict;
+#[cfg(feature = "internals")]
 pub mod preprocess;
+#[cfg(not(feature = "internals"))]
+mod preprocess;
 mod reach;
 mod rule;
 pub mod scan;
@@ -74,6 +79,7 @@ pub mod sweeps;
 mod sweeps;
 
 pub use config::{Config, NoiseModel, Threshold, Typing, NP};
+pub use correction::RangeCorrection;
 pub use error::{ExtractError, FitError};
 pub use extractor::Extractor;
 pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
@@ -82,7 +88,6 @@ pub use fit::circle::{
 };
 pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
+pub use motion::{BeamTiming, Motion};
 pub use output::Stats;
-pub use preprocess::correction::RangeCorrection;
-pub use preprocess::deskew::{BeamTiming, Motion};
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

@@ -5,9 +5,9 @@
 use crate::beams::Beams;
 use crate::flags::VALID;
 use crate::geometry::Point;
+use crate::motion::Motion;
 use crate::output::Stats;
 use crate::predict::{Prediction, WindowLine};
-use crate::preprocess::deskew::Motion;
 #[cfg(test)]
 use crate::{config::Config, preprocess, scan::Scan};
 
@@ -163,8 +163,8 @@ pub(crate) fn point_at(points: &[Point], i: usize) -> Point {
 mod tests {
     use super::*;
     use crate::extractor::Extractor;
+    use crate::motion::BeamTiming;
     use crate::output::Stats;
-    use crate::preprocess::deskew::BeamTiming;
     use crate::scan::ScanGeometry;
     use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 

@@ -2,7 +2,7 @@
 
 use crate::geometry::Point;
 use crate::math;
-use crate::preprocess::deskew::Motion;
+use crate::motion::Motion;
 
 /// Where the beams point and how far the scanner sees.
 #[derive(Clone, Copy, Debug, PartialEq)]

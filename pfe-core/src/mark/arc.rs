@@ -137,7 +137,7 @@ mod tests {
     /// 1.45 `k σ_r` + floor.
     #[test]
     fn an_arc_continues_along_the_beam_of_a_moving_scanner() {
-        use crate::preprocess::deskew::Motion;
+        use crate::motion::Motion;
         let g = ScanGeometry::LMS200_180_050;
         let config = Config::default().with_sigma_r(5.0);
         let (v, w, dt) = (1000.0f64, 1.0f64, 0.002_666f64);

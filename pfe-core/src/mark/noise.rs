@@ -515,7 +515,7 @@ mod tests {
     /// where the range is NaN): marked by `mark`, or walked with or without the fast path.
     fn walked(
         cloud: (&[Point], &[f32]),
-        frame: (Option<crate::preprocess::deskew::Motion>, bool),
+        frame: (Option<crate::motion::Motion>, bool),
         config: &crate::config::Config,
         how: How,
     ) -> [u8; 361] {
@@ -525,7 +525,7 @@ mod tests {
     /// [`walked`] and the number of predictions the walk counted.
     fn walked_counted(
         (points, ranges): (&[Point], &[f32]),
-        (motion, uneven): (Option<crate::preprocess::deskew::Motion>, bool),
+        (motion, uneven): (Option<crate::motion::Motion>, bool),
         config: &crate::config::Config,
         how: How,
     ) -> ([u8; 361], usize) {
@@ -743,7 +743,7 @@ mod tests {
     #[test]
     fn a_scan_on_the_move_is_marked_where_surfaces_change() {
         use crate::config::Config;
-        use crate::preprocess::deskew::{BeamTiming, Motion};
+        use crate::motion::{BeamTiming, Motion};
         let config = Config::default();
         let mut seed = 9u32;
         let mut sum = [0usize; 6];
