@@ -8,13 +8,16 @@
 use crate::config::NP;
 use crate::flags::{next_flag, Seek, JUMP, START};
 use crate::geometry::Point;
-use crate::mark::Rule;
 use crate::math;
 use crate::pass::Pass;
+use crate::rule::Rule;
 
-/// Applies the check step to the marks of `pass`.
-pub(crate) fn check(pass: &mut Pass<'_>, rule: &Rule) {
-    match pass.neighbours.take() {
+/// Applies the check step to the marks of `pass`. `noted`: the segment starts the default
+/// mode's walk set right after another one, in increasing order, when it noted them all (else
+/// every flag is read); `moved`: interleaved sweeps were moved onto sweep 0 by an estimate of
+/// their offset (see [`out_and_back`]).
+pub(crate) fn check(pass: &mut Pass<'_>, rule: &Rule, noted: Option<&[u16]>, moved: bool) {
+    match noted {
         // The default mode's walk noted every start next to another (in increasing order):
         // the runs of marks are where they are.
         Some(list) => {
@@ -27,13 +30,13 @@ pub(crate) fn check(pass: &mut Pass<'_>, rule: &Rule) {
                 while j > done && pass.flag(j - 1) & Seek::MARK == Seek::MARK {
                     j -= 1;
                 }
-                done = check_run(pass, j, rule);
+                done = check_run(pass, j, rule, moved);
             }
         }
         None => {
             let mut j = 0usize;
             while let Some(start) = next_flag(pass.flags, j, Seek::Mark) {
-                j = check_run(pass, start, rule);
+                j = check_run(pass, start, rule, moved);
             }
         }
     }
@@ -41,14 +44,15 @@ pub(crate) fn check(pass: &mut Pass<'_>, rule: &Rule) {
 
 /// The check step for the run of marks starting at `j`; returns the point after it.
 #[inline(always)]
-fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule) -> usize {
+fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule, moved: bool) -> usize {
     let len = pass.len();
     let next = next_flag(pass.flags, j + 1, Seek::NotMark).unwrap_or(len);
     let e = next - 1;
     if e > j && next < len && pass.valid(next) {
         let from = (e + 1).saturating_sub(NP).max(j);
         let pred = pass.predict_next(from, next);
-        if !rule.marks(pred, pass.range(next)) && !out_and_back(pass, rule, from, e, next) {
+        let fits = !rule.marks(pred, pass.range(next));
+        if fits && (moved || !out_and_back(pass, rule, from, e, next)) {
             for i in from + 1..next {
                 pass.clear(i, START);
             }
@@ -65,11 +69,10 @@ fn check_run(pass: &mut Pass<'_>, j: usize, rule: &Rule) -> usize {
 /// one may well predict the next foreground point; in one sweep, a jump onto a surface that
 /// comes back towards the scanner does the same. Not where sweeps were moved by an estimate of
 /// their offset: its error zigzags their points along one surface, and the prediction alone
-/// decides there.
+/// decides there ([`check_run`] does not ask).
 fn out_and_back(pass: &Pass<'_>, rule: &Rule, from: usize, e: usize, next: usize) -> bool {
     let tol = rule.noise().map_or(0.0, |n| n.k_sigma + n.model.floor);
-    pass.stats.sweeps_aligned == 0
-        && (from + 1..=e).any(|i| pass.flag(i) & JUMP != 0)
+    (from + 1..=e).any(|i| pass.flag(i) & JUMP != 0)
         && !pass
             .points
             .get(from..=next)
@@ -117,14 +120,11 @@ mod tests {
             for &i in marks {
                 pass.set(i, START);
             }
-            if noted {
-                let mut list = heapless::Vec::new();
-                for w in marks.windows(2).filter(|w| w[1] == w[0] + 1) {
-                    let _ = list.push(w[1] as u16);
-                }
-                pass.neighbours = Some(list);
+            let mut list = heapless::Vec::<u16, 16>::new();
+            for w in marks.windows(2).filter(|w| w[1] == w[0] + 1) {
+                let _ = list.push(w[1] as u16);
             }
-            check(pass, rule);
+            check(pass, rule, Some(&list[..]).filter(|_| noted), false);
             let mut flags = [0u8; 361];
             flags.copy_from_slice(pass.flags);
             flags
@@ -178,7 +178,7 @@ mod tests {
     /// of `k σ + floor`, with 10 mm less than its 43 mm). `jumps` are the marks also set as
     /// jumps.
     fn checked_on_a_passed_wall(sigma_r: f32, jumps: &[usize]) -> heapless::Vec<usize, 64> {
-        use crate::preprocess::deskew::{BeamTiming, Motion};
+        use crate::motion::{BeamTiming, Motion};
         let g = ScanGeometry::LMS200_180_050;
         let (v, omega, d) = (1200.0f64, 0.9f64, -800.0f64);
         let ranges: [f32; 361] = core::array::from_fn(|i| {
@@ -208,7 +208,7 @@ mod tests {
             for &i in jumps {
                 pass.set(i, JUMP);
             }
-            check(pass, rule);
+            check(pass, rule, None, false);
             starts(pass.flags)
         })
     }

@@ -1,8 +1,8 @@
 //! The two named configurations, `paper` and `default`, and every knob of the method.
 
+use crate::correction::RangeCorrection;
 use crate::fit::circle::CircleMethod;
 use crate::math;
-use crate::preprocess::correction::RangeCorrection;
 
 /// How the mark-point threshold is computed.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,6 +167,14 @@ impl Config {
             correction: None,
             scrutiny: true,
         }
+    }
+
+    /// Whether the checks for real scans run: [`Self::scrutiny`], in a build with the
+    /// `scrutiny` feature (without it their code is left out, and [`Self::is_valid`] refuses
+    /// them on). The one switch every step asks.
+    #[inline(always)]
+    pub(crate) const fn scrutinised(&self) -> bool {
+        cfg!(feature = "scrutiny") && self.scrutiny
     }
 
     /// The same configuration with the checks for real scans ([`Self::scrutiny`]) on or off.

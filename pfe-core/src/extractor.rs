@@ -5,46 +5,21 @@ use heapless::Vec;
 
 use crate::beams::{BeamTable, Beams};
 use crate::check;
+use crate::classify;
 use crate::config::Config;
 use crate::error::ExtractError;
 use crate::feature::Feature;
 use crate::flags::{END, START, VALID};
 use crate::geometry::Point;
-use crate::mark::{self, Rule};
+use crate::mark::{self, Neighbours};
+use crate::output::{FeatureSink, Stats};
 use crate::pass::Pass;
-use crate::preprocess::{self, scatter, sweeps};
+use crate::preprocess::{self, scatter};
 use crate::reach;
+use crate::rule::Rule;
 use crate::scan::Scan;
 use crate::segment;
-
-/// What one extraction did.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct Stats {
-    /// Readings in the scan.
-    pub readings: usize,
-    /// Valid points.
-    pub valid: usize,
-    /// Segments (of any length).
-    pub segments: usize,
-    /// Segments shorter than `min_points`, ignored.
-    pub short_segments: usize,
-    /// Segments whose fit failed (degenerate), ignored.
-    pub degenerate: usize,
-    /// Features stored.
-    pub features: usize,
-    /// Features that did not fit in the buffer.
-    pub dropped: usize,
-    /// Predictions made (N + M in the paper's count).
-    pub predictions: usize,
-    /// Interleaved sweeps moved onto sweep 0 by their estimated offset (scans of several
-    /// sweeps without motion, see [`crate::preprocess::sweeps`]).
-    pub sweeps_aligned: usize,
-    /// The scan's own σ_r in µm, when it scattered well beyond the configured one and the
-    /// extraction used it ([`crate::preprocess::scatter`], with `Config::scrutiny`); else 0.
-    pub scan_sigma_um: u32,
-}
+use crate::sweeps;
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
 /// put it in a `static` on a microcontroller.
@@ -87,23 +62,6 @@ struct Buffers<const N: usize> {
 struct Output<const M: usize> {
     features: Vec<Feature, M>,
     stats: Stats,
-}
-
-/// Where the segment step puts the features (an extractor's buffer, whatever its capacity).
-pub(crate) trait FeatureSink {
-    /// Stores `f`; false when there is no room.
-    fn push(&mut self, f: Feature) -> bool;
-    /// The features stored, in the order pushed.
-    fn features_mut(&mut self) -> &mut [Feature];
-}
-
-impl<const M: usize> FeatureSink for Vec<Feature, M> {
-    fn push(&mut self, f: Feature) -> bool {
-        Vec::push(self, f).is_ok()
-    }
-    fn features_mut(&mut self) -> &mut [Feature] {
-        self
-    }
 }
 
 impl<const N: usize, const M: usize> Default for Extractor<N, M> {
@@ -253,77 +211,188 @@ fn accept(scan: &Scan<'_>, config: &Config, capacity: usize) -> Result<usize, Ex
     Ok(n)
 }
 
-/// The paper's steps in order, over an extractor's parts (not generic: compiled once, here).
+/// The paper's steps and ours, in order, over an extractor's parts (not generic: compiled
+/// once, here).
 #[inline(never)]
 fn run(
     beams: Beams<'_>,
-    slots: (&mut [Point], &mut [f32], &mut [u8]),
+    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
     scan: &Scan<'_>,
     config: &Config,
     stats: &mut Stats,
     out: &mut dyn FeatureSink,
 ) -> Result<Stats, ExtractError> {
-    // §2: readings to points (range correction, de-skew).
-    let (points, ranges, flags) = slots;
     let motion = scan.deskewing();
-    preprocess::load(
-        (&mut *points, &mut *ranges, &mut *flags),
-        &beams,
-        motion,
-        scan,
-        config,
-        stats,
-    );
-    let sweeps = usize::from(scan.sweeps.max(1));
-    let step = scan.geometry.angle_step;
-    let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
-    let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
-    if cfg!(feature = "scrutiny") && config.scrutiny {
-        // The readings' rounding joins the systematic error (see `Scan::quantum`).
-        let var = config.sigma_sys * config.sigma_sys + scan.shared_rounding(config.sigma_r);
-        let config = &config.with_sigma_sys(crate::math::sqrt(var));
-        return scrutinised(beams, (points, ranges, flags), scan, config, stats, out);
-    }
-    let rule = Rule::new(config, scan.geometry.r_max, beams.gap_factor);
-    // Interleaved sweeps without odometry are moved onto sweep 0 (by their offset estimated
-    // from the scan) when the marks show them out of place, and extracted again.
-    {
-        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-        // §3.1–3.2, §3.6: mark points by prediction.
-        mark::mark(&mut pass, &rule);
-        // The marks' evidence (many segment starts): no fit is made before aligning.
-        if !(interleaved && sweeps::suspect(&pass, &rule)) {
-            fit(&mut pass, &rule, config, out);
-            return outcome(pass.stats);
+    let checks = config.scrutinised();
+    // §2: readings to points (range correction, de-skew).
+    let slots = (&mut *points, &mut *ranges, &mut *flags);
+    preprocess::load(slots, &beams, motion, scan, config, stats);
+    // Ours, with the checks for real scans: the readings' rounding joins the systematic error
+    // (see `Scan::quantum`), and the walk takes the scan's own σ where it scatters well beyond
+    // σ_r ([`scatter`]).
+    let rounded;
+    let config = match checks {
+        true => {
+            let var = config.sigma_sys * config.sigma_sys + scan.shared_rounding(config.sigma_r);
+            rounded = config.with_sigma_sys(crate::math::sqrt(var));
+            &rounded
         }
-    }
-    stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
-    if stats.sweeps_aligned == 0 {
-        // Nothing to move: the marks stand (the check step reads every flag).
-        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-        fit(&mut pass, &rule, config, out);
-        return outcome(stats);
-    }
-    // Nothing was fitted before aligning: `out` is still empty.
-    *stats = Stats {
-        readings: stats.readings,
-        valid: stats.valid,
-        predictions: stats.predictions,
-        sweeps_aligned: stats.sweeps_aligned,
-        ..Stats::default()
+        false => config,
     };
-    flags.iter_mut().for_each(|f| *f &= VALID);
+    let gauge = (scan.geometry.r_max, beams.gap_factor);
+    let walk = match checks {
+        true => Marking::own(points, config, gauge, stats),
+        false => Marking::of(config, gauge),
+    };
+    // §3.1–3.2, §3.6: mark points by prediction.
+    let uneven = motion.is_some_and(|m| m.sweeps_apart());
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-    pass.uneven = true;
-    mark::mark(&mut pass, &rule);
-    fit(&mut pass, &rule, config, out);
+    let noted = mark::mark(&mut pass, &walk.rule, uneven);
+    // Ours: interleaved sweeps out of place (no odometry) moved onto sweep 0 and marked again.
+    let parts = (beams, scan, config);
+    let marks = in_place(parts, (points, ranges, flags), walk, noted, stats);
+    let fitted;
+    let config = match checks {
+        true => {
+            fitted = config.with_sigma_r(marks.by.sigma_r);
+            &fitted
+        }
+        false => config,
+    };
+    let rule = &marks.by.rule;
+    let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    // §3.3: the check step.
+    if config.check_step {
+        check::check(&mut pass, rule, marks.noted.as_deref(), marks.moved);
+    }
+    // §3.4–3.5: segments and pairing, merges, the type and fit of each.
+    segment::segments(&mut pass, rule, config, out);
+    // Ours: the features inherit the error of the offsets that moved the sweeps.
+    if classify::honest(config, checks) {
+        sweeps::inherit(out.features_mut(), marks.alignment);
+    }
+    // Ours, with the checks for real scans: line ends reach over the beams beside them that
+    // lie on them.
+    if let (true, Some(noise)) = (checks, rule.noise()) {
+        reach::extend(&mut pass, noise, out.features_mut());
+    }
     outcome(pass.stats)
 }
 
-/// [`run`] after the pre-processing, with [`Config::scrutiny`]: the walk marks the points with
-/// the scan's own σ when it scatters well beyond σ_r ([`scatter`]). Declared sweeps (without
-/// odometry) with a significant offset ([`sweeps`]) are then moved onto sweep 0, so that the
-/// lines lie where sweep 0 saw them rather than between the sweeps, and walked again:
+/// How a walk marks: the σ_r it takes (the fits after it take it too) and its rule.
+#[derive(Clone, Copy)]
+struct Marking {
+    sigma_r: f32,
+    rule: Rule,
+}
+
+impl Marking {
+    /// With `config` as it is, for a scanner of maximum range and gap factor `gauge`.
+    fn of(config: &Config, (r_max, gap): (f32, f32)) -> Self {
+        let rule = Rule::new(config, r_max, gap);
+        Self {
+            sigma_r: config.sigma_r,
+            rule,
+        }
+    }
+
+    /// With the σ_r of `points` where they scatter well beyond `config`'s ([`scatter`]),
+    /// noted in `stats.scan_sigma_um` (0 where not).
+    fn own(points: &[Point], config: &Config, gauge: (f32, f32), stats: &mut Stats) -> Self {
+        let sigma_r = match scatter::sigma(points, config.sigma_r) {
+            Some(sigma) => {
+                stats.scan_sigma_um = (sigma * 1000.0) as u32;
+                sigma
+            }
+            None => {
+                stats.scan_sigma_um = 0;
+                config.sigma_r
+            }
+        };
+        Self::of(&config.with_sigma_r(sigma_r), gauge)
+    }
+}
+
+/// The marks the check step and the segments go on from.
+struct Marks {
+    /// How they were made.
+    by: Marking,
+    /// The neighbouring starts the walk noted, when they were made by the walk the check step
+    /// follows (else `None`: it reads every flag).
+    noted: Neighbours,
+    /// Interleaved sweeps were moved onto sweep 0 by an estimate of their offset.
+    moved: bool,
+    /// The variance the features inherit from that estimate ([`sweeps::Offsets::variance`]);
+    /// zero when no sweep was moved by one.
+    alignment: [f32; 3],
+}
+
+/// Interleaved sweeps without odometry (default mode) are moved onto sweep 0 by their offset
+/// estimated from the scan, when the marks of `walk` (which noted `noted`) or, with the checks
+/// for real scans, the scan's scatter show them out of place, and walked again; otherwise the
+/// walk's marks stand.
+fn in_place(
+    (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
+    walk: Marking,
+    noted: Neighbours,
+    stats: &mut Stats,
+) -> Marks {
+    let sweeps = usize::from(scan.sweeps.max(1));
+    if !(sweeps > 1 && scan.deskewing().is_none() && walk.rule.noise().is_some()) {
+        return Marks::standing(walk, noted);
+    }
+    match config.scrutinised() {
+        true => scrutinised((beams, scan, config), slots, walk, noted, stats),
+        false => suspected((beams, scan), slots, walk, noted, stats),
+    }
+}
+
+impl Marks {
+    /// The marks of `walk`, where the points stand, as the check step follows them.
+    fn standing(by: Marking, noted: Neighbours) -> Self {
+        Self {
+            by,
+            noted,
+            moved: false,
+            alignment: [0.0; 3],
+        }
+    }
+}
+
+/// [`in_place`] without the checks for real scans: the sweeps are moved when the walk's marks
+/// are suspect ([`sweeps::suspect`]), and walked again with the same rule.
+#[inline(never)]
+fn suspected(
+    (beams, scan): (Beams<'_>, &Scan<'_>),
+    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    walk: Marking,
+    noted: Neighbours,
+    stats: &mut Stats,
+) -> Marks {
+    // The marks' evidence (many segment starts): no fit is made before aligning.
+    if !sweeps::suspect(flags, noted.is_some(), stats.valid) {
+        return Marks::standing(walk, noted);
+    }
+    let sweeps = usize::from(scan.sweeps.max(1));
+    let step = scan.geometry.angle_step;
+    stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
+    if stats.sweeps_aligned == 0 {
+        // Nothing to move: the marks stand (the check step reads every flag).
+        return Marks::standing(walk, None);
+    }
+    let noted = walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
+    Marks {
+        by: walk,
+        noted,
+        moved: true,
+        alignment: [0.0; 3],
+    }
+}
+
+/// [`in_place`] with the checks for real scans: declared sweeps (without odometry) with a
+/// significant offset ([`sweeps`]) are moved onto sweep 0, so that the lines lie where sweep 0
+/// saw them rather than between the sweeps, and walked again:
 /// - two sweeps: with the first walk's σ when their scatter shows them apart, else with the
 ///   moved points' own σ (a turn between the sweeps moves points across the beams, which the
 ///   scatter shows only where beams graze a surface, and there the walk marks them). The new
@@ -333,99 +402,71 @@ fn run(
 ///   segments into pieces of one period, four sweeps drifting apart).
 ///
 /// The fits of moved points use their own σ.
+#[inline(never)]
 fn scrutinised(
-    beams: Beams<'_>,
+    (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
-    scan: &Scan<'_>,
-    config: &Config,
+    walk: Marking,
+    noted: Neighbours,
     stats: &mut Stats,
-    out: &mut dyn FeatureSink,
-) -> Result<Stats, ExtractError> {
-    let motion = scan.deskewing();
+) -> Marks {
     let sweeps = usize::from(scan.sweeps.max(1));
-    let noise_rule = matches!(config.threshold, crate::config::Threshold::Noise(_));
-    let interleaved = sweeps > 1 && motion.is_none() && noise_rule;
-    let apart = interleaved && scatter::sweeps_apart(points, sweeps, config.sigma_r);
-    let own = |points: &[Point], stats: &mut Stats| match scatter::sigma(points, config.sigma_r) {
-        Some(sigma) => {
-            stats.scan_sigma_um = (sigma * 1000.0) as u32;
-            config.with_sigma_r(sigma)
-        }
-        None => {
-            stats.scan_sigma_um = 0;
-            *config
-        }
-    };
-    let (r_max, gap) = (scan.geometry.r_max, beams.gap_factor);
-    let walk_config = own(points, stats);
-    let walk_sigma_um = stats.scan_sigma_um;
-    let walk_rule = Rule::new(&walk_config, r_max, gap);
-    let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-    mark::mark(&mut pass, &walk_rule);
-    let offsets = match interleaved && (apart || sweeps == 2) {
+    let apart = scatter::sweeps_apart(points, sweeps, config.sigma_r);
+    let offsets = match apart || sweeps == 2 {
         true => sweeps::Offsets::of(points, sweeps, scan.geometry.angle_step),
         false => sweeps::Offsets::default(),
     };
     if offsets.moved() == 0 {
-        fit(&mut pass, &walk_rule, &walk_config, out);
-        return outcome(pass.stats);
+        return Marks::standing(walk, noted);
     }
-    let unmoved = starts(pass.flags);
-    // Walks the points again with `rule`, from the flags of the pre-processing, `moved` or as
-    // loaded; returns the marks (every walk's predictions are counted).
-    let walk_again = |(points, ranges, flags): (&[Point], &[f32], &mut [u8]),
-                      stats: &mut Stats,
-                      rule: &Rule,
-                      moved: bool| {
-        flags.iter_mut().for_each(|f| *f &= VALID);
-        let mut pass = Pass::over(beams, (points, ranges, flags), motion, stats);
-        pass.uneven = moved;
-        mark::mark(&mut pass, rule);
-        starts(pass.flags)
-    };
+    let (unmoved, walk_sigma_um) = (starts(flags), stats.scan_sigma_um);
     offsets.apply(points, ranges, flags);
-    let moved_config = own(points, stats);
+    let gauge = (scan.geometry.r_max, beams.gap_factor);
+    let moved = Marking::own(points, config, gauge, stats);
     let moved_sigma_um = stats.scan_sigma_um;
-    let moved_rule = Rule::new(&moved_config, r_max, gap);
     if sweeps > 2 {
-        walk_again((points, ranges, flags), stats, &walk_rule, true);
+        walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
     } else {
-        let rule = if apart { &walk_rule } else { &moved_rule };
-        if walk_again((points, ranges, flags), stats, rule, true) >= unmoved {
+        let rule = if apart { &walk.rule } else { &moved.rule };
+        walk_again(beams, (points, ranges, flags), rule, true, stats);
+        if starts(flags) >= unmoved {
             // The first walk stands: the points are loaded again (exactly as they were) and
             // walked again (its flags are not kept), then moved again when apart.
-            preprocess::load((points, ranges, flags), &beams, motion, scan, config, stats);
-            walk_again((points, ranges, flags), stats, &walk_rule, false);
+            let motion = scan.deskewing();
+            let slots = (&mut *points, &mut *ranges, &mut *flags);
+            preprocess::load(slots, &beams, motion, scan, config, stats);
+            walk_again(beams, (points, ranges, flags), &walk.rule, false, stats);
             if !apart {
                 stats.scan_sigma_um = walk_sigma_um;
-                let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-                fit(&mut pass, &walk_rule, &walk_config, out);
-                return outcome(pass.stats);
+                return Marks::standing(walk, None);
             }
             offsets.apply(points, ranges, flags);
         }
     }
     stats.scan_sigma_um = moved_sigma_um;
     stats.sweeps_aligned = offsets.moved();
-    // A new pass over the moved points: the walk's noted neighbours are gone, the check step
-    // reads every flag (the same outcome).
-    let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
-    pass.alignment = offsets.variance();
-    fit(&mut pass, &moved_rule, &moved_config, out);
-    outcome(pass.stats)
+    // The check step reads every flag (the same outcome as following the walk's notes).
+    Marks {
+        by: moved,
+        noted: None,
+        moved: true,
+        alignment: offsets.variance(),
+    }
 }
 
-/// §3.3: the check step; §3.4–3.5: segments and pairing, merges, type and fit of each; with
-/// [`Config::scrutiny`], line ends reach over the beams next to them that lie on them.
-#[inline(always)]
-fn fit(pass: &mut Pass<'_>, rule: &Rule, config: &Config, out: &mut dyn FeatureSink) {
-    if config.check_step {
-        check::check(pass, rule);
-    }
-    segment::segments(pass, rule, config, out);
-    if let (true, Some(noise)) = (cfg!(feature = "scrutiny") && config.scrutiny, rule.noise()) {
-        reach::extend(pass, noise, out.features_mut());
-    }
+/// Walks the points (no motion) again with `rule`, from the flags of the pre-processing
+/// (`uneven`: see [`mark::mark`]); returns the neighbouring starts it noted (every walk's
+/// predictions are counted).
+fn walk_again(
+    beams: Beams<'_>,
+    (points, ranges, flags): (&[Point], &[f32], &mut [u8]),
+    rule: &Rule,
+    uneven: bool,
+    stats: &mut Stats,
+) -> Neighbours {
+    flags.iter_mut().for_each(|f| *f &= VALID);
+    let mut pass = Pass::over(beams, (points, ranges, flags), None, stats);
+    mark::mark(&mut pass, rule, uneven)
 }
 
 /// Segment starts among `flags` (the marks of a walk).
@@ -467,15 +508,15 @@ mod tests {
                 let mut pass =
                     Pass::load(beams.of(g), work.slots(), &scan, &config, &mut out.stats);
                 let rule = Rule::new(&config, g.r_max, pass.beams.gap_factor);
-                mark::mark(&mut pass, &rule);
+                let mut neighbours = mark::mark(&mut pass, &rule, false);
                 let mut before = [0u8; 361];
                 before.copy_from_slice(pass.flags);
-                match (&pass.neighbours, all) {
-                    (_, true) => pass.neighbours = None,
+                match (&neighbours, all) {
+                    (_, true) => neighbours = None,
                     (Some(_), false) => noted += 1,
                     (None, false) => overflowed += 1,
                 }
-                check::check(&mut pass, &rule);
+                check::check(&mut pass, &rule, neighbours.as_deref(), false);
                 joined += usize::from(!all && pass.flags != before);
                 flags[usize::from(all)].copy_from_slice(pass.flags);
             }

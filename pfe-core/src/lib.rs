@@ -4,25 +4,30 @@
 //! for 2D laser scanner", *Robotics and Autonomous Systems* 59 (2011) 402–409, for
 //! microcontrollers: `no_std`, no allocator, `f32`, fixed capacities, no panics.
 //!
-//! The paper's steps, in the order [`Extractor::extract`] runs them, and where each lives:
+//! The paper's steps and ours, in the order [`Extractor::extract`] runs them, and where each
+//! lives:
 //!
 //! | step | paper | module |
 //! |---|---|---|
-//! | readings and beam geometry | | [`scan`] |
-//! | readings to points: range correction, de-skew, interleaved sweeps | §2 | [`preprocess`] ([`preprocess::correction`], [`preprocess::deskew`], [`preprocess::sweeps`]) |
-//! | prediction point and its error | §3.1 | [`predict`] |
-//! | mark points: the paper's threshold, or the default mode's walk with boundary refinement | §3.2, §3.6 | `mark` (`paper`, `noise`, `refine`) |
-//! | check step and pairing | §3.3 | `check` |
-//! | segments (and arc merges) | §3.4 | `segment` |
-//! | type of a segment (and the arc tests) | §3.5 | `classify` (`arc`) |
+//! | readings to points: range correction, de-skew | §2 | `preprocess`, with the scanner's models [`correction`], [`motion`] |
+//! | the scan's own σ, where it scatters well beyond σ_r ([`Config::scrutiny`]) | ours | `preprocess::scatter` |
+//! | mark points by prediction: the paper's threshold, or the default mode's walk with boundary refinement and arc continuation | §3.1–3.2, §3.6 | [`predict`], `mark` (`paper`, `noise`, `refine`, `arc`) |
+//! | interleaved sweeps out of place moved onto sweep 0 and marked again | ours | `sweeps` |
+//! | check step | §3.3 | `check` |
+//! | segments and pairing, arc merges (`arc`) | §3.4 | `segment` |
+//! | type of each segment, its covariance | §3.5 | `classify` |
 //! | line and circle fits with covariance | §3.5 | [`fit::line`], [`fit::circle`] |
-//! | line ends over the beams beside them that lie on them | | `reach` |
-//! | output | | [`feature`] |
+//! | the features inherit the sweep offsets' error | ours | `sweeps` |
+//! | line ends over the beams beside them that lie on them ([`Config::scrutiny`]) | ours | `reach` |
+//! | output | | [`feature`], [`Stats`] |
 //!
-//! [`Extractor`] owns the beam table (what depends on the geometry only), the work buffers of
-//! one scan and the output; every step is a function of slices, not generic over the
-//! capacities, so it is compiled once, in this crate. [`config`] holds the two named
-//! configurations, [`error`] the errors, [`geometry`] the shared plane geometry.
+//! A module imports only modules below it: the steps import none of each other (but `segment`
+//! calls `classify` for each segment), and the shared vocabulary lies below every step: the
+//! rules (`rule`), the work state (`pass`), statistics and sinks (`output`), the configuration,
+//! flags, geometry and maths. [`Extractor`] owns the beam table (what depends on the geometry
+//! only), the work buffers of one scan and the output; every step is a function of slices, not
+//! generic over the capacities, so it is compiled once, in this crate. [`config`] holds the two
+//! named configurations, [`error`] the errors, [`geometry`] the shared plane geometry.
 //!
 //! Features: `libm` (default) or `micromath` maths; `defmt` for `defmt::Format`; `serde` for
 //! `Serialize`/`Deserialize` of the output ([`Feature`], [`Stats`], [`Point`] as `[x, y]`).
@@ -42,10 +47,12 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod arc;
 mod beams;
 mod check;
 mod classify;
 pub mod config;
+pub mod correction;
 pub mod error;
 mod extractor;
 pub mod feature;
@@ -54,23 +61,33 @@ mod flags;
 pub mod geometry;
 mod mark;
 mod math;
+pub mod motion;
+mod output;
 mod pass;
 pub mod predict;
+#[cfg(feature = "internals")]
 pub mod preprocess;
+#[cfg(not(feature = "internals"))]
+mod preprocess;
 mod reach;
+mod rule;
 pub mod scan;
 mod segment;
+#[cfg(feature = "internals")]
+pub mod sweeps;
+#[cfg(not(feature = "internals"))]
+mod sweeps;
 
 pub use config::{Config, NoiseModel, Threshold, Typing, NP};
+pub use correction::RangeCorrection;
 pub use error::{ExtractError, FitError};
-pub use extractor::{Extractor, Stats};
+pub use extractor::Extractor;
 pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
 pub use fit::circle::{
     circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
 };
 pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
-pub use preprocess::correction::RangeCorrection;
-pub use preprocess::deskew::{BeamTiming, Motion};
-pub use preprocess::sweeps::SweepOffset;
+pub use motion::{BeamTiming, Motion};
+pub use output::Stats;
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

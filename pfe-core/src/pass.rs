@@ -2,19 +2,14 @@
 //! points, ranges and flags, and the statistics. Every step is a function of it, compiled
 //! once in this crate.
 
-use heapless::Vec;
-
 use crate::beams::Beams;
-use crate::extractor::Stats;
-use crate::flags::{START, VALID};
+use crate::flags::VALID;
 use crate::geometry::Point;
+use crate::motion::Motion;
+use crate::output::Stats;
 use crate::predict::{Prediction, WindowLine};
-use crate::preprocess::deskew::Motion;
 #[cfg(test)]
 use crate::{config::Config, preprocess, scan::Scan};
-
-/// Most neighbouring segment starts the default mode's walk notes for its check step.
-pub(crate) const NEIGHBOURS: usize = 16;
 
 /// The work state of one extraction. `points`, `ranges` and `flags` hold one slot per reading.
 pub(crate) struct Pass<'a> {
@@ -28,21 +23,8 @@ pub(crate) struct Pass<'a> {
     pub flags: &'a mut [u8],
     /// Motion during the scan, when de-skewing.
     pub motion: Option<Motion>,
-    /// Consecutive points are not one beam step apart in bearing: interleaved sweeps taken
-    /// from different poses, de-skewed or moved onto sweep 0 (a short and a long step in
-    /// turn). The walk then measures each step rather than assume the beam step.
-    pub uneven: bool,
-    /// Segment starts the default mode's walk set right after another one, in increasing
-    /// order: the only places where its check step can act. `None` when not known (the
-    /// paper's mode, or more than [`NEIGHBOURS`]): the check step then reads every flag.
-    pub neighbours: Option<Vec<u16, NEIGHBOURS>>,
-    /// What the extraction did so far.
+    /// What the extraction did so far (the steps count into it).
     pub stats: &'a mut Stats,
-    /// The variance a feature's points inherit from the estimated offsets that moved
-    /// interleaved sweeps onto sweep 0 ([`crate::preprocess::sweeps::Offsets::variance`]):
-    /// (x mm², y mm², θ rad²), each sweep's over the square of the sweeps. Zero when no sweep
-    /// was moved by an estimate.
-    pub alignment: [f32; 3],
 }
 
 impl<'a> Pass<'a> {
@@ -75,10 +57,7 @@ impl<'a> Pass<'a> {
             ranges,
             flags,
             motion,
-            uneven: motion.is_some_and(|m| m.sweeps_apart()),
-            neighbours: None,
             stats,
-            alignment: [0.0; 3],
         }
     }
 
@@ -157,21 +136,6 @@ impl<'a> Pass<'a> {
         };
         predict_point(line, self.origin(k), p, r)
     }
-
-    /// Sets a segment start at `i` in increasing order, noting it when point `i − 1` starts
-    /// one too (see [`Self::neighbours`]).
-    pub(crate) fn start(&mut self, i: usize) {
-        self.set(i, START);
-        if i.checked_sub(1).is_some_and(|j| self.flag(j) & START != 0) {
-            let noted = match (&mut self.neighbours, u16::try_from(i)) {
-                (Some(list), Ok(i)) => list.push(i).is_ok(),
-                _ => false,
-            };
-            if !noted {
-                self.neighbours = None;
-            }
-        }
-    }
 }
 
 /// Predicts the point `p` at measured range `r` seen from `origin` by `line` (`None` unless
@@ -198,8 +162,9 @@ pub(crate) fn point_at(points: &[Point], i: usize) -> Point {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::extractor::{Extractor, Stats};
-    use crate::preprocess::deskew::BeamTiming;
+    use crate::extractor::Extractor;
+    use crate::motion::BeamTiming;
+    use crate::output::Stats;
     use crate::scan::ScanGeometry;
     use core::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
@@ -230,25 +195,6 @@ mod tests {
                 ));
             },
         );
-    }
-
-    /// A segment start right after another one is noted (in increasing order); one after a
-    /// point that does not start a segment is not; the list dropped when full.
-    #[test]
-    fn a_start_next_to_a_start_is_noted() {
-        let points = [Point::new(1000.0, 0.0); 361];
-        let ranges = [1000.0f32; 361];
-        with_pass((&points, &ranges), None, |pass| {
-            pass.neighbours = Some(Vec::new());
-            for i in [5, 6, 9, 20, 21, 22] {
-                pass.start(i);
-            }
-            assert_eq!(pass.neighbours.as_deref(), Some(&[6u16, 21, 22][..]));
-            for i in 100..100 + 2 * NEIGHBOURS {
-                pass.start(i);
-            }
-            assert!(pass.neighbours.is_none());
-        });
     }
 
     /// On the move (3 m/s, 2 rad/s, two sweeps one mirror turn apart: beams up to 40 mm and

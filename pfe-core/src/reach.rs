@@ -11,9 +11,9 @@
 use crate::feature::{CircleFeature, Feature, LineFeature};
 use crate::flags::{END, JUMP, START};
 use crate::geometry::Point;
-use crate::mark::NoiseRule;
 use crate::math;
 use crate::pass::Pass;
+use crate::rule::NoiseRule;
 
 /// Extends every line of `features` (in scan order; a feature out of order is left as it is)
 /// over the beams of `pass` next to its ends that lie on it. The marks follow: a line's ends

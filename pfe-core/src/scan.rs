@@ -2,7 +2,7 @@
 
 use crate::geometry::Point;
 use crate::math;
-use crate::preprocess::deskew::Motion;
+use crate::motion::Motion;
 
 /// Where the beams point and how far the scanner sees.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -144,9 +144,8 @@ pub struct Scan<'a> {
     pub motion: Option<Motion>,
     /// Number of interleaved sweeps (1: none; 0 counts as 1): beam `i` is in sweep
     /// `i mod sweeps`. Without [`motion`](Self::motion), the sweeps' offset against sweep 0 is
-    /// estimated from the scan and removed ([`crate::preprocess::sweeps`], up to
-    /// [`MAX_SWEEPS`](crate::preprocess::sweeps::MAX_SWEEPS) sweeps; a scan declared with more
-    /// is extracted as it is); with it, its timing's sweeps rule.
+    /// estimated from the scan and removed (default mode, up to 4 sweeps; a scan declared with
+    /// more is extracted as it is); with it, its timing's sweeps rule.
     pub sweeps: u8,
     /// Resolution of the readings, mm (0: unknown, or finer than matters). Readings rounded to
     /// a grid of q mm carry an error of variance q²/12. Range noise much finer than q leaves

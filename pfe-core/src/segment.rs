@@ -9,16 +9,17 @@
 
 use heapless::Vec;
 
-use crate::classify::{self, arc::arc_fit};
+use crate::arc::arc_fit;
+use crate::classify;
 use crate::config::{Config, Typing};
-use crate::extractor::FeatureSink;
 use crate::feature::Feature;
 use crate::fit::line::fit_line;
 use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::geometry::Point;
-use crate::mark::{NoiseRule, Rule};
+use crate::output::FeatureSink;
 use crate::pass::Pass;
+use crate::rule::{NoiseRule, Rule};
 
 /// Sizes of the union of two neighbouring segments tested for being one arc (fewer points do
 /// not show an arc above the noise).
@@ -36,16 +37,16 @@ pub(crate) fn segments(
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
-    // Compiled once with and once without `Config::scrutiny`: without, no check of it is left
-    // in the per-segment path.
-    if cfg!(feature = "scrutiny") && config.scrutiny {
+    // Compiled once with and once without the checks for real scans: without, no check of
+    // them is left in the per-segment path.
+    if config.scrutinised() {
         segments_with::<true>(pass, rule, config, out);
     } else {
         segments_with::<false>(pass, rule, config, out);
     }
 }
 
-/// [`segments`] with `Config::scrutiny == SCRUTINY`.
+/// [`segments`] with the checks for real scans when `SCRUTINY`.
 fn segments_with<const SCRUTINY: bool>(
     pass: &mut Pass<'_>,
     rule: &Rule,
@@ -286,7 +287,8 @@ fn corner(pts: &[Point], config: &Config) -> Option<usize> {
 }
 
 // The f64 references need libm (the default feature).
-#[cfg(all(test, feature = "libm"))]
+#[cfg(test)]
+#[cfg(feature = "libm")]
 #[allow(clippy::indexing_slicing)]
 mod tests {
     use super::*;

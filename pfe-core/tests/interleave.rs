@@ -6,10 +6,8 @@
 mod common;
 
 use common::{cast, Noise, Prim};
-use pfe_core::preprocess::sweeps::estimate;
-use pfe_core::{
-    BeamTiming, Config, Extractor, Feature, Motion, Point, Scan, ScanGeometry, SweepOffset,
-};
+use pfe_core::sweeps::{estimate, SweepOffset};
+use pfe_core::{BeamTiming, Config, Extractor, Feature, Motion, Point, Scan, ScanGeometry};
 
 /// The robot's motion between sweeps: 0.6 m/s, 0.45 rad/s.
 fn motion(resolution_deg: f32) -> Motion {
@@ -564,7 +562,7 @@ fn the_chi2_of_a_static_scan_has_three_degrees_of_freedom() {
 
 /// Sweeps 5–8 mm apart (about σ_r = 5 mm) seldom scatter apart, nor leave fewer marks when
 /// moved and walked again: the extractor moves them only on that evidence (the extractor's and
-/// `preprocess::sweeps`' docs), so it moves few of these scans (at most 10 of 40) although
+/// `sweeps`' docs), so it moves few of these scans (at most 10 of 40) although
 /// their offset estimate is mostly significant (at least 30 of 40).
 #[test]
 fn sweeps_slightly_apart_are_moved_only_on_evidence() {
@@ -611,7 +609,7 @@ fn the_offset_of_sweep_zero_or_beyond_the_last_is_none() {
 /// without scrutiny, while declared as 2 it is aligned.
 #[test]
 fn more_sweeps_than_the_most_are_left_as_they_are() {
-    assert_eq!(pfe_core::preprocess::sweeps::MAX_SWEEPS, 4);
+    assert_eq!(pfe_core::sweeps::MAX_SWEEPS, 4);
     let mut ex = Extractor::<401, 128>::new();
     let mut noise = Noise::new(31);
     let (g, n, sweeps) = variant(0.5);

@@ -4,8 +4,8 @@
 //! or bent wall, a slowly varying bias: residuals that do not average out over the points),
 //! with the scatter and its correlation ([`correlated_scale`]); the share of a systematic
 //! range error its beams have in common is added ([`systematic_line`],
-//! [`systematic_circle`]), and the error of the estimated offsets that moved interleaved
-//! sweeps onto sweep 0 ([`aligned_line`], [`aligned_circle`]).
+//! [`systematic_circle`]). (The error of the estimated offsets that moved interleaved sweeps
+//! onto sweep 0 is added to every feature after the fits: `sweeps::inherit`.)
 
 use crate::feature::{CircleFeature, LineFeature};
 use crate::geometry::Point;
@@ -79,31 +79,6 @@ pub(super) fn systematic_circle(cf: &mut CircleFeature, origin: Point, s: f32) {
     *xy += k * dx * dy;
     *yx += k * dx * dy;
     *yy += k * dy * dy;
-}
-
-/// Adds to a line's covariance what it inherits from the offsets that moved interleaved
-/// sweeps (`alignment`, [`Pass::alignment`]): moving its points by (dx, dy) and turning them
-/// by dθ about the scanner moves ρ by n·(dx, dy) and α by dθ, each by the share of points the
-/// sweep holds (already in `alignment`).
-pub(super) fn aligned_line(lf: &mut LineFeature, [xx, yy, tt]: [f32; 3]) {
-    if !(xx > 0.0 || yy > 0.0 || tt > 0.0) {
-        return;
-    }
-    let (sin, cos) = math::sin_cos(lf.alpha);
-    lf.var_rho += cos * cos * xx + sin * sin * yy;
-    lf.var_alpha += tt;
-}
-
-/// Adds to a circle's centre covariance what it inherits from the offsets that moved
-/// interleaved sweeps (`alignment`, [`Pass::alignment`]): (dx, dy) moves the centre c by
-/// itself, dθ by dθ (−c_y, c_x).
-pub(super) fn aligned_circle(cf: &mut CircleFeature, [xx, yy, tt]: [f32; 3]) {
-    let c = cf.center;
-    let [[cxx, cxy, _], [cyx, cyy, _], _] = &mut cf.cov;
-    *cxx += xx + tt * c.y * c.y;
-    *cyy += yy + tt * c.x * c.x;
-    *cxy -= tt * c.x * c.y;
-    *cyx -= tt * c.x * c.y;
 }
 
 /// Factor on a fit's covariance: its reduced χ², `sse / (var · dof)` (`var` the variance of a

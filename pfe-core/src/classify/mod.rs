@@ -1,12 +1,11 @@
 //! Type and parameters of a segment (§3.5): a line or a circle, by the paper's mean distance
 //! to the fitted line or (default mode) by comparing the two fits; then the feature with its
-//! covariance. [`arc`]: the default mode's arc tests. In the default mode a circle must also
+//! covariance. In the default mode a circle must also
 //! beat the best two-line (corner) split, cover enough points and arc angle, and every
 //! feature's covariance is scaled up by the reduced χ² of its fit when that shows more scatter
 //! than σ_r explains, and further when that scatter is correlated from beam to beam
 //! ([`covariance`]).
 
-pub(crate) mod arc;
 mod covariance;
 
 use crate::config::{Config, Typing};
@@ -17,10 +16,7 @@ use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
-use covariance::{
-    aligned_circle, aligned_line, correlated_scale, mean_cos2, scatter_scale, systematic_circle,
-    systematic_line,
-};
+use covariance::{correlated_scale, mean_cos2, scatter_scale, systematic_circle, systematic_line};
 
 /// Fewest points of a circle in the default mode.
 const CIRCLE_MIN_POINTS: usize = 6;
@@ -28,7 +24,14 @@ const CIRCLE_MIN_POINTS: usize = 6;
 /// bent piece is not an arc.
 const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
 
-/// The feature of the segment `s..=e` (`None`: degenerate).
+/// Whether the features' covariance is made honest ([`covariance`]): with the checks for real
+/// scans (`scrutiny`), when the typing compares the fits.
+pub(crate) fn honest(config: &Config, scrutiny: bool) -> bool {
+    scrutiny && matches!(config.typing, Typing::CompareFits { .. })
+}
+
+/// The feature of the segment `s..=e` (`None`: degenerate), with the checks for real scans
+/// when `SCRUTINY`.
 pub(crate) fn feature<const SCRUTINY: bool>(
     pass: &Pass<'_>,
     s: usize,
@@ -38,7 +41,7 @@ pub(crate) fn feature<const SCRUTINY: bool>(
     let pts = pass.points.get(s..=e)?;
     let origin = pass.origin((s + e) / 2);
     let line = fit_line(pts).ok();
-    let honest = SCRUTINY && matches!(config.typing, Typing::CompareFits { .. });
+    let honest = honest(config, SCRUTINY);
     let var = config.sigma_r * config.sigma_r;
     match circle_of::<SCRUTINY>(pts, line.as_ref(), config) {
         Some((c, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
@@ -58,7 +61,6 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 }
                 cf.cov = cf.cov.map(|row| row.map(|v| v * k));
                 systematic_circle(cf, origin, config.sigma_sys);
-                aligned_circle(cf, pass.alignment);
             }
             Some(f)
         }
@@ -91,7 +93,6 @@ pub(crate) fn feature<const SCRUTINY: bool>(
                 lf.var_rho *= k;
                 lf.cov_alpha_rho *= k;
                 systematic_line(lf, config.sigma_sys);
-                aligned_line(lf, pass.alignment);
             }
             Some(f)
         }

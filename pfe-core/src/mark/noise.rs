@@ -5,13 +5,15 @@
 
 use heapless::Vec;
 
+use super::arc::continues_arc;
 use super::refine::{locate, refine_boundary, REFINE_AFTER};
-use super::NoiseRule;
-use crate::classify::arc::{arc_fit, continues_arc};
+use super::Neighbours;
+use crate::arc::arc_fit;
 use crate::flags::{JUMP, START};
 use crate::geometry::Point;
 use crate::pass::{point_at, Pass};
 use crate::predict::WindowLine;
+use crate::rule::NoiseRule;
 
 /// Size of a new segment at which it is tested for being the same arc as the one before.
 const MERGE_AT: usize = 8;
@@ -44,39 +46,46 @@ impl Walk {
     }
 }
 
-/// The walk's points and their ranges, of one length.
+/// The walk's points and their ranges, of one length, and whether they are unevenly spaced in
+/// bearing (see [`super::mark`]).
 #[derive(Clone, Copy)]
 struct Cloud<'a> {
     points: &'a [Point],
     ranges: &'a [f32],
+    uneven: bool,
 }
 
-/// Marks the points of `pass` in the default mode.
-pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule) {
+/// Marks the points of `pass` in the default mode (`uneven`: see [`super::mark`]); returns the
+/// neighbouring starts it noted.
+pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -> Neighbours {
     // The fast path: no de-skewing (the scanner at the origin) and a floor small enough for
     // its test (`WindowLine::accepts_within`); otherwise every point takes the slow path, with
     // the same outcome.
     let floor = rule.model.floor;
     let fast = pass.motion.is_none()
-        && !pass.uneven
+        && !uneven
         && floor * floor <= WindowLine::FLOOR2_WITHIN * rule.k_sigma2;
     if fast {
-        walk::<true>(pass, rule);
+        walk::<true>(pass, rule, uneven)
     } else {
-        walk::<false>(pass, rule);
+        walk::<false>(pass, rule, uneven)
     }
 }
 
 /// The walk over every point, with the fast path (`FAST`: the scanner at the origin, points
 /// evenly spaced: the uneven cases' tests compile out) or without.
-fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule) {
-    pass.neighbours = Some(Vec::new());
+fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -> Neighbours {
+    let mut noted = Some(Vec::new());
     // Points and ranges cut to the number of readings once: one bounds check for both.
     let n = pass.len();
     let (Some(points), Some(ranges)) = (pass.points.get(..n), pass.ranges.get(..n)) else {
-        return;
+        return noted;
     };
-    let cloud = Cloud { points, ranges };
+    let cloud = Cloud {
+        points,
+        ranges,
+        uneven,
+    };
     let mut walk = Walk::default();
     let mut k = 0usize;
     while k < n {
@@ -94,8 +103,24 @@ fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule) {
                 break;
             }
         }
-        step::<FAST>(pass, cloud, k, &mut walk, stale_failed, rule);
+        step::<FAST>(pass, cloud, k, (&mut walk, &mut noted), stale_failed, rule);
         k += 1;
+    }
+    noted
+}
+
+/// Sets a segment start at `i` in increasing order, noting it in `noted` when point `i − 1`
+/// starts one too (see [`Neighbours`]).
+fn start(pass: &mut Pass<'_>, noted: &mut Neighbours, i: usize) {
+    pass.set(i, START);
+    if i.checked_sub(1).is_some_and(|j| pass.flag(j) & START != 0) {
+        let kept = match (&mut *noted, u16::try_from(i)) {
+            (Some(list), Ok(i)) => list.push(i).is_ok(),
+            _ => false,
+        };
+        if !kept {
+            *noted = None;
+        }
     }
 }
 
@@ -106,17 +131,21 @@ fn step<const FAST: bool>(
     pass: &mut Pass<'_>,
     cloud: Cloud<'_>,
     k: usize,
-    walk: &mut Walk,
+    (walk, noted): (&mut Walk, &mut Neighbours),
     stale_failed: bool,
     rule: &NoiseRule,
 ) {
-    let Cloud { points, ranges } = cloud;
+    let Cloud {
+        points,
+        ranges,
+        uneven,
+    } = cloud;
     if !pass.valid(k) {
         *walk = Walk::default();
         return;
     }
     let Some(s) = walk.seg else {
-        pass.start(k);
+        start(pass, noted, k);
         walk.seg = Some(k);
         walk.cache = None;
         return;
@@ -128,7 +157,7 @@ fn step<const FAST: bool>(
     else {
         return;
     };
-    let limit = if !FAST && pass.uneven {
+    let limit = if !FAST && uneven {
         let o = pass.origin(k);
         let seen = |q: Point| Point::new(q.x - o.x, q.y - o.y);
         rule.jump_limit_between(seen(prev), seen(p), prev_r)
@@ -158,7 +187,7 @@ fn step<const FAST: bool>(
         } else {
             let w = window(points, k, c, rule);
             let (first, last) = (point_at(points, k - w), prev);
-            if !FAST && pass.uneven && !spans(&first, &last, rule) {
+            if !FAST && uneven && !spans(&first, &last, rule) {
                 // Points not evenly spaced (interleaved sweeps de-skewed or moved: close to
                 // the scanner one sweep's point may even pass the other's) give a window that
                 // does not yet span the noise no direction: no test until it does.
@@ -179,7 +208,7 @@ fn step<const FAST: bool>(
         }
     };
     if let Some(b) = boundary {
-        pass.start(b);
+        start(pass, noted, b);
         if jump {
             pass.set(b, JUMP);
         }
@@ -234,13 +263,13 @@ fn line_accepts<const FAST: bool>(
     let p = point_at(cloud.points, k);
     let r = cloud.ranges.get(k).copied().unwrap_or(f32::NAN);
     let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
-    if FAST || (pass.motion.is_none() && !pass.uneven) {
+    if FAST || (pass.motion.is_none() && !cloud.uneven) {
         return line.accepts(p.x, p.y, r, k_sigma2, floor);
     }
     let o = pass.origin(k);
     let seen = line.seen_from(o);
     let (x, y) = (p.x - o.x, p.y - o.y);
-    if pass.uneven {
+    if cloud.uneven {
         let prev = point_at(cloud.points, k.wrapping_sub(1));
         let prev = Point::new(prev.x - o.x, prev.y - o.y);
         seen.accepts_after(&prev, (x, y), r, k_sigma2, floor)
@@ -332,7 +361,7 @@ fn accepted_run(
 mod tests {
     use super::*;
     use crate::config::Config;
-    use crate::mark::Rule;
+    use crate::rule::Rule;
 
     /// The window grows from `window` (10) points until its far end is `min_span · σ_r` (12 ·
     /// 5 = 60 mm) from the last point, up to `max_window` (24): points 3 mm apart, along y
@@ -451,6 +480,29 @@ mod tests {
         (best, id)
     }
 
+    /// A segment start right after another one is noted (in increasing order); one after a
+    /// point that does not start a segment is not; the list dropped when full.
+    #[test]
+    fn a_start_next_to_a_start_is_noted() {
+        use super::super::NEIGHBOURS;
+        use crate::extractor::Extractor;
+        use crate::scan::{Scan, ScanGeometry};
+        let ranges = [1000.0f32; 361];
+        let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges);
+        let mut ex = Extractor::<361, 8>::new();
+        ex.with_pass(&scan, &Config::default(), |pass, _| {
+            let mut neighbours: Neighbours = Some(Vec::new());
+            for i in [5, 6, 9, 20, 21, 22] {
+                start(pass, &mut neighbours, i);
+            }
+            assert_eq!(neighbours.as_deref(), Some(&[6u16, 21, 22][..]));
+            for i in 100..100 + 2 * NEIGHBOURS {
+                start(pass, &mut neighbours, i);
+            }
+            assert!(neighbours.is_none());
+        });
+    }
+
     /// How [`walked`] walks.
     #[derive(Clone, Copy, PartialEq)]
     enum How {
@@ -463,7 +515,7 @@ mod tests {
     /// where the range is NaN): marked by `mark`, or walked with or without the fast path.
     fn walked(
         cloud: (&[Point], &[f32]),
-        frame: (Option<crate::preprocess::deskew::Motion>, bool),
+        frame: (Option<crate::motion::Motion>, bool),
         config: &crate::config::Config,
         how: How,
     ) -> [u8; 361] {
@@ -473,7 +525,7 @@ mod tests {
     /// [`walked`] and the number of predictions the walk counted.
     fn walked_counted(
         (points, ranges): (&[Point], &[f32]),
-        (motion, uneven): (Option<crate::preprocess::deskew::Motion>, bool),
+        (motion, uneven): (Option<crate::motion::Motion>, bool),
         config: &crate::config::Config,
         how: How,
     ) -> ([u8; 361], usize) {
@@ -490,22 +542,22 @@ mod tests {
         });
         let mut ex = Extractor::<361, 8>::new();
         let predictions = ex.with_pass(&Scan::from_mm(g, &zeros), config, |loaded, rule| {
-            let mut stats = crate::extractor::Stats::default();
+            let mut stats = crate::output::Stats::default();
             let mut pass = Pass::over(
                 loaded.beams,
                 (points, ranges, &mut flags),
                 motion,
                 &mut stats,
             );
-            pass.uneven |= uneven;
+            let uneven = uneven || motion.is_some_and(|m| m.sweeps_apart());
             let Some(noise) = rule.noise() else {
                 panic!("the default rule")
             };
             match how {
-                How::Mark => super::mark(&mut pass, noise),
-                How::Fast => walk::<true>(&mut pass, noise),
-                How::Slow => walk::<false>(&mut pass, noise),
-            }
+                How::Mark => super::mark(&mut pass, noise, uneven),
+                How::Fast => walk::<true>(&mut pass, noise, uneven),
+                How::Slow => walk::<false>(&mut pass, noise, uneven),
+            };
             pass.stats.predictions
         });
         (flags, predictions)
@@ -691,7 +743,7 @@ mod tests {
     #[test]
     fn a_scan_on_the_move_is_marked_where_surfaces_change() {
         use crate::config::Config;
-        use crate::preprocess::deskew::{BeamTiming, Motion};
+        use crate::motion::{BeamTiming, Motion};
         let config = Config::default();
         let mut seed = 9u32;
         let mut sum = [0usize; 6];
@@ -730,7 +782,7 @@ mod tests {
     #[test]
     fn a_window_spans_min_span_sigmas() {
         let config = crate::config::Config::default().with_sigma_r(5.0);
-        let rule = crate::mark::Rule::new(&config, 8000.0, 1.0);
+        let rule = crate::rule::Rule::new(&config, 8000.0, 1.0);
         let Some(noise) = rule.noise() else {
             panic!("the default rule")
         };

@@ -1,10 +1,10 @@
 //! The paper's marking (§3.2): every point with `Np` valid predecessors is predicted from
 //! them; the first point after a gap (or at the start) opens a segment.
 
-use super::PaperRule;
 use crate::config::NP;
 use crate::flags::START;
 use crate::pass::Pass;
+use crate::rule::PaperRule;
 
 /// Marks the points of `pass` under the paper's threshold.
 pub(crate) fn mark(pass: &mut Pass<'_>, rule: &PaperRule) {

@@ -2,13 +2,13 @@
 //! over the points that already left the old segment's line; a few points later,
 //! [`refine_boundary`] settles it between two fixed lines.
 
-use super::NoiseRule;
 use crate::config::NP;
 use crate::fit::line::fit_axis;
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
 use crate::predict::Prediction;
+use crate::rule::NoiseRule;
 
 /// Points of the new segment seen before its boundary is refined (its line in the refinement
 /// is fitted to the points after the candidates).

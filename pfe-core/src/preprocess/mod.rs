@@ -1,22 +1,21 @@
-//! Pre-processing (§2): readings to points, with the systematic range [`correction`] and
-//! motion de-skewing ([`deskew`]) when configured; for interleaved sweeps without motion, the
-//! extractor may move each sweep onto sweep 0 by its offset estimated from the scan
-//! ([`sweeps`]).
-//! Invalid readings (no return, reserved codes) are not points.
+//! Pre-processing (§2): readings to points, with the systematic range
+//! [`correction`](crate::correction) and motion de-skewing ([`motion`](crate::motion)) when
+//! configured; the scan's own noise measured from its points (`scatter`). Invalid readings (no
+//! return, reserved codes) are not points.
 
-pub mod correction;
-pub mod deskew;
+#[cfg(feature = "internals")]
 pub mod scatter;
-pub mod sweeps;
+#[cfg(not(feature = "internals"))]
+pub(crate) mod scatter;
 
 use crate::beams::Beams;
 use crate::config::Config;
-use crate::extractor::Stats;
 use crate::flags::VALID;
 use crate::geometry::Point;
 use crate::math;
+use crate::motion::Motion;
+use crate::output::Stats;
 use crate::scan::{max_code, valid_mm, Ranges, Scan};
-use deskew::Motion;
 
 /// Converts the readings of `scan` to points, ranges and flags (one slot per reading), with
 /// the beam directions of `beams` and the scanner's `motion` (when de-skewing).

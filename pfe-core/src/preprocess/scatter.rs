@@ -49,15 +49,15 @@ const PER_SIGMA: f32 = 16.0;
 /// inlier).
 const BINS: usize = 512;
 /// Fewest chord residuals for an estimate.
-pub const MIN_SAMPLES: usize = 24;
+pub(crate) const MIN_SAMPLES: usize = 24;
 /// The estimate replaces σ_r only above `1 + SIGNIFICANT / √n` times it, n the residuals it
 /// came from. Over 1 000 walls of 181 points with normal noise at σ_r, the estimate was at
 /// most 1.53 σ_r (n ≈ 177: the bound is 1.75), with 361 points at most 1.41 (bound 1.53);
 /// a pillar of 25 beams gives the median of few residuals, curvature included (bound 3).
-pub const SIGNIFICANT: f32 = 10.0;
+pub(crate) const SIGNIFICANT: f32 = 10.0;
 /// The largest σ the scan may claim, as a multiple of σ_r (a scan of clutter is not a wall
 /// with a large noise).
-pub const MAX_FACTOR: f32 = 8.0;
+pub(crate) const MAX_FACTOR: f32 = 8.0;
 /// Residual σ per σ_r: √1.5.
 const RESIDUAL_PER_SIGMA: f32 = 1.224_745;
 /// σ_r from the lower quartile of |residual|: a normal residual has |e| below 0.3186 σ a
@@ -116,7 +116,7 @@ pub fn sweeps_apart(points: &[Point], sweeps: usize, sigma_r: f32) -> bool {
 }
 
 /// The factor of [`sweeps_apart`].
-pub const APART: f32 = 1.5;
+pub(crate) const APART: f32 = 1.5;
 
 /// [`sigma`] from the chords of points `span` beams before and after each point.
 fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {

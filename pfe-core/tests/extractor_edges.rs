@@ -1,8 +1,8 @@
-//! Extractor behaviours that cargo-mutants found untested (docs/TESTING.md, "Mutation
-//! testing"), against analytic truth (the exact ray casting of `common`, closed-form poses,
-//! f64 first-order propagation): distant walls at grazing incidence at any heading, a bent wall
-//! of less than 30° of arc, the covariance of a line of a de-skewed scan, and a beam within
-//! 10⁻⁶ of a window's line.
+//! Extractor behaviours at their edges, against analytic truth (the exact ray casting of
+//! `common`, closed-form poses, f64 first-order propagation): distant walls at grazing
+//! incidence at any heading, a bent wall of less than 30° of arc, the covariance of a line of a
+//! de-skewed scan, and a beam within 10⁻⁶ of a window's line. (How they were found:
+//! docs/TESTING.md, "Mutation testing".)
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 #![allow(clippy::needless_range_loop)]
 

@@ -1,5 +1,5 @@
-//! Small geometric and fitting contracts that cargo-mutants found untested (docs/TESTING.md,
-//! "Mutation testing"), each against exact values or an f64 reference: points and rays,
+//! Small geometric and fitting contracts at their edges, each against exact values or an f64
+//! reference (how they were found: docs/TESTING.md, "Mutation testing"): points and rays,
 //! window lines and predictions, the paper's threshold, a sweep's rigid offset, the circle and
 //! line fits at their edges.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
@@ -80,7 +80,7 @@ fn a_line_through_the_scanner_predicts_nothing_ahead() {
 #[test]
 fn a_sweep_offset_is_a_rotation_then_a_translation() {
     for dtheta in [0.02f32, -0.3] {
-        let off = pfe_core::SweepOffset {
+        let off = pfe_core::sweeps::SweepOffset {
             dx: 8.0,
             dy: -5.0,
             dtheta,

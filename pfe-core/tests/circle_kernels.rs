@@ -1,5 +1,5 @@
-//! The circle kernels that cargo-mutants found untested (docs/TESTING.md, "Mutation testing"),
-//! each against a reference computed here in f64, independently of pfe-core: the geometric
+//! The circle kernels, each against a reference computed here in f64, independently of
+//! pfe-core (how they were found: docs/TESTING.md, "Mutation testing"): the geometric
 //! residual sum, the Levenberg–Marquardt refinement step by step, the covariance
 //! `σ² (WᵀW)⁻¹` and its range-noise sandwich by Gauss–Jordan inversion, and the Taubin and
 //! Hyper fits as the smallest non-negative root of `det(M − ηN)` found by bisection.

@@ -21,14 +21,13 @@
 //! [`SweepOffset::CHI2_SIGNIFICANT`]) and moves some point by more than
 //! [`SweepOffset::MIN_SHIFT_MM`]; otherwise the points stay as they are.
 
+use crate::feature::{CircleFeature, Feature, LineFeature};
 use crate::flags::{START, VALID};
 use crate::geometry::Point;
-use crate::mark::Rule;
 use crate::math;
-use crate::pass::Pass;
 
 /// Most rows (beams) one sweep's estimate uses: longer sweeps are subsampled evenly.
-pub const MAX_ROWS: usize = 64;
+pub(crate) const MAX_ROWS: usize = 64;
 
 /// The pose of one sweep's scanner in the frame of sweep 0, estimated from the scan.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -79,7 +78,7 @@ type Row = [f32; 5];
 /// `None` when too few beams are on smooth surfaces or the geometry does not fix the offset.
 ///
 /// ```
-/// use pfe_core::preprocess::sweeps::estimate;
+/// use pfe_core::sweeps::estimate;
 /// use pfe_core::{Point, ScanGeometry};
 /// // A room 3 m × 4 m; the odd beams from a scanner 8 mm ahead.
 /// let g = ScanGeometry::LMS200_180_050;
@@ -203,17 +202,50 @@ impl Offsets {
 }
 
 /// Whether the default mode's walk over a scan of interleaved sweeps left the marks that
-/// sweeps out of place make: more segment starts than one in [`SUSPECT_EVERY`] valid points,
-/// or more neighbouring starts than the walk notes. The paper's mode is left as published.
-pub(crate) fn suspect(pass: &Pass<'_>, rule: &Rule) -> bool {
-    rule.noise().is_some()
-        && (pass.neighbours.is_none()
-            || pass.flags.iter().filter(|f| **f & START != 0).count() * SUSPECT_EVERY
-                > pass.stats.valid)
+/// sweeps out of place make: more segment starts among `flags` than one in [`SUSPECT_EVERY`]
+/// of the `valid` points, or more neighbouring starts than the walk notes (`noted` false).
+pub(crate) fn suspect(flags: &[u8], noted: bool, valid: usize) -> bool {
+    !noted || flags.iter().filter(|f| **f & START != 0).count() * SUSPECT_EVERY > valid
 }
 
 /// One segment start in this many valid points is more than a scan of sweeps in place makes.
-pub const SUSPECT_EVERY: usize = 18;
+pub(crate) const SUSPECT_EVERY: usize = 18;
+
+/// Adds to every feature's covariance what it inherits from the offsets that moved
+/// interleaved sweeps onto sweep 0 (`alignment`: their [`Offsets::variance`]).
+pub(crate) fn inherit(features: &mut [Feature], alignment: [f32; 3]) {
+    for f in features {
+        match f {
+            Feature::Line(lf) => aligned_line(lf, alignment),
+            Feature::Circle(cf) => aligned_circle(cf, alignment),
+        }
+    }
+}
+
+/// Adds to a line's covariance what it inherits from the offsets that moved interleaved
+/// sweeps (`alignment`, see [`Offsets::variance`]): moving its points by (dx, dy) and turning them
+/// by dθ about the scanner moves ρ by n·(dx, dy) and α by dθ, each by the share of points the
+/// sweep holds (already in `alignment`).
+fn aligned_line(lf: &mut LineFeature, [xx, yy, tt]: [f32; 3]) {
+    if !(xx > 0.0 || yy > 0.0 || tt > 0.0) {
+        return;
+    }
+    let (sin, cos) = math::sin_cos(lf.alpha);
+    lf.var_rho += cos * cos * xx + sin * sin * yy;
+    lf.var_alpha += tt;
+}
+
+/// Adds to a circle's centre covariance what it inherits from the offsets that moved
+/// interleaved sweeps (`alignment`, see [`Offsets::variance`]): (dx, dy) moves the centre c by
+/// itself, dθ by dθ (−c_y, c_x).
+fn aligned_circle(cf: &mut CircleFeature, [xx, yy, tt]: [f32; 3]) {
+    let c = cf.center;
+    let [[cxx, cxy, _], [cyx, cyy, _], _] = &mut cf.cov;
+    *cxx += xx + tt * c.y * c.y;
+    *cyy += yy + tt * c.x * c.x;
+    *cxy -= tt * c.x * c.y;
+    *cyx -= tt * c.x * c.y;
+}
 
 /// Residual floor, mm (the 1 mm range quantum's standard deviation, about 0.3 mm).
 const SIGMA_FLOOR: f32 = 0.3;
@@ -409,7 +441,11 @@ fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
 
 #[cfg(test)]
 mod tests {
-    use super::{invert, offset, Offsets, Solution, SweepOffset, ROT_SCALE};
+    use super::{
+        aligned_circle, aligned_line, invert, offset, Offsets, Solution, SweepOffset, ROT_SCALE,
+    };
+    use crate::feature::{CircleFeature, LineFeature};
+    use crate::geometry::Point;
 
     /// Each moved sweep's standard errors over the sweeps, squared and summed; sweeps not
     /// moved add nothing.
@@ -505,5 +541,68 @@ mod tests {
         };
         assert!(invert(&near(5e-5)).is_none());
         assert!(invert(&near(2e-4)).is_some());
+    }
+
+    /// The offsets that moved interleaved sweeps: ρ gets n·(x, y)'s variance, α the turn's; a
+    /// circle's centre c gets (x, y)'s and the turn's lever (−c_y, c_x); nothing when none moved.
+    #[test]
+    fn aligned_sweeps_add_the_offsets_variance() {
+        let alignment = [4.0f32, 9.0, 1e-6];
+        let (alpha, rho) = (0.5f32, 2000.0f32);
+        let mut lf = LineFeature {
+            first: 0,
+            last: 9,
+            points: 10,
+            alpha,
+            rho,
+            var_alpha: 1e-6,
+            var_rho: 4.0,
+            cov_alpha_rho: 1e-4,
+            start: Point::new(1000.0, 0.0),
+            end: Point::new(0.0, 2000.0),
+        };
+        let plain = lf;
+        aligned_line(&mut lf, [0.0; 3]);
+        assert_eq!(lf, plain);
+        // Each term alone counts.
+        for one in [[4.0, 0.0, 0.0], [0.0, 9.0, 0.0], [0.0, 0.0, 1e-6]] {
+            let mut l = plain;
+            aligned_line(&mut l, one);
+            assert_ne!(
+                (l.var_alpha, l.var_rho),
+                (plain.var_alpha, plain.var_rho),
+                "{one:?}"
+            );
+        }
+        aligned_line(&mut lf, alignment);
+        let (c, s) = (f64::from(alpha).cos(), f64::from(alpha).sin());
+        let want_rho = 4.0 + c * c * 4.0 + s * s * 9.0;
+        assert!(
+            (f64::from(lf.var_rho) - want_rho).abs() < 1e-4,
+            "{}",
+            lf.var_rho
+        );
+        assert!((f64::from(lf.var_alpha) - 2e-6).abs() < 1e-12);
+        assert_eq!(lf.cov_alpha_rho, 1e-4);
+
+        let mut cf = CircleFeature {
+            first: 0,
+            last: 9,
+            points: 10,
+            center: Point::new(1000.0, -2000.0),
+            radius: 150.0,
+            cov: [[1.0, 0.5, 0.0], [0.5, 2.0, 0.0], [0.0, 0.0, 3.0]],
+            start_angle: 0.0,
+            end_angle: 1.0,
+        };
+        aligned_circle(&mut cf, alignment);
+        // dθ moves the centre by dθ (2000, 1000).
+        let want = [[1.0 + 4.0 + 4.0, 0.5 + 2.0], [0.5 + 2.0, 2.0 + 9.0 + 1.0]];
+        for (i, row) in want.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                assert!((cf.cov[i][j] - v).abs() < 1e-4, "{i}{j}: {:?}", cf.cov);
+            }
+        }
+        assert_eq!(cf.cov[2], [0.0, 0.0, 3.0]);
     }
 }

@@ -1,8 +1,8 @@
-//! Small public contracts that cargo-mutants found untested (docs/TESTING.md, "Mutation
-//! testing"), each against closed-form or counted truth: the scanner pose of a constant-
-//! velocity motion (the exact arc `x = v/ω sin ωt`, `y = v/ω (1 − cos ωt)`, in f64), a de-skewed
-//! point, `Point::norm`, which configurations are valid, a range corrected to zero, and the
-//! statistics of a scan whose interleaved sweeps were moved and extracted again.
+//! Small public contracts, each against closed-form or counted truth: the scanner pose of a
+//! constant-velocity motion (the exact arc `x = v/ω sin ωt`, `y = v/ω (1 − cos ωt)`, in f64), a
+//! de-skewed point, `Point::norm`, which configurations are valid, a range corrected to zero,
+//! and the statistics of a scan whose interleaved sweeps were moved and extracted again. (How
+//! they were found: docs/TESTING.md, "Mutation testing".)
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 mod common;
