@@ -1,0 +1,386 @@
+//! Feature odometry: every scan's pose in the frame of the first, registered against a small
+//! local map of features rather than only against the previous scan.
+//!
+//! The map holds at most `MAP` features (lines and points) in the odometry frame. Each scan is
+//! registered against it ([`crate::register`]'s method, the map as the "previous scan", the
+//! pose predicted from the last motion as a loose prior); matched features are fused into their
+//! map feature (information-weighted average, the segment's extent the union), unmatched ones
+//! are added, and when the map is full the one seen least recently (then least often) is
+//! replaced. A feature seen again from far along the trajectory is thus measured against the
+//! same map feature, and the error grows more slowly than by chaining pairs of scans.
+//!
+//! Covariance: the relative motion's covariance is the registration's against the map; the
+//! pose's covariance chains those (`compose_covariance`), which ignores what the map's
+//! memory saves: it bounds the error from above.
+
+use core::f32::consts::PI;
+
+use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
+use crate::obs::{LineObs, Observation, PointObs};
+use crate::register::{register_sets, Assoc, Config, Status, NONE};
+use crate::set::{Set, MAX_OBS};
+
+/// One feature of the map, in the odometry frame.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    /// Line (α, ρ) or point (x, y).
+    v: [f32; 2],
+    cov: Sym2,
+    /// Segment ends of a line (NaN: none).
+    ext: ([f32; 2], [f32; 2]),
+    line: bool,
+    seen: u16,
+    last: u32,
+}
+
+const EMPTY: Entry = Entry {
+    v: [0.0; 2],
+    cov: Sym2 {
+        a: 1.0,
+        b: 0.0,
+        c: 1.0,
+    },
+    ext: ([f32::NAN; 2], [f32::NAN; 2]),
+    line: false,
+    seen: 0,
+    last: 0,
+};
+
+/// One scan's result of [`Odometry::update`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    /// Index of the scan (0 for the first).
+    pub scan: u32,
+    /// The pose of this scan in the previous scan's frame.
+    pub rel: Pose,
+    /// Its covariance (x mm, y mm, θ rad).
+    pub rel_cov: Cov3,
+    /// The pose of this scan in the first scan's frame.
+    pub pose: Pose,
+    /// Its covariance.
+    pub cov: Cov3,
+    /// How the registration went ([`Status::Ok`] for the first scan). For
+    /// [`Status::None`] the pose is the prediction and the map restarts from this scan.
+    pub status: Status,
+}
+
+/// Feature odometry with a local map of at most `MAP` features.
+///
+/// ```
+/// use pfe_pose::{LineObs, Observation, Odometry, Pose, Status};
+/// let walls = [(0.0f32, 3000.0f32), (1.5708, 2000.0), (3.1416, 1500.0), (-1.5708, 2500.0)];
+/// let cov = [[1e-6, 0.0], [0.0, 25.0]];
+/// let scan_at = |p: Pose| -> Vec<Observation> {
+///     let inv = p.inverse();
+///     walls.iter().map(|&(a, r)| {
+///         let (a, r) = inv.transform_line(a, r);
+///         Observation::Line(LineObs::new(a, r, cov))
+///     }).collect()
+/// };
+/// let mut odo = Odometry::<32>::new(Default::default());
+/// odo.update(&scan_at(Pose::IDENTITY), None);
+/// odo.update(&scan_at(Pose::new(200.0, 0.0, 0.1)), None);
+/// let step = odo.update(&scan_at(Pose::new(400.0, 50.0, 0.2)), None);
+/// assert_eq!(step.status, Status::Ok);
+/// assert!((step.pose.x - 400.0).abs() < 5.0 && (step.pose.theta - 0.2).abs() < 1e-3);
+/// ```
+#[derive(Clone, Debug)]
+pub struct Odometry<const MAP: usize> {
+    cfg: Config,
+    map: [Entry; MAP],
+    n: usize,
+    pose: Pose,
+    cov: Cov3,
+    last_rel: Pose,
+    scans: u32,
+}
+
+impl<const MAP: usize> Odometry<MAP> {
+    /// An odometry that has seen no scan, with registration settings `cfg`.
+    pub const fn new(cfg: Config) -> Self {
+        Self {
+            cfg,
+            map: [EMPTY; MAP],
+            n: 0,
+            pose: Pose::IDENTITY,
+            cov: ZERO3,
+            last_rel: Pose::IDENTITY,
+            scans: 0,
+        }
+    }
+
+    /// Forgets every scan.
+    pub fn reset(&mut self) {
+        self.n = 0;
+        self.pose = Pose::IDENTITY;
+        self.cov = ZERO3;
+        self.last_rel = Pose::IDENTITY;
+        self.scans = 0;
+    }
+
+    /// The latest pose in the first scan's frame and its covariance.
+    pub fn pose(&self) -> (Pose, Cov3) {
+        (self.pose, self.cov)
+    }
+
+    /// The map's features in the odometry frame.
+    pub fn map(&self) -> impl Iterator<Item = Observation> + '_ {
+        self.map.iter().take(self.n).map(|e| {
+            let cov = [[e.cov.a, e.cov.b], [e.cov.b, e.cov.c]];
+            if e.line {
+                Observation::Line(LineObs::new(e.v[0], e.v[1], cov).with_extent(e.ext.0, e.ext.1))
+            } else {
+                Observation::Point(PointObs::new(e.v[0], e.v[1], cov))
+            }
+        })
+    }
+
+    /// Registers the scan's features `obs` against the map and updates it. `motion`: a prior
+    /// of this scan's pose in the previous scan's frame with its covariance (wheel odometry),
+    /// or `None` (then the last motion, with the configured bounds as its uncertainty).
+    pub fn update(&mut self, obs: &[Observation], motion: Option<(Pose, Cov3)>) -> Step {
+        let cfg = self.cfg;
+        let curr = Set::from_obs(obs, &cfg);
+        let scan = self.scans;
+        self.scans = self.scans.saturating_add(1);
+        if scan == 0 {
+            self.n = 0;
+            self.insert_all(&curr, &Assoc::new(), &Pose::IDENTITY, scan);
+            return Step {
+                scan,
+                rel: Pose::IDENTITY,
+                rel_cov: ZERO3,
+                pose: Pose::IDENTITY,
+                cov: ZERO3,
+                status: Status::Ok,
+            };
+        }
+        let (guess, guess_cov) = match motion {
+            Some((m, c)) if m.is_finite() && c.iter().flatten().all(|v| v.is_finite()) => (m, c),
+            _ => {
+                let (t, r) = (cfg.max_translation, cfg.max_rotation);
+                (
+                    self.last_rel,
+                    [[t * t, 0.0, 0.0], [0.0, t * t, 0.0], [0.0, 0.0, r * r]],
+                )
+            }
+        };
+        let predicted = self.pose.compose(&guess);
+        let prior_cov = compose_covariance(&self.pose, &ZERO3, &guess, &guess_cov);
+        // The map as the "previous scan"; recently seen features first for hypotheses.
+        let mut map = Set::new();
+        let mut line_of = [NONE; MAX_OBS];
+        let mut pt_of = [NONE; MAX_OBS];
+        let (mut nl, mut np) = (0usize, 0usize);
+        for (i, e) in self.map.iter().take(self.n).enumerate() {
+            let Ok(iu) = u8::try_from(i) else { break };
+            let age = scan.saturating_sub(e.last) as f32;
+            if e.line {
+                let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
+                let ext = ext.then_some(e.ext);
+                let len = ext.map_or(0.0, |(s, t)| libm::hypotf(t[0] - s[0], t[1] - s[1]));
+                if map.push_line(e.v[0], e.v[1], e.cov, ext, len / (1.0 + age), None) {
+                    if let Some(s) = line_of.get_mut(nl) {
+                        *s = iu;
+                    }
+                    nl += 1;
+                }
+            } else if map.push_pt(e.v, e.cov, 1.0 / (1.0 + age), None) {
+                if let Some(s) = pt_of.get_mut(np) {
+                    *s = iu;
+                }
+                np += 1;
+            }
+        }
+        let mut assoc = Assoc::new();
+        let reg = register_sets(&map, &curr, Some((predicted, prior_cov)), &cfg, &mut assoc);
+        let old = self.pose;
+        if !reg.is_registered() {
+            // Lost: take the prediction and restart the map from this scan.
+            let rel = guess;
+            self.cov = compose_covariance(&old, &self.cov, &rel, &guess_cov);
+            self.pose = predicted;
+            self.n = 0;
+            self.insert_all(&curr, &Assoc::new(), &predicted, scan);
+            return Step {
+                scan,
+                rel,
+                rel_cov: guess_cov,
+                pose: predicted,
+                cov: self.cov,
+                status: reg.status,
+            };
+        }
+        let new = reg.rel;
+        let rel = old.inverse().compose(&new);
+        // The registration's covariance is in the odometry frame's axes: turn it into the
+        // previous scan's.
+        let (s, c) = sin_cos(-old.theta);
+        let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+        let rel_cov = crate::geom::sandwich3(&rot, &reg.cov);
+        self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
+        self.pose = new;
+        self.last_rel = rel;
+        // Map ids of the matches.
+        let mut ids = Assoc::new();
+        for (slot, m) in ids.lines.iter_mut().zip(&assoc.lines) {
+            *slot = line_of.get(usize::from(*m)).copied().unwrap_or(NONE);
+        }
+        for (slot, m) in ids.pts.iter_mut().zip(&assoc.pts) {
+            *slot = pt_of.get(usize::from(*m)).copied().unwrap_or(NONE);
+        }
+        self.insert_all(&curr, &ids, &new, scan);
+        Step {
+            scan,
+            rel,
+            rel_cov,
+            pose: new,
+            cov: self.cov,
+            status: reg.status,
+        }
+    }
+
+    /// Fuses the matched features of `curr` (seen from `pose`) into their map entries and adds
+    /// the others.
+    fn insert_all(&mut self, curr: &Set, ids: &Assoc, pose: &Pose, scan: u32) {
+        let (x, y) = (pose.x, pose.y);
+        for (k, l) in curr.lines().iter().enumerate() {
+            let a = l.a + pose.theta;
+            let (sa, ca) = sin_cos(a);
+            let h = -x * sa + y * ca;
+            let cov = Sym2 {
+                a: l.cov.a,
+                b: l.cov.b + h * l.cov.a,
+                c: l.cov.c + 2.0 * h * l.cov.b + h * h * l.cov.a,
+            };
+            let (a, r, cov) = if l.r + x * ca + y * sa < 0.0 {
+                (
+                    wrap(a + PI),
+                    -(l.r + x * ca + y * sa),
+                    Sym2 {
+                        a: cov.a,
+                        b: -cov.b,
+                        c: cov.c,
+                    },
+                )
+            } else {
+                (wrap(a), l.r + x * ca + y * sa, cov)
+            };
+            let ext = match l.ext {
+                Some((s, e)) => (pose.transform_point(s), pose.transform_point(e)),
+                None => ([f32::NAN; 2], [f32::NAN; 2]),
+            };
+            let id = ids.lines.get(k).copied().unwrap_or(NONE);
+            let new = Entry {
+                v: [a, r],
+                cov,
+                ext,
+                line: true,
+                seen: 1,
+                last: scan,
+            };
+            match self.map.get_mut(usize::from(id)).filter(|_| id != NONE) {
+                Some(e) if e.line && usize::from(id) < self.n => fuse_line(e, &new),
+                _ => self.add(new),
+            }
+        }
+        for (k, p) in curr.pts().iter().enumerate() {
+            let (s, c) = sin_cos(pose.theta);
+            let new = Entry {
+                v: pose.transform_point(p.p),
+                cov: p.cov.rotate(s, c),
+                ext: ([f32::NAN; 2], [f32::NAN; 2]),
+                line: false,
+                seen: 1,
+                last: scan,
+            };
+            let id = ids.pts.get(k).copied().unwrap_or(NONE);
+            match self.map.get_mut(usize::from(id)).filter(|_| id != NONE) {
+                Some(e) if !e.line && usize::from(id) < self.n => fuse_2(e, &new),
+                _ => self.add(new),
+            }
+        }
+    }
+
+    /// Adds `e`, replacing the entry seen least recently (then least often) when full.
+    fn add(&mut self, e: Entry) {
+        if let Some(slot) = self.map.get_mut(self.n) {
+            *slot = e;
+            self.n += 1;
+            return;
+        }
+        let n = self.n;
+        if let Some(victim) = self
+            .map
+            .iter_mut()
+            .take(n)
+            .filter(|v| v.last < e.last)
+            .min_by_key(|v| (v.last, v.seen))
+        {
+            *victim = e;
+        }
+    }
+}
+
+/// Fuses the observation `o` of a line into the map entry `e` (same line).
+fn fuse_line(e: &mut Entry, o: &Entry) {
+    let mut o = *o;
+    if libm::cosf(o.v[0] - e.v[0]) < 0.0 {
+        o.v = [wrap(o.v[0] + PI), -o.v[1]];
+        o.cov.b = -o.cov.b;
+    }
+    o.v[0] = e.v[0] + wrap(o.v[0] - e.v[0]);
+    let (ext_e, ext_o) = (e.ext, o.ext);
+    fuse_2(e, &o);
+    e.v[0] = wrap(e.v[0]);
+    if e.v[1] < 0.0 {
+        e.v = [wrap(e.v[0] + PI), -e.v[1]];
+        e.cov.b = -e.cov.b;
+    }
+    // Extent: the union of both segments along the fused line.
+    let (sa, ca) = sin_cos(e.v[0]);
+    let ends = [ext_e.0, ext_e.1, ext_o.0, ext_o.1];
+    let mut lo = f32::INFINITY;
+    let mut hi = f32::NEG_INFINITY;
+    for p in ends.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        let t = -sa * p[0] + ca * p[1];
+        lo = lo.min(t);
+        hi = hi.max(t);
+    }
+    if lo <= hi {
+        let foot = [e.v[1] * ca, e.v[1] * sa];
+        e.ext = (
+            [foot[0] - sa * lo, foot[1] + ca * lo],
+            [foot[0] - sa * hi, foot[1] + ca * hi],
+        );
+    }
+}
+
+/// Information-weighted fusion of the 2-vector of `o` into `e`.
+fn fuse_2(e: &mut Entry, o: &Entry) {
+    let s = e.cov.add(o.cov);
+    let Some(si) = s.inverse() else { return };
+    // K = P_e S⁻¹.
+    let p = e.cov;
+    let k = [
+        [p.a * si.a + p.b * si.b, p.a * si.b + p.b * si.c],
+        [p.b * si.a + p.c * si.b, p.b * si.b + p.c * si.c],
+    ];
+    let d = [o.v[0] - e.v[0], o.v[1] - e.v[1]];
+    let v = [
+        e.v[0] + k[0][0] * d[0] + k[0][1] * d[1],
+        e.v[1] + k[1][0] * d[0] + k[1][1] * d[1],
+    ];
+    // P = (I − K) P_e.
+    let cov = Sym2 {
+        a: (1.0 - k[0][0]) * p.a - k[0][1] * p.b,
+        b: (1.0 - k[0][0]) * p.b - k[0][1] * p.c,
+        c: -k[1][0] * p.b + (1.0 - k[1][1]) * p.c,
+    };
+    if v[0].is_finite() && v[1].is_finite() && cov.finite() && cov.a > 0.0 && cov.c > 0.0 {
+        e.v = v;
+        e.cov = cov;
+    }
+    e.seen = e.seen.saturating_add(1);
+    e.last = e.last.max(o.last);
+}
