@@ -266,13 +266,25 @@ pub(crate) fn eigen_sym3(a: &Cov3) -> ([f32; 3], [[f32; 3]; 3]) {
 }
 
 /// Inverse of a symmetric positive definite 3×3 matrix (`None` when not positive definite or
-/// not finite).
+/// not finite). Inverted with unit diagonal (Jacobi scaling), so mixed units (mm², rad²) do
+/// not limit it.
 pub(crate) fn inverse_spd3(a: &Cov3) -> Option<Cov3> {
-    if !finite3(a) {
+    if !finite3(a) || !(a[0][0] > 0.0 && a[1][1] > 0.0 && a[2][2] > 0.0) {
         return None;
     }
-    let (vals, vecs) = eigen_sym3(a);
-    if !(vals[0] > 0.0) || !(vals[0] > vals[2] * 1e-7) {
+    let d = [
+        1.0 / libm::sqrtf(a[0][0]),
+        1.0 / libm::sqrtf(a[1][1]),
+        1.0 / libm::sqrtf(a[2][2]),
+    ];
+    let mut m = ZERO3;
+    for i in 0..3 {
+        for j in 0..3 {
+            m[i][j] = a[i][j] * d[i] * d[j];
+        }
+    }
+    let (vals, vecs) = eigen_sym3(&m);
+    if !(vals[0] > 1e-6 * vals[2]) {
         return None;
     }
     let mut r = ZERO3;
@@ -281,6 +293,11 @@ pub(crate) fn inverse_spd3(a: &Cov3) -> Option<Cov3> {
             for j in 0..3 {
                 r[i][j] += v[i] * v[j] / l;
             }
+        }
+    }
+    for i in 0..3 {
+        for j in 0..3 {
+            r[i][j] *= d[i] * d[j];
         }
     }
     finite3(&r).then_some(r)
@@ -365,6 +382,9 @@ mod tests {
         let inv = inverse_spd3(&[[2.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 8.0]]);
         assert_eq!(inv.map(|m| m[2][2]), Some(0.125));
         assert!(inverse_spd3(&[[1.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]).is_none());
+        // Mixed units: mm² and rad².
+        let inv = inverse_spd3(&[[2500.0, 0.0, 0.0], [0.0, 2500.0, 0.0], [0.0, 0.0, 1e-4]]);
+        assert!(inv.is_some_and(|m| (m[2][2] - 1e4).abs() < 1.0));
     }
 
     #[test]

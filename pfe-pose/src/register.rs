@@ -39,7 +39,7 @@ pub const UNOBSERVABLE_VARIANCE: f32 = 1e12;
 pub const ROTATION_SCALE: f32 = 1000.0;
 
 /// Hypotheses refined (the best by consensus).
-const REFINE: usize = 6;
+const REFINE: usize = 12;
 /// Gauss–Newton steps at most.
 const ITERATIONS: usize = 10;
 
@@ -74,6 +74,15 @@ pub struct Config {
     /// A direction whose standard deviation (x, y in mm; θ in units of
     /// [`ROTATION_SCALE`]) exceeds this is one the scene cannot tell, mm.
     pub degenerate_sigma: f32,
+    /// Weight of the segments' overlap in a line match's score (0: none; 1: a match counts in
+    /// proportion to how much of the shorter segment the other covers).
+    pub overlap_weight: f32,
+    /// Weight of the visibility check in the choice among refined hypotheses: each segment
+    /// that would hide, seen from the other scan, what that scan saw costs up to this much
+    /// score (0: no check).
+    pub visibility_weight: f32,
+    /// Least score (matches' agreement less the visibility penalty) for a registration.
+    pub min_score: f32,
     /// Fewest matched features for a registration.
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
@@ -96,6 +105,9 @@ impl Default for Config {
             slack: [0.03, 60.0, 0.03],
             overlap_slack: 500.0,
             degenerate_sigma: 300.0,
+            overlap_weight: 0.5,
+            visibility_weight: 1.0,
+            min_score: 0.0,
             min_matches: 3,
             scale_by_residuals: true,
             ambiguity: 2.0,
@@ -318,6 +330,9 @@ pub(crate) fn register_sets(
     let mut second_score = 0.0f32;
     for h in top.items() {
         let r = refine(prev, curr, h.pose, prior.as_ref(), cfg);
+        if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
+            continue;
+        }
         match &best {
             Some(b) if !better(&r, b) => {
                 if !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
@@ -335,10 +350,13 @@ pub(crate) fn register_sets(
         }
     }
     let Some(best) = best else {
-        return fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses);
+        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     };
     let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
     if matched < cfg.min_matches {
+        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+    }
+    if !(best.score > cfg.min_score) {
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     }
     if second_score >= cfg.ambiguity * best.score {
@@ -765,7 +783,7 @@ impl<'a> Work<'a> {
             let ext = lk
                 .ext
                 .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)));
-            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32)> = None;
+            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             for (i, li) in self.prev.lines().iter().enumerate() {
                 let dcos = libm::cosf(a - li.a);
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
@@ -794,12 +812,12 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
-                if !overlap(ext, li, cfg.overlap_slack + sr) {
+                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr) else {
                     continue;
-                }
+                };
                 if best.is_none_or(|b| d2 < b.0) {
                     let Ok(iu) = u8::try_from(i) else { continue };
-                    best = Some((d2, iu, e, w, sign));
+                    best = Some((d2, iu, e, w, sign, frac));
                 }
             }
             if let Some(o) = out.as_deref_mut() {
@@ -807,11 +825,11 @@ impl<'a> Work<'a> {
                     *slot = best.map_or(NONE, |b| b.1);
                 }
             }
-            let Some((d2, _, e, w, sign)) = best else {
+            let Some((d2, _, e, w, sign, frac)) = best else {
                 continue;
             };
             n.lines += 1;
-            n.score += 1.0 - d2 / gate;
+            n.score += (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
             n.chi2 += d2;
             // Jacobian rows: e_α = [0, 0, 1]; e_ρ = sign · [cos a, sin a, h].
             let ja = [0.0, 0.0, 1.0];
@@ -875,11 +893,12 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
     }
 }
 
-/// True when the segment `ext` (in the previous frame) and `li`'s segment are no farther apart
-/// along `li` than `slack` (true when either has no extent).
-fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> bool {
+/// `None` when the segment `ext` (in the previous frame) and `li`'s segment are farther apart
+/// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
+/// when either has no extent).
+fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f32> {
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
-        return true;
+        return Some(1.0);
     };
     let (sa, ca) = sin_cos(li.a);
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
@@ -888,7 +907,11 @@ fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> bool {
     let (alo, ahi) = (a0.min(a1), a0.max(a1));
     let (blo, bhi) = (b0.min(b1), b0.max(b1));
     let gap = alo.max(blo) - ahi.min(bhi);
-    gap <= slack
+    if !(gap <= slack) {
+        return None;
+    }
+    let shorter = (ahi - alo).min(bhi - blo).max(1.0);
+    Some((-gap / shorter).clamp(0.0, 1.0))
 }
 
 /// Scales to put θ in mm: (1, 1, [`ROTATION_SCALE`]).
@@ -993,15 +1016,85 @@ fn refine(prev: &Set, curr: &Set, start: Pose, prior: Option<&Prior>, cfg: &Conf
         }
         None => cov_scene,
     };
+    let penalty = if cfg.visibility_weight > 0.0 {
+        cfg.visibility_weight * visibility_penalty(prev, curr, &pose)
+    } else {
+        0.0
+    };
     Refined {
         pose,
         cov,
         cov_scene_pinv: cov_scene,
-        score: n.score,
+        score: n.score - penalty,
         chi2: n.chi2,
         matches: (n.lines, n.pts),
         unobservable,
     }
+}
+
+/// How much the segments of each scan, seen from the other scan's position under `pose`, would
+/// hide segments that scan did see: the number of hidden samples over 5 per segment, summed
+/// over both directions. A right pose hides nothing (static, opaque scene); a wrong one puts
+/// walls in front of what was seen.
+fn visibility_penalty(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
+    let inv = pose.inverse();
+    let a = hidden(
+        curr.lines()
+            .iter()
+            .filter_map(|l| l.ext)
+            .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e))),
+        prev.lines(),
+    );
+    let b = hidden(
+        prev.lines()
+            .iter()
+            .filter_map(|l| l.ext)
+            .map(|(s, e)| (inv.transform_point(s), inv.transform_point(e))),
+        curr.lines(),
+    );
+    a + b
+}
+
+/// Samples of the segments `front` (in a scan's frame) that lie clearly in front of one of the
+/// segments `seen` by that scan, over 5 per segment.
+fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f32 {
+    const SAMPLES: usize = 5;
+    const END: f32 = 150.0;
+    const DEPTH: f32 = 250.0;
+    let mut total = 0.0;
+    for (s, e) in front {
+        let d = [e[0] - s[0], e[1] - s[1]];
+        let len = libm::hypotf(d[0], d[1]);
+        if !(len > 2.0 * END + 100.0) {
+            continue;
+        }
+        let mut count = 0usize;
+        for k in 0..SAMPLES {
+            let u = (END + (len - 2.0 * END) * k as f32 / (SAMPLES - 1) as f32) / len;
+            let q = [s[0] + d[0] * u, s[1] + d[1] * u];
+            let rq = libm::hypotf(q[0], q[1]);
+            if !(rq > 1.0) {
+                continue;
+            }
+            let dir = [q[0] / rq, q[1] / rq];
+            let behind = seen.iter().filter_map(|l| l.ext).any(|(ps, pe)| {
+                // Ray origin + λ dir meets ps + μ (pe − ps).
+                let w = [pe[0] - ps[0], pe[1] - ps[1]];
+                let den = dir[0] * w[1] - dir[1] * w[0];
+                if !(den.abs() > 1e-6 * libm::hypotf(w[0], w[1])) {
+                    return false;
+                }
+                let lambda = (ps[0] * w[1] - ps[1] * w[0]) / den;
+                let mu = (ps[0] * dir[1] - ps[1] * dir[0]) / den;
+                (0.05..=0.95).contains(&mu) && lambda > rq + DEPTH
+            });
+            if behind {
+                count += 1;
+            }
+        }
+        total += count as f32 / SAMPLES as f32;
+    }
+    total
 }
 
 fn add_prior(n: &mut Normal, pose: &Pose, p: &Prior) {
