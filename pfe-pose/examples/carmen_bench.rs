@@ -20,6 +20,7 @@
 //! for its 0.25°/0.5° steps, the range grid of the readings as the scan's quantum,
 //! `Config::default()` with σ_r = 10 mm and σ_sys = 5 mm. The reference motion is
 //! `P_{k−1}⁻¹ ⊕ P_k` of the lines' laser poses.
+#![allow(clippy::needless_range_loop)]
 
 use std::f32::consts::PI;
 use std::io::{BufRead, BufReader};
@@ -50,12 +51,12 @@ fn read_log(path: &Path) -> std::io::Result<Vec<Record>> {
         let mut t = line.split_ascii_whitespace();
         match t.next() {
             Some("PARAM") => {
-                if t.next() == Some("robot_front_laser_max") {
-                    if let Some(v) = t.next().and_then(|v| v.parse::<f32>().ok()) {
-                        if v >= 80.0 {
-                            r_max = 81_830.0;
-                        }
-                    }
+                let long = t.next() == Some("robot_front_laser_max")
+                    && t.next()
+                        .and_then(|v| v.parse::<f32>().ok())
+                        .is_some_and(|v| v >= 80.0);
+                if long {
+                    r_max = 81_830.0;
                 }
             }
             Some("FLASER") => {
@@ -123,7 +124,10 @@ fn quantum(ranges: &[f32]) -> f32 {
 
 fn sweeps(g: &ScanGeometry) -> u8 {
     let deg = g.angle_step.abs().to_degrees();
-    if [0.25f32, 0.5, 1.0].iter().any(|r| (deg / r - 1.0).abs() < 0.01) {
+    if [0.25f32, 0.5, 1.0]
+        .iter()
+        .any(|r| (deg / r - 1.0).abs() < 0.01)
+    {
         BeamTiming::lms2xx(deg).sweeps
     } else {
         1
@@ -164,7 +168,7 @@ fn nis(c: &[[f64; 3]; 3], e: &[f64; 3]) -> Option<f64> {
     let det = c[0][0] * (c[1][1] * c[2][2] - c[1][2] * c[2][1])
         - c[0][1] * (c[1][0] * c[2][2] - c[1][2] * c[2][0])
         + c[0][2] * (c[1][0] * c[2][1] - c[1][1] * c[2][0]);
-    if !(det.abs() > 0.0) || !det.is_finite() {
+    if det == 0.0 || !det.is_finite() {
         return None;
     }
     let mut inv = [[0.0; 3]; 3];
@@ -381,7 +385,10 @@ fn main() {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--max-pairs" => {
-                max_pairs = args.next().and_then(|v| v.parse().ok()).unwrap_or(usize::MAX)
+                max_pairs = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(usize::MAX)
             }
             "--odometry" => odometry = true,
             _ => logs.push(PathBuf::from(a)),

@@ -269,7 +269,7 @@ pub(crate) fn eigen_sym3(a: &Cov3) -> ([f32; 3], [[f32; 3]; 3]) {
 /// not finite). Inverted with unit diagonal (Jacobi scaling), so mixed units (mm², rad²) do
 /// not limit it.
 pub(crate) fn inverse_spd3(a: &Cov3) -> Option<Cov3> {
-    if !finite3(a) || !(a[0][0] > 0.0 && a[1][1] > 0.0 && a[2][2] > 0.0) {
+    if !(finite3(a) && a[0][0] > 0.0 && a[1][1] > 0.0 && a[2][2] > 0.0) {
         return None;
     }
     let d = [

@@ -49,6 +49,8 @@
 #![deny(missing_docs)]
 // `!(x > 0.0)` is deliberate: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+// 3×3 matrix algebra reads best with row and column indices (all over fixed arrays).
+#![allow(clippy::needless_range_loop)]
 
 mod geom;
 mod obs;
