@@ -217,6 +217,9 @@ fn pose_config() -> pfe_pose::Config {
             "degenerate_sigma" => c.degenerate_sigma = v,
             "overlap_weight" => c.overlap_weight = v,
             "visibility_weight" => c.visibility_weight = v,
+            "endpoint_weight" => c.endpoint_weight = v,
+            "endpoint_tolerance" => c.endpoint_tolerance = v,
+            "confirm" => c.confirm = v > 0.0,
             "min_score" => c.min_score = v,
             "min_matches" => c.min_matches = v as usize,
             "scale" => c.scale_by_residuals = v > 0.0,
@@ -270,6 +273,28 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
             ];
             let (terr, rerr) = (e[0].hypot(e[1]), e[2].abs());
             let bad = terr > 200.0 || rerr > 5f64.to_radians();
+            if std::env::var("BENCH_DUMP").ok().and_then(|v| v.parse::<usize>().ok()) == Some(st.pairs) {
+                let dump = |o: &[Observation]| -> String {
+                    o.iter()
+                        .map(|f| match f {
+                            Observation::Line(l) => format!(
+                                "L {} {} {} {} {} {}",
+                                l.start[0], l.start[1], l.end[0], l.end[1], l.alpha, l.rho
+                            ),
+                            Observation::Point(p) => format!("P {} {}", p.x, p.y),
+                        })
+                        .collect::<Vec<_>>()
+                        .join(";")
+                };
+                if let Some((p, _)) = prev.as_ref() {
+                    eprintln!("DUMP prev {}", dump(p));
+                }
+                eprintln!("DUMP curr {}", dump(&obs));
+                eprintln!("DUMP truth {} {} {}", truth.x, truth.y, truth.theta);
+                eprintln!("DUMP got {} {} {}", reg.rel.x, reg.rel.y, reg.rel.theta);
+                let ranges: Vec<String> = rec.ranges.iter().map(|r| format!("{r}")).collect();
+                eprintln!("DUMP ranges {} {}", rec.geometry.angle_step, ranges.join(" "));
+            }
             if std::env::var_os("BENCH_VERBOSE").is_some() && (bad || !reg.is_registered()) {
                 let c = [[2500.0, 0.0, 0.0], [0.0, 2500.0, 0.0], [0.0, 0.0, 1e-4]];
                 let at_truth = prev
@@ -282,8 +307,10 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
                     );
                 }
                 eprintln!(
-                    "{} pair {}: truth ({:.0}, {:.0}, {:.1}°) got ({:.0}, {:.0}, {:.1}°) {:?} matches {:?} features {}→{} sd ({:.0}, {:.0}, {:.2}°)",
-                    path.display(), st.pairs, truth.x, truth.y, truth.theta.to_degrees(),
+                    "{} pair {}{}: truth ({:.0}, {:.0}, {:.1}°) got ({:.0}, {:.0}, {:.1}°) {:?} matches {:?} features {}→{} sd ({:.0}, {:.0}, {:.2}°)",
+                    path.display(), st.pairs,
+                    if !reg.is_registered() || (bad && (matches!(reg.status, Status::Ok) || nis(&to_f64(&reg.cov), &e).unwrap_or(f64::INFINITY) > 11.345)) { " FAIL" } else { "" },
+                    truth.x, truth.y, truth.theta.to_degrees(),
                     reg.rel.x, reg.rel.y, reg.rel.theta.to_degrees(), reg.status, reg.matches,
                     prev.as_ref().map_or(0, |p| p.0.len()), obs.len(),
                     reg.cov[0][0].sqrt(), reg.cov[1][1].sqrt(), reg.cov[2][2].sqrt().to_degrees()

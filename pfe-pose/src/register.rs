@@ -77,12 +77,21 @@ pub struct Config {
     /// Weight of the segments' overlap in a line match's score (0: none; 1: a match counts in
     /// proportion to how much of the shorter segment the other covers).
     pub overlap_weight: f32,
+    /// Score added per end of a matched segment that meets an end of the other segment
+    /// (within [`Config::endpoint_tolerance`] along the line): corners and door frames agree
+    /// under the right pose only.
+    pub endpoint_weight: f32,
+    /// Distance along the line within which two segment ends meet, mm.
+    pub endpoint_tolerance: f32,
     /// Weight of the visibility check in the choice among refined hypotheses: each segment
     /// that would hide, seen from the other scan, what that scan saw costs up to this much
     /// score (0: no check).
     pub visibility_weight: f32,
     /// Least score (matches' agreement less the visibility penalty) for a registration.
     pub min_score: f32,
+    /// Count a direction that a single match alone determines as unobservable (its
+    /// information dropped): an association no other feature confirms is not trusted.
+    pub confirm: bool,
     /// Fewest matched features for a registration.
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
@@ -106,8 +115,11 @@ impl Default for Config {
             overlap_slack: 500.0,
             degenerate_sigma: 300.0,
             overlap_weight: 0.5,
+            endpoint_weight: 0.0,
+            endpoint_tolerance: 100.0,
             visibility_weight: 1.0,
             min_score: 0.0,
+            confirm: true,
             min_matches: 3,
             scale_by_residuals: true,
             ambiguity: 2.0,
@@ -443,6 +455,14 @@ impl Top {
         self.items.get(..self.n).unwrap_or(&[])
     }
 
+    /// True when a kept hypothesis lies within `dist` mm and `angle` rad of `pose`.
+    fn has_near(&self, pose: &Pose, dist: f32, angle: f32) -> bool {
+        self.items().iter().any(|e| {
+            libm::hypotf(e.pose.x - pose.x, e.pose.y - pose.y) < dist
+                && wrap(e.pose.theta - pose.theta).abs() < angle
+        })
+    }
+
     fn offer(&mut self, h: Hyp) {
         if !(h.score > 0.0) {
             return;
@@ -526,7 +546,10 @@ fn hypothesise(prev: &Set, curr: &Set, prior: Option<&Prior>, cfg: &Config, top:
             }
         }
         *count = count.saturating_add(1);
-        // Skip scoring when a kept hypothesis is already this one.
+        // A kept hypothesis is already this one (the right pose comes from many pairs).
+        if top.has_near(&pose, 40.0, 0.01) {
+            return;
+        }
         let score = w.associate(&pose, 1.0, None).score;
         top.offer(Hyp { pose, score });
     };
@@ -535,8 +558,8 @@ fn hypothesise(prev: &Set, curr: &Set, prior: Option<&Prior>, cfg: &Config, top:
         None => consider(Pose::IDENTITY, &mut w, top, &mut count),
     }
     let (pl, cl) = (prev.lines(), curr.lines());
-    let (hp, np) = top_k::<10>(pl.iter().map(|l| l.rank));
-    let (hc, nc) = top_k::<10>(cl.iter().map(|l| l.rank));
+    let (hp, np) = top_k::<12>(pl.iter().map(|l| l.rank));
+    let (hc, nc) = top_k::<12>(cl.iter().map(|l| l.rank));
     let hp = hp.get(..np).unwrap_or(&[]);
     let hc = hc.get(..nc).unwrap_or(&[]);
     let line = |s: &[Line], i: u8| s.get(usize::from(i)).copied();
@@ -740,6 +763,9 @@ struct Work<'a> {
     cfg: &'a Config,
     #[allow(dead_code)]
     prior: Option<&'a Prior>,
+    /// Each match's information `Jᵀ W J` in the last association.
+    contrib: [Cov3; 2 * MAX_OBS],
+    nc: usize,
 }
 
 impl<'a> Work<'a> {
@@ -749,6 +775,8 @@ impl<'a> Work<'a> {
             curr,
             cfg,
             prior,
+            contrib: [ZERO3; 2 * MAX_OBS],
+            nc: 0,
         }
     }
 
@@ -765,6 +793,7 @@ impl<'a> Work<'a> {
             pts: 0,
         };
         let gate = cfg.gate;
+        self.nc = 0;
         let (x, y) = (pose.x, pose.y);
         let (st, ct) = sin_cos(pose.theta);
         let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
@@ -783,7 +812,7 @@ impl<'a> Work<'a> {
             let ext = lk
                 .ext
                 .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)));
-            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
+            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, (f32, f32))> = None;
             for (i, li) in self.prev.lines().iter().enumerate() {
                 let dcos = libm::cosf(a - li.a);
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
@@ -812,7 +841,8 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
-                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr) else {
+                let tol = cfg.endpoint_tolerance + sr;
+                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr, tol) else {
                     continue;
                 };
                 if best.is_none_or(|b| d2 < b.0) {
@@ -829,12 +859,15 @@ impl<'a> Work<'a> {
                 continue;
             };
             n.lines += 1;
-            n.score += (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
+            let (frac, ends) = frac;
+            n.score += (1.0 - d2 / gate)
+                * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac + cfg.endpoint_weight * ends);
             n.chi2 += d2;
             // Jacobian rows: e_α = [0, 0, 1]; e_ρ = sign · [cos a, sin a, h].
             let ja = [0.0, 0.0, 1.0];
             let jr = [sign * ca, sign * sa, sign * h];
-            accumulate(&mut n, &ja, &jr, &w, &e);
+            let hi = accumulate(&mut n, &ja, &jr, &w, &e);
+            self.record(hi);
         }
         for (k, pk) in self.curr.pts().iter().enumerate() {
             let q = pose.transform_point(pk.p);
@@ -870,14 +903,48 @@ impl<'a> Work<'a> {
             n.chi2 += d2;
             let jx = [1.0, 0.0, -st * pk.p[0] - ct * pk.p[1]];
             let jy = [0.0, 1.0, ct * pk.p[0] - st * pk.p[1]];
-            accumulate(&mut n, &jx, &jy, &w, &e);
+            let hi = accumulate(&mut n, &jx, &jy, &w, &e);
+            self.record(hi);
         }
         n
     }
 }
 
-/// `H += Jᵀ W J`, `g += Jᵀ W e` for a 2-row residual with rows `j0`, `j1`.
-fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 2]) {
+impl Work<'_> {
+    fn record(&mut self, hi: Cov3) {
+        if let Some(slot) = self.contrib.get_mut(self.nc) {
+            *slot = hi;
+            self.nc += 1;
+        }
+    }
+
+    /// The information of the last association without its most critical match: the one
+    /// whose removal leaves the smallest least eigenvalue (scaled units). A direction that
+    /// one match alone determines is not confirmed by any other.
+    fn without_critical(&self, h: &Cov3) -> Cov3 {
+        let mut worst = *h;
+        let mut least = f32::INFINITY;
+        for hi in self.contrib.iter().take(self.nc) {
+            let mut r = *h;
+            for (row, hr) in r.iter_mut().zip(hi) {
+                for (v, x) in row.iter_mut().zip(hr) {
+                    *v -= x;
+                }
+            }
+            let l = eigen_sym3(&to_scaled_info(&r)).0[0];
+            if l < least {
+                least = l;
+                worst = r;
+            }
+        }
+        worst
+    }
+}
+
+/// `H += Jᵀ W J`, `g += Jᵀ W e` for a 2-row residual with rows `j0`, `j1`; returns the
+/// match's `Jᵀ W J`.
+fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 2]) -> Cov3 {
+    let mut hi = ZERO3;
     // W J: rows.
     let mut wj0 = [0.0f32; 3];
     let mut wj1 = [0.0f32; 3];
@@ -887,18 +954,20 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
     }
     for r in 0..3 {
         for c in 0..3 {
-            n.h[r][c] += j0[r] * wj0[c] + j1[r] * wj1[c];
+            hi[r][c] = j0[r] * wj0[c] + j1[r] * wj1[c];
+            n.h[r][c] += hi[r][c];
         }
         n.g[r] += wj0[r] * e[0] + wj1[r] * e[1];
     }
+    hi
 }
 
 /// `None` when the segment `ext` (in the previous frame) and `li`'s segment are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
-fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f32> {
+fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32, tol: f32) -> Option<(f32, f32)> {
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
-        return Some(1.0);
+        return Some((1.0, 0.0));
     };
     let (sa, ca) = sin_cos(li.a);
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
@@ -911,7 +980,9 @@ fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f
         return None;
     }
     let shorter = (ahi - alo).min(bhi - blo).max(1.0);
-    Some((-gap / shorter).clamp(0.0, 1.0))
+    let near = |a: f32| (a - b0).abs().min((a - b1).abs()) < tol;
+    let ends = f32::from(u8::from(near(a0)) + u8::from(near(a1)));
+    Some(((-gap / shorter).clamp(0.0, 1.0), ends))
 }
 
 /// Scales to put θ in mm: (1, 1, [`ROTATION_SCALE`]).
@@ -978,9 +1049,20 @@ fn refine(prev: &Set, curr: &Set, start: Pose, prior: Option<&Prior>, cfg: &Conf
         }
     }
     // Final association, covariance and status.
-    let n = w.associate(&pose, 0.0, None);
-    let hs = to_scaled_info(&n.h);
-    let (vals, vecs) = eigen_sym3(&hs);
+    let mut n = w.associate(&pose, 0.0, None);
+    let (vals, vecs) = eigen_sym3(&to_scaled_info(&n.h));
+    if cfg.confirm && vals[0] > limit {
+        // A direction only one match determines is taken as unobservable.
+        let robust = w.without_critical(&n.h);
+        if !(eigen_sym3(&to_scaled_info(&robust)).0[0] > limit) {
+            n.h = robust;
+        }
+    }
+    let (vals, vecs) = if cfg.confirm {
+        eigen_sym3(&to_scaled_info(&n.h))
+    } else {
+        (vals, vecs)
+    };
     let unobservable = (!(vals[0] > limit)).then_some(vecs[0]);
     let m = usize::from(n.lines) * 2 + usize::from(n.pts) * 2;
     let factor = if cfg.scale_by_residuals && m > 3 {
@@ -1052,7 +1134,33 @@ fn visibility_penalty(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
             .map(|(s, e)| (inv.transform_point(s), inv.transform_point(e))),
         curr.lines(),
     );
-    a + b
+    a + b + 2.0 * crossings(prev, curr, pose)
+}
+
+/// How many segments of either scan the straight path between the two scan positions goes
+/// through (in the middle 90 % of the segment): a robot does not pass through walls.
+fn crossings(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
+    let to = [pose.x, pose.y];
+    let through = |(s, e): ([f32; 2], [f32; 2])| -> bool {
+        // Path 0 + u·to, u in (0, 1); segment s + μ (e − s), μ in [0.05, 0.95].
+        let w = [e[0] - s[0], e[1] - s[1]];
+        let den = to[0] * w[1] - to[1] * w[0];
+        if !(den.abs() > 1e-3) {
+            return false;
+        }
+        let u = (s[0] * w[1] - s[1] * w[0]) / den;
+        let mu = (s[0] * to[1] - s[1] * to[0]) / den;
+        u > 0.0 && u < 1.0 && (0.05..=0.95).contains(&mu)
+    };
+    let a = prev.lines().iter().filter_map(|l| l.ext).filter(|&x| through(x)).count();
+    let b = curr
+        .lines()
+        .iter()
+        .filter_map(|l| l.ext)
+        .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)))
+        .filter(|&x| through(x))
+        .count();
+    (a + b) as f32
 }
 
 /// Samples of the segments `front` (in a scan's frame) that lie clearly in front of one of the
