@@ -93,6 +93,8 @@ pub struct Odometry<const MAP: usize> {
     cov: Cov3,
     last_rel: Pose,
     scans: u32,
+    /// The previous scan's features.
+    last: Set,
 }
 
 impl<const MAP: usize> Odometry<MAP> {
@@ -106,6 +108,7 @@ impl<const MAP: usize> Odometry<MAP> {
             cov: ZERO3,
             last_rel: Pose::IDENTITY,
             scans: 0,
+            last: Set::new(),
         }
     }
 
@@ -145,6 +148,7 @@ impl<const MAP: usize> Odometry<MAP> {
         self.scans = self.scans.saturating_add(1);
         if scan == 0 {
             self.n = 0;
+            self.last = curr.clone();
             self.insert_all(&curr, &Assoc::new(), &Pose::IDENTITY, scan);
             return Step {
                 scan,
@@ -155,9 +159,27 @@ impl<const MAP: usize> Odometry<MAP> {
                 status: Status::Ok,
             };
         }
+        let motion =
+            motion.filter(|(m, c)| m.is_finite() && c.iter().flatten().all(|v| v.is_finite()));
+        // First against the previous scan (the motion prior, if any, gating it): its result,
+        // widened to three standard deviations, gates and starts the registration against the
+        // map.
+        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new());
         let (guess, guess_cov) = match motion {
-            Some((m, c)) if m.is_finite() && c.iter().flatten().all(|v| v.is_finite()) => (m, c),
-            _ => {
+            _ if pair.is_registered() => {
+                let mut c = pair.cov;
+                for (i, row) in c.iter_mut().enumerate() {
+                    for v in row.iter_mut() {
+                        *v *= 1.0;
+                    }
+                    if let Some(d) = row.get_mut(i) {
+                        *d += if i == 2 { 1e-4 } else { 2500.0 };
+                    }
+                }
+                (pair.rel, c)
+            }
+            Some(m) => m,
+            None => {
                 let (t, r) = (cfg.max_translation, cfg.max_rotation);
                 (
                     self.last_rel,
@@ -165,6 +187,7 @@ impl<const MAP: usize> Odometry<MAP> {
                 )
             }
         };
+        self.last = curr.clone();
         let predicted = self.pose.compose(&guess);
         let prior_cov = compose_covariance(&self.pose, &ZERO3, &guess, &guess_cov);
         // The map as the "previous scan"; recently seen features first for hypotheses.
@@ -196,19 +219,25 @@ impl<const MAP: usize> Odometry<MAP> {
         let reg = register_sets(&map, &curr, Some((predicted, prior_cov)), &cfg, &mut assoc);
         let old = self.pose;
         if !reg.is_registered() {
-            // Lost: take the prediction and restart the map from this scan.
-            let rel = guess;
-            self.cov = compose_covariance(&old, &self.cov, &rel, &guess_cov);
-            self.pose = predicted;
+            // Not against the map: take the pair's registration (or the prediction) and
+            // restart the map from this scan.
+            let (rel, rel_cov, status) = if pair.is_registered() {
+                (pair.rel, pair.cov, pair.status)
+            } else {
+                (guess, guess_cov, reg.status)
+            };
+            self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
+            self.pose = old.compose(&rel);
+            self.last_rel = rel;
             self.n = 0;
-            self.insert_all(&curr, &Assoc::new(), &predicted, scan);
+            self.insert_all(&curr, &Assoc::new(), &self.pose.clone(), scan);
             return Step {
                 scan,
                 rel,
-                rel_cov: guess_cov,
-                pose: predicted,
+                rel_cov,
+                pose: self.pose,
                 cov: self.cov,
-                status: reg.status,
+                status,
             };
         }
         let new = reg.rel;
