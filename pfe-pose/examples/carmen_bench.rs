@@ -217,8 +217,6 @@ fn pose_config() -> pfe_pose::Config {
             "degenerate_sigma" => c.degenerate_sigma = v,
             "overlap_weight" => c.overlap_weight = v,
             "visibility_weight" => c.visibility_weight = v,
-            "endpoint_weight" => c.endpoint_weight = v,
-            "endpoint_tolerance" => c.endpoint_tolerance = v,
             "confirm" => c.confirm = v > 0.0,
             "min_score" => c.min_score = v,
             "min_matches" => c.min_matches = v as usize,
@@ -260,6 +258,21 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
             .map(|(p, _)| register_with(p, &obs, None, &pose_cfg));
         if odometry {
             let step = odo.update(&obs, None);
+            if let (Some(r), Some((_, p0))) = (reg.as_ref(), prev.as_ref()) {
+                if std::env::var_os("BENCH_ODO").is_some() {
+                    let truth = p0.inverse().compose(&rec.pose);
+                    let err = |p: &Pose| {
+                        (p.x - truth.x).hypot(p.y - truth.y) > 200.0
+                            || wrap(p.theta - truth.theta).abs() > 0.087
+                    };
+                    if err(&step.rel) != err(&r.rel) {
+                        eprintln!(
+                            "ODO scan {}: odo bad {} ({:?}) pair bad {} ({:?}) truth {:?} odo {:?} pair {:?}",
+                            st.scans, err(&step.rel), step.status, err(&r.rel), r.status, truth, step.rel, r.rel
+                        );
+                    }
+                }
+            }
             if let Some(r) = reg.filter(|r| r.is_registered()) {
                 chained = chained.compose(&r.rel);
             }
@@ -277,7 +290,11 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
             ];
             let (terr, rerr) = (e[0].hypot(e[1]), e[2].abs());
             let bad = terr > 200.0 || rerr > 5f64.to_radians();
-            if std::env::var("BENCH_DUMP").ok().and_then(|v| v.parse::<usize>().ok()) == Some(st.pairs) {
+            if std::env::var("BENCH_DUMP")
+                .ok()
+                .and_then(|v| v.parse::<usize>().ok())
+                == Some(st.pairs)
+            {
                 let dump = |o: &[Observation]| -> String {
                     o.iter()
                         .map(|f| match f {
@@ -297,7 +314,11 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
                 eprintln!("DUMP truth {} {} {}", truth.x, truth.y, truth.theta);
                 eprintln!("DUMP got {} {} {}", reg.rel.x, reg.rel.y, reg.rel.theta);
                 let ranges: Vec<String> = rec.ranges.iter().map(|r| format!("{r}")).collect();
-                eprintln!("DUMP ranges {} {}", rec.geometry.angle_step, ranges.join(" "));
+                eprintln!(
+                    "DUMP ranges {} {}",
+                    rec.geometry.angle_step,
+                    ranges.join(" ")
+                );
             }
             if std::env::var_os("BENCH_VERBOSE").is_some() && (bad || !reg.is_registered()) {
                 let c = [[2500.0, 0.0, 0.0], [0.0, 2500.0, 0.0], [0.0, 0.0, 1e-4]];

@@ -1,13 +1,18 @@
 //! Feature odometry: every scan's pose in the frame of the first, registered against a small
 //! local map of features rather than only against the previous scan.
 //!
-//! The map holds at most `MAP` features (lines and points) in the odometry frame. Each scan is
-//! registered against it ([`crate::register`]'s method, the map as the "previous scan", the
-//! pose predicted from the last motion as a loose prior); matched features are fused into their
-//! map feature (information-weighted average, the segment's extent the union), unmatched ones
-//! are added, and when the map is full the one seen least recently (then least often) is
-//! replaced. A feature seen again from far along the trajectory is thus measured against the
-//! same map feature, and the error grows more slowly than by chaining pairs of scans.
+//! Each scan is first registered against the previous scan ([`crate::register`], gated by the
+//! motion prior when one is given). That result, widened to three standard deviations, gates
+//! and starts the registration against the map: at most `MAP` features (lines and points) in
+//! the odometry frame, taken into the predicted pose's frame for the registration. Matched
+//! features are fused into their map feature (information-weighted, the segment's extent the
+//! union), unmatched ones are added, and when the map is full the one seen least recently
+//! (then least often) is replaced. When the map cannot register the scan the pair's result
+//! is taken and the map restarts from this scan.
+//!
+//! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
+//! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would
+//! be nearly singular in f32.
 //!
 //! Covariance: the relative motion's covariance is the registration's against the map; the
 //! pose's covariance chains those (`compose_covariance`), which ignores what the map's
@@ -20,11 +25,17 @@ use crate::obs::{LineObs, Observation, PointObs};
 use crate::register::{register_sets, Assoc, Config, Status, NONE};
 use crate::set::{Set, MAX_OBS};
 
-/// One feature of the map, in the odometry frame.
+/// One feature of the map, in the odometry frame. A line is kept as its normal angle α and an
+/// anchor point on it (near the segment's middle) with the covariance of (α, d), d the
+/// normal offset at the anchor: unlike (α, ρ) about a far origin, well conditioned in f32
+/// wherever the robot is.
 #[derive(Clone, Copy, Debug)]
 struct Entry {
-    /// Line (α, ρ) or point (x, y).
+    /// Point (x, y), or a line's anchor point.
     v: [f32; 2],
+    /// A line's normal angle.
+    alpha: f32,
+    /// Point: (x, y); line: (α, d).
     cov: Sym2,
     /// Segment ends of a line (NaN: none).
     ext: ([f32; 2], [f32; 2]),
@@ -35,6 +46,7 @@ struct Entry {
 
 const EMPTY: Entry = Entry {
     v: [0.0; 2],
+    alpha: 0.0,
     cov: Sym2 {
         a: 1.0,
         b: 0.0,
@@ -129,10 +141,12 @@ impl<const MAP: usize> Odometry<MAP> {
     /// The map's features in the odometry frame.
     pub fn map(&self) -> impl Iterator<Item = Observation> + '_ {
         self.map.iter().take(self.n).map(|e| {
-            let cov = [[e.cov.a, e.cov.b], [e.cov.b, e.cov.c]];
             if e.line {
-                Observation::Line(LineObs::new(e.v[0], e.v[1], cov).with_extent(e.ext.0, e.ext.1))
+                let (a, r, c) = anchor_to_line(e.alpha, e.v, e.cov);
+                let cov = [[c.a, c.b], [c.b, c.c]];
+                Observation::Line(LineObs::new(a, r, cov).with_extent(e.ext.0, e.ext.1))
             } else {
+                let cov = [[e.cov.a, e.cov.b], [e.cov.b, e.cov.c]];
                 Observation::Point(PointObs::new(e.v[0], e.v[1], cov))
             }
         })
@@ -170,7 +184,7 @@ impl<const MAP: usize> Odometry<MAP> {
                 let mut c = pair.cov;
                 for (i, row) in c.iter_mut().enumerate() {
                     for v in row.iter_mut() {
-                        *v *= 1.0;
+                        *v *= 9.0;
                     }
                     if let Some(d) = row.get_mut(i) {
                         *d += if i == 2 { 1e-4 } else { 2500.0 };
@@ -189,8 +203,14 @@ impl<const MAP: usize> Odometry<MAP> {
         };
         self.last = curr.clone();
         let predicted = self.pose.compose(&guess);
-        let prior_cov = compose_covariance(&self.pose, &ZERO3, &guess, &guess_cov);
-        // The map as the "previous scan"; recently seen features first for hypotheses.
+        // The guess's covariance in the predicted pose's axes.
+        let (s, c) = sin_cos(-guess.theta);
+        let prior_cov =
+            crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
+        let to_local = predicted.inverse();
+        let (ls, lc) = sin_cos(-predicted.theta);
+        // The map, in the predicted pose's frame, as the "previous scan"; recently seen
+        // features first for hypotheses.
         let mut map = Set::new();
         let mut line_of = [NONE; MAX_OBS];
         let mut pt_of = [NONE; MAX_OBS];
@@ -202,13 +222,25 @@ impl<const MAP: usize> Odometry<MAP> {
                 let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
                 let ext = ext.then_some(e.ext);
                 let len = ext.map_or(0.0, |(s, t)| libm::hypotf(t[0] - s[0], t[1] - s[1]));
-                if map.push_line(e.v[0], e.v[1], e.cov, ext, len / (1.0 + age), None) {
+                let ext =
+                    ext.map(|(s, t)| (to_local.transform_point(s), to_local.transform_point(t)));
+                let (a, r, cov) = anchor_to_line(
+                    e.alpha - predicted.theta,
+                    to_local.transform_point(e.v),
+                    e.cov,
+                );
+                if map.push_line(a, r, cov, ext, len / (1.0 + age), None) {
                     if let Some(s) = line_of.get_mut(nl) {
                         *s = iu;
                     }
                     nl += 1;
                 }
-            } else if map.push_pt(e.v, e.cov, 1.0 / (1.0 + age), None) {
+            } else if map.push_pt(
+                to_local.transform_point(e.v),
+                e.cov.rotate(ls, lc),
+                1.0 / (1.0 + age),
+                None,
+            ) {
                 if let Some(s) = pt_of.get_mut(np) {
                     *s = iu;
                 }
@@ -216,7 +248,13 @@ impl<const MAP: usize> Odometry<MAP> {
             }
         }
         let mut assoc = Assoc::new();
-        let reg = register_sets(&map, &curr, Some((predicted, prior_cov)), &cfg, &mut assoc);
+        let reg = register_sets(
+            &map,
+            &curr,
+            Some((Pose::IDENTITY, prior_cov)),
+            &cfg,
+            &mut assoc,
+        );
         let old = self.pose;
         if !reg.is_registered() {
             // Not against the map: take the pair's registration (or the prediction) and
@@ -240,11 +278,11 @@ impl<const MAP: usize> Odometry<MAP> {
                 status,
             };
         }
-        let new = reg.rel;
+        let new = predicted.compose(&reg.rel);
         let rel = old.inverse().compose(&new);
-        // The registration's covariance is in the odometry frame's axes: turn it into the
+        // The registration's covariance is in the predicted pose's axes: turn it into the
         // previous scan's.
-        let (s, c) = sin_cos(-old.theta);
+        let (s, c) = sin_cos(guess.theta);
         let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
         let rel_cov = crate::geom::sandwich3(&rot, &reg.cov);
         self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
@@ -272,28 +310,18 @@ impl<const MAP: usize> Odometry<MAP> {
     /// Fuses the matched features of `curr` (seen from `pose`) into their map entries and adds
     /// the others.
     fn insert_all(&mut self, curr: &Set, ids: &Assoc, pose: &Pose, scan: u32) {
-        let (x, y) = (pose.x, pose.y);
         for (k, l) in curr.lines().iter().enumerate() {
-            let a = l.a + pose.theta;
-            let (sa, ca) = sin_cos(a);
-            let h = -x * sa + y * ca;
+            let (sa, ca) = sin_cos(l.a);
+            // Anchor at the segment's middle (the foot of the normal without extent).
+            let mid = match l.ext {
+                Some((s, e)) => -sa * 0.5 * (s[0] + e[0]) + ca * 0.5 * (s[1] + e[1]),
+                None => 0.0,
+            };
+            let anchor = [l.r * ca - mid * sa, l.r * sa + mid * ca];
             let cov = Sym2 {
                 a: l.cov.a,
-                b: l.cov.b + h * l.cov.a,
-                c: l.cov.c + 2.0 * h * l.cov.b + h * h * l.cov.a,
-            };
-            let (a, r, cov) = if l.r + x * ca + y * sa < 0.0 {
-                (
-                    wrap(a + PI),
-                    -(l.r + x * ca + y * sa),
-                    Sym2 {
-                        a: cov.a,
-                        b: -cov.b,
-                        c: cov.c,
-                    },
-                )
-            } else {
-                (wrap(a), l.r + x * ca + y * sa, cov)
+                b: l.cov.b - mid * l.cov.a,
+                c: l.cov.c - 2.0 * mid * l.cov.b + mid * mid * l.cov.a,
             };
             let ext = match l.ext {
                 Some((s, e)) => (pose.transform_point(s), pose.transform_point(e)),
@@ -301,7 +329,8 @@ impl<const MAP: usize> Odometry<MAP> {
             };
             let id = ids.lines.get(k).copied().unwrap_or(NONE);
             let new = Entry {
-                v: [a, r],
+                v: pose.transform_point(anchor),
+                alpha: wrap(l.a + pose.theta),
                 cov,
                 ext,
                 line: true,
@@ -317,6 +346,7 @@ impl<const MAP: usize> Odometry<MAP> {
             let (s, c) = sin_cos(pose.theta);
             let new = Entry {
                 v: pose.transform_point(p.p),
+                alpha: 0.0,
                 cov: p.cov.rotate(s, c),
                 ext: ([f32::NAN; 2], [f32::NAN; 2]),
                 line: false,
@@ -351,38 +381,86 @@ impl<const MAP: usize> Odometry<MAP> {
     }
 }
 
-/// Fuses the observation `o` of a line into the map entry `e` (same line).
+/// The line through `anchor` with normal angle `alpha` and covariance `cov` of (α, d) as
+/// (α, ρ) with ρ ≥ 0 and the covariance of (α, ρ), in the frame the anchor is given in.
+fn anchor_to_line(alpha: f32, anchor: [f32; 2], cov: Sym2) -> (f32, f32, Sym2) {
+    let (sa, ca) = sin_cos(alpha);
+    let rho = ca * anchor[0] + sa * anchor[1];
+    // Along-line position of the anchor from the normal's foot: δρ = d + s δα.
+    let s = -sa * anchor[0] + ca * anchor[1];
+    let c = Sym2 {
+        a: cov.a,
+        b: cov.b + s * cov.a,
+        c: cov.c + 2.0 * s * cov.b + s * s * cov.a,
+    };
+    if rho < 0.0 {
+        (
+            wrap(alpha + PI),
+            -rho,
+            Sym2 {
+                a: c.a,
+                b: -c.b,
+                c: c.c,
+            },
+        )
+    } else {
+        (wrap(alpha), rho, c)
+    }
+}
+
+/// Fuses the observation `o` of a line into the map entry `e` (same line), both anchored.
 fn fuse_line(e: &mut Entry, o: &Entry) {
     let mut o = *o;
-    if libm::cosf(o.v[0] - e.v[0]) < 0.0 {
-        o.v = [wrap(o.v[0] + PI), -o.v[1]];
+    if libm::cosf(o.alpha - e.alpha) < 0.0 {
+        // The same line with the opposite normal: d and cov(α, d) change sign.
+        o.alpha = wrap(o.alpha + PI);
         o.cov.b = -o.cov.b;
     }
-    o.v[0] = e.v[0] + wrap(o.v[0] - e.v[0]);
-    let (ext_e, ext_o) = (e.ext, o.ext);
-    fuse_2(e, &o);
-    e.v[0] = wrap(e.v[0]);
-    if e.v[1] < 0.0 {
-        e.v = [wrap(e.v[0] + PI), -e.v[1]];
-        e.cov.b = -e.cov.b;
-    }
+    let (so, co) = sin_cos(o.alpha);
+    // The observation re-anchored at the entry's anchor: d(s) = d − s δα.
+    let s = -so * (e.v[0] - o.v[0]) + co * (e.v[1] - o.v[1]);
+    let d = co * (o.v[0] - e.v[0]) + so * (o.v[1] - e.v[1]);
+    let r = Sym2 {
+        a: o.cov.a,
+        b: o.cov.b - s * o.cov.a,
+        c: o.cov.c - 2.0 * s * o.cov.b + s * s * o.cov.a,
+    };
+    let mut state = Entry {
+        v: [0.0, 0.0],
+        ..*e
+    };
+    let z = Entry {
+        v: [wrap(o.alpha - e.alpha), d],
+        cov: r,
+        ..o
+    };
+    fuse_2(&mut state, &z);
+    let (se, ce) = sin_cos(e.alpha);
+    let anchor = [e.v[0] + state.v[1] * ce, e.v[1] + state.v[1] * se];
+    let alpha = wrap(e.alpha + state.v[0]);
     // Extent: the union of both segments along the fused line.
-    let (sa, ca) = sin_cos(e.v[0]);
-    let ends = [ext_e.0, ext_e.1, ext_o.0, ext_o.1];
+    let (sa, ca) = sin_cos(alpha);
+    let ends = [e.ext.0, e.ext.1, o.ext.0, o.ext.1];
     let mut lo = f32::INFINITY;
     let mut hi = f32::NEG_INFINITY;
     for p in ends.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
-        let t = -sa * p[0] + ca * p[1];
+        let t = -sa * (p[0] - anchor[0]) + ca * (p[1] - anchor[1]);
         lo = lo.min(t);
         hi = hi.max(t);
     }
     if lo <= hi {
-        let foot = [e.v[1] * ca, e.v[1] * sa];
         e.ext = (
-            [foot[0] - sa * lo, foot[1] + ca * lo],
-            [foot[0] - sa * hi, foot[1] + ca * hi],
+            [anchor[0] - sa * lo, anchor[1] + ca * lo],
+            [anchor[0] - sa * hi, anchor[1] + ca * hi],
         );
     }
+    if anchor[0].is_finite() && anchor[1].is_finite() && alpha.is_finite() {
+        e.v = anchor;
+        e.alpha = alpha;
+        e.cov = state.cov;
+    }
+    e.seen = state.seen;
+    e.last = state.last;
 }
 
 /// Information-weighted fusion of the 2-vector of `o` into `e`.

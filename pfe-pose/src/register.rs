@@ -77,12 +77,6 @@ pub struct Config {
     /// Weight of the segments' overlap in a line match's score (0: none; 1: a match counts in
     /// proportion to how much of the shorter segment the other covers).
     pub overlap_weight: f32,
-    /// Score added per end of a matched segment that meets an end of the other segment
-    /// (within [`Config::endpoint_tolerance`] along the line): corners and door frames agree
-    /// under the right pose only.
-    pub endpoint_weight: f32,
-    /// Distance along the line within which two segment ends meet, mm.
-    pub endpoint_tolerance: f32,
     /// Weight of the visibility check in the choice among refined hypotheses: each segment
     /// that would hide, seen from the other scan, what that scan saw costs up to this much
     /// score (0: no check).
@@ -115,8 +109,6 @@ impl Default for Config {
             overlap_slack: 500.0,
             degenerate_sigma: 300.0,
             overlap_weight: 0.5,
-            endpoint_weight: 0.0,
-            endpoint_tolerance: 100.0,
             visibility_weight: 1.0,
             min_score: 0.0,
             confirm: true,
@@ -812,7 +804,7 @@ impl<'a> Work<'a> {
             let ext = lk
                 .ext
                 .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)));
-            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, (f32, f32))> = None;
+            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             for (i, li) in self.prev.lines().iter().enumerate() {
                 let dcos = libm::cosf(a - li.a);
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
@@ -841,8 +833,7 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
-                let tol = cfg.endpoint_tolerance + sr;
-                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr, tol) else {
+                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr) else {
                     continue;
                 };
                 if best.is_none_or(|b| d2 < b.0) {
@@ -859,9 +850,7 @@ impl<'a> Work<'a> {
                 continue;
             };
             n.lines += 1;
-            let (frac, ends) = frac;
-            n.score += (1.0 - d2 / gate)
-                * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac + cfg.endpoint_weight * ends);
+            n.score += (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
             n.chi2 += d2;
             // Jacobian rows: e_α = [0, 0, 1]; e_ρ = sign · [cos a, sin a, h].
             let ja = [0.0, 0.0, 1.0];
@@ -965,9 +954,9 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
 /// `None` when the segment `ext` (in the previous frame) and `li`'s segment are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
-fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32, tol: f32) -> Option<(f32, f32)> {
+fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f32> {
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
-        return Some((1.0, 0.0));
+        return Some(1.0);
     };
     let (sa, ca) = sin_cos(li.a);
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
@@ -980,9 +969,7 @@ fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32, tol: f32) -
         return None;
     }
     let shorter = (ahi - alo).min(bhi - blo).max(1.0);
-    let near = |a: f32| (a - b0).abs().min((a - b1).abs()) < tol;
-    let ends = f32::from(u8::from(near(a0)) + u8::from(near(a1)));
-    Some(((-gap / shorter).clamp(0.0, 1.0), ends))
+    Some((-gap / shorter).clamp(0.0, 1.0))
 }
 
 /// Scales to put θ in mm: (1, 1, [`ROTATION_SCALE`]).
@@ -1152,7 +1139,12 @@ fn crossings(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
         let mu = (s[0] * to[1] - s[1] * to[0]) / den;
         u > 0.0 && u < 1.0 && (0.05..=0.95).contains(&mu)
     };
-    let a = prev.lines().iter().filter_map(|l| l.ext).filter(|&x| through(x)).count();
+    let a = prev
+        .lines()
+        .iter()
+        .filter_map(|l| l.ext)
+        .filter(|&x| through(x))
+        .count();
     let b = curr
         .lines()
         .iter()
