@@ -102,7 +102,7 @@ impl Default for Config {
             max_rotation: 1.75,
             line_floor: [0.008, 15.0],
             point_floor: 15.0,
-            min_pair_angle: 0.26,
+            min_pair_angle: 0.17,
             gate: 9.21,
             prior_gate: 16.27,
             slack: [0.05, 100.0, 0.03],

@@ -228,3 +228,16 @@ mod tests {
         assert_eq!((n, &idx[..2]), (2, &[1u8, 0][..]));
     }
 }
+
+#[cfg(test)]
+mod size {
+    /// The stack a registration needs is dominated by two sets and one set of per-match
+    /// informations (see the crate's README): keep them small.
+    #[test]
+    fn sets_stay_small() {
+        let set = core::mem::size_of::<super::Set>();
+        let work = 2 * super::MAX_OBS * core::mem::size_of::<crate::Cov3>();
+        assert!(set <= 5 * 1024, "{set}");
+        assert!(work <= 5 * 1024, "{work}");
+    }
+}
