@@ -137,6 +137,11 @@ fn sweeps(g: &ScanGeometry) -> u8 {
 #[derive(Default)]
 struct Stats {
     pairs: usize,
+    /// Failures in two consecutive "ok" pairs whose two-step motion agrees with the
+    /// reference's (within 0.2 m and 2°): the middle reference pose is the suspect.
+    suspect: usize,
+    /// The last pair: (estimate, reference, an "ok" failure not yet counted as suspect).
+    last: Option<(Pose, Pose, bool)>,
     failures: usize,
     none: usize,
     degenerate: usize,
@@ -343,10 +348,12 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
             }
             match reg.status {
                 Status::None(_) => {
+                    st.last = None;
                     st.none += 1;
                     st.failures += 1;
                 }
                 Status::Degenerate { .. } => {
+                    st.last = None;
                     st.degenerate += 1;
                     let own = nis(&to_f64(&reg.cov), &e).unwrap_or(f64::INFINITY);
                     if bad && own > 11.345 {
@@ -359,6 +366,21 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
                     if bad {
                         st.failures += 1;
                     }
+                    if let Some((r0, t0, true)) = st.last {
+                        let two = r0.compose(&reg.rel);
+                        let ref_two = t0.compose(&truth);
+                        if bad
+                            && (two.x - ref_two.x).hypot(two.y - ref_two.y) < 200.0
+                            && wrap(two.theta - ref_two.theta).abs() < 2f32.to_radians()
+                        {
+                            st.suspect += 2;
+                            st.last = Some((reg.rel, truth, false));
+                        } else {
+                            st.last = Some((reg.rel, truth, bad));
+                        }
+                    } else {
+                        st.last = Some((reg.rel, truth, bad));
+                    }
                     st.terr.push(terr);
                     st.rerr.push(rerr);
                     let mut c = to_f64(&reg.cov);
@@ -370,6 +392,9 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
                     }
                 }
             }
+        }
+        if reg.is_none() {
+            st.last = None;
         }
         prev = Some((obs, rec.pose));
     }
@@ -408,9 +433,10 @@ fn row(name: &str, st: &mut Stats, odometry: bool) {
     let mut r: Vec<f64> = st.rerr.iter().map(|v| v.to_degrees()).collect();
     let mut nis = st.nis.clone();
     print!(
-        "| {name} | {} | {:.1} | {:.1} | {:.1} | {:.1} / {:.1} / {:.1} | {:.2} / {:.2} / {:.2} | {:.2} | {:.1} | {:.2} |",
+        "| {name} | {} | {:.1} | {:.1} | {:.1} | {:.1} | {:.1} / {:.1} / {:.1} | {:.2} / {:.2} / {:.2} | {:.2} | {:.1} | {:.2} |",
         st.pairs,
         pct(st.failures),
+        pct(st.suspect),
         pct(st.none),
         pct(st.degenerate),
         percentile(&mut t, 0.5) / 10.0,
@@ -478,12 +504,12 @@ fn main() {
             }
         }
     }
-    print!("| log | pairs | fail % | none % | degenerate % | trans. error cm (median / mean / p95) | rot. error ° (median / mean / p95) | NIS median | inside 95 % | ms/scan |");
+    print!("| log | pairs | fail % | of which reference-suspect % | none % | degenerate % | trans. error cm (median / mean / p95) | rot. error ° (median / mean / p95) | NIS median | inside 95 % | ms/scan |");
     if odometry {
         print!(" 50-scan windows: m per m (odometry / chained pairs) | rad per rad (odometry / chained) |");
     }
     println!();
-    print!("|---|---|---|---|---|---|---|---|---|---|");
+    print!("|---|---|---|---|---|---|---|---|---|---|---|");
     if odometry {
         print!("---|---|");
     }
@@ -499,6 +525,7 @@ fn main() {
                 row(&name, &mut st, odometry);
                 pooled.pairs += st.pairs;
                 pooled.failures += st.failures;
+                pooled.suspect += st.suspect;
                 pooled.none += st.none;
                 pooled.degenerate += st.degenerate;
                 pooled.terr.extend(&st.terr);
