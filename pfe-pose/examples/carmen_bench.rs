@@ -264,6 +264,16 @@ fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> std::io::Result<Sta
         if odometry {
             let step = odo.update(&obs, None);
             if let (Some(r), Some((_, p0))) = (reg.as_ref(), prev.as_ref()) {
+                if std::env::var_os("BENCH_ODO_STEP").is_some() && r.is_registered() {
+                    let truth = p0.inverse().compose(&rec.pose);
+                    eprintln!(
+                        "STEP {} {} {} {}",
+                        (step.rel.x - truth.x).hypot(step.rel.y - truth.y),
+                        wrap(step.rel.theta - truth.theta).abs(),
+                        (r.rel.x - truth.x).hypot(r.rel.y - truth.y),
+                        wrap(r.rel.theta - truth.theta).abs()
+                    );
+                }
                 if std::env::var_os("BENCH_ODO").is_some() {
                     let truth = p0.inverse().compose(&rec.pose);
                     let err = |p: &Pose| {

@@ -7,8 +7,9 @@
 //! the odometry frame, taken into the predicted pose's frame for the registration. Matched
 //! features are fused into their map feature (information-weighted, the segment's extent the
 //! union), unmatched ones are added, and when the map is full the one seen least recently
-//! (then least often) is replaced. When the map cannot register the scan the pair's result
-//! is taken and the map restarts from this scan.
+//! (then least often) is replaced. When the map cannot register the scan, or its answer
+//! disagrees with the pair's beyond both covariances (χ²₃ 99.9 %: a wrong map match), the
+//! pair's result is taken and the map restarts from this scan.
 //!
 //! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
 //! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would
@@ -256,7 +257,27 @@ impl<const MAP: usize> Odometry<MAP> {
             &mut assoc,
         );
         let old = self.pose;
-        if !reg.is_registered() {
+        // The map's answer must agree with the pair's (χ²₃ 99.9 %): otherwise a map feature
+        // was matched wrongly, and the pair's answer is kept.
+        let disagree = pair.is_registered() && reg.is_registered() && {
+            let (s, c) = sin_cos(-guess.theta);
+            let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+            let both = crate::geom::add3(&crate::geom::sandwich3(&rot, &pair.cov), &reg.cov);
+            let d = [reg.rel.x, reg.rel.y, reg.rel.theta];
+            match crate::geom::inverse_spd3(&both) {
+                Some(info) => {
+                    let mut q = 0.0;
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            q += d[i] * info[i][j] * d[j];
+                        }
+                    }
+                    !(q < 16.27)
+                }
+                None => false,
+            }
+        };
+        if !reg.is_registered() || disagree {
             // Not against the map: take the pair's registration (or the prediction) and
             // restart the map from this scan.
             let (rel, rel_cov, status) = if pair.is_registered() {
