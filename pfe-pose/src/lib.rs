@@ -5,9 +5,9 @@
 //! [`pfe_core::Extractor`] finds, with their covariances, and returns the motion between two
 //! scans with its 3×3 covariance and an honest status:
 //!
-//! - [`register`]: the pose of the current scan in the previous scan's frame, with no first
+//! - [`register()`]: the pose of the current scan in the previous scan's frame, with no first
 //!   guess needed (hypotheses from pairs of lines and of points, consensus, weighted least
-//!   squares; see [`register`'s module](crate::register) for the method), optionally gated by
+//!   squares; see [the `register` module](mod@crate::register) for the method), optionally gated by
 //!   a prior (wheel odometry, a gyro) that also enters the least squares.
 //! - [`Status::Degenerate`] when the scene cannot tell a direction (a corridor): the
 //!   covariance along it is the prior's or [`UNOBSERVABLE_VARIANCE`]; [`Status::None`] when
