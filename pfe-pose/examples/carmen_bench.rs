@@ -223,6 +223,7 @@ fn pose_config() -> pfe_pose::Config {
             "overlap_weight" => c.overlap_weight = v,
             "visibility_weight" => c.visibility_weight = v,
             "confirm" => c.confirm = v > 0.0,
+            "trusted_length" => c.trusted_length = v,
             "min_score" => c.min_score = v,
             "min_matches" => c.min_matches = v as usize,
             "scale" => c.scale_by_residuals = v > 0.0,

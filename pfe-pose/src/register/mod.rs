@@ -24,7 +24,8 @@
 //!    freedom when above 1). The eigen-analysis of the scene's information (x, y in mm, θ in
 //!    units of 1 m) finds directions the scene cannot tell (standard deviation above
 //!    [`Config::degenerate_sigma`]), and with [`Config::confirm`] also a direction that one
-//!    match alone determines (an association no other feature confirms): the status is then
+//!    match alone determines (an association no other feature confirms), unless both of its
+//!    segments are at least [`Config::trusted_length`] long: the status is then
 //!    [`Status::Degenerate`], the estimate does not move along them, and their variance is the
 //!    prior's or [`UNOBSERVABLE_VARIANCE`].
 
@@ -94,6 +95,9 @@ pub struct Config {
     /// Count a direction that a single match alone determines as unobservable (its
     /// information dropped): an association no other feature confirms is not trusted.
     pub confirm: bool,
+    /// Line matches whose segments are both at least this long (mm) need no confirmation
+    /// (see [`Config::confirm`]): a long wall is not mistaken for another.
+    pub trusted_length: f32,
     /// Fewest matched features for a registration.
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
@@ -120,6 +124,7 @@ impl Default for Config {
             visibility_weight: 1.0,
             min_score: 0.0,
             confirm: true,
+            trusted_length: 1000.0,
             min_matches: 3,
             scale_by_residuals: true,
             ambiguity: 2.0,

@@ -40,6 +40,8 @@ pub(super) struct Work<'a> {
     prior: Option<&'a Prior>,
     /// Each match's information `Jᵀ W J` in the last association.
     contrib: [Cov3; 2 * MAX_OBS],
+    /// Whether each match is trusted without confirmation (both segments long).
+    trusted: [bool; 2 * MAX_OBS],
     nc: usize,
 }
 
@@ -56,6 +58,7 @@ impl<'a> Work<'a> {
             cfg,
             prior,
             contrib: [ZERO3; 2 * MAX_OBS],
+            trusted: [false; 2 * MAX_OBS],
             nc: 0,
         }
     }
@@ -139,9 +142,18 @@ impl<'a> Work<'a> {
                     *slot = best.map_or(NONE, |b| b.1);
                 }
             }
-            let Some((d2, _, e, w, sign, frac)) = best else {
+            let Some((d2, i, e, w, sign, frac)) = best else {
                 continue;
             };
+            let length = |ext: Option<([f32; 2], [f32; 2])>| {
+                ext.map_or(0.0, |(s, e)| libm::hypotf(e[0] - s[0], e[1] - s[1]))
+            };
+            let prev_len = self
+                .prev
+                .lines()
+                .get(usize::from(i))
+                .map_or(0.0, |l| length(l.ext));
+            let trusted = length(lk.ext).min(prev_len) >= cfg.trusted_length;
             n.lines += 1;
             n.score += (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
             n.chi2 += d2;
@@ -149,7 +161,7 @@ impl<'a> Work<'a> {
             let ja = [0.0, 0.0, 1.0];
             let jr = [sign * ca, sign * sa, sign * h];
             let hi = accumulate(&mut n, &ja, &jr, &w, &e);
-            self.record(hi);
+            self.record(hi, trusted);
         }
         for (k, pk) in self.curr.pts().iter().enumerate() {
             let q = pose.transform_point(pk.p);
@@ -186,16 +198,19 @@ impl<'a> Work<'a> {
             let jx = [1.0, 0.0, -st * pk.p[0] - ct * pk.p[1]];
             let jy = [0.0, 1.0, ct * pk.p[0] - st * pk.p[1]];
             let hi = accumulate(&mut n, &jx, &jy, &w, &e);
-            self.record(hi);
+            self.record(hi, false);
         }
         n
     }
 }
 
 impl Work<'_> {
-    fn record(&mut self, hi: Cov3) {
-        if let Some(slot) = self.contrib.get_mut(self.nc) {
+    fn record(&mut self, hi: Cov3, trusted: bool) {
+        if let (Some(slot), Some(t)) =
+            (self.contrib.get_mut(self.nc), self.trusted.get_mut(self.nc))
+        {
             *slot = hi;
+            *t = trusted;
             self.nc += 1;
         }
     }
@@ -206,7 +221,13 @@ impl Work<'_> {
     fn without_critical(&self, h: &Cov3) -> Cov3 {
         let mut worst = *h;
         let mut least = f32::INFINITY;
-        for hi in self.contrib.iter().take(self.nc) {
+        for (hi, _) in self
+            .contrib
+            .iter()
+            .zip(&self.trusted)
+            .take(self.nc)
+            .filter(|(_, &t)| !t)
+        {
             let mut r = *h;
             for (row, hr) in r.iter_mut().zip(hi) {
                 for (v, x) in row.iter_mut().zip(hr) {
