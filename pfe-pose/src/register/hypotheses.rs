@@ -109,7 +109,7 @@ pub(super) fn hypothesise(
     let mut w = Work::new(prev, curr, cfg, prior);
     let mut count = 0u32;
     let consider = |pose: Pose, w: &mut Work, top: &mut Top, count: &mut u32| {
-        if !pose.is_finite() {
+        if !pose.is_finite() || *count >= cfg.max_hypotheses {
             return;
         }
         match prior {

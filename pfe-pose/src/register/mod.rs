@@ -98,6 +98,10 @@ pub struct Config {
     /// Line matches whose segments are both at least this long (mm) need no confirmation
     /// (see [`Config::confirm`]): a long wall is not mistaken for another.
     pub trusted_length: f32,
+    /// Most hypotheses considered (within the bounds or the prior), in the order they are
+    /// formed (the longest lines first): bounds the worst case. On the shared CARMEN logs a
+    /// scan pair forms 177 (median) and at most 2250.
+    pub max_hypotheses: u32,
     /// Fewest matched features for a registration.
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
@@ -125,6 +129,7 @@ impl Default for Config {
             min_score: 0.0,
             confirm: true,
             trusted_length: 1000.0,
+            max_hypotheses: 4096,
             min_matches: 3,
             scale_by_residuals: true,
             ambiguity: 2.0,
