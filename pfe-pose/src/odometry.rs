@@ -1,0 +1,514 @@
+//! Feature odometry: every scan's pose in the frame of the first, registered against a small
+//! local map of features rather than only against the previous scan.
+//!
+//! Each scan is first registered against the previous scan ([`crate::register`], gated by the
+//! motion prior when one is given). That result, widened to three standard deviations, gates
+//! and starts the registration against the map: at most `MAP` features (lines and points) in
+//! the odometry frame, taken into the predicted pose's frame for the registration. Matched
+//! features are fused into their map feature (information-weighted, the segment's extent the
+//! union), unmatched ones are added, and when the map is full the one seen least recently
+//! (then least often) is replaced. When the map cannot register the scan, or its answer
+//! disagrees with the pair's beyond both covariances (χ²₃ 99.9 %: a wrong map match), the
+//! pair's result is taken and the map restarts from this scan.
+//!
+//! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
+//! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would
+//! be nearly singular in f32.
+//!
+//! Covariance: the relative motion's covariance is the registration's against the map; the
+//! pose's covariance chains those (`compose_covariance`), which ignores what the map's
+//! memory saves: it bounds the error from above.
+
+use core::f32::consts::PI;
+
+use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
+use crate::obs::{LineObs, Observation, PointObs};
+use crate::register::{register_sets, Assoc, Config, Status, NONE};
+use crate::set::{Set, MAX_OBS};
+
+/// One feature of the map, in the odometry frame. A line is kept as its normal angle α and an
+/// anchor point on it (near the segment's middle) with the covariance of (α, d), d the
+/// normal offset at the anchor: unlike (α, ρ) about a far origin, well conditioned in f32
+/// wherever the robot is.
+#[derive(Clone, Copy, Debug)]
+struct Entry {
+    /// Point (x, y), or a line's anchor point.
+    v: [f32; 2],
+    /// A line's normal angle.
+    alpha: f32,
+    /// Point: (x, y); line: (α, d).
+    cov: Sym2,
+    /// Segment ends of a line (NaN: none).
+    ext: ([f32; 2], [f32; 2]),
+    line: bool,
+    seen: u16,
+    last: u32,
+}
+
+const EMPTY: Entry = Entry {
+    v: [0.0; 2],
+    alpha: 0.0,
+    cov: Sym2 {
+        a: 1.0,
+        b: 0.0,
+        c: 1.0,
+    },
+    ext: ([f32::NAN; 2], [f32::NAN; 2]),
+    line: false,
+    seen: 0,
+    last: 0,
+};
+
+/// One scan's result of [`Odometry::update`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    /// Index of the scan (0 for the first).
+    pub scan: u32,
+    /// The pose of this scan in the previous scan's frame.
+    pub rel: Pose,
+    /// Its covariance (x mm, y mm, θ rad).
+    pub rel_cov: Cov3,
+    /// The pose of this scan in the first scan's frame.
+    pub pose: Pose,
+    /// Its covariance.
+    pub cov: Cov3,
+    /// How the registration went ([`Status::Ok`] for the first scan). For
+    /// [`Status::None`] the pose is the prediction and the map restarts from this scan.
+    pub status: Status,
+}
+
+/// Feature odometry with a local map of at most `MAP` features.
+///
+/// ```
+/// use pfe_pose::{LineObs, Observation, Odometry, Pose, Status};
+/// let walls = [(0.0f32, 3000.0f32), (1.5708, 2000.0), (3.1416, 1500.0), (-1.5708, 2500.0)];
+/// let cov = [[1e-6, 0.0], [0.0, 25.0]];
+/// let scan_at = |p: Pose| -> Vec<Observation> {
+///     let inv = p.inverse();
+///     walls.iter().map(|&(a, r)| {
+///         let (a, r) = inv.transform_line(a, r);
+///         Observation::Line(LineObs::new(a, r, cov))
+///     }).collect()
+/// };
+/// let mut odo = Odometry::<32>::new(Default::default());
+/// odo.update(&scan_at(Pose::IDENTITY), None);
+/// odo.update(&scan_at(Pose::new(200.0, 0.0, 0.1)), None);
+/// let step = odo.update(&scan_at(Pose::new(400.0, 50.0, 0.2)), None);
+/// assert_eq!(step.status, Status::Ok);
+/// assert!((step.pose.x - 400.0).abs() < 5.0 && (step.pose.theta - 0.2).abs() < 1e-3);
+/// ```
+#[derive(Clone, Debug)]
+pub struct Odometry<const MAP: usize> {
+    cfg: Config,
+    map: [Entry; MAP],
+    n: usize,
+    pose: Pose,
+    cov: Cov3,
+    last_rel: Pose,
+    scans: u32,
+    /// The previous scan's features.
+    last: Set,
+}
+
+impl<const MAP: usize> Odometry<MAP> {
+    /// An odometry that has seen no scan, with registration settings `cfg`.
+    pub const fn new(cfg: Config) -> Self {
+        Self {
+            cfg,
+            map: [EMPTY; MAP],
+            n: 0,
+            pose: Pose::IDENTITY,
+            cov: ZERO3,
+            last_rel: Pose::IDENTITY,
+            scans: 0,
+            last: Set::new(),
+        }
+    }
+
+    /// Forgets every scan.
+    pub fn reset(&mut self) {
+        self.n = 0;
+        self.pose = Pose::IDENTITY;
+        self.cov = ZERO3;
+        self.last_rel = Pose::IDENTITY;
+        self.scans = 0;
+    }
+
+    /// The latest pose in the first scan's frame and its covariance.
+    pub fn pose(&self) -> (Pose, Cov3) {
+        (self.pose, self.cov)
+    }
+
+    /// The map's features in the odometry frame.
+    pub fn map(&self) -> impl Iterator<Item = Observation> + '_ {
+        self.map.iter().take(self.n).map(|e| {
+            if e.line {
+                let (a, r, c) = anchor_to_line(e.alpha, e.v, e.cov);
+                let cov = [[c.a, c.b], [c.b, c.c]];
+                Observation::Line(LineObs::new(a, r, cov).with_extent(e.ext.0, e.ext.1))
+            } else {
+                let cov = [[e.cov.a, e.cov.b], [e.cov.b, e.cov.c]];
+                Observation::Point(PointObs::new(e.v[0], e.v[1], cov))
+            }
+        })
+    }
+
+    /// Registers the scan's features `obs` against the map and updates it. `motion`: a prior
+    /// of this scan's pose in the previous scan's frame with its covariance (wheel odometry),
+    /// or `None` (then the last motion, with the configured bounds as its uncertainty).
+    pub fn update(&mut self, obs: &[Observation], motion: Option<(Pose, Cov3)>) -> Step {
+        let cfg = self.cfg;
+        let curr = Set::from_obs(obs, &cfg);
+        let scan = self.scans;
+        self.scans = self.scans.saturating_add(1);
+        if scan == 0 {
+            self.n = 0;
+            self.last = curr.clone();
+            self.insert_all(&curr, &Assoc::new(), &Pose::IDENTITY, scan);
+            return Step {
+                scan,
+                rel: Pose::IDENTITY,
+                rel_cov: ZERO3,
+                pose: Pose::IDENTITY,
+                cov: ZERO3,
+                status: Status::Ok,
+            };
+        }
+        let motion =
+            motion.filter(|(m, c)| m.is_finite() && c.iter().flatten().all(|v| v.is_finite()));
+        // First against the previous scan (the motion prior, if any, gating it): its result,
+        // widened to three standard deviations, gates and starts the registration against the
+        // map.
+        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new());
+        let (guess, guess_cov) = match motion {
+            _ if pair.is_registered() => {
+                let mut c = pair.cov;
+                for (i, row) in c.iter_mut().enumerate() {
+                    for v in row.iter_mut() {
+                        *v *= 9.0;
+                    }
+                    if let Some(d) = row.get_mut(i) {
+                        *d += if i == 2 { 1e-4 } else { 2500.0 };
+                    }
+                }
+                (pair.rel, c)
+            }
+            Some(m) => m,
+            None => {
+                let (t, r) = (cfg.max_translation, cfg.max_rotation);
+                (
+                    self.last_rel,
+                    [[t * t, 0.0, 0.0], [0.0, t * t, 0.0], [0.0, 0.0, r * r]],
+                )
+            }
+        };
+        self.last = curr.clone();
+        let predicted = self.pose.compose(&guess);
+        // The guess's covariance in the predicted pose's axes.
+        let (s, c) = sin_cos(-guess.theta);
+        let prior_cov =
+            crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
+        let to_local = predicted.inverse();
+        let (ls, lc) = sin_cos(-predicted.theta);
+        // The map, in the predicted pose's frame, as the "previous scan"; recently seen
+        // features first for hypotheses.
+        let mut map = Set::new();
+        let mut line_of = [NONE; MAX_OBS];
+        let mut pt_of = [NONE; MAX_OBS];
+        let (mut nl, mut np) = (0usize, 0usize);
+        for (i, e) in self.map.iter().take(self.n).enumerate() {
+            let Ok(iu) = u8::try_from(i) else { break };
+            let age = scan.saturating_sub(e.last) as f32;
+            if e.line {
+                let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
+                let ext = ext.then_some(e.ext);
+                let len = ext.map_or(0.0, |(s, t)| libm::hypotf(t[0] - s[0], t[1] - s[1]));
+                let ext =
+                    ext.map(|(s, t)| (to_local.transform_point(s), to_local.transform_point(t)));
+                let (a, r, cov) = anchor_to_line(
+                    e.alpha - predicted.theta,
+                    to_local.transform_point(e.v),
+                    e.cov,
+                );
+                if map.push_line(a, r, cov, ext, len / (1.0 + age), None) {
+                    if let Some(s) = line_of.get_mut(nl) {
+                        *s = iu;
+                    }
+                    nl += 1;
+                }
+            } else if map.push_pt(
+                to_local.transform_point(e.v),
+                e.cov.rotate(ls, lc),
+                1.0 / (1.0 + age),
+                None,
+            ) {
+                if let Some(s) = pt_of.get_mut(np) {
+                    *s = iu;
+                }
+                np += 1;
+            }
+        }
+        let mut assoc = Assoc::new();
+        let reg = register_sets(
+            &map,
+            &curr,
+            Some((Pose::IDENTITY, prior_cov)),
+            &cfg,
+            &mut assoc,
+        );
+        let old = self.pose;
+        // The map's answer must agree with the pair's (χ²₃ 99.9 %): otherwise a map feature
+        // was matched wrongly, and the pair's answer is kept.
+        let disagree = pair.is_registered() && reg.is_registered() && {
+            let (s, c) = sin_cos(-guess.theta);
+            let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+            let both = crate::geom::add3(&crate::geom::sandwich3(&rot, &pair.cov), &reg.cov);
+            let d = [reg.rel.x, reg.rel.y, reg.rel.theta];
+            match crate::geom::inverse_spd3(&both) {
+                Some(info) => {
+                    let mut q = 0.0;
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            q += d[i] * info[i][j] * d[j];
+                        }
+                    }
+                    !(q < 16.27)
+                }
+                None => false,
+            }
+        };
+        if !reg.is_registered() || disagree {
+            // Not against the map: take the pair's registration (or the prediction) and
+            // restart the map from this scan.
+            let (rel, rel_cov, status) = if pair.is_registered() {
+                (pair.rel, pair.cov, pair.status)
+            } else {
+                (guess, guess_cov, reg.status)
+            };
+            self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
+            self.pose = old.compose(&rel);
+            self.last_rel = rel;
+            self.n = 0;
+            self.insert_all(&curr, &Assoc::new(), &self.pose.clone(), scan);
+            return Step {
+                scan,
+                rel,
+                rel_cov,
+                pose: self.pose,
+                cov: self.cov,
+                status,
+            };
+        }
+        let new = predicted.compose(&reg.rel);
+        let rel = old.inverse().compose(&new);
+        // The registration's covariance is in the predicted pose's axes: turn it into the
+        // previous scan's.
+        let (s, c) = sin_cos(guess.theta);
+        let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+        let rel_cov = crate::geom::sandwich3(&rot, &reg.cov);
+        self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
+        self.pose = new;
+        self.last_rel = rel;
+        // Map ids of the matches.
+        let mut ids = Assoc::new();
+        for (slot, m) in ids.lines.iter_mut().zip(&assoc.lines) {
+            *slot = line_of.get(usize::from(*m)).copied().unwrap_or(NONE);
+        }
+        for (slot, m) in ids.pts.iter_mut().zip(&assoc.pts) {
+            *slot = pt_of.get(usize::from(*m)).copied().unwrap_or(NONE);
+        }
+        self.insert_all(&curr, &ids, &new, scan);
+        Step {
+            scan,
+            rel,
+            rel_cov,
+            pose: new,
+            cov: self.cov,
+            status: reg.status,
+        }
+    }
+
+    /// Fuses the matched features of `curr` (seen from `pose`) into their map entries and adds
+    /// the others.
+    fn insert_all(&mut self, curr: &Set, ids: &Assoc, pose: &Pose, scan: u32) {
+        for (k, l) in curr.lines().iter().enumerate() {
+            let (sa, ca) = sin_cos(l.a);
+            // Anchor at the segment's middle (the foot of the normal without extent).
+            let mid = match l.ext {
+                Some((s, e)) => -sa * 0.5 * (s[0] + e[0]) + ca * 0.5 * (s[1] + e[1]),
+                None => 0.0,
+            };
+            let anchor = [l.r * ca - mid * sa, l.r * sa + mid * ca];
+            let cov = Sym2 {
+                a: l.cov.a,
+                b: l.cov.b - mid * l.cov.a,
+                c: l.cov.c - 2.0 * mid * l.cov.b + mid * mid * l.cov.a,
+            };
+            let ext = match l.ext {
+                Some((s, e)) => (pose.transform_point(s), pose.transform_point(e)),
+                None => ([f32::NAN; 2], [f32::NAN; 2]),
+            };
+            let id = ids.lines.get(k).copied().unwrap_or(NONE);
+            let new = Entry {
+                v: pose.transform_point(anchor),
+                alpha: wrap(l.a + pose.theta),
+                cov,
+                ext,
+                line: true,
+                seen: 1,
+                last: scan,
+            };
+            match self.map.get_mut(usize::from(id)).filter(|_| id != NONE) {
+                Some(e) if e.line && usize::from(id) < self.n => fuse_line(e, &new),
+                _ => self.add(new),
+            }
+        }
+        for (k, p) in curr.pts().iter().enumerate() {
+            let (s, c) = sin_cos(pose.theta);
+            let new = Entry {
+                v: pose.transform_point(p.p),
+                alpha: 0.0,
+                cov: p.cov.rotate(s, c),
+                ext: ([f32::NAN; 2], [f32::NAN; 2]),
+                line: false,
+                seen: 1,
+                last: scan,
+            };
+            let id = ids.pts.get(k).copied().unwrap_or(NONE);
+            match self.map.get_mut(usize::from(id)).filter(|_| id != NONE) {
+                Some(e) if !e.line && usize::from(id) < self.n => fuse_2(e, &new),
+                _ => self.add(new),
+            }
+        }
+    }
+
+    /// Adds `e`, replacing the entry seen least recently (then least often) when full.
+    fn add(&mut self, e: Entry) {
+        if let Some(slot) = self.map.get_mut(self.n) {
+            *slot = e;
+            self.n += 1;
+            return;
+        }
+        let n = self.n;
+        if let Some(victim) = self
+            .map
+            .iter_mut()
+            .take(n)
+            .filter(|v| v.last < e.last)
+            .min_by_key(|v| (v.last, v.seen))
+        {
+            *victim = e;
+        }
+    }
+}
+
+/// The line through `anchor` with normal angle `alpha` and covariance `cov` of (α, d) as
+/// (α, ρ) with ρ ≥ 0 and the covariance of (α, ρ), in the frame the anchor is given in.
+fn anchor_to_line(alpha: f32, anchor: [f32; 2], cov: Sym2) -> (f32, f32, Sym2) {
+    let (sa, ca) = sin_cos(alpha);
+    let rho = ca * anchor[0] + sa * anchor[1];
+    // Along-line position of the anchor from the normal's foot: δρ = d + s δα.
+    let s = -sa * anchor[0] + ca * anchor[1];
+    let c = Sym2 {
+        a: cov.a,
+        b: cov.b + s * cov.a,
+        c: cov.c + 2.0 * s * cov.b + s * s * cov.a,
+    };
+    if rho < 0.0 {
+        (
+            wrap(alpha + PI),
+            -rho,
+            Sym2 {
+                a: c.a,
+                b: -c.b,
+                c: c.c,
+            },
+        )
+    } else {
+        (wrap(alpha), rho, c)
+    }
+}
+
+/// Fuses the observation `o` of a line into the map entry `e` (same line), both anchored.
+fn fuse_line(e: &mut Entry, o: &Entry) {
+    let mut o = *o;
+    if libm::cosf(o.alpha - e.alpha) < 0.0 {
+        // The same line with the opposite normal: d and cov(α, d) change sign.
+        o.alpha = wrap(o.alpha + PI);
+        o.cov.b = -o.cov.b;
+    }
+    let (so, co) = sin_cos(o.alpha);
+    // The observation re-anchored at the entry's anchor: d(s) = d − s δα.
+    let s = -so * (e.v[0] - o.v[0]) + co * (e.v[1] - o.v[1]);
+    let d = co * (o.v[0] - e.v[0]) + so * (o.v[1] - e.v[1]);
+    let r = Sym2 {
+        a: o.cov.a,
+        b: o.cov.b - s * o.cov.a,
+        c: o.cov.c - 2.0 * s * o.cov.b + s * s * o.cov.a,
+    };
+    let mut state = Entry {
+        v: [0.0, 0.0],
+        ..*e
+    };
+    let z = Entry {
+        v: [wrap(o.alpha - e.alpha), d],
+        cov: r,
+        ..o
+    };
+    fuse_2(&mut state, &z);
+    let (se, ce) = sin_cos(e.alpha);
+    let anchor = [e.v[0] + state.v[1] * ce, e.v[1] + state.v[1] * se];
+    let alpha = wrap(e.alpha + state.v[0]);
+    // Extent: the union of both segments along the fused line.
+    let (sa, ca) = sin_cos(alpha);
+    let ends = [e.ext.0, e.ext.1, o.ext.0, o.ext.1];
+    let mut lo = f32::INFINITY;
+    let mut hi = f32::NEG_INFINITY;
+    for p in ends.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        let t = -sa * (p[0] - anchor[0]) + ca * (p[1] - anchor[1]);
+        lo = lo.min(t);
+        hi = hi.max(t);
+    }
+    if lo <= hi {
+        e.ext = (
+            [anchor[0] - sa * lo, anchor[1] + ca * lo],
+            [anchor[0] - sa * hi, anchor[1] + ca * hi],
+        );
+    }
+    if anchor[0].is_finite() && anchor[1].is_finite() && alpha.is_finite() {
+        e.v = anchor;
+        e.alpha = alpha;
+        e.cov = state.cov;
+    }
+    e.seen = state.seen;
+    e.last = state.last;
+}
+
+/// Information-weighted fusion of the 2-vector of `o` into `e`.
+fn fuse_2(e: &mut Entry, o: &Entry) {
+    let s = e.cov.add(o.cov);
+    let Some(si) = s.inverse() else { return };
+    // K = P_e S⁻¹.
+    let p = e.cov;
+    let k = [
+        [p.a * si.a + p.b * si.b, p.a * si.b + p.b * si.c],
+        [p.b * si.a + p.c * si.b, p.b * si.b + p.c * si.c],
+    ];
+    let d = [o.v[0] - e.v[0], o.v[1] - e.v[1]];
+    let v = [
+        e.v[0] + k[0][0] * d[0] + k[0][1] * d[1],
+        e.v[1] + k[1][0] * d[0] + k[1][1] * d[1],
+    ];
+    // P = (I − K) P_e.
+    let cov = Sym2 {
+        a: (1.0 - k[0][0]) * p.a - k[0][1] * p.b,
+        b: (1.0 - k[0][0]) * p.b - k[0][1] * p.c,
+        c: -k[1][0] * p.b + (1.0 - k[1][1]) * p.c,
+    };
+    if v[0].is_finite() && v[1].is_finite() && cov.finite() && cov.a > 0.0 && cov.c > 0.0 {
+        e.v = v;
+        e.cov = cov;
+    }
+    e.seen = e.seen.saturating_add(1);
+    e.last = e.last.max(o.last);
+}

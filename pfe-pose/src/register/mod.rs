@@ -1,0 +1,438 @@
+//! Registration of two scans' features: hypotheses from the features themselves, consensus,
+//! weighted least squares, covariance and an honest status.
+//!
+//! 1. **Hypotheses** (no first guess needed): a pair of non-parallel lines of the previous scan
+//!    and a pair of the current one with the same angle between them fix the rotation (from
+//!    the normals' angles α) and the translation (from the two ρ); a pair of points at the same
+//!    distance fixes both too, and so does a line with a point. Only when none of these exist
+//!    (a corridor), single lines give the rotation and the translation across them, with none
+//!    along them. With a prior, the prior's pose is a hypothesis too and every hypothesis must
+//!    lie within its covariance (χ²₃ < [`Config::prior_gate`]); without one, the motion bounds
+//!    [`Config::max_translation`] and [`Config::max_rotation`] apply.
+//! 2. **Consensus**: each hypothesis is scored by the features of the current scan that then
+//!    agree with one of the previous scan's (Mahalanobis distance with both covariances plus a
+//!    slack for the hypothesis's own error, truncated-quadratic score, weighted by how much
+//!    the two segments overlap): features seen in one scan only, and moving objects, simply do
+//!    not agree.
+//! 3. **Refinement**: the best few hypotheses are refined by Gauss–Newton over the gated
+//!    matches (re-associated each step while the slack shrinks to zero), weighted by the
+//!    features' covariances; the prior enters as one more measurement. The best refined one
+//!    wins, after a visibility check: a pose under which one scan's segments
+//!    would hide what the other scan saw, or the robot would have gone through a wall, loses
+//!    score.
+//! 4. **Covariance and status**: `(Jᵀ W J)⁻¹` (scaled up by the residuals' χ² per degree of
+//!    freedom when above 1). The eigen-analysis of the scene's information (x, y in mm, θ in
+//!    units of 1 m) finds directions the scene cannot tell (standard deviation above
+//!    [`Config::degenerate_sigma`]), and with [`Config::confirm`] also a direction that one
+//!    match alone determines (an association no other feature confirms), unless both of its
+//!    segments are at least [`Config::trusted_length`] long: the status is then
+//!    [`Status::Degenerate`], the estimate does not move along them, and their variance is the
+//!    prior's or [`UNOBSERVABLE_VARIANCE`].
+
+mod hypotheses;
+mod refine;
+mod visibility;
+
+use crate::geom::{finite3, inverse_spd3, wrap, Cov3, Pose};
+use crate::obs::Observation;
+use crate::set::{Set, MAX_OBS};
+use hypotheses::{hypothesise, Top};
+use refine::{refine, Refined, Work};
+
+/// Variance given to a direction the scene cannot tell when there is no prior: 10¹² mm² (a
+/// standard deviation of 1000 km) for translation; a rotation's part is in units of 1 m
+/// (10⁶ rad²). Finite, so sums and products stay finite; invert such a covariance in f64.
+pub const UNOBSERVABLE_VARIANCE: f32 = 1e12;
+
+/// Length that puts rotation in the units of translation for the eigen-analysis, mm per rad.
+pub const ROTATION_SCALE: f32 = 1000.0;
+
+/// Hypotheses refined (the best by consensus).
+const REFINE: usize = 12;
+/// Gauss–Newton steps at most.
+const ITERATIONS: usize = 10;
+
+/// Settings of the registration.
+///
+/// ```
+/// let c = pfe_pose::Config::default();
+/// assert!(c.max_rotation > 1.4 && c.max_translation >= 1800.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub struct Config {
+    /// Largest translation between two scans considered without a prior, mm.
+    pub max_translation: f32,
+    /// Largest rotation between two scans considered without a prior, rad.
+    pub max_rotation: f32,
+    /// Model noise added to every line: (σ_α rad, σ_ρ mm). Covers what the range noise does
+    /// not: walls that are not perfectly straight, partial views, the extraction's choices.
+    pub line_floor: [f32; 2],
+    /// Model noise added to every point feature, σ per axis, mm.
+    pub point_floor: f32,
+    /// Lines closer than this to parallel (rad) do not make a hypothesis pair.
+    pub min_pair_angle: f32,
+    /// χ²₂ gate for a match (9.21: 99 %).
+    pub gate: f32,
+    /// χ²₃ gate of a hypothesis against the prior.
+    pub prior_gate: f32,
+    /// Slack for a hypothesis's own error while scoring: (σ_α rad, σ_ρ mm, σ per mm of reach).
+    pub slack: [f32; 3],
+    /// Segments farther apart along their line than this (mm) do not match.
+    pub overlap_slack: f32,
+    /// A direction whose standard deviation (x, y in mm; θ in units of
+    /// [`ROTATION_SCALE`]) exceeds this is one the scene cannot tell, mm.
+    pub degenerate_sigma: f32,
+    /// Weight of the segments' overlap in a line match's score (0: none; 1: a match counts in
+    /// proportion to how much of the shorter segment the other covers).
+    pub overlap_weight: f32,
+    /// Weight of the visibility check in the choice among refined hypotheses: each segment
+    /// that would hide, seen from the other scan, what that scan saw costs up to this much
+    /// score (0: no check).
+    pub visibility_weight: f32,
+    /// Least score (matches' agreement less the visibility penalty) for a registration.
+    pub min_score: f32,
+    /// Count a direction that a single match alone determines as unobservable (its
+    /// information dropped): an association no other feature confirms is not trusted.
+    pub confirm: bool,
+    /// Line matches whose segments are both at least this long (mm) need no confirmation
+    /// (see [`Config::confirm`]): a long wall is not mistaken for another.
+    pub trusted_length: f32,
+    /// Most hypotheses considered (within the bounds or the prior), in the order they are
+    /// formed (the longest lines first): bounds the worst case. On the shared CARMEN logs a
+    /// scan pair forms 177 (median) and at most 2250.
+    pub max_hypotheses: u32,
+    /// Fewest matched features for a registration.
+    pub min_matches: usize,
+    /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
+    pub scale_by_residuals: bool,
+    /// Give up ([`Failure::Ambiguous`]) when a distinct second solution scores at least this
+    /// fraction of the best (above 1: never).
+    pub ambiguity: f32,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            max_translation: 3000.0,
+            max_rotation: 1.75,
+            line_floor: [0.008, 15.0],
+            point_floor: 15.0,
+            min_pair_angle: 0.17,
+            gate: 9.21,
+            prior_gate: 16.27,
+            slack: [0.05, 100.0, 0.03],
+            overlap_slack: 500.0,
+            degenerate_sigma: 300.0,
+            overlap_weight: 0.5,
+            visibility_weight: 1.0,
+            min_score: 0.0,
+            confirm: true,
+            trusted_length: 1000.0,
+            max_hypotheses: 4096,
+            min_matches: 3,
+            scale_by_residuals: true,
+            ambiguity: 2.0,
+        }
+    }
+}
+
+/// Why there is no registration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Failure {
+    /// Fewer than two usable features in a scan.
+    TooFewFeatures,
+    /// No hypothesis could be formed (or none within the bounds or the prior).
+    NoHypothesis,
+    /// The best hypothesis is agreed on by fewer than [`Config::min_matches`] features.
+    NoConsensus,
+    /// Two distinct solutions agree nearly as well (see [`Config::ambiguity`]).
+    Ambiguous,
+    /// The prior is not finite or its covariance not positive definite.
+    InvalidPrior,
+}
+
+/// How a registration went.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Status {
+    /// Every direction of the pose is determined by the scene.
+    Ok,
+    /// The scene cannot tell the pose along `direction` (a unit vector in (x mm, y mm,
+    /// θ·[`ROTATION_SCALE`])): a corridor, say. The covariance along it is the prior's, or
+    /// [`UNOBSERVABLE_VARIANCE`] without a prior; the other directions are measured.
+    Degenerate {
+        /// The least determined direction.
+        direction: [f32; 3],
+    },
+    /// No registration: `rel` is the prior's pose (identity without one) and `cov` the
+    /// prior's ([`UNOBSERVABLE_VARIANCE`] on the diagonal without one).
+    None(Failure),
+}
+
+/// The result of [`register`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Registration {
+    /// The pose of the current scan in the previous scan's frame.
+    pub rel: Pose,
+    /// Its covariance, (x mm, y mm, θ rad).
+    pub cov: Cov3,
+    /// Whether the scene determined it.
+    pub status: Status,
+    /// Features of the current scan matched (lines, points).
+    pub matches: (u16, u16),
+    /// Hypotheses scored.
+    pub hypotheses: u32,
+    /// Valid features left out for want of room (see [`crate::MAX_OBS`]).
+    pub dropped: u16,
+    /// Invalid features ignored (NaN, negative ρ, covariance not positive definite).
+    pub invalid: u16,
+    /// χ² of the matched features' residuals.
+    pub chi2: f32,
+}
+
+impl Registration {
+    /// True for [`Status::Ok`] and [`Status::Degenerate`].
+    pub fn is_registered(&self) -> bool {
+        !matches!(self.status, Status::None(_))
+    }
+}
+
+/// Registers `curr` against `prev` with the default [`Config`]: the pose of the current scan
+/// in the previous scan's frame, its covariance and status. `prior`: a guess of that pose with
+/// its covariance (wheel odometry, a gyro), or `None`.
+///
+/// ```
+/// use pfe_pose::{register, LineObs, Observation, Pose, Status};
+/// // A room's three walls and a pillar, seen before and after a move of (300 mm, 100 mm, 0.2 rad).
+/// let truth = Pose::new(300.0, 100.0, 0.2);
+/// let walls = [(0.0f32, 3000.0f32), (1.5708, 2000.0), (3.1416, 1500.0), (-1.5708, 2500.0)];
+/// let cov = [[1e-6, 0.0], [0.0, 25.0]];
+/// let inv = truth.inverse();
+/// let prev: Vec<_> = walls.iter().map(|&(a, r)| Observation::Line(LineObs::new(a, r, cov))).collect();
+/// let curr: Vec<_> = walls.iter().map(|&(a, r)| {
+///     let (a, r) = inv.transform_line(a, r);
+///     Observation::Line(LineObs::new(a, r, cov))
+/// }).collect();
+/// let reg = register(&prev, &curr, None);
+/// assert_eq!(reg.status, Status::Ok);
+/// assert!((reg.rel.x - 300.0).abs() < 5.0 && (reg.rel.theta - 0.2).abs() < 1e-3);
+/// ```
+pub fn register(
+    prev: &[Observation],
+    curr: &[Observation],
+    prior: Option<(Pose, Cov3)>,
+) -> Registration {
+    register_with(prev, curr, prior, &Config::default())
+}
+
+/// [`register`] with a configuration.
+///
+/// ```
+/// use pfe_pose::{register_with, Config, Failure, Status};
+/// let reg = register_with(&[], &[], None, &Config::default());
+/// assert_eq!(reg.status, Status::None(Failure::TooFewFeatures));
+/// ```
+pub fn register_with(
+    prev: &[Observation],
+    curr: &[Observation],
+    prior: Option<(Pose, Cov3)>,
+    cfg: &Config,
+) -> Registration {
+    let p = Set::from_obs(prev, cfg);
+    let c = Set::from_obs(curr, cfg);
+    let mut assoc = Assoc::new();
+    let mut r = register_sets(&p, &c, prior, cfg, &mut assoc);
+    r.dropped = p.dropped.saturating_add(c.dropped);
+    r.invalid = p.invalid.saturating_add(c.invalid);
+    r
+}
+
+/// Which feature of the previous set each current one matched (`NONE` when none).
+#[derive(Clone, Debug)]
+pub(crate) struct Assoc {
+    pub lines: [u8; MAX_OBS],
+    pub pts: [u8; MAX_OBS],
+}
+
+pub(crate) const NONE: u8 = u8::MAX;
+
+impl Assoc {
+    pub const fn new() -> Self {
+        Self {
+            lines: [NONE; MAX_OBS],
+            pts: [NONE; MAX_OBS],
+        }
+    }
+}
+
+/// A validated prior: pose, information matrix, covariance.
+#[derive(Clone, Copy)]
+struct Prior {
+    pose: Pose,
+    info: Cov3,
+    cov: Cov3,
+    /// Information of the prior widened by the hypotheses' slack, for gating.
+    gate_info: Cov3,
+}
+
+fn check_prior(prior: Option<(Pose, Cov3)>, cfg: &Config) -> Result<Option<Prior>, Failure> {
+    let Some((pose, cov)) = prior else {
+        return Ok(None);
+    };
+    if !pose.is_finite() || !finite3(&cov) {
+        return Err(Failure::InvalidPrior);
+    }
+    let cov = crate::geom::symmetrise3(&cov);
+    let info = inverse_spd3(&cov).ok_or(Failure::InvalidPrior)?;
+    let mut wide = cov;
+    let (st, sa) = (cfg.slack[1] * 2.0, cfg.slack[0] * 2.0);
+    wide[0][0] += st * st;
+    wide[1][1] += st * st;
+    wide[2][2] += sa * sa;
+    let gate_info = inverse_spd3(&wide).ok_or(Failure::InvalidPrior)?;
+    Ok(Some(Prior {
+        pose: Pose::new(pose.x, pose.y, pose.theta),
+        info,
+        cov,
+        gate_info,
+    }))
+}
+
+/// The registration on prepared sets; `assoc` receives the final matches.
+pub(crate) fn register_sets(
+    prev: &Set,
+    curr: &Set,
+    prior: Option<(Pose, Cov3)>,
+    cfg: &Config,
+    assoc: &mut Assoc,
+) -> Registration {
+    let prior = check_prior(prior, cfg);
+    let fallback = |failure: Failure, prior: Option<&Prior>, hypotheses: u32| {
+        let (rel, cov) = match prior {
+            Some(p) => (p.pose, p.cov),
+            None => (
+                Pose::IDENTITY,
+                [
+                    [UNOBSERVABLE_VARIANCE, 0.0, 0.0],
+                    [0.0, UNOBSERVABLE_VARIANCE, 0.0],
+                    [
+                        0.0,
+                        0.0,
+                        UNOBSERVABLE_VARIANCE / (ROTATION_SCALE * ROTATION_SCALE),
+                    ],
+                ],
+            ),
+        };
+        Registration {
+            rel,
+            cov,
+            status: Status::None(failure),
+            matches: (0, 0),
+            hypotheses,
+            dropped: 0,
+            invalid: 0,
+            chi2: 0.0,
+        }
+    };
+    let prior = match prior {
+        Ok(p) => p,
+        Err(f) => return fallback(f, None, 0),
+    };
+    if prev.len() < 2 || curr.len() < 2 {
+        return fallback(Failure::TooFewFeatures, prior.as_ref(), 0);
+    }
+    let mut top = Top::new();
+    let hypotheses = hypothesise(prev, curr, prior.as_ref(), cfg, &mut top);
+    if top.n == 0 {
+        return fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses);
+    }
+    // Refine the best few; keep the best refined and the best distinct runner-up.
+    let mut best: Option<Refined> = None;
+    let mut second_score = 0.0f32;
+    for h in top.items() {
+        let r = refine(prev, curr, h.pose, prior.as_ref(), cfg);
+        if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
+            continue;
+        }
+        match &best {
+            Some(b) if !better(&r, b) => {
+                if !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
+                    second_score = second_score.max(r.score);
+                }
+            }
+            _ => {
+                if let Some(b) = &best {
+                    if !close(&r.pose, &b.pose, &r.cov_scene_pinv) {
+                        second_score = second_score.max(b.score);
+                    }
+                }
+                best = Some(r);
+            }
+        }
+    }
+    let Some(best) = best else {
+        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+    };
+    let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
+    if matched < cfg.min_matches {
+        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+    }
+    if !(best.score > cfg.min_score) {
+        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+    }
+    if second_score >= cfg.ambiguity * best.score {
+        return fallback(Failure::Ambiguous, prior.as_ref(), hypotheses);
+    }
+    // Associations of the best, for the odometry's map.
+    let mut w = Work::new(prev, curr, cfg, None);
+    w.associate(&best.pose, 0.0, Some(assoc));
+    let status = match best.unobservable {
+        Some(direction) => Status::Degenerate { direction },
+        None => Status::Ok,
+    };
+    Registration {
+        rel: best.pose,
+        cov: best.cov,
+        status,
+        matches: best.matches,
+        hypotheses,
+        dropped: 0,
+        invalid: 0,
+        chi2: best.chi2,
+    }
+}
+
+/// True when `a` should be preferred to `b`: a higher score, or (within 1 %) a smaller motion.
+fn better(a: &Refined, b: &Refined) -> bool {
+    if a.score > b.score * 1.01 {
+        return true;
+    }
+    if b.score > a.score * 1.01 {
+        return false;
+    }
+    let size = |p: &Pose| libm::hypotf(p.x, p.y) + ROTATION_SCALE * p.theta.abs();
+    size(&a.pose) < size(&b.pose)
+}
+
+/// True when `a` lies within the 99.9 % ellipsoid of `b` (or within 50 mm and 1°).
+fn close(a: &Pose, b: &Pose, cov: &Cov3) -> bool {
+    let d = [a.x - b.x, a.y - b.y, wrap(a.theta - b.theta)];
+    if libm::hypotf(d[0], d[1]) < 50.0 && d[2].abs() < 0.0175 {
+        return true;
+    }
+    match inverse_spd3(cov) {
+        Some(info) => quad3(&info, &d) < 16.27,
+        None => false,
+    }
+}
+
+fn quad3(m: &Cov3, d: &[f32; 3]) -> f32 {
+    let mut s = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            s += d[i] * m[i][j] * d[j];
+        }
+    }
+    s
+}

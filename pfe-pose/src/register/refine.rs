@@ -1,0 +1,434 @@
+//! Steps 2–4: association with Mahalanobis gates, consensus score, Gauss–Newton, covariance
+//! and degeneracy.
+
+use core::f32::consts::PI;
+
+use super::visibility::visibility_penalty;
+use super::{Assoc, Config, Prior, ITERATIONS, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE};
+use crate::geom::{eigen_sym3, inverse_spd3, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
+use crate::set::{Line, Set, MAX_OBS};
+
+/// A hypothesis after Gauss–Newton.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Refined {
+    pub(super) pose: Pose,
+    pub(super) cov: Cov3,
+    /// Pseudo-inverse of the scene's information (for "distinct" tests).
+    pub(super) cov_scene_pinv: Cov3,
+    pub(super) score: f32,
+    pub(super) chi2: f32,
+    pub(super) matches: (u16, u16),
+    pub(super) unobservable: Option<[f32; 3]>,
+}
+
+/// Normal equations of one association.
+pub(super) struct Normal {
+    pub(super) h: Cov3,
+    pub(super) g: [f32; 3],
+    pub(super) chi2: f32,
+    pub(super) score: f32,
+    pub(super) lines: u16,
+    pub(super) pts: u16,
+}
+
+/// The data of one registration.
+pub(super) struct Work<'a> {
+    prev: &'a Set,
+    curr: &'a Set,
+    cfg: &'a Config,
+    #[allow(dead_code)]
+    prior: Option<&'a Prior>,
+    /// Each match's information `Jᵀ W J` in the last association.
+    contrib: [Cov3; 2 * MAX_OBS],
+    /// Whether each match is trusted without confirmation (both segments long).
+    trusted: [bool; 2 * MAX_OBS],
+    nc: usize,
+}
+
+impl<'a> Work<'a> {
+    pub(super) fn new(
+        prev: &'a Set,
+        curr: &'a Set,
+        cfg: &'a Config,
+        prior: Option<&'a Prior>,
+    ) -> Self {
+        Self {
+            prev,
+            curr,
+            cfg,
+            prior,
+            contrib: [ZERO3; 2 * MAX_OBS],
+            trusted: [false; 2 * MAX_OBS],
+            nc: 0,
+        }
+    }
+
+    /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
+    /// with `slack` times the configured slack), and the normal equations of those matches.
+    pub(super) fn associate(
+        &mut self,
+        pose: &Pose,
+        slack: f32,
+        mut out: Option<&mut Assoc>,
+    ) -> Normal {
+        let cfg = self.cfg;
+        let mut n = Normal {
+            h: ZERO3,
+            g: [0.0; 3],
+            chi2: 0.0,
+            score: 0.0,
+            lines: 0,
+            pts: 0,
+        };
+        let gate = cfg.gate;
+        self.nc = 0;
+        let (x, y) = (pose.x, pose.y);
+        let (st, ct) = sin_cos(pose.theta);
+        let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
+        for (k, lk) in self.curr.lines().iter().enumerate() {
+            let a = lk.a + pose.theta;
+            let (sa, ca) = sin_cos(a);
+            let r = lk.r + x * ca + y * sa;
+            let h = -x * sa + y * ca;
+            // Covariance of the transformed line.
+            let ct_ = Sym2 {
+                a: lk.cov.a,
+                b: lk.cov.b + h * lk.cov.a,
+                c: lk.cov.c + 2.0 * h * lk.cov.b + h * h * lk.cov.a,
+            };
+            let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
+            let ext = lk
+                .ext
+                .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)));
+            let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
+            for (i, li) in self.prev.lines().iter().enumerate() {
+                let dcos = libm::cosf(a - li.a);
+                let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
+                let ea = if sign > 0.0 {
+                    wrap(a - li.a)
+                } else {
+                    wrap(a + PI - li.a)
+                };
+                let var_a = ct_.a + li.cov.a + sa2;
+                if ea * ea > gate * var_a {
+                    continue;
+                }
+                let er = sign * r - li.r;
+                let var_r = ct_.c + li.cov.c + sr * sr;
+                if er * er > gate * var_r {
+                    continue;
+                }
+                let s = Sym2 {
+                    a: var_a,
+                    b: sign * ct_.b + li.cov.b,
+                    c: var_r,
+                };
+                let Some(w) = s.inverse() else { continue };
+                let e = [ea, er];
+                let d2 = w.quad(e);
+                if !(d2 < gate) {
+                    continue;
+                }
+                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr) else {
+                    continue;
+                };
+                if best.is_none_or(|b| d2 < b.0) {
+                    let Ok(iu) = u8::try_from(i) else { continue };
+                    best = Some((d2, iu, e, w, sign, frac));
+                }
+            }
+            if let Some(o) = out.as_deref_mut() {
+                if let Some(slot) = o.lines.get_mut(k) {
+                    *slot = best.map_or(NONE, |b| b.1);
+                }
+            }
+            let Some((d2, i, e, w, sign, frac)) = best else {
+                continue;
+            };
+            let length = |ext: Option<([f32; 2], [f32; 2])>| {
+                ext.map_or(0.0, |(s, e)| libm::hypotf(e[0] - s[0], e[1] - s[1]))
+            };
+            let prev_len = self
+                .prev
+                .lines()
+                .get(usize::from(i))
+                .map_or(0.0, |l| length(l.ext));
+            let trusted = length(lk.ext).min(prev_len) >= cfg.trusted_length;
+            n.lines += 1;
+            n.score += (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
+            n.chi2 += d2;
+            // Jacobian rows: e_α = [0, 0, 1]; e_ρ = sign · [cos a, sin a, h].
+            let ja = [0.0, 0.0, 1.0];
+            let jr = [sign * ca, sign * sa, sign * h];
+            let hi = accumulate(&mut n, &ja, &jr, &w, &e);
+            self.record(hi, trusted);
+        }
+        for (k, pk) in self.curr.pts().iter().enumerate() {
+            let q = pose.transform_point(pk.p);
+            let cq = pk.cov.rotate(st, ct);
+            let reach = libm::hypotf(pk.p[0], pk.p[1]);
+            let sr = slack * (cfg.slack[1] + cfg.slack[2] * reach);
+            let mut best: Option<(f32, u8, [f32; 2], Sym2)> = None;
+            for (i, pi) in self.prev.pts().iter().enumerate() {
+                let e = [q[0] - pi.p[0], q[1] - pi.p[1]];
+                let s = cq.add(pi.cov).add(Sym2 {
+                    a: sr * sr,
+                    b: 0.0,
+                    c: sr * sr,
+                });
+                if e[0] * e[0] > gate * s.a || e[1] * e[1] > gate * s.c {
+                    continue;
+                }
+                let Some(w) = s.inverse() else { continue };
+                let d2 = w.quad(e);
+                if d2 < gate && best.is_none_or(|b| d2 < b.0) {
+                    let Ok(iu) = u8::try_from(i) else { continue };
+                    best = Some((d2, iu, e, w));
+                }
+            }
+            if let Some(o) = out.as_deref_mut() {
+                if let Some(slot) = o.pts.get_mut(k) {
+                    *slot = best.map_or(NONE, |b| b.1);
+                }
+            }
+            let Some((d2, _, e, w)) = best else { continue };
+            n.pts += 1;
+            n.score += 1.0 - d2 / gate;
+            n.chi2 += d2;
+            let jx = [1.0, 0.0, -st * pk.p[0] - ct * pk.p[1]];
+            let jy = [0.0, 1.0, ct * pk.p[0] - st * pk.p[1]];
+            let hi = accumulate(&mut n, &jx, &jy, &w, &e);
+            self.record(hi, false);
+        }
+        n
+    }
+}
+
+impl Work<'_> {
+    fn record(&mut self, hi: Cov3, trusted: bool) {
+        if let (Some(slot), Some(t)) =
+            (self.contrib.get_mut(self.nc), self.trusted.get_mut(self.nc))
+        {
+            *slot = hi;
+            *t = trusted;
+            self.nc += 1;
+        }
+    }
+
+    /// The information of the last association without its most critical match: the one
+    /// whose removal leaves the smallest least eigenvalue (scaled units). A direction that
+    /// one match alone determines is not confirmed by any other.
+    fn without_critical(&self, h: &Cov3) -> Cov3 {
+        let mut worst = *h;
+        let mut least = f32::INFINITY;
+        for (hi, _) in self
+            .contrib
+            .iter()
+            .zip(&self.trusted)
+            .take(self.nc)
+            .filter(|(_, &t)| !t)
+        {
+            let mut r = *h;
+            for (row, hr) in r.iter_mut().zip(hi) {
+                for (v, x) in row.iter_mut().zip(hr) {
+                    *v -= x;
+                }
+            }
+            let l = eigen_sym3(&to_scaled_info(&r)).0[0];
+            if l < least {
+                least = l;
+                worst = r;
+            }
+        }
+        worst
+    }
+}
+
+/// `H += Jᵀ W J`, `g += Jᵀ W e` for a 2-row residual with rows `j0`, `j1`; returns the
+/// match's `Jᵀ W J`.
+fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 2]) -> Cov3 {
+    let mut hi = ZERO3;
+    // W J: rows.
+    let mut wj0 = [0.0f32; 3];
+    let mut wj1 = [0.0f32; 3];
+    for c in 0..3 {
+        wj0[c] = w.a * j0[c] + w.b * j1[c];
+        wj1[c] = w.b * j0[c] + w.c * j1[c];
+    }
+    for r in 0..3 {
+        for c in 0..3 {
+            hi[r][c] = j0[r] * wj0[c] + j1[r] * wj1[c];
+            n.h[r][c] += hi[r][c];
+        }
+        n.g[r] += wj0[r] * e[0] + wj1[r] * e[1];
+    }
+    hi
+}
+
+/// `None` when the segment `ext` (in the previous frame) and `li`'s segment are farther apart
+/// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
+/// when either has no extent).
+fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f32> {
+    let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
+        return Some(1.0);
+    };
+    let (sa, ca) = sin_cos(li.a);
+    let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
+    let (a0, a1) = (along(s), along(e));
+    let (b0, b1) = (along(ps), along(pe));
+    let (alo, ahi) = (a0.min(a1), a0.max(a1));
+    let (blo, bhi) = (b0.min(b1), b0.max(b1));
+    let gap = alo.max(blo) - ahi.min(bhi);
+    if !(gap <= slack) {
+        return None;
+    }
+    let shorter = (ahi - alo).min(bhi - blo).max(1.0);
+    Some((-gap / shorter).clamp(0.0, 1.0))
+}
+
+/// Scales to put θ in mm: (1, 1, [`ROTATION_SCALE`]).
+const SCALE: [f32; 3] = [1.0, 1.0, ROTATION_SCALE];
+
+fn to_scaled_info(h: &Cov3) -> Cov3 {
+    let mut r = ZERO3;
+    for i in 0..3 {
+        for j in 0..3 {
+            r[i][j] = h[i][j] / (SCALE[i] * SCALE[j]);
+        }
+    }
+    r
+}
+
+fn from_scaled_cov(c: &Cov3) -> Cov3 {
+    let mut r = ZERO3;
+    for i in 0..3 {
+        for j in 0..3 {
+            r[i][j] = c[i][j] / (SCALE[i] * SCALE[j]);
+        }
+    }
+    r
+}
+
+/// Gauss–Newton from `start`.
+pub(super) fn refine(
+    prev: &Set,
+    curr: &Set,
+    start: Pose,
+    prior: Option<&Prior>,
+    cfg: &Config,
+) -> Refined {
+    let mut w = Work::new(prev, curr, cfg, prior);
+    let mut pose = start;
+    let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
+    let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
+    for it in 0..ITERATIONS {
+        let slack = slacks.get(it).copied().unwrap_or(0.0);
+        let mut n = w.associate(&pose, slack, None);
+        if let Some(p) = prior {
+            add_prior(&mut n, &pose, p);
+        }
+        let hs = to_scaled_info(&n.h);
+        let gs = [n.g[0], n.g[1], n.g[2] / ROTATION_SCALE];
+        let (vals, vecs) = eigen_sym3(&hs);
+        let floor = if prior.is_some() {
+            vals[2] * 1e-7
+        } else {
+            limit.max(vals[2] * 1e-7)
+        };
+        let mut step = [0.0f32; 3];
+        for (l, v) in vals.iter().zip(&vecs) {
+            if !(*l > floor) {
+                continue;
+            }
+            let c = (v[0] * gs[0] + v[1] * gs[1] + v[2] * gs[2]) / l;
+            for (s, vi) in step.iter_mut().zip(v) {
+                *s -= c * vi;
+            }
+        }
+        let step_theta = step[2] / ROTATION_SCALE;
+        if !(step[0].is_finite() && step[1].is_finite() && step_theta.is_finite()) {
+            break;
+        }
+        pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
+        let small = libm::hypotf(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
+        if small && slack == 0.0 {
+            break;
+        }
+    }
+    // Final association, covariance and status.
+    let mut n = w.associate(&pose, 0.0, None);
+    let (vals, vecs) = eigen_sym3(&to_scaled_info(&n.h));
+    if cfg.confirm && vals[0] > limit {
+        // A direction only one match determines is taken as unobservable.
+        let robust = w.without_critical(&n.h);
+        if !(eigen_sym3(&to_scaled_info(&robust)).0[0] > limit) {
+            n.h = robust;
+        }
+    }
+    let (vals, vecs) = if cfg.confirm {
+        eigen_sym3(&to_scaled_info(&n.h))
+    } else {
+        (vals, vecs)
+    };
+    let unobservable = (!(vals[0] > limit)).then_some(vecs[0]);
+    let m = usize::from(n.lines) * 2 + usize::from(n.pts) * 2;
+    let factor = if cfg.scale_by_residuals && m > 3 {
+        (n.chi2 / (m - 3) as f32).max(1.0)
+    } else {
+        1.0
+    };
+    // Scene-only pseudo-inverse (sentinel on the unobservable directions).
+    let mut pinv = ZERO3;
+    for (l, v) in vals.iter().zip(&vecs) {
+        let var = if *l > limit {
+            (factor / l).min(UNOBSERVABLE_VARIANCE)
+        } else {
+            UNOBSERVABLE_VARIANCE
+        };
+        for i in 0..3 {
+            for j in 0..3 {
+                pinv[i][j] += var * v[i] * v[j];
+            }
+        }
+    }
+    let cov_scene = from_scaled_cov(&pinv);
+    let cov = match prior {
+        Some(p) => {
+            let mut h = n.h;
+            for r in h.iter_mut() {
+                for v in r.iter_mut() {
+                    *v /= factor;
+                }
+            }
+            let h = crate::geom::add3(&h, &p.info);
+            inverse_spd3(&h).unwrap_or(p.cov)
+        }
+        None => cov_scene,
+    };
+    let penalty = if cfg.visibility_weight > 0.0 {
+        cfg.visibility_weight * visibility_penalty(prev, curr, &pose)
+    } else {
+        0.0
+    };
+    Refined {
+        pose,
+        cov,
+        cov_scene_pinv: cov_scene,
+        score: n.score - penalty,
+        chi2: n.chi2,
+        matches: (n.lines, n.pts),
+        unobservable,
+    }
+}
+
+fn add_prior(n: &mut Normal, pose: &Pose, p: &Prior) {
+    let e = [
+        pose.x - p.pose.x,
+        pose.y - p.pose.y,
+        wrap(pose.theta - p.pose.theta),
+    ];
+    n.h = crate::geom::add3(&n.h, &p.info);
+    for (g, row) in n.g.iter_mut().zip(&p.info) {
+        *g += row[0] * e[0] + row[1] * e[1] + row[2] * e[2];
+    }
+}
