@@ -2,14 +2,17 @@
 //! its actions carried out on an `embedded-io-async` UART and an `embedded-hal-async` delay
 //! (embassy's `RingBufferedUartRx` / `BufferedUart` and `embassy_time::Delay`, for instance).
 //!
-//! Waiting for bytes: where the blocking driver asks `ReadReady` and then sleeps half a
-//! character, this one reads with a timeout of that same interval ([`read_with_timeout`]: the
-//! read and the delay polled together in one `core::future::poll_fn`, the first to finish
-//! wins; no executor or embassy dependency). So the machine sees the same "nothing yet" at the
-//! same moments and both drivers take the same decisions; bytes that come sooner end the wait
-//! sooner. The UART's `read` must therefore be cancel-safe (a read dropped unfinished loses no
-//! byte), as embassy's ring-buffered and buffered UARTs are; a plain DMA read into the
-//! caller's buffer is not.
+//! Waiting for bytes, without `select!` or an executor dependency: where the blocking driver
+//! asks `ReadReady` and then sleeps, this one polls a read once ([`Action::Read`]: ready at
+//! once, or nothing is available) and, when the machine then idles, waits for bytes with a
+//! timeout ([`read_with_timeout`]: the delay and the read polled together in one
+//! `core::future::poll_fn`, the first to finish wins), so the wait ends as soon as a byte
+//! arrives. The machine sees "nothing yet" at the same moments as under the blocking driver,
+//! so both drivers take the same decisions on the same line. A read that finished during the
+//! idle wait is handed to the machine at its next [`Action::Read`]. The UART's `read` must be
+//! cancel-safe (a read dropped unfinished loses no byte), as embassy's ring-buffered
+//! (`RingBufferedUartRx`) and buffered UARTs are; a plain DMA read into the caller's buffer is
+//! not.
 
 use embedded_hal_async::delay::DelayNs;
 use embedded_io::ErrorType;
@@ -52,6 +55,8 @@ pub struct AsyncDriver<U, D, C> {
     delay: D,
     clock: C,
     machine: Machine,
+    /// Bytes read into the machine's receive buffer during an idle wait, not yet reported.
+    early: Option<usize>,
 }
 
 impl<U, D, C> AsyncDriver<U, D, C>
@@ -68,6 +73,7 @@ where
             delay,
             clock,
             machine: Machine::new(config),
+            early: None,
         }
     }
 
@@ -127,34 +133,27 @@ where
     /// Carries out the machine's actions until `request` ends.
     async fn run(&mut self, request: Request) -> Result<(), Error<U::Error>> {
         self.machine.start(request);
-        // The last read waited its whole interval: the idle wait that follows is spent.
-        let mut waited = false;
         loop {
             let now = self.clock.now_ms();
-            let idle_us = self.machine.poll_interval_us();
             let io = match self.machine.step(now) {
                 Action::Write(bytes) => write_all(&mut self.uart, bytes).await,
                 Action::SetBaud(bps) => self.uart.set_baud(bps).await.map_err(Error::Io),
                 Action::Read => {
+                    let n = match self.early.take() {
+                        Some(n) => Ok(n),
+                        None => read_now(&mut self.uart, self.machine.rx_buffer()).await,
+                    };
+                    n.map(|n| self.machine.received(n)).map_err(Error::Io)
+                }
+                Action::Idle(us) => {
                     let buf = self.machine.rx_buffer();
-                    match read_with_timeout(&mut self.uart, buf, &mut self.delay, idle_us).await {
-                        Ok(Some(n)) => {
-                            self.machine.received(n);
-                            Ok(())
-                        }
-                        Ok(None) => {
-                            self.machine.received(0);
-                            waited = true;
+                    match read_with_timeout(&mut self.uart, buf, &mut self.delay, us).await {
+                        Ok(n) => {
+                            self.early = n;
                             Ok(())
                         }
                         Err(e) => Err(Error::Io(e)),
                     }
-                }
-                Action::Idle(us) => {
-                    if !core::mem::take(&mut waited) {
-                        self.delay.delay_us(us).await;
-                    }
-                    Ok(())
                 }
                 Action::Wait(ms) => {
                     self.delay.delay_ms(ms).await;
@@ -171,6 +170,17 @@ where
     }
 }
 
+/// The bytes available now: a read polled once, 0 when it is not ready at once (the read is
+/// then dropped: it must be cancel-safe).
+async fn read_now<U: Read>(uart: &mut U, buf: &mut [u8]) -> Result<usize, U::Error> {
+    let mut read = pin!(uart.read(buf));
+    poll_fn(|cx| match read.as_mut().poll(cx) {
+        Poll::Ready(r) => Poll::Ready(r),
+        Poll::Pending => Poll::Ready(Ok(0)),
+    })
+    .await
+}
+
 async fn write_all<U: Write>(uart: &mut U, mut buf: &[u8]) -> Result<(), Error<U::Error>> {
     while !buf.is_empty() {
         match uart.write(buf).await {
@@ -183,7 +193,8 @@ async fn write_all<U: Write>(uart: &mut U, mut buf: &[u8]) -> Result<(), Error<U
 }
 
 /// Reads into `buf`, waiting at most `timeout_us`: `Ok(Some(n))` when the read finished first,
-/// `Ok(None)` when the delay did (the read is then dropped: it must be cancel-safe).
+/// `Ok(None)` when the delay did (the read is then dropped: it must be cancel-safe). The delay
+/// is polled first, so a delay that is over at once ends the wait without a read.
 ///
 /// ```
 /// # fn block_on<F: core::future::Future>(f: F) -> F::Output {
@@ -191,14 +202,25 @@ async fn write_all<U: Write>(uart: &mut U, mut buf: &[u8]) -> Result<(), Error<U
 /// #     let mut cx = core::task::Context::from_waker(core::task::Waker::noop());
 /// #     loop { if let core::task::Poll::Ready(v) = f.as_mut().poll(&mut cx) { return v; } }
 /// # }
-/// struct NoDelay;
-/// impl embedded_hal_async::delay::DelayNs for NoDelay {
-///     async fn delay_ns(&mut self, _: u32) {}
+/// /// A delay that is pending once, then over.
+/// struct OnePoll;
+/// impl embedded_hal_async::delay::DelayNs for OnePoll {
+///     async fn delay_ns(&mut self, _: u32) {
+///         let mut polled = false;
+///         core::future::poll_fn(|_| {
+///             if core::mem::replace(&mut polled, true) {
+///                 core::task::Poll::Ready(())
+///             } else {
+///                 core::task::Poll::Pending
+///             }
+///         })
+///         .await
+///     }
 /// }
-/// // A read that has bytes at once wins over the delay.
+/// // A read that has bytes at once wins over a delay still running.
 /// let mut uart: &[u8] = &[1, 2, 3];
 /// let mut buf = [0u8; 8];
-/// let r = block_on(lms2xx::driver::read_with_timeout(&mut uart, &mut buf, &mut NoDelay, 100));
+/// let r = block_on(lms2xx::driver::read_with_timeout(&mut uart, &mut buf, &mut OnePoll, 100));
 /// assert_eq!(r, Ok(Some(3)));
 /// ```
 pub async fn read_with_timeout<U: Read, D: DelayNs>(
@@ -210,13 +232,10 @@ pub async fn read_with_timeout<U: Read, D: DelayNs>(
     let mut read = pin!(uart.read(buf));
     let mut timer = pin!(delay.delay_us(timeout_us));
     poll_fn(|cx| {
-        if let Poll::Ready(r) = read.as_mut().poll(cx) {
-            return Poll::Ready(r.map(Some));
-        }
         if timer.as_mut().poll(cx).is_ready() {
             return Poll::Ready(Ok(None));
         }
-        Poll::Pending
+        read.as_mut().poll(cx).map(|r| r.map(Some))
     })
     .await
 }
