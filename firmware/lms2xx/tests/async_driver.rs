@@ -34,16 +34,31 @@ fn block_on<F: Future>(f: F) -> F::Output {
     panic!("future pending for a million polls");
 }
 
+// The async traits are embedded-io 0.7's (embassy's), whose errors are `core::error::Error`s.
+impl core::fmt::Display for E {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("mock UART error")
+    }
+}
+impl std::error::Error for E {}
+impl embedded_io_async::Error for E {
+    fn kind(&self) -> embedded_io_async::ErrorKind {
+        embedded_io_async::ErrorKind::Other
+    }
+}
+
 /// A blocking UART seen through the async traits: a read with nothing available is pending
 /// (as on a real async UART) until bytes arrive, which in simulated time happens only when a
 /// delay advances it.
 struct Async<T>(T);
 
-impl<T: embedded_io::ErrorType> embedded_io::ErrorType for Async<T> {
-    type Error = T::Error;
+impl<T: embedded_io::ErrorType<Error = E>> embedded_io_async::ErrorType for Async<T> {
+    type Error = E;
 }
-impl<T: embedded_io::Read + embedded_io::ReadReady> embedded_io_async::Read for Async<T> {
-    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, T::Error> {
+impl<T: embedded_io::Read + embedded_io::ReadReady + embedded_io::ErrorType<Error = E>>
+    embedded_io_async::Read for Async<T>
+{
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, E> {
         poll_fn(|_| match self.0.read_ready() {
             Ok(true) => Poll::Ready(self.0.read(buf)),
             Ok(false) => Poll::Pending,
@@ -52,16 +67,18 @@ impl<T: embedded_io::Read + embedded_io::ReadReady> embedded_io_async::Read for 
         .await
     }
 }
-impl<T: embedded_io::Write> embedded_io_async::Write for Async<T> {
-    async fn write(&mut self, buf: &[u8]) -> Result<usize, T::Error> {
+impl<T: embedded_io::Write + embedded_io::ErrorType<Error = E>> embedded_io_async::Write
+    for Async<T>
+{
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, E> {
         self.0.write(buf)
     }
-    async fn flush(&mut self) -> Result<(), T::Error> {
+    async fn flush(&mut self) -> Result<(), E> {
         self.0.flush()
     }
 }
-impl<T: SetBaud> AsyncSetBaud for Async<T> {
-    async fn set_baud(&mut self, baud: u32) -> Result<(), T::Error> {
+impl<T: SetBaud + embedded_io::ErrorType<Error = E>> AsyncSetBaud for Async<T> {
+    async fn set_baud(&mut self, baud: u32) -> Result<(), E> {
         self.0.set_baud(baud)
     }
 }
@@ -324,7 +341,7 @@ fn async_and_blocking_agree_under_faults() {
 /// A UART that takes writes and never receives: no device at any rate, in bounded (simulated)
 /// time, with the blocking driver's counts (lms_driver.rs: 3 rounds over 4 rates, 1 s each).
 struct Dead(u32);
-impl embedded_io::ErrorType for Dead {
+impl embedded_io_async::ErrorType for Dead {
     type Error = E;
 }
 impl embedded_io_async::Read for Dead {
@@ -335,6 +352,9 @@ impl embedded_io_async::Read for Dead {
 impl embedded_io_async::Write for Dead {
     async fn write(&mut self, b: &[u8]) -> Result<usize, E> {
         Ok(if self.0 == 0 { 0 } else { b.len() })
+    }
+    async fn flush(&mut self) -> Result<(), E> {
+        Ok(())
     }
 }
 impl AsyncSetBaud for Dead {

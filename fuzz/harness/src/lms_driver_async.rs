@@ -31,6 +31,10 @@ fn block_on<F: Future>(f: F) -> F::Output {
     panic!("the async driver stayed pending");
 }
 
+impl embedded_io_async::ErrorType for Mock {
+    type Error = Infallible;
+}
+
 impl embedded_io_async::Read for Mock {
     async fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
         poll_fn(|_| {
@@ -47,6 +51,9 @@ impl embedded_io_async::Read for Mock {
 impl embedded_io_async::Write for Mock {
     async fn write(&mut self, buf: &[u8]) -> Result<usize, Infallible> {
         embedded_io::Write::write(self, buf)
+    }
+    async fn flush(&mut self) -> Result<(), Infallible> {
+        Ok(())
     }
 }
 

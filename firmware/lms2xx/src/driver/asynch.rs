@@ -15,7 +15,7 @@
 //! not.
 
 use embedded_hal_async::delay::DelayNs;
-use embedded_io::ErrorType;
+use embedded_io_async::ErrorType;
 use embedded_io_async::{Read, Write};
 
 use core::future::{poll_fn, Future};
