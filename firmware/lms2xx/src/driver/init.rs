@@ -78,7 +78,7 @@ impl Machine {
                         .filter(|_| usize::from(i) < self.probe_len)
                     else {
                         self.init = S::Probe {
-                            round: round + 1,
+                            round: round.saturating_add(1),
                             i: 0,
                         };
                         continue;
@@ -103,7 +103,10 @@ impl Machine {
                         }
                     }
                     Err(Error::Timeout { .. } | Error::Nak { .. } | Error::DeviceReset) => {
-                        self.init = S::Probe { round, i: i + 1 };
+                        self.init = S::Probe {
+                            round,
+                            i: i.saturating_add(1),
+                        };
                     }
                     Err(e) => return Sub::Finished(Err(e)),
                 },

@@ -540,7 +540,9 @@ impl Machine {
                     if i.saturating_add(1) >= self.txn_tries {
                         return Sub::Finished(Err(e));
                     }
-                    self.txn = Txn::Send { i: i + 1 };
+                    self.txn = Txn::Send {
+                        i: i.saturating_add(1),
+                    };
                 }
                 Err(e) => return Sub::Finished(Err(e)),
             }

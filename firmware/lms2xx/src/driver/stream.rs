@@ -138,7 +138,7 @@ impl Machine {
                 }
                 self.init = super::init::InitStep::Start;
                 self.op = Op::NextScan {
-                    reinits: reinits + 1,
+                    reinits: reinits.saturating_add(1),
                     initing: true,
                 };
                 continue;
