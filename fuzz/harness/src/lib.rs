@@ -16,9 +16,11 @@
 #![deny(missing_docs)]
 
 pub mod lms_driver;
+pub mod lms_driver_async;
 pub mod seeds;
 
 pub use lms_driver::lms_driver;
+pub use lms_driver_async::lms_driver_async;
 
 use std::io::Cursor;
 
