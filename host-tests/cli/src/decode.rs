@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use super::input::{flush, guess, open, stdout, write_json};
+use super::input::{flush, guess, nothing_found, open, shown, stdout, write_json};
 use super::Failure;
 use pfe_formats::{lms200, Format};
 
@@ -61,6 +61,10 @@ pub fn run(a: Args) -> Result<(), Failure> {
     flush(&mut out)?;
     bar.finish_and_clear();
     let s = reader.summary();
+    let bytes = input.bytes.load(std::sync::atomic::Ordering::Relaxed);
+    if bytes == 0 && error.is_none() {
+        return Err(nothing_found(file, format, "LMS200 telegram", 0));
+    }
     eprintln!(
         "pfe: {} bytes: {} telegrams good, {} dropped for CRC, {} bytes skipped \
          ({} dropped for length, {} malformed B0, {} B0 of an unknown value count, {} other telegrams)",
@@ -76,14 +80,14 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if let Some(e) = error {
         return Err(e);
     }
-    if s.good == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+    if s.good == 0 {
         let hint = match guess(file, format) {
             Some(g) => format!("; is it {g}? try pfe extract --format {g}"),
             None => String::new(),
         };
         return Err(Failure::input(format!(
-            "{}: no LMS200 telegram found in it{hint}",
-            file.display()
+            "no LMS200 telegram found in {}{hint}",
+            shown(file)
         )));
     }
     Ok(())

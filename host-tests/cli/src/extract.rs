@@ -125,8 +125,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if let Some(e) = error {
         return Err(e);
     }
-    if scans == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
-        return Err(nothing_found(file, format, "scan"));
+    if scans == 0 {
+        let bytes = input.bytes.load(std::sync::atomic::Ordering::Relaxed);
+        return Err(nothing_found(file, format, "scan", bytes));
     }
     let s = t0.elapsed().as_secs_f64();
     eprintln!(

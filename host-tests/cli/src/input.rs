@@ -245,16 +245,28 @@ pub fn guess(file: &Path, format: Format) -> Option<Format> {
         })
 }
 
-/// Bad input for non-empty input in which `format` found nothing (`what`: "scan",
-/// "telegram"), with a guess at the right format when another one reads a scan from it.
-pub fn nothing_found(file: &Path, format: Format, what: &str) -> Failure {
+/// The name of `file` in messages: `stdin` for `-`.
+pub fn shown(file: &Path) -> String {
+    if file.as_os_str() == "-" {
+        "stdin".to_string()
+    } else {
+        file.display().to_string()
+    }
+}
+
+/// Bad input for input in which `format` found nothing (`what`: "scan", "telegram"): empty
+/// input says so; otherwise the message suggests another format that reads a scan from it.
+pub fn nothing_found(file: &Path, format: Format, what: &str, bytes: u64) -> Failure {
+    if bytes == 0 {
+        return Failure::input(format!("no {what} found in {}: it is empty", shown(file)));
+    }
     let hint = match guess(file, format) {
         Some(g) => format!("is it {g}? try --format {g}"),
         None => "is --format right? (csv, carmen, hokuyo, lms200, mcap)".to_string(),
     };
     Failure::input(format!(
-        "{}: no {what} found in it as {format}; {hint}",
-        file.display()
+        "no {what} found in {} as {format}; {hint}",
+        shown(file)
     ))
 }
 

@@ -1,0 +1,80 @@
+//! The `pfe` CLI without surprises (issue 41): input with no scan is an error, outputs go only
+//! into directories that exist, arguments outside what the help lists are refused at parse
+//! time, the same kind of failure has the same exit code everywhere, a capture holds the scans
+//! reported, nothing is written where the user did not say, and the help is plain text with
+//! every option listed.
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
+
+#[path = "../../tests/common/mod.rs"]
+mod common;
+use common::{arg, fixture, pfe, spawn_pfe, stderr, TempDir};
+
+/// One line on stderr, exit 2, nothing on stdout, and the line names `name`.
+fn assert_no_scan(args: &[&str], out: &std::process::Output, name: &str) {
+    let e = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {e}");
+    assert!(out.stdout.is_empty(), "{args:?}");
+    assert_eq!(e.trim_end().lines().count(), 1, "{args:?}: {e}");
+    assert!(
+        e.contains("no ") && e.contains(" found in "),
+        "{args:?}: {e}"
+    );
+    assert!(e.contains(name), "{args:?}: {e}");
+}
+
+#[test]
+fn input_with_no_scan_exits_2_naming_the_file() {
+    let dir = TempDir::new("surprise-empty");
+    let empty = dir.0.join("empty.txt");
+    std::fs::write(&empty, "").unwrap();
+    // A valid bag with no message at all.
+    let bag = dir.0.join("empty.mcap");
+    let mut buf = std::io::Cursor::new(Vec::new());
+    common::mcap_writer(&mut buf, 4096).finish().unwrap();
+    std::fs::write(&bag, buf.into_inner()).unwrap();
+    let garbage = dir.0.join("garbage.mcap");
+    std::fs::write(&garbage, "not a bag\n").unwrap();
+    let e = arg(&empty);
+    for (args, name) in [
+        (
+            vec!["extract", "--format", "carmen", "/dev/null"],
+            "/dev/null",
+        ),
+        (vec!["extract", "--format", "csv", e], e),
+        (vec!["extract", "--format", "hokuyo", e], e),
+        (vec!["extract", "--format", "lms200", e], e),
+        (vec!["decode", e], e),
+        (vec!["decode", "/dev/null"], "/dev/null"),
+        (
+            vec![
+                "plot",
+                "--format",
+                "csv",
+                e,
+                "--scan",
+                "0",
+                "-o",
+                "/dev/null",
+            ],
+            e,
+        ),
+    ] {
+        assert_no_scan(&args, &pfe(&args), name);
+    }
+    // An empty stdin is named as such.
+    for args in [vec!["extract", "--format", "csv", "-"], vec!["decode", "-"]] {
+        let child = spawn_pfe(&args);
+        let out = child.wait_with_output().unwrap();
+        assert_no_scan(&args, &out, "stdin");
+    }
+    // Bags: empty, not a bag, or no bytes at all (already exit 2; kept so).
+    for b in [&bag, &garbage, &empty] {
+        let out = pfe(&["extract", "--format", "mcap", arg(b)]);
+        assert_eq!(out.status.code(), Some(2), "{b:?}: {}", stderr(&out));
+        assert!(stderr(&out).contains(arg(b)), "{}", stderr(&out));
+    }
+    // realdata on an empty log: exit 2, the log named (already so).
+    let out = pfe(&["realdata", e]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains(e), "{}", stderr(&out));
+}
