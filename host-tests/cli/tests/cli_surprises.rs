@@ -78,3 +78,66 @@ fn input_with_no_scan_exits_2_naming_the_file() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains(e), "{}", stderr(&out));
 }
+
+/// The data sets of a `pfe bench --json` run.
+fn bench_datasets(out: &std::process::Output) -> Vec<String> {
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    report["datasets"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d["dataset"].as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn bench_reads_carmen_logs_only_from_carmen_dir() {
+    let dir = TempDir::new("surprise-bench");
+    // `../shared/data/carmen` as seen from `cwd`: no longer read unless named.
+    let cwd = dir.0.join("cwd");
+    let logs = dir.0.join("shared/data/carmen");
+    std::fs::create_dir_all(&cwd).unwrap();
+    std::fs::create_dir_all(&logs).unwrap();
+    std::fs::copy(fixture("room.log"), logs.join("room.log")).unwrap();
+    let bench = |extra: &[&str]| {
+        std::process::Command::new(common::pfe_bin())
+            .args([
+                "bench",
+                "--sim-scans",
+                "1",
+                "--reps",
+                "1",
+                "--json",
+                "--report-only",
+            ])
+            .args(extra)
+            .current_dir(&cwd)
+            .output()
+            .unwrap()
+    };
+    let out = bench(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(bench_datasets(&out), ["simulated"]);
+    let out = bench(&["--carmen", arg(&logs)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(bench_datasets(&out), ["simulated", "carmen"]);
+    // A directory with no log, one whose only log is empty, one that is absent: exit 2.
+    let none = dir.0.join("none");
+    std::fs::create_dir(&none).unwrap();
+    let one = dir.0.join("one");
+    std::fs::create_dir(&one).unwrap();
+    std::fs::write(one.join("empty.log"), "").unwrap();
+    for (d, says) in [
+        (&none, "no scan found in"),
+        (&one, "no scan found in"),
+        (&dir.0.join("nope"), "no such directory"),
+    ] {
+        let out = bench(&["--carmen", arg(d)]);
+        let e = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{d:?}: {e}");
+        assert!(e.contains(says) && e.contains(arg(d)), "{e}");
+        assert!(out.stdout.is_empty(), "{d:?}");
+    }
+    let help = pfe(&["bench", "--help"]);
+    assert!(!String::from_utf8_lossy(&help.stdout).contains("shared/data"));
+}
