@@ -103,7 +103,7 @@ pub struct MethodArgs {
     /// `auto`: what a CARMEN ROBOTLASER1/RAWLASER1 line's laser type says (1 for a scanner
     /// that is not a SICK LMS), else a SICK LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4
     /// at 0.25°, 1 for a step no LMS2xx has), else 1.
-    #[arg(long, default_value = "auto", value_parser = sweeps_arg)]
+    #[arg(long, default_value = "auto", value_parser = sweeps_parser())]
     pub sweeps: Sweeps,
 }
 
@@ -111,15 +111,12 @@ pub struct MethodArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sweeps(pub Option<u8>);
 
-/// `--sweeps N|auto`: 1 to 4 sweeps, or `auto`.
-pub fn sweeps_arg(s: &str) -> Result<Sweeps, String> {
-    match s.trim() {
-        "auto" => Ok(Sweeps(None)),
-        n => match n.parse::<u8>() {
-            Ok(v @ 1..=4) => Ok(Sweeps(Some(v))),
-            _ => Err(format!("sweeps are 1 to 4, or auto (got {s:?})")),
-        },
-    }
+/// `--sweeps 1|2|4|auto`: the sweeps an LMS2xx interleaves, or `auto`; anything else is
+/// refused by clap with the allowed values.
+pub fn sweeps_parser() -> impl clap::builder::TypedValueParser<Value = Sweeps> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(["auto", "1", "2", "4"])
+        .map(|s| Sweeps(s.parse::<u8>().ok()))
 }
 
 /// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).

@@ -141,3 +141,33 @@ fn bench_reads_carmen_logs_only_from_carmen_dir() {
     let help = pfe(&["bench", "--help"]);
     assert!(!String::from_utf8_lossy(&help.stdout).contains("shared/data"));
 }
+
+#[test]
+fn sweeps_are_1_2_4_or_auto_at_parse_time() {
+    let room = fixture("room.csv");
+    let log = fixture("room.log");
+    let (room, log) = (arg(&room), arg(&log));
+    for n in ["0", "3", "5", "8", "x", ""] {
+        for args in [
+            vec!["extract", "--format", "csv", "--sweeps", n, room],
+            vec![
+                "plot", "--format", "csv", "--sweeps", n, room, "--scan", "1", "-o", "-",
+            ],
+            vec!["realdata", "--sweeps", n, log],
+        ] {
+            let out = pfe(&args);
+            let e = stderr(&out);
+            assert_eq!(out.status.code(), Some(2), "{args:?}: {e}");
+            assert!(out.stdout.is_empty(), "{args:?}");
+            // clap's own error, naming the allowed values.
+            assert!(
+                e.contains("possible values: auto, 1, 2, 4"),
+                "{args:?}: {e}"
+            );
+        }
+    }
+    for n in ["auto", "1", "2", "4"] {
+        let out = pfe(&["extract", "--format", "csv", "--sweeps", n, room]);
+        assert!(out.status.success(), "{n}: {}", stderr(&out));
+    }
+}
