@@ -141,6 +141,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
 
 /// Starts the Foxglove file `path`: an existing file is bad input unless `force`.
 fn create_foxglove(path: &Path, force: bool) -> Result<FoxgloveWriter, Failure> {
+    pfe_formats::outfile::check_dir(path).map_err(|e| Failure::input(format!("--mcap {e}")))?;
     let w = if force {
         FoxgloveWriter::create_overwriting(path)
     } else {

@@ -171,3 +171,98 @@ fn sweeps_are_1_2_4_or_auto_at_parse_time() {
         assert!(out.status.success(), "{n}: {}", stderr(&out));
     }
 }
+
+#[test]
+fn no_writer_creates_a_directory() {
+    let dir = TempDir::new("surprise-dirs");
+    let room = fixture("room.csv");
+    let log = fixture("room.log");
+    let (room, log) = (arg(&room), arg(&log));
+    let gone = dir.0.join("gone");
+    let file = |name: &str| gone.join("deeper").join(name);
+    let (svg, html, sheet, mcap, md, lms) = (
+        file("x.svg"),
+        file("x.html"),
+        file("sheet.svg"),
+        file("x.mcap"),
+        file("r.md"),
+        file("x.lms"),
+    );
+    let deeper = arg(&gone.join("deeper")).to_string();
+    for args in [
+        vec![
+            "plot",
+            "--format",
+            "csv",
+            room,
+            "--scan",
+            "1",
+            "-o",
+            arg(&svg),
+        ],
+        vec![
+            "plot",
+            "--format",
+            "csv",
+            room,
+            "--scan",
+            "1",
+            "-o",
+            arg(&svg),
+            "--force",
+        ],
+        vec![
+            "plot",
+            "--format",
+            "csv",
+            room,
+            "--scans",
+            "0..2",
+            "--html",
+            arg(&html),
+        ],
+        vec![
+            "plot",
+            "--format",
+            "csv",
+            room,
+            "--scans",
+            "0..2",
+            "--sheet",
+            arg(&sheet),
+        ],
+        vec!["extract", "--format", "csv", room, "--mcap", arg(&mcap)],
+        vec!["listen", "--input", "/dev/null", "--mcap", arg(&mcap)],
+        vec![
+            "listen",
+            "--input",
+            "/dev/null",
+            "--svg",
+            arg(&gone.join("deeper")),
+        ],
+        vec!["bench", "--sim-scans", "1", "--reps", "1", "--md", arg(&md)],
+        vec!["realdata", log, "--md", arg(&md)],
+        vec!["eval", "--scans", "1", "--out", &deeper],
+        vec!["record", "--port", "/dev/null", "-o", arg(&lms)],
+    ] {
+        let out = pfe(&args);
+        let e = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {e}");
+        assert!(e.contains("no such directory"), "{args:?}: {e}");
+        assert!(!gone.exists(), "{args:?} created {gone:?}");
+    }
+    // Into a directory that exists: written.
+    let ok = dir.0.join("x.svg");
+    let out = pfe(&[
+        "plot",
+        "--format",
+        "csv",
+        room,
+        "--scan",
+        "1",
+        "-o",
+        arg(&ok),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(ok.is_file());
+}

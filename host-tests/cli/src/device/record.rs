@@ -81,6 +81,7 @@ pub fn record(
     if !opts.overwrite && out.symlink_metadata().is_ok() {
         return Err(OutputExists(out.to_path_buf()).into());
     }
+    pfe_formats::outfile::check_dir(out)?;
     let mut tty = TtyPort::open(port)?;
     if let Some(stop) = &opts.stop {
         tty = tty.with_stop(stop.clone());
