@@ -102,12 +102,12 @@ fn record_never_empties_an_existing_file() {
     assert!(stderr(&r).contains("--force"), "{}", stderr(&r));
     // With --force but a port that cannot be opened: the file is untouched.
     let r = pfe(&["record", "--port", "/nonexistent/tty", "-o", o, "--force"]);
-    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
     assert!(stderr(&r).contains("/nonexistent/tty"), "{}", stderr(&r));
     assert_eq!(std::fs::read(&out).unwrap(), b"a user's recording");
     // A port that is not a tty: the same.
     let r = pfe(&["record", "--port", "/dev/null", "-o", o, "--force"]);
-    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
     assert_eq!(std::fs::read(&out).unwrap(), b"a user's recording");
     assert_eq!(
         std::fs::read_dir(&dir).unwrap().count(),

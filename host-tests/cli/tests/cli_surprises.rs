@@ -266,3 +266,19 @@ fn no_writer_creates_a_directory() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(ok.is_file());
 }
+
+#[test]
+fn a_port_that_is_no_tty_exits_2_in_record_as_in_listen() {
+    let dir = TempDir::new("surprise-port");
+    let file = dir.0.join("not-a-tty");
+    std::fs::write(&file, "").unwrap();
+    let out = dir.0.join("x.lms");
+    for port in ["/dev/null", arg(&file), "/nonexistent/tty"] {
+        let listen = pfe(&["listen", "--port", port, "--seconds", "1"]);
+        let record = pfe(&["record", "--port", port, "-o", arg(&out)]);
+        assert_eq!(listen.status.code(), Some(2), "{port}: {}", stderr(&listen));
+        assert_eq!(record.status.code(), Some(2), "{port}: {}", stderr(&record));
+        assert!(stderr(&record).contains(port), "{}", stderr(&record));
+        assert!(!out.exists());
+    }
+}

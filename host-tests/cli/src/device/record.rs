@@ -82,7 +82,8 @@ pub fn record(
         return Err(OutputExists(out.to_path_buf()).into());
     }
     pfe_formats::outfile::check_dir(out)?;
-    let mut tty = TtyPort::open(port)?;
+    // A port that cannot be opened as a tty is bad input (exit 2), as for `pfe listen`.
+    let mut tty = TtyPort::open(port).map_err(|e| crate::Exit::bad_input(format!("{e:#}")))?;
     if let Some(stop) = &opts.stop {
         tty = tty.with_stop(stop.clone());
     }
