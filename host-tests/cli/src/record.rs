@@ -13,7 +13,7 @@ const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE [
     [--variant 180/0.5] [--unit mm|cm]
 
 Initialises the LMS200 on PATH with the firmware driver, streams N scans (default 10) and writes
-every raw byte received to FILE. Prints a JSON summary (driver counters).
+the raw bytes received up to the end of the last scan to FILE. Prints a JSON summary (driver counters).
 
 An existing FILE is refused (exit 2) unless --force. The port is opened first and the bytes go
 to a temporary file beside FILE, renamed to FILE at the end: a port that cannot be opened leaves

@@ -282,3 +282,63 @@ fn a_port_that_is_no_tty_exits_2_in_record_as_in_listen() {
         assert!(!out.exists());
     }
 }
+
+/// B0 telegrams (scans) in a raw LMS200 capture.
+fn b0_count(bytes: &[u8]) -> usize {
+    use lms2xx::codec::frame::{Decoder, Event, MAX_TELEGRAM};
+    let mut dec = Decoder::<MAX_TELEGRAM>::new();
+    let (mut rest, mut n) = (bytes, 0);
+    loop {
+        let (u, ev) = dec.feed(rest);
+        rest = &rest[u..];
+        match ev {
+            Some(Event::Telegram(t)) if t.payload().first() == Some(&0xB0) => n += 1,
+            Some(_) => {}
+            None => return n,
+        }
+    }
+}
+
+#[test]
+fn record_captures_exactly_the_scans_it_reports() {
+    use std::time::{Duration, Instant};
+    let dir = TempDir::new("surprise-record");
+    let link = dir.0.join("lms");
+    let mut emulator = spawn_pfe(&["emulate", "--pty", arg(&link), "--seconds", "120"]);
+    let t0 = Instant::now();
+    while link.symlink_metadata().is_err() {
+        assert!(t0.elapsed() < Duration::from_secs(10), "no pty link");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    for (k, n) in [1u64, 5, 12].into_iter().enumerate() {
+        let out = dir.0.join(format!("take{k}.lms"));
+        let scans = n.to_string();
+        let r = pfe(&[
+            "record",
+            "--port",
+            arg(&link),
+            "--baud",
+            "38400",
+            "--scans",
+            &scans,
+            "-o",
+            arg(&out),
+        ]);
+        assert!(r.status.success(), "{}", stderr(&r));
+        let summary: serde_json::Value = serde_json::from_slice(&r.stdout).unwrap();
+        let bytes = std::fs::read(&out).unwrap();
+        assert_eq!(summary["scans"].as_u64(), Some(n), "{summary}");
+        assert_eq!(summary["bytes"].as_u64(), Some(bytes.len() as u64));
+        assert_eq!(b0_count(&bytes), n as usize, "--scans {n}");
+        // What `pfe decode` reads from it agrees.
+        let d = pfe(&["decode", arg(&out)]);
+        assert_eq!(String::from_utf8_lossy(&d.stdout).lines().count() as u64, n);
+    }
+    // Ctrl-C: the emulator removes its link and exits 0.
+    let int = std::process::Command::new("kill")
+        .args(["-INT", &emulator.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(int.success());
+    assert!(emulator.wait().unwrap().success());
+}
