@@ -61,11 +61,8 @@ impl Args {
             sigma: self.sigma.unwrap_or(d.sigma),
             sweep,
             passes: self.passes.unwrap_or(d.passes),
-            out: if self.no_write {
-                None
-            } else {
-                self.out.or(d.out)
-            },
+            // No default directory: without --out nothing is written.
+            out: if self.no_write { None } else { self.out },
             command: self.command.unwrap_or(d.command),
             force: self.force,
         };

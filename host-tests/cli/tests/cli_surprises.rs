@@ -7,6 +7,8 @@
 
 #[path = "../../tests/common/mod.rs"]
 mod common;
+use std::path::Path;
+
 use common::{arg, fixture, pfe, spawn_pfe, stderr, TempDir};
 
 /// One line on stderr, exit 2, nothing on stdout, and the line names `name`.
@@ -341,4 +343,50 @@ fn record_captures_exactly_the_scans_it_reports() {
         .unwrap();
     assert!(int.success());
     assert!(emulator.wait().unwrap().success());
+}
+
+#[test]
+fn eval_writes_only_into_out() {
+    let dir = TempDir::new("surprise-eval");
+    let docs = dir.0.join("docs");
+    std::fs::create_dir(&docs).unwrap();
+    let eval = |extra: &[&str]| {
+        std::process::Command::new(common::pfe_bin())
+            .args(["eval", "--scans", "1", "--sweep", "1", "--passes", "1"])
+            .args(extra)
+            .current_dir(&dir.0)
+            .output()
+            .unwrap()
+    };
+    let listing = |d: &Path| {
+        let mut names: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    // Without --out: the tables on stdout, nothing written (the CWD's docs/ stays empty).
+    let out = eval(&[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("pfe-default"));
+    assert!(listing(&docs).is_empty(), "{:?}", listing(&docs));
+    assert_eq!(listing(&dir.0), ["docs"]);
+    // --no-write (kept for scripts): the same tables.
+    let quiet = eval(&["--no-write"]);
+    assert!(quiet.status.success(), "{}", stderr(&quiet));
+    assert!(listing(&docs).is_empty());
+    // --out DIR: the report and its four plots there.
+    let out = eval(&["--out", arg(&docs)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        listing(&docs),
+        [
+            "EVALUATION.md",
+            "eval-errors.svg",
+            "eval-ratios.svg",
+            "eval-scenes.svg",
+            "eval-time.svg"
+        ]
+    );
 }
