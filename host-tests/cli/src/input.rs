@@ -60,7 +60,7 @@ enum FormatArg {
     Lms200,
     /// `topic stamp angle_min angle_increment range_min range_max n r_0 ... r_{n-1}`.
     Hokuyo,
-    /// ROS 2 bag (MCAP) with `sensor_msgs/msg/LaserScan` messages (see [`ros2`]).
+    /// ROS 2 bag (MCAP) with `sensor_msgs/msg/LaserScan` messages (--topic names the topic).
     Mcap,
 }
 

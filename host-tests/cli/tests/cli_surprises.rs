@@ -390,3 +390,29 @@ fn eval_writes_only_into_out() {
         ]
     );
 }
+
+/// Every subcommand of `pfe` (as `pfe --help` lists them).
+const SUBCOMMANDS: [&str; 9] = [
+    "extract", "decode", "plot", "eval", "bench", "emulate", "record", "realdata", "listen",
+];
+
+/// `pfe ARGS --help` (exit 0, on stdout).
+fn help(args: &[&str]) -> String {
+    let out = pfe(&[args, &["--help"]].concat());
+    assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+#[test]
+fn help_is_plain_text() {
+    let mut all = vec![help(&[])];
+    for sub in SUBCOMMANDS {
+        all.push(help(&[sub]));
+    }
+    for text in all {
+        // Intra-doc links (`[`ros2`]`, `[Foo]`-style references) are rustdoc, not help.
+        for rustdoc in ["[`", "`]", "](", "[crate::", "[super::", "[Self::"] {
+            assert!(!text.contains(rustdoc), "{rustdoc:?} in:\n{text}");
+        }
+    }
+}
