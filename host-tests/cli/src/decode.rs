@@ -8,12 +8,19 @@ use super::input::{flush, guess, nothing_found, open, shown, stdout, write_json}
 use super::Failure;
 use pfe_formats::{lms200, Format};
 
+/// What `pfe decode` reads: LMS200 captures only (`pfe extract` reads the other formats).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum DecodeFormat {
+    /// Raw byte capture of an LMS200 serial line (0xB0 telegrams, damage skipped).
+    Lms200,
+}
+
 /// Arguments of `pfe decode`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input format: only `lms200`, the default (decode reads raw LMS200 captures).
-    #[arg(long, short, default_value = "lms200", value_parser = crate::input::format_parser())]
-    format: Format,
+    /// Input format (decode reads raw LMS200 captures only).
+    #[arg(long, short, value_enum, default_value_t = DecodeFormat::Lms200)]
+    format: DecodeFormat,
     /// Input file (`-` = stdin).
     file: PathBuf,
 }
@@ -29,12 +36,10 @@ struct TelegramJson<'a> {
 
 /// Runs `pfe decode`.
 pub fn run(a: Args) -> Result<(), Failure> {
-    let (format, file) = (a.format, a.file.as_path());
-    if format != Format::Lms200 {
-        return Err(Failure::input(format!(
-            "decode reads only --format lms200 (got {format})"
-        )));
-    }
+    let format = match a.format {
+        DecodeFormat::Lms200 => Format::Lms200,
+    };
+    let file = a.file.as_path();
     let input = open(file, format)?;
     let bar = input.bar.clone();
     let mut out = stdout();

@@ -416,3 +416,16 @@ fn help_is_plain_text() {
         }
     }
 }
+
+#[test]
+fn decode_lists_only_lms200() {
+    let out = pfe(&["decode", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(help.contains("lms200"), "{help}");
+    for other in ["csv", "carmen", "hokuyo", "mcap"] {
+        assert!(!help.contains(other), "{other} in: {help}");
+    }
+    let out = pfe(&["decode", "--format", "csv", arg(&fixture("room.csv"))]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(stderr(&out).contains("lms200"), "{}", stderr(&out));
+}
