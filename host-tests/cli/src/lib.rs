@@ -61,13 +61,13 @@ enum Command {
     Decode(decode::Args),
     /// Plot one scan with its mark points and features as SVG (like Fig. 7 of the paper).
     Plot(plot::Args),
-    /// Evaluate methods against ground truth (see `pfe eval --help`).
+    /// Evaluate PFE, split-and-merge and ACF against ground truth on simulated scans.
     Eval(eval::Args),
     /// Speed of pfe-paper, pfe-default, split-merge and acf on the same scans.
     Bench(bench::Args),
-    /// LMS200 device emulator.
+    /// Emulate a SICK LMS200 on a pseudo-terminal or a TCP socket.
     Emulate(emulate::Args),
-    /// Record from a scanner.
+    /// Record a SICK LMS200's raw bytes through the firmware driver.
     Record(record::Args),
     /// Real-data benchmark without ground truth: features re-found in the next scan via the poses.
     Realdata(realdata::Args),

@@ -429,3 +429,77 @@ fn decode_lists_only_lms200() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("lms200"), "{}", stderr(&out));
 }
+
+#[test]
+fn eval_emulate_and_record_have_clap_help_with_every_option() {
+    for (sub, options) in [
+        (
+            "eval",
+            &[
+                "--kind",
+                "--scans",
+                "--seed",
+                "--sigma",
+                "--sweep",
+                "--passes",
+                "--out",
+                "--no-write",
+                "--command",
+                "--force",
+            ][..],
+        ),
+        (
+            "emulate",
+            &[
+                "--pty",
+                "--tcp",
+                "--scans",
+                "--seconds",
+                "--seed",
+                "--baud",
+                "--variant",
+                "--unit",
+                "--source",
+                "--trace",
+            ][..],
+        ),
+        (
+            "record",
+            &[
+                "--port",
+                "--output",
+                "--scans",
+                "--force",
+                "--baud",
+                "--variant",
+                "--unit",
+            ][..],
+        ),
+    ] {
+        let text = help(&[sub]);
+        assert!(text.contains(&format!("Usage: pfe {sub} ")), "{text}");
+        let (_, section) = text.split_once("\nOptions:\n").expect("an options section");
+        for o in options {
+            // Each option on its own line, with words after it (its help).
+            let line = section
+                .lines()
+                .find(|l| l.trim_start().starts_with(o) || l.contains(&format!(", {o}")))
+                .unwrap_or_else(|| panic!("{sub}: no line for {o} in:\n{text}"));
+            let words = line
+                .split_whitespace()
+                .filter(|w| w.chars().all(char::is_alphabetic));
+            assert!(words.count() >= 2, "{sub} {o}: undocumented: {line:?}");
+        }
+    }
+    // The defaults are shown where there are some, and stay what they were.
+    let eval = help(&["eval"]);
+    for d in [
+        "[default: mixed]",
+        "[default: 100]",
+        "[default: 1,2,5,10]",
+        "[default: 5]",
+    ] {
+        assert!(eval.contains(d), "{d} in:\n{eval}");
+    }
+    assert!(help(&["record"]).contains("[default: 10]"));
+}
