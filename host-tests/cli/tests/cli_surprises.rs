@@ -392,8 +392,18 @@ fn eval_writes_only_into_out() {
 }
 
 /// Every subcommand of `pfe` (as `pfe --help` lists them).
-const SUBCOMMANDS: [&str; 9] = [
-    "extract", "decode", "plot", "eval", "bench", "emulate", "record", "realdata", "listen",
+const SUBCOMMANDS: [&str; 11] = [
+    "extract",
+    "decode",
+    "plot",
+    "eval",
+    "bench",
+    "emulate",
+    "record",
+    "realdata",
+    "listen",
+    "completions",
+    "man",
 ];
 
 /// `pfe ARGS --help` (exit 0, on stdout).
@@ -502,4 +512,103 @@ fn eval_emulate_and_record_have_clap_help_with_every_option() {
         assert!(eval.contains(d), "{d} in:\n{eval}");
     }
     assert!(help(&["record"]).contains("[default: 10]"));
+}
+
+#[test]
+fn bash_completion_names_every_subcommand() {
+    let out = pfe(&["completions", "bash"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let script = String::from_utf8(out.stdout).unwrap();
+    // The words offered after `pfe `: the first opts="-..." line of the script.
+    let top = script
+        .lines()
+        .find(|l| l.trim_start().starts_with("opts=\"-"))
+        .expect("an opts line");
+    let words: Vec<&str> = top
+        .trim()
+        .trim_start_matches("opts=\"")
+        .trim_end_matches('"')
+        .split(' ')
+        .collect();
+    for sub in SUBCOMMANDS {
+        assert!(words.contains(&sub), "{sub} not offered: {top}");
+    }
+    // Options of a subcommand are completed too.
+    assert!(
+        script.contains("--sweeps") && script.contains("--carmen"),
+        "{script}"
+    );
+    // bash reads it (syntax check only).
+    let dir = TempDir::new("surprise-bash");
+    let file = dir.0.join("pfe.bash");
+    std::fs::write(&file, &script).unwrap();
+    let bash = std::process::Command::new("bash")
+        .arg("-n")
+        .arg(&file)
+        .output();
+    match bash {
+        Ok(b) => assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr)),
+        Err(e) => pfe_testkit::skip::skip(
+            "cli_surprises::bash_completion_names_every_subcommand (bash -n)",
+            &format!("no bash: {e}"),
+            pfe_testkit::skip::Need::Optional,
+        ),
+    }
+    for shell in ["zsh", "fish", "elvish", "powershell"] {
+        let out = pfe(&["completions", shell]);
+        assert!(out.status.success() && !out.stdout.is_empty(), "{shell}");
+    }
+    let out = pfe(&["completions", "tcsh"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}
+
+#[test]
+fn man_page_is_roff_and_lists_every_subcommand() {
+    let out = pfe(&["man"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let page = String::from_utf8(out.stdout).unwrap();
+    // The first request after the string definitions (.ie/.el, for the apostrophe) is .TH.
+    let first = page
+        .lines()
+        .find(|l| !l.starts_with(".ie ") && !l.starts_with(".el "))
+        .unwrap();
+    assert!(first.starts_with(".TH pfe 1 "), "{first}");
+    assert!(page.contains("\n.SH SUBCOMMANDS\n"), "{page}");
+    for sub in SUBCOMMANDS {
+        let entry = format!("pfe\\-{}(1)", sub.replace('-', "\\-"));
+        assert!(page.contains(&entry), "{entry} not in:\n{page}");
+    }
+    // One subcommand's page: its options.
+    let out = pfe(&["man", "extract"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let extract = String::from_utf8(out.stdout).unwrap();
+    assert!(extract.contains(".TH pfe-extract 1 "), "{extract}");
+    assert!(extract.contains("\\-\\-sweeps"), "{extract}");
+    assert_eq!(pfe(&["man", "nonsense"]).status.code(), Some(2));
+    // groff reads it without a warning, when it is installed.
+    let dir = TempDir::new("surprise-man");
+    for (name, text) in [("pfe.1", &page), ("pfe-extract.1", &extract)] {
+        let file = dir.0.join(name);
+        std::fs::write(&file, text).unwrap();
+        match std::process::Command::new("groff")
+            // -k: through preconv (UTF-8 input, as man(1) reads it).
+            .args(["-k", "-man", "-Tutf8", "-z", "-ww"])
+            .arg(&file)
+            .output()
+        {
+            Ok(g) => {
+                assert!(g.status.success(), "{}", String::from_utf8_lossy(&g.stderr));
+                assert!(
+                    g.stderr.is_empty(),
+                    "{name}: {}",
+                    String::from_utf8_lossy(&g.stderr)
+                );
+            }
+            Err(e) => pfe_testkit::skip::skip(
+                "cli_surprises::man_page_is_roff_and_lists_every_subcommand (groff)",
+                &format!("no groff: {e}"),
+                pfe_testkit::skip::Need::Optional,
+            ),
+        }
+    }
 }
