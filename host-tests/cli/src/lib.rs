@@ -11,7 +11,8 @@
 //!
 //! FILE may be gzipped (detected from its content) or `-` for stdin. Every subcommand exits
 //! with the codes of [`EXIT_CODES`]: 2 for bad input (a bad argument, a malformed line, an
-//! unknown format, an unreadable file, input with no scan), with a one-line error on stderr
+//! unknown format, an unreadable file, input with no scan, an output directory that does not
+//! exist), with a one-line error on stderr
 //! (the scans before it are still written); 1 for any other failure; 130 when interrupted.
 //!
 //! Besides the subcommands: [`figure`] (one scan as SVG), [`foxglove`] (Foxglove MCAP file and
@@ -95,7 +96,8 @@ pub const EXIT_CODES: &str = "FILE may be gzipped (detected from its content) or
 
 Exit codes (every subcommand): 0 success; 2 bad input: a bad argument, an unreadable or \
 malformed file (one-line error with the line number; the scans before it are still written), \
-input with no scan, an output that would overwrite a file; 1 any other failure (device, I/O, \
+input with no scan (empty input included), an output that would overwrite a file or go into a \
+directory that does not exist (pfe creates none); 1 any other failure (device, I/O, \
 a broken budget); 130 interrupted by Ctrl-C (what was recorded is kept), except `pfe listen`, \
 whose normal stop is Ctrl-C (exit 0 after its summary).";
 
