@@ -17,6 +17,9 @@ use anyhow::Result;
 
 use crate::util::{cargo, ensure_apt, ensure_target, run as sh};
 
+/// The shared CARMEN logs, from the workspace root (`pfe bench --carmen`).
+const CARMEN_LOGS: &str = "../shared/data/carmen";
+
 const THUMB: &str = "thumbv7em-none-eabihf";
 
 /// Runs every step, then lists what was skipped (also after a failure).
@@ -150,7 +153,15 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     })?;
     step(
         "host speed against the baselines (reported, not asserted)",
-        || sh(crate::util::pfe().args(["bench", "--reps", "5", "--report-only"])),
+        || {
+            // The real-data part needs the shared CARMEN logs, named explicitly.
+            let mut bench = crate::util::pfe();
+            bench.args(["bench", "--reps", "5", "--report-only"]);
+            if crate::util::root().join(CARMEN_LOGS).is_dir() {
+                bench.args(["--carmen", CARMEN_LOGS]);
+            }
+            sh(&mut bench)
+        },
     )?;
     step("MRPT conformance", || crate::conformance::run(&[]))?;
     step(
