@@ -226,7 +226,15 @@ pub fn msrv() -> Result<()> {
     let check = |extra: &[&str], crates: &[&str]| {
         let mut c = std::process::Command::new("rustup");
         c.current_dir(crate::util::root())
-            .args(["run", &v, "cargo", "check", "--locked", "--target-dir", "target/msrv"])
+            .args([
+                "run",
+                &v,
+                "cargo",
+                "check",
+                "--locked",
+                "--target-dir",
+                "target/msrv",
+            ])
             .args(extra);
         for p in crates {
             c.args(["-p", p]);
