@@ -111,6 +111,10 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
         },
     )?;
     if !quick {
+        step(
+            "MSRV: the published crates and the firmware library build with the declared rust-version",
+            msrv,
+        )?;
         ensure_apt("qemu-system-arm", "qemu-system-arm")?;
     }
     step("host tests (unit, integration, doc, end to end)", || {
@@ -197,6 +201,59 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     })?;
     eprintln!("\nall checks passed");
     Ok(())
+}
+
+/// The crates users build, on the host; the `no_std` ones also for the Cortex-M target.
+const PUBLISHED: [&str; 7] = [
+    "pfe-core",
+    "lms2xx",
+    "pfe-frame",
+    "pfe-formats",
+    "pfe-eval",
+    "lms200-emulator",
+    "pfe-cli",
+];
+const NO_STD: [&str; 4] = ["pfe-core", "lms2xx", "pfe-frame", "firmware"];
+
+/// The workspace's `rust-version` (the root Cargo.toml's `[workspace.package]`).
+fn declared_msrv() -> Result<String> {
+    let manifest = std::fs::read_to_string(crate::util::root().join("Cargo.toml"))?;
+    manifest
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("rust-version"))
+        .and_then(|rest| rest.split('"').nth(1))
+        .map(str::to_string)
+        .ok_or_else(|| anyhow::anyhow!("no rust-version in the workspace's Cargo.toml"))
+}
+
+/// `cargo xtask msrv`: installs the declared MSRV toolchain (rustup, minimal profile, with the
+/// thumbv7em target) and checks the published crates on the host and the `no_std` crates for
+/// the Cortex-M target with it, against Cargo.lock (`--locked`), in `target/msrv`.
+pub fn msrv() -> Result<()> {
+    let v = declared_msrv()?;
+    sh(std::process::Command::new("rustup")
+        .args(["toolchain", "install", &v, "--profile", "minimal"])
+        .args(["--target", THUMB]))?;
+    let check = |extra: &[&str], crates: &[&str]| {
+        let mut c = std::process::Command::new("rustup");
+        c.current_dir(crate::util::root())
+            .args([
+                "run",
+                &v,
+                "cargo",
+                "check",
+                "--locked",
+                "--target-dir",
+                "target/msrv",
+            ])
+            .args(extra);
+        for p in crates {
+            c.args(["-p", p]);
+        }
+        sh(&mut c)
+    };
+    check(&[], &PUBLISHED)?;
+    check(&["--lib", "--target", THUMB], &NO_STD)
 }
 
 /// Entry point: `cargo xtask test [--quick]`.
