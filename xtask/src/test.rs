@@ -85,6 +85,10 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                 "lms200-emulator",
                 "-p",
                 "pfe-testkit",
+                "-p",
+                "pfe-pose",
+                "-p",
+                "pfe-capi",
             ])
             .env("RUSTDOCFLAGS", "-D warnings"))
     })?;
@@ -104,12 +108,57 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                 "pfe-frame",
                 "-p",
                 "firmware",
+                "-p",
+                "pfe-pose",
+                "-p",
+                "pfe-capi",
                 "--lib",
                 "--target",
                 THUMB,
-            ]))
+            ]))?;
+            sh(cargo()
+                .args([
+                    "build",
+                    "--release",
+                    "-p",
+                    "lms2xx",
+                    "--lib",
+                    "--target",
+                    THUMB,
+                ])
+                .args(["--features", "async"]))
         },
     )?;
+    step(
+        "the async LMS2xx driver: its tests and clippy (feature `async`)",
+        || {
+            sh(cargo().args(["test", "-p", "lms2xx", "--features", "async"]))?;
+            sh(cargo()
+                .args([
+                    "clippy",
+                    "-p",
+                    "lms2xx",
+                    "--features",
+                    "async",
+                    "--all-targets",
+                ])
+                .args(["--", "-D", "warnings"]))
+        },
+    )?;
+    if !quick {
+        step(
+            "the embassy firmware (firmware/embassy, its own workspace) for the STM32F411",
+            || {
+                sh(cargo()
+                    .args(["clippy", "--release", "--locked", "--target", THUMB])
+                    .args(["--manifest-path", "firmware/embassy/Cargo.toml"])
+                    .args(["--", "-D", "warnings"]))?;
+                sh(cargo()
+                    .args(["build", "--release", "--locked", "--target", THUMB])
+                    .args(["--manifest-path", "firmware/embassy/Cargo.toml"]))
+            },
+        )?;
+    }
     if !quick {
         step(
             "MSRV: the published crates and the firmware library build with the declared rust-version",
@@ -204,7 +253,8 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
 }
 
 /// The crates users build, on the host; the `no_std` ones also for the Cortex-M target.
-const PUBLISHED: [&str; 7] = [
+const PUBLISHED: [&str; 8] = [
+    "pfe-pose",
     "pfe-core",
     "lms2xx",
     "pfe-frame",
@@ -213,7 +263,14 @@ const PUBLISHED: [&str; 7] = [
     "lms200-emulator",
     "pfe-cli",
 ];
-const NO_STD: [&str; 4] = ["pfe-core", "lms2xx", "pfe-frame", "firmware"];
+const NO_STD: [&str; 6] = [
+    "pfe-core",
+    "lms2xx",
+    "pfe-frame",
+    "firmware",
+    "pfe-pose",
+    "pfe-capi",
+];
 
 /// The workspace's `rust-version` (the root Cargo.toml's `[workspace.package]`).
 fn declared_msrv() -> Result<String> {
