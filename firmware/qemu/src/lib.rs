@@ -2,7 +2,8 @@
 //! CMSDK APB UARTs as polled `embedded-io` ports, UART0 to the scanner through its receive
 //! interrupt and the firmware's receive ring ([`scanner_uart`]), a SysTick time base, semihosting exit and
 //! arguments, the stack high-water mark, and the runtime glue the binaries share (exception
-//! and panic handlers, the statics in [`rt`]).
+//! and panic handlers, the statics in [`rt`]), and with feature `async` the async UART, delay
+//! and executor of the `pfe-qemu-async` binary ([`asynch`]).
 //!
 //! Everything here only exists for `target_os = "none"`; on the host the crate is empty so
 //! `cargo test --workspace` and clippy still build it.
@@ -25,3 +26,6 @@ pub mod sys;
 
 #[cfg(target_os = "none")]
 pub mod rt;
+
+#[cfg(all(target_os = "none", feature = "async"))]
+pub mod asynch;

@@ -9,6 +9,7 @@ use pfe_frame::Report;
 
 use crate::uart::Uart;
 use crate::{scanner_uart, sys, time};
+use firmware::rx_ring::RING_SLOTS;
 
 /// Takes the core peripherals and starts the SysTick time base ([`time::start`]); exits with
 /// [`sys::EXIT_USAGE`] when called twice.
@@ -26,18 +27,48 @@ pub fn report(out: &mut Uart, r: Report) {
     }
 }
 
+/// The end of a run of the pfe firmware: sends `Report::Stack` (painted-stack high-water
+/// mark) and `Report::Done { scans }` on `out`, writes the receive path's account to
+/// semihosting stderr (`rx: ring_full=… overruns=… line_errors=… peak=… capacity=…
+/// scan_errors=…`), then exits QEMU with [`sys::EXIT_OK`].
+pub fn finish(out: &mut Uart, scans: u32, scan_errors: u32) -> ! {
+    let (used, size) = sys::stack_usage();
+    defmt::info!("done: stack high-water mark {} of {} bytes", used, size);
+    report(out, Report::Stack { used, size });
+    report(out, Report::Done { scans });
+    let rx = scanner_uart::rx_counters();
+    sys::eprint_stats(
+        "rx:",
+        &[
+            ("ring_full", rx.ring_full()),
+            ("overruns", rx.overruns()),
+            ("line_errors", rx.line_errors()),
+            ("peak", rx.peak()),
+            ("capacity", RING_SLOTS as u32 - 1),
+            ("scan_errors", scan_errors),
+        ],
+    );
+    sys::exit(sys::EXIT_OK)
+}
+
 #[exception]
 fn SysTick() {
     time::on_systick();
 }
 
 /// Device interrupts (cortex-m-rt's vector table sends them all here with their number):
-/// UART0's receive interrupt; no other is unmasked.
+/// UART0's receive interrupt and, with feature `async`, timer 0's; no other is unmasked.
 #[exception]
 #[allow(unsafe_code)]
 unsafe fn DefaultHandler(irqn: i16) {
     if irqn == scanner_uart::UART0_RX_IRQ as i16 {
         scanner_uart::on_rx_interrupt();
+        #[cfg(feature = "async")]
+        crate::asynch::on_rx_interrupt();
+    }
+    #[cfg(feature = "async")]
+    if irqn == crate::asynch::TIMER0_IRQ as i16 {
+        crate::asynch::on_timer_interrupt();
     }
 }
 

@@ -12,7 +12,7 @@
 //!
 //! Ownership: the handler owns the receive side of UART0 (its own [`Uart`] handle: DATA
 //! reads, STATE overrun and INTSTATUS acknowledgement) and the ring's producer end in
-//! [`RX_SIDE`]; [`ScannerUart`] owns the transmit side and BAUDDIV and the consumer end.
+//! `RX_SIDE`; [`ScannerUart`] owns the transmit side and BAUDDIV and the consumer end.
 
 use core::cell::RefCell;
 

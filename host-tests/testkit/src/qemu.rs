@@ -90,11 +90,16 @@ pub fn build_firmware<V: AsRef<std::ffi::OsStr>>(
 /// run); `None` after a [`skip`](crate::skip::skip) when `PFE_SKIP_QEMU` is set
 /// (`cargo xtask test --quick`), or when qemu-system-arm or the target is missing (a failure
 /// under `CI=true`). Panics when the firmware does not build: the test fails.
+pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
+    test_firmware_with(test, bin, &[], dir)
+}
+
+/// [`test_firmware`] with firmware-qemu's cargo `features` (`pfe-qemu-async` needs `async`).
 #[allow(
     clippy::panic,
     reason = "a test helper: its panic is the calling test's failure"
 )]
-pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
+pub fn test_firmware_with(test: &str, bin: &str, features: &[&str], dir: &str) -> Option<PathBuf> {
     use crate::skip::{skip, Need};
     if std::env::var_os("PFE_SKIP_QEMU").is_some() {
         skip(
@@ -126,7 +131,7 @@ pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
         .join(dir);
     match build_firmware(
         bin,
-        &[],
+        features,
         &[("CARGO_PROFILE_RELEASE_OPT_LEVEL", FIRMWARE_OPT_LEVEL)],
         &dir,
     ) {

@@ -25,15 +25,13 @@ mod fw {
     use defmt_semihosting as _;
     use embedded_hal::delay::DelayNs;
     use firmware::app::{AppError, ConfigChoice};
-    use firmware::rx_ring::RING_SLOTS;
-    use firmware_qemu::rt::{self, report};
-    use firmware_qemu::scanner_uart::{rx_counters, ScannerUart};
+    use firmware_qemu::rt;
+    use firmware_qemu::scanner_uart::ScannerUart;
     use firmware_qemu::sys;
     use firmware_qemu::time::{Clock, Delay};
     use firmware_qemu::uart::{Uart, UART1};
     use lms2xx::codec::types::Baud;
     use lms2xx::driver::{Config, Driver};
-    use pfe_frame::Report;
 
     /// Consecutive failed scans before giving up.
     const MAX_FAILURES: u32 = 5;
@@ -97,22 +95,6 @@ mod fw {
             }
         }
         let _ = lms.stop();
-        let (used, size) = sys::stack_usage();
-        defmt::info!("done: stack high-water mark {} of {} bytes", used, size);
-        report(&mut out, Report::Stack { used, size });
-        report(&mut out, Report::Done { scans: app.seq() });
-        let rx = rx_counters();
-        sys::eprint_stats(
-            "rx:",
-            &[
-                ("ring_full", rx.ring_full()),
-                ("overruns", rx.overruns()),
-                ("line_errors", rx.line_errors()),
-                ("peak", rx.peak()),
-                ("capacity", RING_SLOTS as u32 - 1),
-                ("scan_errors", scan_errors),
-            ],
-        );
-        sys::exit(sys::EXIT_OK)
+        rt::finish(&mut out, app.seq(), scan_errors)
     }
 }
