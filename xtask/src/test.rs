@@ -142,7 +142,20 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                     "async",
                     "--all-targets",
                 ])
-                .args(["--", "-D", "warnings"]))
+                .args(["--", "-D", "warnings"]))?;
+            // The QEMU binaries, blocking and async, for their target (the workspace's clippy
+            // runs on the host only).
+            sh(cargo()
+                .args(["clippy", "-p", "firmware-qemu", "--target", THUMB])
+                .args([
+                    "--features",
+                    "async",
+                    "--lib",
+                    "--bins",
+                    "--",
+                    "-D",
+                    "warnings",
+                ]))
         },
     )?;
     if !quick {
