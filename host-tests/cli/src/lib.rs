@@ -31,7 +31,9 @@ pub mod interrupt;
 pub mod link;
 pub mod listen;
 mod lms_args;
+pub mod odometry;
 pub mod plot;
+pub mod posebench;
 pub mod realdata;
 pub mod record;
 
@@ -73,6 +75,10 @@ enum Command {
     Realdata(realdata::Args),
     /// Read the firmware's feature frames: one JSON object per scan on stdout.
     Listen(listen::Args),
+    /// The pose of every scan from its features (pfe-pose): one JSON object per scan.
+    Odometry(odometry::Args),
+    /// Pose benchmark on CARMEN logs against their poses: a Markdown table.
+    Posebench(posebench::Args),
 }
 
 /// The exit codes of every subcommand, as `pfe --help` prints them.
@@ -189,6 +195,8 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Record(a) => record::run(a).map_err(|e| Failure::of("record", &e)),
         Command::Realdata(a) => realdata::run(a).map_err(|e| Failure::of("realdata", &e)),
         Command::Listen(a) => listen::run(a),
+        Command::Odometry(a) => odometry::run(a),
+        Command::Posebench(a) => posebench::run(a).map_err(|e| Failure::of("posebench", &e)),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -196,7 +196,8 @@ pub fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> anyhow::Result<
     let mut track: Vec<(Pose, Pose, Pose)> = Vec::new();
     let mut chained = Pose::IDENTITY;
     for record in pfe_formats::scans(Format::Carmen, input).take(max_pairs.saturating_add(1)) {
-        let record = record.map_err(|e| anyhow::Error::new(e).context(path.display().to_string()))?;
+        let record =
+            record.map_err(|e| anyhow::Error::new(e).context(path.display().to_string()))?;
         // A scan without a pose breaks the chain of reference motions.
         let Some(p) = record.pose else {
             prev = None;
@@ -431,7 +432,6 @@ fn row(out: &mut String, name: &str, st: &mut Stats, odometry: bool) {
     }
     out.push('\n');
 }
-
 
 /// The header of [`table`]'s Markdown table.
 fn header(odometry: bool) -> String {
