@@ -1,6 +1,6 @@
 //! `cargo xtask pose`: the pose benchmark (`pfe posebench`, issue 40) on the shared CARMEN
 //! logs (every CARMEN log in `../shared/data/carmen`); writes docs/POSE.md's generated
-//! section. `--quick` is CI's short run (the first 100 pairs of each log, printed, no
+//! section, pfe-pose beside the PL-ICP baseline (`--baseline`). `--quick` is CI's short run (the first 100 pairs of each log, printed, no
 //! document); other arguments (`--odometry`, `--force`) pass through. Skips loudly, exit 0,
 //! when the shared data is absent.
 
@@ -36,7 +36,7 @@ pub fn run(args: &[String]) -> Result<()> {
     }
     // A release build (the table times the host).
     let mut cmd = util::pfe();
-    cmd.arg("posebench").args(&logs);
+    cmd.arg("posebench").arg("--baseline").args(&logs);
     if args.iter().any(|a| a == "--quick") {
         cmd.args(args);
     } else {

@@ -374,8 +374,10 @@ fn odometry_on_intel() {
     assert!(ok * 100 >= lines.len() * 80, "{ok} of {} ok", lines.len());
 }
 
-/// `pfe posebench --quick` on two shared logs: 100 pairs each and the pooled row, with sane
-/// figures (failures under 25 %, median errors under 10 cm and 1°, NIS median 1–5).
+/// `pfe posebench --quick --baseline` on two shared logs: 100 pairs each and the pooled row,
+/// with sane figures (failures under 25 %, median errors under 10 cm and 1°, NIS median 1–5);
+/// then PL-ICP's rows: from the noisy prior it fails on under 15 % of the pairs, from the
+/// identity on more (these logs' scans are up to 1.8 m and 1.4 rad apart).
 #[test]
 fn posebench_quick_on_two_logs() {
     let Some(d) = shared_carmen("posebench_quick_on_two_logs") else {
@@ -385,7 +387,13 @@ fn posebench_quick_on_two_logs() {
         d.join("intel-corrected.log.gz"),
         d.join("fhw-corrected.log.gz"),
     ];
-    let out = pfe(&["posebench", "--quick", arg(&logs[0]), arg(&logs[1])]);
+    let out = pfe(&[
+        "posebench",
+        "--quick",
+        "--baseline",
+        arg(&logs[0]),
+        arg(&logs[1]),
+    ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let text = String::from_utf8(out.stdout).unwrap();
     let rows: Vec<Vec<&str>> = text
@@ -393,12 +401,19 @@ fn posebench_quick_on_two_logs() {
         .skip(2)
         .map(|l| l.trim_matches('|').split('|').map(str::trim).collect())
         .collect();
-    assert_eq!(rows.len(), 3, "{text}");
+    assert_eq!(rows.len(), 9, "{text}");
     assert_eq!(
         [rows[0][0], rows[1][0], rows[2][0]],
         ["intel", "fhw", "pooled"]
     );
-    for r in &rows {
+    assert_eq!(rows[5][0], "pooled · PL-ICP, identity", "{text}");
+    assert_eq!(rows[8][0], "pooled · PL-ICP, noisy prior", "{text}");
+    let fail = |r: &Vec<&str>| r[2].parse::<f64>().unwrap();
+    assert!(
+        fail(&rows[8]) < 15.0 && fail(&rows[5]) > fail(&rows[8]),
+        "{text}"
+    );
+    for r in &rows[..3] {
         let num = |i: usize| r[i].parse::<f64>().unwrap();
         let median = |i: usize| {
             r[i].split('/')

@@ -7,6 +7,7 @@
 
 pub mod bench;
 pub mod methods;
+pub mod plicp;
 pub mod posebench;
 pub mod realdata;
 pub mod report;

@@ -186,6 +186,34 @@ fn pose_config() -> pfe_pose::Config {
 /// Registers the consecutive scans of the CARMEN log `path` (the first `max_pairs` pairs),
 /// and with `odometry` runs [`Odometry`] too; bad input is a [`pfe_formats::InputError`].
 pub fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> anyhow::Result<Stats> {
+    Ok(run_log_with(path, max_pairs, odometry, false)?.pfe)
+}
+
+/// The figures of one log: pfe-pose's, and with `baseline` PL-ICP's ([`crate::plicp`]) from
+/// the identity and from the noisy prior (the reference motion perturbed by σ = 50 mm + 10 %
+/// of the translation per axis and 2° + 10 % of the rotation, seed 40).
+pub struct LogFigures {
+    /// pfe-pose without a prior.
+    pub pfe: Stats,
+    /// PL-ICP from the identity (with `baseline`).
+    pub icp_identity: Option<Stats>,
+    /// PL-ICP from the noisy prior (with `baseline`).
+    pub icp_prior: Option<Stats>,
+}
+
+/// [`run_log`], and with `baseline` PL-ICP beside it ([`LogFigures`]).
+pub fn run_log_with(
+    path: &Path,
+    max_pairs: usize,
+    odometry: bool,
+    baseline: bool,
+) -> anyhow::Result<LogFigures> {
+    use rand::SeedableRng as _;
+    use rand_distr::Distribution as _;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(40);
+    let unit = rand_distr::StandardNormal;
+    let mut icp = [Stats::default(), Stats::default()];
+    let mut prev_points: Option<Vec<[f64; 2]>> = None;
     let input = pfe_formats::open_for(path, Format::Carmen, |r| r)
         .with_context(|| format!("{}: cannot open", path.display()))?;
     let mut method = carmen_method();
@@ -247,6 +275,44 @@ pub fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> anyhow::Result<
             track.push((step.pose, rec.pose, chained));
         }
         st.seconds += t0.elapsed().as_secs_f64();
+        let points: Vec<[f64; 2]> = if baseline {
+            rec.ranges
+                .iter()
+                .enumerate()
+                .filter(|(_, r)| r.is_finite())
+                .map(|(i, &r)| {
+                    let b = f64::from(rec.geometry.bearing(i));
+                    [f64::from(r) * b.cos(), f64::from(r) * b.sin()]
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        if let (true, Some(p0), Some((_, pose0))) = (baseline, prev_points.as_ref(), prev.as_ref())
+        {
+            let truth = pose0.inverse().compose(&rec.pose);
+            let t = [
+                f64::from(truth.x),
+                f64::from(truth.y),
+                f64::from(truth.theta),
+            ];
+            let sxy = 50.0 + 0.1 * t[0].hypot(t[1]);
+            let sth = 2f64.to_radians() + 0.1 * t[2].abs();
+            let mut draw = || -> f64 { unit.sample(&mut rng) };
+            let noisy = [
+                t[0] + sxy * draw(),
+                t[1] + sxy * draw(),
+                t[2] + sth * draw(),
+            ];
+            for (k, guess) in [[0.0; 3], noisy].into_iter().enumerate() {
+                let t0 = Instant::now();
+                let a = crate::plicp::plicp(p0, &points, guess, &crate::plicp::Params::default());
+                icp[k].seconds += t0.elapsed().as_secs_f64();
+                icp[k].scans += 1;
+                account(&mut icp[k], a.map(|a| (a.pose, a.cov)), &truth);
+            }
+        }
+        prev_points = baseline.then_some(points);
         st.scans += 1;
         if let (Some(reg), Some((_, p0))) = (reg, prev.as_ref()) {
             let truth = p0.inverse().compose(&rec.pose);
@@ -386,7 +452,40 @@ pub fn run_log(path: &Path, max_pairs: usize, odometry: bool) -> anyhow::Result<
             s += 25;
         }
     }
-    Ok(st)
+    let [a, b] = icp;
+    Ok(LogFigures {
+        pfe: st,
+        icp_identity: baseline.then_some(a),
+        icp_prior: baseline.then_some(b),
+    })
+}
+
+/// Adds a baseline's answer for one pair (`None`: no answer, a failure) against `truth`.
+fn account(st: &mut Stats, answer: Option<([f64; 3], [[f64; 3]; 3])>, truth: &Pose) {
+    st.pairs += 1;
+    let Some((p, cov)) = answer else {
+        st.none += 1;
+        st.failures += 1;
+        return;
+    };
+    let e = [
+        p[0] - f64::from(truth.x),
+        p[1] - f64::from(truth.y),
+        f64::from(wrap((p[2] - f64::from(truth.theta)) as f32)),
+    ];
+    let (terr, rerr) = (e[0].hypot(e[1]), e[2].abs());
+    if terr > 200.0 || rerr > 5f64.to_radians() {
+        st.failures += 1;
+    }
+    st.terr.push(terr);
+    st.rerr.push(rerr);
+    let mut c = cov;
+    c[0][0] += 15.0 * 15.0;
+    c[1][1] += 15.0 * 15.0;
+    c[2][2] += 0.4f64.to_radians().powi(2);
+    if let Some(v) = nis(&c, &e) {
+        st.nis.push(v);
+    }
 }
 
 fn row(out: &mut String, name: &str, st: &mut Stats, odometry: bool) {
@@ -451,9 +550,30 @@ fn header(odometry: bool) -> String {
 /// (when more than one log), with the odometry columns when `odometry`.
 pub fn table(logs: &[(String, Stats)], odometry: bool) -> String {
     let mut out = header(odometry);
+    rows(&mut out, logs, odometry, "");
+    out
+}
+
+/// [`table`] with the rows of further methods below pfe-pose's, `(suffix of their rows'
+/// names, rows)` (pooled per method).
+pub fn table_with(
+    logs: &[(String, Stats)],
+    others: &[(&str, Vec<(String, Stats)>)],
+    odometry: bool,
+) -> String {
+    let mut out = header(odometry);
+    rows(&mut out, logs, odometry, "");
+    for (suffix, logs) in others {
+        rows(&mut out, logs, false, suffix);
+    }
+    out
+}
+
+/// The rows of `logs` and their pooled row, each name followed by `suffix`.
+fn rows(out: &mut String, logs: &[(String, Stats)], odometry: bool, suffix: &str) {
     let mut pooled = Stats::default();
     for (name, st) in logs {
-        row(&mut out, name, &mut st.clone(), odometry);
+        row(out, &format!("{name}{suffix}"), &mut st.clone(), odometry);
         pooled.pairs += st.pairs;
         pooled.failures += st.failures;
         pooled.suspect += st.suspect;
@@ -467,9 +587,8 @@ pub fn table(logs: &[(String, Stats)], odometry: bool) -> String {
         pooled.windows.extend(&st.windows);
     }
     if logs.len() > 1 {
-        row(&mut out, "pooled", &mut pooled, odometry);
+        row(out, &format!("pooled{suffix}"), &mut pooled, odometry);
     }
-    out
 }
 
 /// A log's name in the table: its file name without `-corrected.log.gz` (or `.gz`, `.log`,
