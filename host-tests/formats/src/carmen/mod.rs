@@ -174,7 +174,7 @@ impl Reader {
     ///
     /// ```
     /// use pfe_formats::carmen::Reader;
-    /// let log = "FLASER 3 1 2 3 0.5 0 0 10.25 -3 0.5 7.0 host 7.0\n";
+    /// let log = "FLASER 5 1 2 3 4 5 0.5 0 0 10.25 -3 0.5 7.0 host 7.0\n";
     /// let mut r = Reader::new(Box::new(log.as_bytes()));
     /// assert!(r.next().is_some_and(|s| s.is_ok()));
     /// assert_eq!(r.odometry(), Some([10.25, -3.0, 0.5]));
