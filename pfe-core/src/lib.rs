@@ -1,8 +1,6 @@
-//! # pfe-core: prediction-based geometric feature extraction for 2D laser scans
+#![doc = include_str!("../README.md")]
 //!
-//! An implementation of Y. Zhao and X. Chen, "Prediction-based geometric feature extraction
-//! for 2D laser scanner", *Robotics and Autonomous Systems* 59 (2011) 402–409, for
-//! microcontrollers: `no_std`, no allocator, `f32`, fixed capacities, no panics.
+//! ## Inside the crate
 //!
 //! The paper's steps and ours, in the order [`Extractor::extract`] runs them, and where each
 //! lives:
@@ -28,18 +26,6 @@
 //! only), the work buffers of one scan and the output; every step is a function of slices, not
 //! generic over the capacities, so it is compiled once, in this crate. [`config`] holds the two
 //! named configurations, [`error`] the errors, [`geometry`] the shared plane geometry.
-//!
-//! Features: `libm` (default) or `micromath` maths; `defmt` for `defmt::Format`; `serde` for
-//! `Serialize`/`Deserialize` of the output ([`Feature`], [`Stats`], [`Point`] as `[x, y]`).
-//!
-//! ```
-//! use pfe_core::{Config, Extractor, Scan, ScanGeometry};
-//! let ranges = [3000.0_f32; 361]; // a round room of radius 3 m
-//! let mut ex = Extractor::<361, 32>::new();
-//! let stats = ex.extract(&Scan::from_mm(ScanGeometry::LMS200_180_050, &ranges), &Config::paper())?;
-//! assert_eq!(stats.valid, 361);
-//! # Ok::<(), pfe_core::ExtractError>(())
-//! ```
 #![no_std]
 // One audited exception: `math::sqrt`'s `vsqrt.f32` on hard-float Arm.
 #![deny(unsafe_code)]

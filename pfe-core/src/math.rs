@@ -3,6 +3,9 @@
 //! (or micromath), square root and finiteness by FPU arithmetic. Everything else in the crate
 //! calls these.
 
+#[cfg(not(feature = "libm"))]
+compile_error!("pfe-core needs its `libm` feature (on by default; `micromath` turns it on too)");
+
 #[cfg(feature = "micromath")]
 mod imp {
     use micromath::F32Ext;

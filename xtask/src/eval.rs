@@ -25,6 +25,12 @@ pub fn run(args: &[String]) -> Result<()> {
     if !args.iter().any(|a| a == "--command") {
         cmd.args(["--command", &named]);
     }
+    // `pfe eval` writes nothing without --out: the repository's docs/ unless told otherwise.
+    if !args.iter().any(|a| {
+        a == "--no-write" || a == "--out" || a.starts_with("--out=") || a == "--help" || a == "-h"
+    }) {
+        cmd.arg("--out").arg(crate::util::root().join("docs"));
+    }
     cmd.args(args);
     util::run(&mut cmd)
 }

@@ -20,13 +20,23 @@ use std::process::{Command, Stdio};
 use crate::util::{have, root};
 
 /// The fuzz targets, in the order they run.
-pub const TARGETS: [&str; 5] = [
+pub const TARGETS: [&str; 6] = [
     "lms_decoder",
     "extractor",
     "readers",
     "frame_decoder",
     "lms_driver",
+    "lms_driver_async",
 ];
+
+/// The target whose committed inputs `target` reads: the async driver's target takes the
+/// blocking driver's input layout, so it starts from that target's corpus and regressions.
+fn inputs_of(target: &str) -> &str {
+    match target {
+        "lms_driver_async" => "lms_driver",
+        t => t,
+    }
+}
 
 /// libFuzzer's summary of one run.
 #[derive(Debug, Default)]
@@ -164,8 +174,8 @@ fn seeds(fuzz: &Path) -> Result<()> {
 fn corpus_dirs(fuzz: &Path, target: &str) -> [std::path::PathBuf; 3] {
     [
         fuzz.join("corpus").join(target),
-        fuzz.join("corpus-min").join(target),
-        fuzz.join("regressions").join(target),
+        fuzz.join("corpus-min").join(inputs_of(target)),
+        fuzz.join("regressions").join(inputs_of(target)),
     ]
 }
 
@@ -291,7 +301,7 @@ pub fn run(args: &[String]) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::{corpus_dirs, TARGETS};
+    use super::{corpus_dirs, inputs_of, TARGETS};
     use std::path::Path;
 
     #[test]
@@ -302,8 +312,8 @@ mod tests {
                 corpus_dirs(fuzz, t),
                 [
                     fuzz.join("corpus").join(t),
-                    fuzz.join("corpus-min").join(t),
-                    fuzz.join("regressions").join(t)
+                    fuzz.join("corpus-min").join(inputs_of(t)),
+                    fuzz.join("regressions").join(inputs_of(t))
                 ]
             );
         }

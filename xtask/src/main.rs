@@ -28,6 +28,7 @@ const HELP: &str = "cargo xtask <command> [args]
   demo          firmware in QEMU against the emulated LMS200, prints features (main job)
   test          everything CI runs: fmt, clippy, unit/integration tests, thumbv7em builds,
                 end-to-end QEMU test, MRPT conformance, no-panic build, budgets
+  msrv          the published crates built with the declared rust-version (rustup installs it)
   eval          PFE paper/default vs ACF and split-and-merge on simulated scans -> docs/EVALUATION.md
   conformance   MRPT's CSickLaserSerial against the emulator on a pseudo-terminal
   bench-mcu     instruction counts on mps2-an386 under QEMU (budgets enforced)
@@ -57,6 +58,7 @@ fn main() -> Result<()> {
         }
         "demo" => demo::run(rest),
         "test" => test::run(rest),
+        "msrv" => test::msrv(),
         "eval" => eval::run(rest),
         "conformance" => conformance::run(rest),
         "bench-mcu" => bench_mcu::run(rest),

@@ -17,6 +17,9 @@ use anyhow::Result;
 
 use crate::util::{cargo, ensure_apt, ensure_target, run as sh};
 
+/// The shared CARMEN logs, from the workspace root (`pfe bench --carmen`).
+const CARMEN_LOGS: &str = "../shared/data/carmen";
+
 const THUMB: &str = "thumbv7em-none-eabihf";
 
 /// Runs every step, then lists what was skipped (also after a failure).
@@ -82,6 +85,10 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                 "lms200-emulator",
                 "-p",
                 "pfe-testkit",
+                "-p",
+                "pfe-pose",
+                "-p",
+                "pfe-capi",
             ])
             .env("RUSTDOCFLAGS", "-D warnings"))
     })?;
@@ -101,13 +108,62 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
                 "pfe-frame",
                 "-p",
                 "firmware",
+                "-p",
+                "pfe-pose",
+                "-p",
+                "pfe-capi",
                 "--lib",
                 "--target",
                 THUMB,
-            ]))
+            ]))?;
+            sh(cargo()
+                .args([
+                    "build",
+                    "--release",
+                    "-p",
+                    "lms2xx",
+                    "--lib",
+                    "--target",
+                    THUMB,
+                ])
+                .args(["--features", "async"]))
+        },
+    )?;
+    step(
+        "the async LMS2xx driver: its tests and clippy (feature `async`)",
+        || {
+            sh(cargo().args(["test", "-p", "lms2xx", "--features", "async"]))?;
+            sh(cargo()
+                .args([
+                    "clippy",
+                    "-p",
+                    "lms2xx",
+                    "--features",
+                    "async",
+                    "--all-targets",
+                ])
+                .args(["--", "-D", "warnings"]))
         },
     )?;
     if !quick {
+        step(
+            "the embassy firmware (firmware/embassy, its own workspace) for the STM32F411",
+            || {
+                sh(cargo()
+                    .args(["clippy", "--release", "--locked", "--target", THUMB])
+                    .args(["--manifest-path", "firmware/embassy/Cargo.toml"])
+                    .args(["--", "-D", "warnings"]))?;
+                sh(cargo()
+                    .args(["build", "--release", "--locked", "--target", THUMB])
+                    .args(["--manifest-path", "firmware/embassy/Cargo.toml"]))
+            },
+        )?;
+    }
+    if !quick {
+        step(
+            "MSRV: the published crates and the firmware library build with the declared rust-version",
+            msrv,
+        )?;
         ensure_apt("qemu-system-arm", "qemu-system-arm")?;
     }
     step("host tests (unit, integration, doc, end to end)", || {
@@ -150,7 +206,15 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     })?;
     step(
         "host speed against the baselines (reported, not asserted)",
-        || sh(crate::util::pfe().args(["bench", "--reps", "5", "--report-only"])),
+        || {
+            // The real-data part needs the shared CARMEN logs, named explicitly.
+            let mut bench = crate::util::pfe();
+            bench.args(["bench", "--reps", "5", "--report-only"]);
+            if crate::util::root().join(CARMEN_LOGS).is_dir() {
+                bench.args(["--carmen", CARMEN_LOGS]);
+            }
+            sh(&mut bench)
+        },
     )?;
     step("MRPT conformance", || crate::conformance::run(&[]))?;
     step(
@@ -186,6 +250,67 @@ fn steps(quick: bool, skips: &std::path::Path) -> Result<()> {
     })?;
     eprintln!("\nall checks passed");
     Ok(())
+}
+
+/// The crates users build, on the host; the `no_std` ones also for the Cortex-M target.
+const PUBLISHED: [&str; 8] = [
+    "pfe-pose",
+    "pfe-core",
+    "lms2xx",
+    "pfe-frame",
+    "pfe-formats",
+    "pfe-eval",
+    "lms200-emulator",
+    "pfe-cli",
+];
+const NO_STD: [&str; 6] = [
+    "pfe-core",
+    "lms2xx",
+    "pfe-frame",
+    "firmware",
+    "pfe-pose",
+    "pfe-capi",
+];
+
+/// The workspace's `rust-version` (the root Cargo.toml's `[workspace.package]`).
+fn declared_msrv() -> Result<String> {
+    let manifest = std::fs::read_to_string(crate::util::root().join("Cargo.toml"))?;
+    manifest
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("rust-version"))
+        .and_then(|rest| rest.split('"').nth(1))
+        .map(str::to_string)
+        .ok_or_else(|| anyhow::anyhow!("no rust-version in the workspace's Cargo.toml"))
+}
+
+/// `cargo xtask msrv`: installs the declared MSRV toolchain (rustup, minimal profile, with the
+/// thumbv7em target) and checks the published crates on the host and the `no_std` crates for
+/// the Cortex-M target with it, against Cargo.lock (`--locked`), in `target/msrv`.
+pub fn msrv() -> Result<()> {
+    let v = declared_msrv()?;
+    sh(std::process::Command::new("rustup")
+        .args(["toolchain", "install", &v, "--profile", "minimal"])
+        .args(["--target", THUMB]))?;
+    let check = |extra: &[&str], crates: &[&str]| {
+        let mut c = std::process::Command::new("rustup");
+        c.current_dir(crate::util::root())
+            .args([
+                "run",
+                &v,
+                "cargo",
+                "check",
+                "--locked",
+                "--target-dir",
+                "target/msrv",
+            ])
+            .args(extra);
+        for p in crates {
+            c.args(["-p", p]);
+        }
+        sh(&mut c)
+    };
+    check(&[], &PUBLISHED)?;
+    check(&["--lib", "--target", THUMB], &NO_STD)
 }
 
 /// Entry point: `cargo xtask test [--quick]`.

@@ -7,8 +7,9 @@ use super::cobs::cobs_decode_in_place;
 use super::crc::crc32;
 use super::wire::{Header, ScanHeader, MAX_FEATURES, WIRE_VERSION};
 
-/// A decoded frame.
+/// A decoded frame. `#[non_exhaustive]`: later wire versions may carry more.
 #[derive(Clone, Debug, PartialEq)]
+#[non_exhaustive]
 pub struct Frame {
     /// What the frame is.
     pub header: Header,

@@ -1,9 +1,13 @@
 //! The SICK LMS2xx serial protocol (LMS200 / LMS291 family) for `no_std`, without allocation
 //! and without panics: [`codec`] turns bytes into telegrams and back (sans-IO), [`driver`]
-//! runs the device over a UART (initialisation, retries, re-initialisation, scans).
+//! runs the device over a UART (initialisation, retries, re-initialisation, scans): one
+//! sans-IO state machine ([`driver::machine`]) behind a blocking [`driver::Driver`] and, with
+//! the `async` feature, an `AsyncDriver` for embassy (`embedded-io-async`,
+//! `embedded-hal-async`).
 //!
 //! Data path: UART bytes → [`codec::frame::Decoder`] (framing, CRC-16, resync) →
-//! [`codec::reply::parse_reply`] → [`driver::Driver`] → [`driver::ScanData`].
+//! [`codec::reply::parse_reply`] → [`driver::machine::Machine`] → [`driver::Driver`] →
+//! [`driver::ScanData`].
 //!
 //! Imports go one way: [`codec`] imports nothing else of the crate; [`driver`] imports the
 //! codec. Each item has one public path (`lms2xx::codec::frame::Decoder`,

@@ -405,9 +405,7 @@ fn b0_full_telegram_decodes() {
     // With the real-time index option the same payload no longer fits: an error, no panic.
     assert!(parse_reply(
         tel.payload(),
-        ReplyOptions {
-            realtime_index: true
-        }
+        ReplyOptions::default().with_realtime_index(true)
     )
     .is_err());
 }
@@ -424,9 +422,7 @@ fn b0_realtime_index_option() {
     let t = Telegram::parse(&buf[..n]).unwrap();
     let r = parse_reply(
         t.payload(),
-        ReplyOptions {
-            realtime_index: true,
-        },
+        ReplyOptions::default().with_realtime_index(true),
     )
     .unwrap();
     let Reply::Values(v) = r.reply else { panic!() };
@@ -698,7 +694,7 @@ mod props {
                 if let Ev::T(t) = e {
                     prop_assert!(Telegram::parse(&t).is_ok());
                     let _ = parse_reply(&t[4..t.len() - 2], ReplyOptions::default());
-                    let _ = parse_reply(&t[4..t.len() - 2], ReplyOptions { realtime_index: true });
+                    let _ = parse_reply(&t[4..t.len() - 2], ReplyOptions::default().with_realtime_index(true));
                 }
             }
             // Conservation: every byte is in a telegram, skipped, an ACK/NAK, or still pending.

@@ -16,9 +16,11 @@
 #![deny(missing_docs)]
 
 pub mod lms_driver;
+pub mod lms_driver_async;
 pub mod seeds;
 
 pub use lms_driver::lms_driver;
+pub use lms_driver_async::lms_driver_async;
 
 use std::io::Cursor;
 
@@ -151,7 +153,7 @@ pub fn check_telegram(t: &Telegram<'_>, cap: usize) {
         "re-encoding differs"
     );
     for realtime_index in [false, true] {
-        if let Ok(p) = parse_reply(t.payload(), ReplyOptions { realtime_index }) {
+        if let Ok(p) = parse_reply(t.payload(), ReplyOptions::default().with_realtime_index(realtime_index)) {
             if let Reply::Values(v) = p.reply {
                 assert_eq!(v.len(), usize::from(v.count_word() & 0x3FF));
                 let mut codes = [0u16; 1024];

@@ -37,16 +37,16 @@ use std::rc::Rc;
 
 use lms2xx::codec::types::{Baud, MeasuringMode, Unit, Variant};
 
-use lms2xx::driver::{Clock, Config, Driver, SetBaud};
 use lms200_emulator::telegram::device_telegram;
 use lms200_emulator::{Emulator, EmulatorConfig};
+use lms2xx::driver::{Clock, Config, Counters, Driver, Error, ScanData, SetBaud};
 
 /// Setting bytes before the script.
 pub const SETTINGS: usize = 9;
 /// Polls of a quiet line after which a call counts as hung.
 const POLL_CAP: u64 = 5_000_000;
 
-struct Line {
+pub(crate) struct Line {
     script: VecDeque<u8>,
     rx: VecDeque<u8>,
     now_ns: u64,
@@ -105,8 +105,9 @@ impl Line {
     }
 }
 
+/// The mock UART, delay and clock over one scripted line.
 #[derive(Clone)]
-struct Mock(Rc<RefCell<Line>>);
+pub struct Mock(Rc<RefCell<Line>>);
 
 impl embedded_io::ErrorType for Mock {
     type Error = Infallible;
@@ -225,12 +226,101 @@ pub fn budget_ms(c: &Config) -> (u64, u64, u64) {
     (init, next_scan, command)
 }
 
-/// Runs the driver's calls, chosen by the script's bytes, until the script is spent; returns
-/// the number of scans delivered.
-pub fn lms_driver(data: &[u8]) -> usize {
-    let Some((settings, script)) = data.split_first_chunk::<SETTINGS>() else {
-        return 0;
-    };
+/// One driver call's outcome, as compared between the blocking and the async driver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Outcome {
+    /// The call failed.
+    Failed(Error<Infallible>),
+    /// The call ended without a scan (`init`, `stop`, `reset_device`, an empty `poll`).
+    Done,
+    /// A scan: its sequence number, driver time, value count and first value.
+    Scan(u32, u32, usize, u16),
+}
+
+/// A driver call the script chooses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Call {
+    /// `init`.
+    Init,
+    /// `stop`.
+    Stop,
+    /// `reset_device`.
+    ResetDevice,
+    /// `poll` (the blocking driver only).
+    Poll,
+    /// `next_scan`.
+    NextScan,
+}
+
+/// A driver under test: makes `call` and reports its counters.
+pub trait Calls {
+    /// Makes the call.
+    fn call(&mut self, c: Call) -> Outcome;
+    /// The driver's counters.
+    fn counters(&self) -> Counters;
+}
+
+/// The outcome of a scan, after the checks every delivered scan must pass.
+pub fn scan_outcome(s: &ScanData) -> Outcome {
+    assert!(s.len() <= lms2xx::driver::MAX_VALUES);
+    assert_eq!(s.codes().len(), s.len());
+    Outcome::Scan(
+        s.seq,
+        s.time_ms,
+        s.len(),
+        s.codes().first().copied().unwrap_or(0),
+    )
+}
+
+fn done(r: Result<(), Error<Infallible>>) -> Outcome {
+    match r {
+        Ok(()) => Outcome::Done,
+        Err(e) => Outcome::Failed(e),
+    }
+}
+
+struct Blocking(Driver<Mock, Mock, Mock>);
+
+impl Calls for Blocking {
+    fn call(&mut self, c: Call) -> Outcome {
+        match c {
+            Call::Init => done(self.0.init()),
+            Call::Stop => done(self.0.stop()),
+            Call::ResetDevice => done(self.0.reset_device()),
+            Call::Poll => match self.0.poll() {
+                Ok(Some(s)) => scan_outcome(s),
+                Ok(None) => Outcome::Done,
+                Err(e) => Outcome::Failed(e),
+            },
+            Call::NextScan => match self.0.next_scan() {
+                Ok(s) => scan_outcome(s),
+                Err(e) => Outcome::Failed(e),
+            },
+        }
+    }
+    fn counters(&self) -> Counters {
+        self.0.counters()
+    }
+}
+
+/// What a session did: every call with its outcome, and the counters at the end.
+#[derive(Debug, PartialEq, Eq)]
+pub struct Session {
+    /// Per call: what it was and how it ended.
+    pub calls: Vec<(Call, Outcome)>,
+    /// The driver's counters after the last call.
+    pub counters: Counters,
+}
+
+/// Runs a driver made by `make` (from the mock UART, delay and clock, and the settings)
+/// through the calls chosen by the script's bytes until the script is spent; checks every
+/// call's time budget. With `poll` false a `poll` is a `next_scan`.
+pub fn session<D: Calls>(
+    data: &[u8],
+    poll: bool,
+    make: impl FnOnce(Mock, Config) -> D,
+) -> Option<Session> {
+    let (settings, script) = data.split_first_chunk::<SETTINGS>()?;
     let cfg = config(settings);
     let s8 = settings[8];
     let mut emu_cfg = EmulatorConfig {
@@ -253,9 +343,9 @@ pub fn lms_driver(data: &[u8]) -> usize {
         emu: Emulator::from_config(emu_cfg),
         polls: 0,
     }));
-    let mock = Mock(line.clone());
-    let mut lms = Driver::new(mock.clone(), mock.clone(), mock, cfg);
+    let mut lms = make(Mock(line.clone()), cfg);
     let (init, next_scan, command) = budget_ms(&cfg);
+    let mut calls = Vec::new();
     let mut scans = 0;
     let mut op = 0usize;
     // Each round consumes script bytes or ends (a quiet line after the script).
@@ -264,40 +354,23 @@ pub fn lms_driver(data: &[u8]) -> usize {
         let t0 = line.borrow().quiet_ns;
         let sel = line.borrow().script.front().copied().unwrap_or(0);
         op += 1;
-        let (name, budget) = match (sel as usize + op) % 8 {
-            0 => {
-                let _ = lms.init();
-                ("init", init)
-            }
-            1 => {
-                let _ = lms.stop();
-                ("stop", command)
-            }
-            2 => {
-                let _ = lms.reset_device();
-                ("reset_device", command)
-            }
-            3 => {
-                if let Ok(Some(s)) = lms.poll() {
-                    assert!(s.len() <= lms2xx::driver::MAX_VALUES);
-                    scans += 1;
-                }
-                ("poll", OVERSHOOT_MS)
-            }
-            _ => {
-                if let Ok(s) = lms.next_scan() {
-                    assert!(s.len() <= lms2xx::driver::MAX_VALUES);
-                    assert_eq!(s.codes().len(), s.len());
-                    scans += 1;
-                }
-                ("next_scan", next_scan)
-            }
+        let (call, budget) = match (sel as usize + op) % 8 {
+            0 => (Call::Init, init),
+            1 => (Call::Stop, command),
+            2 => (Call::ResetDevice, command),
+            3 if poll => (Call::Poll, OVERSHOOT_MS),
+            _ => (Call::NextScan, next_scan),
         };
+        let outcome = lms.call(call);
+        if matches!(outcome, Outcome::Scan(..)) {
+            scans += 1;
+        }
+        calls.push((call, outcome));
         let l = line.borrow();
         let took_ms = (l.quiet_ns - t0) / 1_000_000;
         assert!(
             took_ms <= budget,
-            "{name} waited {took_ms} ms on a quiet line, budget {budget} ms ({cfg:?})"
+            "{call:?} waited {took_ms} ms on a quiet line, budget {budget} ms ({cfg:?})"
         );
         let c = lms.counters();
         assert!(c.scans as usize >= scans);
@@ -308,7 +381,32 @@ pub fn lms_driver(data: &[u8]) -> usize {
             break;
         }
     }
-    scans
+    Some(Session {
+        counters: lms.counters(),
+        calls,
+    })
+}
+
+/// Runs the blocking driver's calls, chosen by the script's bytes, until the script is spent;
+/// returns the number of scans delivered.
+pub fn lms_driver(data: &[u8]) -> usize {
+    let Some(s) = session(data, true, |m, cfg| {
+        Blocking(Driver::new(m.clone(), m.clone(), m, cfg))
+    }) else {
+        return 0;
+    };
+    s.calls
+        .iter()
+        .filter(|(_, o)| matches!(o, Outcome::Scan(..)))
+        .count()
+}
+
+/// The blocking driver's session on `data` with `poll` calls made `next_scan` (the
+/// async driver has no `poll`), for comparison.
+pub fn blocking_session_without_poll(data: &[u8]) -> Option<Session> {
+    session(data, false, |m, cfg| {
+        Blocking(Driver::new(m.clone(), m.clone(), m, cfg))
+    })
 }
 
 /// Seed inputs: `(name, bytes)`. Sessions where the emulator answers everything (a device at

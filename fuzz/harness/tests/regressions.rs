@@ -157,3 +157,28 @@ fn skip(test: &str, reason: &str) {
         panic!("{test}: {reason}; CI provides this, so skipping it is a failure");
     }
 }
+
+/// The async driver target takes the `lms_driver` target's inputs (same layout): every
+/// committed `lms_driver` regression and minimised-corpus input, and the emulator seeds, run
+/// through it, where the async and the blocking driver must agree call by call. The emulator
+/// sessions deliver scans, so the agreement covers streaming, not only failures.
+#[test]
+fn lms_driver_inputs_pass_through_the_async_driver() {
+    let mut n = 0;
+    for dir in ["regressions", "corpus-min"] {
+        let Ok(entries) = std::fs::read_dir(fuzz_dir().join(dir).join("lms_driver")) else {
+            continue;
+        };
+        for p in entries.flatten().map(|e| e.path()).filter(|p| p.is_file()) {
+            pfe_fuzz_harness::lms_driver_async(&std::fs::read(&p).unwrap());
+            n += 1;
+        }
+    }
+    assert!(n > 0, "no committed lms_driver inputs");
+    for (name, bytes) in pfe_fuzz_harness::lms_driver::seeds(&[]) {
+        let scans = pfe_fuzz_harness::lms_driver_async(&bytes);
+        if name.starts_with("emulator") {
+            assert!(scans > 0, "{name}: no scan");
+        }
+    }
+}

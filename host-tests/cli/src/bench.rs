@@ -13,10 +13,10 @@ pub struct Args {
     /// Seed of the simulated scans.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Directory of CARMEN logs (*.log, *.clf, gzipped or not); skipped with a message when
-    /// absent.
-    #[arg(long, default_value = "../shared/data/carmen")]
-    carmen: PathBuf,
+    /// Also time real scans: the CARMEN logs (*.log, *.clf, gzipped or not) in this
+    /// directory (without it: simulated scans only; a directory with no scan in it: exit 2).
+    #[arg(long, value_name = "DIR")]
+    carmen: Option<PathBuf>,
     /// At most this many scans from each CARMEN log (0 = all).
     #[arg(long, default_value_t = 200)]
     per_log: usize,
@@ -54,12 +54,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             args.force,
         )?;
     }
-    if args.carmen.exists() && !args.carmen.is_dir() {
-        return Err(super::Exit::bad_input(format!(
-            "--carmen {}: not a directory (give the folder of CARMEN logs)",
-            args.carmen.display()
-        ))
-        .into());
+    if let Some(dir) = &args.carmen {
+        if !dir.is_dir() {
+            let why = if dir.exists() {
+                "not a directory (give the folder of CARMEN logs)"
+            } else {
+                "no such directory"
+            };
+            return Err(
+                super::Exit::bad_input(format!("--carmen {}: {why}", dir.display())).into(),
+            );
+        }
     }
     let report = pfe_eval::bench::run(&BenchOptions {
         sim_scans: args.sim_scans,
@@ -67,6 +72,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         carmen: args.carmen.clone(),
         per_log: args.per_log,
         reps: args.reps,
+    })
+    .map_err(|e| match e.downcast::<pfe_eval::bench::NoScans>() {
+        Ok(none) => super::Exit::bad_input(none.to_string()).into(),
+        Err(e) => e,
     })?;
     let (budgets, met) = budget_lines(&report);
     if args.json {

@@ -4,16 +4,23 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use super::input::{flush, guess, open, stdout, write_json};
+use super::input::{flush, guess, nothing_found, open, shown, stdout, write_json};
 use super::Failure;
 use pfe_formats::{lms200, Format};
+
+/// What `pfe decode` reads: LMS200 captures only (`pfe extract` reads the other formats).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum DecodeFormat {
+    /// Raw byte capture of an LMS200 serial line (0xB0 telegrams, damage skipped).
+    Lms200,
+}
 
 /// Arguments of `pfe decode`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Input format: only `lms200`, the default (decode reads raw LMS200 captures).
-    #[arg(long, short, default_value = "lms200", value_parser = crate::input::format_parser())]
-    format: Format,
+    /// Input format (decode reads raw LMS200 captures only).
+    #[arg(long, short, value_enum, default_value_t = DecodeFormat::Lms200)]
+    format: DecodeFormat,
     /// Input file (`-` = stdin).
     file: PathBuf,
 }
@@ -29,12 +36,10 @@ struct TelegramJson<'a> {
 
 /// Runs `pfe decode`.
 pub fn run(a: Args) -> Result<(), Failure> {
-    let (format, file) = (a.format, a.file.as_path());
-    if format != Format::Lms200 {
-        return Err(Failure::input(format!(
-            "decode reads only --format lms200 (got {format})"
-        )));
-    }
+    let format = match a.format {
+        DecodeFormat::Lms200 => Format::Lms200,
+    };
+    let file = a.file.as_path();
     let input = open(file, format)?;
     let bar = input.bar.clone();
     let mut out = stdout();
@@ -61,6 +66,10 @@ pub fn run(a: Args) -> Result<(), Failure> {
     flush(&mut out)?;
     bar.finish_and_clear();
     let s = reader.summary();
+    let bytes = input.bytes.load(std::sync::atomic::Ordering::Relaxed);
+    if bytes == 0 && error.is_none() {
+        return Err(nothing_found(file, format, "LMS200 telegram", 0));
+    }
     eprintln!(
         "pfe: {} bytes: {} telegrams good, {} dropped for CRC, {} bytes skipped \
          ({} dropped for length, {} malformed B0, {} B0 of an unknown value count, {} other telegrams)",
@@ -76,14 +85,14 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if let Some(e) = error {
         return Err(e);
     }
-    if s.good == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
+    if s.good == 0 {
         let hint = match guess(file, format) {
             Some(g) => format!("; is it {g}? try pfe extract --format {g}"),
             None => String::new(),
         };
         return Err(Failure::input(format!(
-            "{}: no LMS200 telegram found in it{hint}",
-            file.display()
+            "no LMS200 telegram found in {}{hint}",
+            shown(file)
         )));
     }
     Ok(())

@@ -11,32 +11,52 @@ use super::Exit;
 use lms200_emulator::serve::clear_stale_link;
 use lms200_emulator::{serve_pty, serve_tcp, Emulator, EmulatorConfig, RunLimits, SourceKind};
 
-const USAGE: &str = "pfe emulate (--pty PATH | --tcp ADDR) [--scans N] [--seconds S] [--seed N]
-    [--baud 9600|19200|38400|500000] [--variant 180/0.5] [--unit mm|cm] [--source room|tagged] [--trace]
-
-Emulates a SICK LMS200 on a pseudo-terminal (symlink PATH to the slave) or on a TCP socket
-(listens on ADDR and serves one connection). Prints a JSON summary on exit, Ctrl-C included.
-PATH must be free or a stale link of a previous run (a symlink to a /dev/pts/N that is gone):
-anything else there is refused. The link is removed on exit.";
+/// What `pfe emulate --help` says after the options.
+const AFTER_HELP: &str = "Emulates a SICK LMS200 on a pseudo-terminal (--pty) or a TCP socket \
+(--tcp), until --scans, --seconds or Ctrl-C, then prints a JSON summary on stdout. The --pty \
+PATH must be free or a stale link of an earlier run (a symlink to a /dev/pts/N that is gone): \
+anything else there is refused (exit 2). The link is removed on exit.";
 
 /// Arguments of `pfe emulate`.
 #[derive(clap::Args, Debug)]
-#[command(override_help = USAGE, args_override_self = true)]
+#[command(
+    after_help = AFTER_HELP,
+    args_override_self = true,
+    mut_arg("baud", |a| a.help(
+        "Rate the device starts at (9600, 19200, 38400 or 500000; a driver switches it) \
+         [default: 9600]"
+    )),
+    mut_arg("variant", |a| a.help(
+        "Angle/resolution the device starts with: 100/1, 100/0.5, 100/0.25, 180/1 or \
+         180/0.5 [default: 180/0.5]"
+    )),
+    mut_arg("unit", |a| a.help("Range unit the device starts with: mm or cm [default: mm]")),
+)]
 pub struct Args {
-    #[arg(long)]
+    /// Serve on a pseudo-terminal: PATH becomes a symlink to its slave side (open it as the
+    /// scanner's serial port).
+    #[arg(long, value_name = "PATH")]
     pty: Option<PathBuf>,
-    #[arg(long)]
+    /// Serve one connection on a TCP socket listening on ADDR (e.g. 127.0.0.1:2111; port 0:
+    /// any free port, printed on stderr).
+    #[arg(long, value_name = "ADDR")]
     tcp: Option<String>,
-    #[arg(long)]
+    /// Stop after N scans sent [default: no limit].
+    #[arg(long, value_name = "N")]
     scans: Option<u32>,
-    #[arg(long)]
+    /// Stop after S seconds [default: no limit].
+    #[arg(long, value_name = "S")]
     seconds: Option<f64>,
-    #[arg(long)]
+    /// Seed of the emulated scans' noise [default: 1].
+    #[arg(long, value_name = "N")]
     seed: Option<u64>,
     #[command(flatten)]
     lms: LmsArgs,
-    #[arg(long, value_parser = source)]
+    /// What the scans show: room (a simulated room) or tagged (every scan distinct and
+    /// recognisable, for tests) [default: room].
+    #[arg(long, value_parser = source, value_name = "room|tagged")]
     source: Option<SourceKind>,
+    /// Print every command received on stderr.
     #[arg(long)]
     trace: bool,
 }
@@ -90,9 +110,9 @@ pub fn run(a: Args) -> Result<()> {
             serve_tcp(l, cfg, limits)?
         }
         _ => {
-            return Err(Exit::bad_input(format!(
-                "give exactly one of --pty PATH or --tcp ADDR\n\n{USAGE}"
-            ))
+            return Err(Exit::bad_input(
+                "give exactly one of --pty PATH or --tcp ADDR (see pfe emulate --help)",
+            )
             .into())
         }
     };

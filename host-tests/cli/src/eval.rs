@@ -6,38 +6,46 @@ use std::path::PathBuf;
 use pfe_eval::scene::SceneKind;
 use pfe_eval::{default_methods, evaluate, report, svg, EvalOptions};
 
-const HELP: &str =
-    "pfe eval [--kind mixed|office|clutter|pillars|corridor] [--scans 100] [--seed 1]
-         [--sigma 5] [--sweep 1,2,5,10] [--passes 5] [--out docs | --no-write] [--command TEXT]
-         [--force]
+/// What `pfe eval --help` says after the options.
+const AFTER_HELP: &str = "Runs PFE paper, PFE default, ACF and split-and-merge on simulated \
+LMS200 scans with ground truth and prints the tables; with --out DIR also writes \
+DIR/EVALUATION.md and DIR/eval-*.svg (DIR must exist). Build in release for times. Files in \
+DIR that no pfe command wrote are not replaced (exit 2) unless --force.";
 
-Runs PFE paper, PFE default, ACF and split-and-merge on simulated LMS200 scans with ground truth,
-prints the tables and writes OUT/EVALUATION.md and OUT/eval-*.svg. Build in release for times.
-Files in OUT that no pfe command wrote are not replaced (exit 2) unless --force.";
-
-/// Arguments of `pfe eval` (defaults: [`EvalOptions::default`]).
+/// Arguments of `pfe eval` (defaults: those of [`EvalOptions::default`], but nothing is
+/// written without `--out`).
 #[derive(clap::Args, Debug)]
-#[command(override_help = HELP, args_override_self = true)]
+#[command(after_help = AFTER_HELP, args_override_self = true)]
 pub struct Args {
-    #[arg(long)]
-    kind: Option<SceneKind>,
-    #[arg(long)]
-    scans: Option<usize>,
-    #[arg(long)]
-    seed: Option<u64>,
-    #[arg(long)]
-    sigma: Option<f32>,
-    /// Comma-separated σ_r values, mm.
-    #[arg(long)]
-    sweep: Option<String>,
-    #[arg(long)]
-    passes: Option<usize>,
-    #[arg(long, overrides_with = "no_write")]
+    /// Kind of simulated scene: mixed, office, clutter, pillars, corridor or long-corridor.
+    #[arg(long, default_value = "mixed")]
+    kind: SceneKind,
+    /// Scans per noise level, > 0.
+    #[arg(long, default_value_t = EvalOptions::default().scans)]
+    scans: usize,
+    /// Seed of the scenes and the noise.
+    #[arg(long, default_value_t = EvalOptions::default().seed)]
+    seed: u64,
+    /// Range noise σ_r of the main comparison, mm, ≥ 0.
+    #[arg(long, default_value_t = EvalOptions::default().sigma)]
+    sigma: f32,
+    /// Comma-separated σ_r values of the noise sweep, mm, each ≥ 0.
+    #[arg(long, value_name = "MM,MM,...", default_value = "1,2,5,10")]
+    sweep: String,
+    /// Timed passes over the scans (the fastest counts).
+    #[arg(long, default_value_t = EvalOptions::default().passes)]
+    passes: usize,
+    /// Also write EVALUATION.md and the eval-*.svg plots into DIR, a directory that exists
+    /// (without it: the tables only).
+    #[arg(long, value_name = "DIR", overrides_with = "no_write")]
     out: Option<PathBuf>,
+    /// Write no file (the default; cancels an earlier --out).
     #[arg(long, overrides_with = "out")]
     no_write: bool,
-    #[arg(long)]
+    /// The command line the report names as its source [default: cargo xtask eval].
+    #[arg(long, value_name = "TEXT")]
     command: Option<String>,
+    /// Replace files in --out that no pfe command wrote.
     #[arg(long)]
     force: bool,
 }
@@ -46,26 +54,21 @@ impl Args {
     /// The evaluation these arguments ask for.
     pub fn options(self) -> anyhow::Result<EvalOptions> {
         let d = EvalOptions::default();
-        let sweep = match self.sweep {
-            Some(s) => s
-                .split(',')
-                .map(|s| s.trim().parse::<f32>())
-                .collect::<Result<_, _>>()
-                .map_err(|e| super::Exit::bad_input(format!("--sweep: {e}")))?,
-            None => d.sweep,
-        };
+        let sweep = self
+            .sweep
+            .split(',')
+            .map(|s| s.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| super::Exit::bad_input(format!("--sweep: {e}")))?;
         let o = EvalOptions {
-            kind: self.kind.unwrap_or(d.kind),
-            scans: self.scans.unwrap_or(d.scans),
-            seed: self.seed.unwrap_or(d.seed),
-            sigma: self.sigma.unwrap_or(d.sigma),
+            kind: self.kind,
+            scans: self.scans,
+            seed: self.seed,
+            sigma: self.sigma,
             sweep,
-            passes: self.passes.unwrap_or(d.passes),
-            out: if self.no_write {
-                None
-            } else {
-                self.out.or(d.out)
-            },
+            passes: self.passes,
+            // No default directory: without --out nothing is written.
+            out: if self.no_write { None } else { self.out },
             command: self.command.unwrap_or(d.command),
             force: self.force,
         };

@@ -125,8 +125,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if let Some(e) = error {
         return Err(e);
     }
-    if scans == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
-        return Err(nothing_found(file, format, "scan"));
+    if scans == 0 {
+        let bytes = input.bytes.load(std::sync::atomic::Ordering::Relaxed);
+        return Err(nothing_found(file, format, "scan", bytes));
     }
     let s = t0.elapsed().as_secs_f64();
     eprintln!(
@@ -140,6 +141,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
 
 /// Starts the Foxglove file `path`: an existing file is bad input unless `force`.
 fn create_foxglove(path: &Path, force: bool) -> Result<FoxgloveWriter, Failure> {
+    pfe_formats::outfile::check_dir(path).map_err(|e| Failure::input(format!("--mcap {e}")))?;
     let w = if force {
         FoxgloveWriter::create_overwriting(path)
     } else {

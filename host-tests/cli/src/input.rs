@@ -60,7 +60,7 @@ enum FormatArg {
     Lms200,
     /// `topic stamp angle_min angle_increment range_min range_max n r_0 ... r_{n-1}`.
     Hokuyo,
-    /// ROS 2 bag (MCAP) with `sensor_msgs/msg/LaserScan` messages (see [`ros2`]).
+    /// ROS 2 bag (MCAP) with `sensor_msgs/msg/LaserScan` messages (--topic names the topic).
     Mcap,
 }
 
@@ -103,7 +103,7 @@ pub struct MethodArgs {
     /// `auto`: what a CARMEN ROBOTLASER1/RAWLASER1 line's laser type says (1 for a scanner
     /// that is not a SICK LMS), else a SICK LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4
     /// at 0.25°, 1 for a step no LMS2xx has), else 1.
-    #[arg(long, default_value = "auto", value_parser = sweeps_arg)]
+    #[arg(long, default_value = "auto", value_parser = sweeps_parser())]
     pub sweeps: Sweeps,
 }
 
@@ -111,15 +111,12 @@ pub struct MethodArgs {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sweeps(pub Option<u8>);
 
-/// `--sweeps N|auto`: 1 to 4 sweeps, or `auto`.
-pub fn sweeps_arg(s: &str) -> Result<Sweeps, String> {
-    match s.trim() {
-        "auto" => Ok(Sweeps(None)),
-        n => match n.parse::<u8>() {
-            Ok(v @ 1..=4) => Ok(Sweeps(Some(v))),
-            _ => Err(format!("sweeps are 1 to 4, or auto (got {s:?})")),
-        },
-    }
+/// `--sweeps 1|2|4|auto`: the sweeps an LMS2xx interleaves, or `auto`; anything else is
+/// refused by clap with the allowed values.
+pub fn sweeps_parser() -> impl clap::builder::TypedValueParser<Value = Sweeps> {
+    use clap::builder::TypedValueParser as _;
+    clap::builder::PossibleValuesParser::new(["auto", "1", "2", "4"])
+        .map(|s| Sweeps(s.parse::<u8>().ok()))
 }
 
 /// `--sigma-r MM`: a finite range noise above zero (the covariances divide by it).
@@ -245,16 +242,28 @@ pub fn guess(file: &Path, format: Format) -> Option<Format> {
         })
 }
 
-/// Bad input for non-empty input in which `format` found nothing (`what`: "scan",
-/// "telegram"), with a guess at the right format when another one reads a scan from it.
-pub fn nothing_found(file: &Path, format: Format, what: &str) -> Failure {
+/// The name of `file` in messages: `stdin` for `-`.
+pub fn shown(file: &Path) -> String {
+    if file.as_os_str() == "-" {
+        "stdin".to_string()
+    } else {
+        file.display().to_string()
+    }
+}
+
+/// Bad input for input in which `format` found nothing (`what`: "scan", "telegram"): empty
+/// input says so; otherwise the message suggests another format that reads a scan from it.
+pub fn nothing_found(file: &Path, format: Format, what: &str, bytes: u64) -> Failure {
+    if bytes == 0 {
+        return Failure::input(format!("no {what} found in {}: it is empty", shown(file)));
+    }
     let hint = match guess(file, format) {
         Some(g) => format!("is it {g}? try --format {g}"),
         None => "is --format right? (csv, carmen, hokuyo, lms200, mcap)".to_string(),
     };
     Failure::input(format!(
-        "{}: no {what} found in it as {format}; {hint}",
-        file.display()
+        "no {what} found in {} as {format}; {hint}",
+        shown(file)
     ))
 }
 

@@ -5,11 +5,14 @@
 //! pfe decode  FILE                                                              # raw LMS200 telegrams
 //! pfe plot FILE --format F [--config C] --scan K -o out.svg                     # Fig. 7-style SVG
 //! pfe eval|bench|emulate|record ...                                             # see their --help
+//! pfe completions bash|zsh|fish|elvish|powershell                               # shell completions
+//! pfe man [COMMAND]                                                             # man page (roff)
 //! ```
 //!
 //! FILE may be gzipped (detected from its content) or `-` for stdin. Every subcommand exits
 //! with the codes of [`EXIT_CODES`]: 2 for bad input (a bad argument, a malformed line, an
-//! unknown format, an unreadable file, input with no scan), with a one-line error on stderr
+//! unknown format, an unreadable file, input with no scan, an output directory that does not
+//! exist), with a one-line error on stderr
 //! (the scans before it are still written); 1 for any other failure; 130 when interrupted.
 //!
 //! Besides the subcommands: [`figure`] (one scan as SVG), [`foxglove`] (Foxglove MCAP file and
@@ -40,7 +43,7 @@ pub mod record;
 use std::ffi::OsString;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 /// Prediction-based feature extraction (Zhao & Chen 2011) on recorded 2D laser scans.
 #[derive(Parser, Debug)]
@@ -63,13 +66,13 @@ enum Command {
     Decode(decode::Args),
     /// Plot one scan with its mark points and features as SVG (like Fig. 7 of the paper).
     Plot(plot::Args),
-    /// Evaluate methods against ground truth (see `pfe eval --help`).
+    /// Evaluate PFE, split-and-merge and ACF against ground truth on simulated scans.
     Eval(eval::Args),
     /// Speed of pfe-paper, pfe-default, split-merge and acf on the same scans.
     Bench(bench::Args),
-    /// LMS200 device emulator.
+    /// Emulate a SICK LMS200 on a pseudo-terminal or a TCP socket.
     Emulate(emulate::Args),
-    /// Record from a scanner.
+    /// Record a SICK LMS200's raw bytes through the firmware driver.
     Record(record::Args),
     /// Real-data benchmark without ground truth: features re-found in the next scan via the poses.
     Realdata(realdata::Args),
@@ -79,6 +82,19 @@ enum Command {
     Odometry(odometry::Args),
     /// Pose benchmark on CARMEN logs against their poses: a Markdown table.
     Posebench(posebench::Args),
+    /// Print a shell completion script on stdout (e.g. for bash: pfe completions bash >
+    /// ~/.local/share/bash-completion/completions/pfe).
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the man page (roff) on stdout: pfe(1), or pfe-COMMAND(1) of one subcommand
+    /// (e.g. pfe man > pfe.1; man ./pfe.1).
+    Man {
+        /// The subcommand whose page to print (default: pfe's own, which lists them all).
+        command: Option<String>,
+    },
 }
 
 /// The exit codes of every subcommand, as `pfe --help` prints them.
@@ -86,7 +102,8 @@ pub const EXIT_CODES: &str = "FILE may be gzipped (detected from its content) or
 
 Exit codes (every subcommand): 0 success; 2 bad input: a bad argument, an unreadable or \
 malformed file (one-line error with the line number; the scans before it are still written), \
-input with no scan, an output that would overwrite a file; 1 any other failure (device, I/O, \
+input with no scan (empty input included), an output that would overwrite a file or go into a \
+directory that does not exist (pfe creates none); 1 any other failure (device, I/O, \
 a broken budget); 130 interrupted by Ctrl-C (what was recorded is kept), except `pfe listen`, \
 whose normal stop is Ctrl-C (exit 0 after its summary).";
 
@@ -197,6 +214,8 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Listen(a) => listen::run(a),
         Command::Odometry(a) => odometry::run(a),
         Command::Posebench(a) => posebench::run(a).map_err(|e| Failure::of("posebench", &e)),
+        Command::Completions { shell } => completions(shell),
+        Command::Man { command } => man(command.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -205,6 +224,58 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
             ExitCode::from(f.code)
         }
     }
+}
+
+/// The clap tree of `pfe`, built (subcommands know their full names, e.g. `pfe extract`).
+fn command_tree() -> clap::Command {
+    let mut cmd = Cli::command();
+    cmd.build();
+    cmd
+}
+
+/// Writes `bytes` to stdout; a closed pipe is not an error.
+fn print_bytes(bytes: &[u8]) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(bytes).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Failure::other(format!("cannot write output: {e}")))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// `pfe completions SHELL`: the completion script of the clap tree.
+fn completions(shell: clap_complete::Shell) -> Result<(), Failure> {
+    let mut cmd = Cli::command();
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut cmd, "pfe", &mut script);
+    print_bytes(&script)
+}
+
+/// `pfe man [COMMAND]`: the man page of `pfe` (listing its subcommands) or of one subcommand.
+fn man(command: Option<&str>) -> Result<(), Failure> {
+    let tree = command_tree();
+    let man = match command {
+        None => clap_mangen::Man::new(tree),
+        Some(name) => {
+            let sub = tree.find_subcommand(name).cloned().ok_or_else(|| {
+                let names: Vec<&str> = tree.get_subcommands().map(|s| s.get_name()).collect();
+                Failure::input(format!(
+                    "man: no subcommand {name:?} (one of {})",
+                    names.join(", ")
+                ))
+            })?;
+            // pfe-extract(1) and so on, as git and cargo name their subcommands' pages.
+            let title = format!("pfe-{}", sub.get_name());
+            clap_mangen::Man::new(sub).title(title)
+        }
+    };
+    let mut roff = Vec::new();
+    man.source(format!("pfe {}", env!("CARGO_PKG_VERSION")))
+        .render(&mut roff)
+        .map_err(|e| Failure::other(format!("man: {e}")))?;
+    print_bytes(&roff)
 }
 
 /// Parses one subcommand's arguments (`args` without the program or subcommand name) for the

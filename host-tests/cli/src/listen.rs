@@ -47,7 +47,8 @@ pub struct Args {
     /// Stop after S seconds.
     #[arg(long)]
     seconds: Option<f64>,
-    /// Write an SVG plot of scans into DIR (created if missing; existing files are kept).
+    /// Write an SVG plot of scans into DIR (DIR is created if missing, its parent must exist;
+    /// existing files are kept).
     #[arg(long)]
     svg: Option<PathBuf>,
     /// With --svg: plot every Nth scan only.
@@ -84,13 +85,17 @@ impl Foxglove {
     fn start(a: &Args) -> Result<Self, Failure> {
         let file = match &a.mcap {
             Some(p) => Some(
-                FoxgloveWriter::create_features_only(p, a.force).map_err(|e| {
-                    if e.kind() == io::ErrorKind::AlreadyExists {
-                        Failure::input(format!("--mcap: {e}; --force replaces it"))
-                    } else {
-                        Failure::input(format!("--mcap {}: {e}", p.display()))
-                    }
-                })?,
+                pfe_formats::outfile::check_dir(p)
+                    .map_err(|e| Failure::input(format!("--mcap {e}")))
+                    .and_then(|()| {
+                        FoxgloveWriter::create_features_only(p, a.force).map_err(|e| {
+                            if e.kind() == io::ErrorKind::AlreadyExists {
+                                Failure::input(format!("--mcap: {e}; --force replaces it"))
+                            } else {
+                                Failure::input(format!("--mcap {}: {e}", p.display()))
+                            }
+                        })
+                    })?,
             ),
             None => None,
         };
@@ -220,8 +225,13 @@ pub fn run(a: Args) -> Result<(), Failure> {
     };
     let mut plots = match &a.svg {
         Some(dir) => {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| Failure::input(format!("--svg {}: {e}", dir.display())))?;
+            // DIR itself, which the user named, not the directories above it.
+            if !dir.is_dir() {
+                pfe_formats::outfile::check_dir(dir)
+                    .map_err(|e| Failure::input(format!("--svg {e}")))?;
+                std::fs::create_dir(dir)
+                    .map_err(|e| Failure::input(format!("--svg {}: {e}", dir.display())))?;
+            }
             Some(Plots {
                 dir: dir.clone(),
                 every: a.svg_every,

@@ -32,13 +32,17 @@ pub fn unit(s: &str) -> Result<Unit, String> {
     }
 }
 
-/// `--baud`, `--variant`, `--unit` (unset: the device's or driver's default).
+/// `--baud`, `--variant`, `--unit` (unset: the device's or driver's default; each command
+/// says which in its help).
 #[derive(clap::Args, Debug)]
 pub struct LmsArgs {
-    #[arg(long, value_parser = baud)]
+    /// Serial rate: 9600, 19200, 38400 or 500000.
+    #[arg(long, value_name = "BPS", value_parser = baud)]
     pub baud: Option<Baud>,
-    #[arg(long, value_parser = variant)]
+    /// Angle/resolution, e.g. 180/0.5.
+    #[arg(long, value_name = "ANGLE/RES", value_parser = variant)]
     pub variant: Option<Variant>,
-    #[arg(long, value_parser = unit)]
+    /// Range unit: mm or cm.
+    #[arg(long, value_name = "mm|cm", value_parser = unit)]
     pub unit: Option<Unit>,
 }

@@ -97,8 +97,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
         }
     }
     bar.finish_and_clear();
-    if count == 0 && input.bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
-        return Err(nothing_found(file, format, "scan"));
+    if count == 0 {
+        let bytes = input.bytes.load(std::sync::atomic::Ordering::Relaxed);
+        return Err(nothing_found(file, format, "scan", bytes));
     }
     if found.is_empty() {
         let what = if want == 1 {

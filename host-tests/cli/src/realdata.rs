@@ -20,10 +20,10 @@ pub struct Args {
     /// Also write this Markdown report, with its plots (SVG) next to it.
     #[arg(long)]
     md: Option<PathBuf>,
-    /// Interleaved sweeps each scan is declared to be made of (1 to 4), or `auto`: one for a
+    /// Interleaved sweeps each scan is declared to be made of (1, 2 or 4), or `auto`: one for a
     /// ROBOTLASER1/RAWLASER1 line whose laser is not a SICK LMS, else a SICK LMS2xx's (2 at
     /// 0.5°, 4 at 0.25°, 1 otherwise). pfe aligns declared sweeps whose offset shows.
-    #[arg(long, default_value = "auto", value_parser = crate::input::sweeps_arg)]
+    #[arg(long, default_value = "auto", value_parser = crate::input::sweeps_parser())]
     sweeps: crate::input::Sweeps,
     /// Tell the methods each scan's motion, from the poses and times of the scans before and
     /// after it (when they are at most 1 s apart): pfe's two modes de-skew the beams with it,

@@ -9,26 +9,43 @@ use super::lms_args::LmsArgs;
 use super::Exit;
 use crate::device::record::{record, RecordOptions};
 
-const USAGE: &str = "pfe record --port PATH [--baud 38400] [--scans N] -o FILE [--force]
-    [--variant 180/0.5] [--unit mm|cm]
+/// What `pfe record --help` says after the options.
+const AFTER_HELP: &str = "Initialises the LMS200 on --port with the firmware driver, streams \
+--scans scans and writes the raw bytes received, up to the end of the last scan, to FILE \
+(pfe decode and pfe extract --format lms200 read it). Prints a JSON summary (driver counters) \
+on stdout.
 
-Initialises the LMS200 on PATH with the firmware driver, streams N scans (default 10) and writes
-every raw byte received to FILE. Prints a JSON summary (driver counters).
-
-An existing FILE is refused (exit 2) unless --force. The port is opened first and the bytes go
-to a temporary file beside FILE, renamed to FILE at the end: a port that cannot be opened leaves
-FILE untouched, and Ctrl-C (exit 130) or a device failure halfway keeps what was received.";
+An existing FILE is refused (exit 2) unless --force. The port is opened first and the bytes go \
+to a temporary file beside FILE, renamed to FILE at the end: a port that cannot be opened \
+leaves FILE untouched, and Ctrl-C (exit 130) or a device failure halfway keeps what was \
+received.";
 
 /// Arguments of `pfe record`.
 #[derive(clap::Args, Debug)]
-#[command(override_help = USAGE, args_override_self = true)]
+#[command(
+    after_help = AFTER_HELP,
+    args_override_self = true,
+    mut_arg("baud", |a| a.help(
+        "Rate the driver switches the device to: 9600, 19200, 38400 or 500000 \
+         [default: 38400]"
+    )),
+    mut_arg("variant", |a| a.help(
+        "Angle/resolution the driver sets: 100/1, 100/0.5, 100/0.25, 180/1 or 180/0.5 \
+         [default: 180/0.5]"
+    )),
+    mut_arg("unit", |a| a.help("Range unit the driver sets: mm or cm [default: mm]")),
+)]
 pub struct Args {
-    #[arg(long)]
+    /// Serial port of the LMS200 (a tty; it starts at 9600 Bd).
+    #[arg(long, value_name = "PATH", required = true)]
     port: Option<PathBuf>,
-    #[arg(short = 'o', long = "output")]
+    /// The capture file (in a directory that exists).
+    #[arg(short = 'o', long = "output", value_name = "FILE", required = true)]
     output: Option<PathBuf>,
-    #[arg(long, default_value_t = 10)]
+    /// Scans to record.
+    #[arg(long, value_name = "N", default_value_t = 10)]
     scans: u32,
+    /// Replace an existing FILE.
     #[arg(long)]
     force: bool,
     #[command(flatten)]
@@ -53,7 +70,7 @@ pub fn run(a: Args) -> Result<()> {
         cfg.unit = u;
     }
     let (Some(port), Some(out)) = (a.port, a.output) else {
-        return Err(Exit::bad_input(format!("--port and -o are required\n\n{USAGE}")).into());
+        return Err(Exit::bad_input("--port and -o are required (see pfe record --help)").into());
     };
     let opts = RecordOptions {
         overwrite: a.force,

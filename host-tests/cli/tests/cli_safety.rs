@@ -102,12 +102,12 @@ fn record_never_empties_an_existing_file() {
     assert!(stderr(&r).contains("--force"), "{}", stderr(&r));
     // With --force but a port that cannot be opened: the file is untouched.
     let r = pfe(&["record", "--port", "/nonexistent/tty", "-o", o, "--force"]);
-    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
     assert!(stderr(&r).contains("/nonexistent/tty"), "{}", stderr(&r));
     assert_eq!(std::fs::read(&out).unwrap(), b"a user's recording");
     // A port that is not a tty: the same.
     let r = pfe(&["record", "--port", "/dev/null", "-o", o, "--force"]);
-    assert_eq!(r.status.code(), Some(1), "{}", stderr(&r));
+    assert_eq!(r.status.code(), Some(2), "{}", stderr(&r));
     assert_eq!(std::fs::read(&out).unwrap(), b"a user's recording");
     assert_eq!(
         std::fs::read_dir(&dir).unwrap().count(),
@@ -287,11 +287,11 @@ fn input_with_no_scan_is_an_error_with_a_hint() {
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(stderr(&out).contains("no scan found"), "{}", stderr(&out));
     assert!(stderr(&out).contains("--format"), "{}", stderr(&out));
-    // Empty input is not an error (nothing to find).
+    // Empty input is bad input too: no scan in it (cli_surprises checks every reader).
     let empty = dir.join("empty.csv");
     std::fs::write(&empty, "").unwrap();
     let out = pfe(&["extract", "--format", "csv", arg(&empty)]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

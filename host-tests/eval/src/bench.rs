@@ -1,7 +1,7 @@
 //! `pfe bench`: host speed of every method on the same scans, in one run, single thread.
 //!
 //! Data sets: simulated scans ([`crate::scene`] mixed scenes, SICK LMS200 geometry, σ_r = 5 mm)
-//! and, when `../shared/data/carmen` is present, real CARMEN logs read by
+//! and, when a directory of them is given (`pfe bench --carmen DIR`), real CARMEN logs read by
 //! [`pfe_formats::carmen::Reader`] (its documented angle convention: n odd → −90° +
 //! i·180°/(n−1); n even → −90° + i·180°/n; readings at or beyond the scanner's maximum —
 //! 50 m, or 81.83 m for 80 m-mode logs — are no return). Every method is told the data's
@@ -261,37 +261,51 @@ pub struct BenchOptions {
     pub sim_scans: usize,
     /// Seed of the simulated scans.
     pub seed: u64,
-    /// Directory of CARMEN logs (*.log, *.clf, gzipped or not); skipped with a message when
-    /// absent.
-    pub carmen: PathBuf,
+    /// Directory of CARMEN logs (*.log, *.clf, gzipped or not), or none: simulated scans
+    /// only. A directory with no scan in it is an error ([`NoScans`]).
+    pub carmen: Option<PathBuf>,
     /// At most this many scans from each CARMEN log (0 = all).
     pub per_log: usize,
     /// Timed passes per data set and method; the median is reported.
     pub reps: usize,
 }
 
+/// The CARMEN directory given to [`run`] holds no scan (no log, or only empty ones).
+#[derive(Debug)]
+pub struct NoScans(pub PathBuf);
+
+impl std::fmt::Display for NoScans {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "no scan found in {} (no *.log or *.clf CARMEN log with a scan in it)",
+            self.0.display()
+        )
+    }
+}
+
+impl std::error::Error for NoScans {}
+
 /// Runs the benchmark and returns the report.
 pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
+    // The logs are read first: a directory without scans fails before any timing.
+    let real = match &args.carmen {
+        Some(dir) => {
+            let real = carmen_scans(dir, args.per_log)?;
+            if real.is_empty() {
+                return Err(NoScans(dir.clone()).into());
+            }
+            Some(real)
+        }
+        None => None,
+    };
     let mut datasets = Vec::new();
     let sim = simulated_scans(args.sim_scans.max(1), args.seed);
     let mut methods = methods_for(DEFAULT_SIGMA_R);
     datasets.push(time_methods("simulated", &sim, &mut methods, args.reps));
-    if args.carmen.is_dir() {
+    if let Some(real) = real {
         let mut methods = methods_for(Format::Carmen.sigma_r());
-        let real = carmen_scans(&args.carmen, args.per_log)?;
-        if real.is_empty() {
-            eprintln!(
-                "pfe bench: no scans in {}; real data skipped",
-                args.carmen.display()
-            );
-        } else {
-            datasets.push(time_methods("carmen", &real, &mut methods, args.reps));
-        }
-    } else {
-        eprintln!(
-            "pfe bench: {} is absent; real-data benchmark skipped",
-            args.carmen.display()
-        );
+        datasets.push(time_methods("carmen", &real, &mut methods, args.reps));
     }
     Ok(BenchReport {
         profile: if cfg!(debug_assertions) {
@@ -393,7 +407,7 @@ pub fn write_markdown(
 ) -> anyhow::Result<()> {
     use std::fmt::Write as _;
     let mut body = format!(
-        "Reproduce: `cargo run --release -p pfe-cli -- bench --md docs/PERFORMANCE.md`\n\n\
+        "Reproduce: `cargo run --release -p pfe-cli -- bench --carmen ../shared/data/carmen --md docs/PERFORMANCE.md`\n\n\
          Host CPU: {}, one thread, release build, `std::time::Instant`; median of {} interleaved \
          passes per method (the machine is shared: compare methods within one run). \
          **× pfe-default** = time(method) / time(pfe-default): above 1, pfe-default is faster. \

@@ -67,6 +67,7 @@ mod tests {
     fn sections_are_replaced_in_pfes_documents_only() {
         let d = std::env::temp_dir().join(format!("pfe-docs-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
         let (doc, user) = (d.join("PERF.md"), d.join("user.md"));
         write_section(&doc, "a", "A", "one\n", false).unwrap();
         write_section(&doc, "b", "B", "two\n", false).unwrap();

@@ -187,12 +187,7 @@ impl Reader {
             return None;
         }
         let parsed = MeasuredValues::parse(payload, ReplyOptions::default()).or_else(|_| {
-            MeasuredValues::parse(
-                payload,
-                ReplyOptions {
-                    realtime_index: true,
-                },
-            )
+            MeasuredValues::parse(payload, ReplyOptions::default().with_realtime_index(true))
         });
         let (Ok(values), Some(&status)) = (parsed, payload.last()) else {
             self.summary.malformed += 1;

@@ -1,6 +1,7 @@
 //! The files `pfe` commands write (plots, pages, reports): a new file, or one a `pfe` command
 //! wrote before, which carries [`MARK`] on its first line. A file of the user's is never
-//! replaced unless they say so (`--force`).
+//! replaced unless they say so (`--force`), and no directory is created: an output goes
+//! into a directory that exists.
 //!
 //! ```
 //! use pfe_formats::outfile::{write, OutError, MARK};
@@ -32,6 +33,8 @@ pub enum OutError {
     /// The path is a directory or a device other than a character device or a pipe: never
     /// written, whatever `--force` says.
     NotAFile(PathBuf),
+    /// The directory the file would go into does not exist (the file, the directory).
+    NoDir(PathBuf, PathBuf),
     /// Writing failed.
     Io(PathBuf, std::io::Error),
 }
@@ -40,7 +43,7 @@ impl OutError {
     /// Whether the user gave a path that cannot or may not be written (bad input), not a
     /// failure of the system.
     pub fn is_refusal(&self) -> bool {
-        matches!(self, Self::Exists(_) | Self::NotAFile(_))
+        matches!(self, Self::Exists(_) | Self::NotAFile(_) | Self::NoDir(..))
     }
 }
 
@@ -53,6 +56,12 @@ impl std::fmt::Display for OutError {
                 p.display()
             ),
             Self::NotAFile(p) => write!(f, "{}: not a file pfe can write", p.display()),
+            Self::NoDir(p, d) => write!(
+                f,
+                "{}: no such directory {} (make it first)",
+                p.display(),
+                d.display()
+            ),
             Self::Io(p, e) => write!(f, "{}: cannot write: {e}", p.display()),
         }
     }
@@ -116,11 +125,21 @@ pub fn beside(path: &Path, name: &str) -> Option<PathBuf> {
     (!matches!(target(path), Target::Stream)).then(|| path.with_file_name(name))
 }
 
+/// [`OutError::NoDir`] when the directory a new file `path` would go into does not exist
+/// (a relative name without a directory goes into the current one).
+pub fn check_dir(path: &Path) -> Result<(), OutError> {
+    match path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        Some(dir) if !dir.is_dir() => Err(OutError::NoDir(path.to_path_buf(), dir.to_path_buf())),
+        _ => Ok(()),
+    }
+}
+
 /// The first of `paths` that may not be written (unless `force`), as an error: check every
-/// output of a command before writing any.
+/// output of a command before writing any. A new file's directory must exist ([`check_dir`]).
 pub fn check<'a>(paths: impl IntoIterator<Item = &'a Path>, force: bool) -> Result<(), OutError> {
     for p in paths {
         match target(p) {
+            Target::New => check_dir(p)?,
             Target::Other => return Err(OutError::NotAFile(p.to_path_buf())),
             Target::File { ours: false, .. } if !force => {
                 return Err(OutError::Exists(p.to_path_buf()))
@@ -131,8 +150,8 @@ pub fn check<'a>(paths: impl IntoIterator<Item = &'a Path>, force: bool) -> Resu
     Ok(())
 }
 
-/// Writes [`MARK`], a newline and `body` to `path`, creating its directory; refuses a file
-/// no `pfe` command wrote unless `force`. A new file is created only if nothing appeared at
+/// Writes [`MARK`], a newline and `body` to `path`, in a directory that exists; refuses a
+/// file no `pfe` command wrote unless `force`. A new file is created only if nothing appeared at
 /// the path since the check (and removed if the write is cut short); an existing file is
 /// replaced whole (a temporary file beside it, renamed over it); a link to a file, a device
 /// or a pipe is written through.
@@ -148,9 +167,6 @@ pub fn write(path: &Path, body: &str, force: bool) -> Result<(), OutError> {
     };
     if through {
         return std::fs::write(path, text).map_err(io);
-    }
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| OutError::Io(dir.to_path_buf(), e))?;
     }
     if new {
         // Fails if anything appeared there since the check; removed again if cut short.
@@ -237,8 +253,15 @@ mod tests {
         ));
         assert!(matches!(write(&sub, "x", true), Err(OutError::NotAFile(_))));
         assert!(sub.is_dir());
-        // A new file in a new directory; a device is no file to lose.
-        write(&d.join("new/deeper/x.svg"), "<svg/>", false).unwrap();
+        // No directory is created for a new file, even with --force; a device is no file to
+        // lose.
+        for force in [false, true] {
+            let deep = d.join("new/deeper/x.svg");
+            assert!(
+                matches!(write(&deep, "<svg/>", force), Err(OutError::NoDir(p, q)) if p == deep && q == d.join("new/deeper"))
+            );
+            assert!(!d.join("new").exists());
+        }
         assert!(may_write(Path::new("/dev/null")));
         // A dangling link is not followed into a new file.
         std::os::unix::fs::symlink(d.join("nowhere"), d.join("link")).unwrap();

@@ -145,9 +145,11 @@ pub enum Event<'a> {
     Telegram(Telegram<'a>),
 }
 
-/// Counters kept by a [`Decoder`]. All saturate instead of wrapping.
+/// Counters kept by a [`Decoder`]. All saturate instead of wrapping. `#[non_exhaustive]`:
+/// more counters may come.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct DecoderStats {
     /// Telegrams delivered with a good CRC.
     pub telegrams: u32,

@@ -60,13 +60,28 @@ impl Status {
     }
 }
 
-/// Options for parsing replies.
+/// Options for parsing replies. `#[non_exhaustive]`: start from [`ReplyOptions::default`].
+///
+/// ```
+/// use lms2xx::codec::reply::ReplyOptions;
+/// let opts = ReplyOptions::default().with_realtime_index(true);
+/// assert!(opts.realtime_index);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct ReplyOptions {
     /// B0 carries a real-time scan index byte before the status byte (config availability flag
     /// 0x02).
     pub realtime_index: bool,
+}
+
+impl ReplyOptions {
+    /// These options with [`ReplyOptions::realtime_index`] set to `on`.
+    pub const fn with_realtime_index(mut self, on: bool) -> Self {
+        self.realtime_index = on;
+        self
+    }
 }
 
 /// A parsed reply and its status byte.

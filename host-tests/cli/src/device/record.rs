@@ -1,8 +1,9 @@
 //! Capture raw LMS200 bytes from a serial port through the firmware driver (`pfe record`).
 //!
-//! The firmware [`Driver`] runs over the std adapters of [`super::tty`]; every byte received from
-//! the port is written to the capture (the capture format is just the raw device bytes,
-//! decodable with `pfe decode`). The port is opened before the output is touched, the bytes go
+//! The firmware [`Driver`] runs over the std adapters of [`super::tty`]; every byte the driver
+//! reads from the port, up to the end of the last scan's telegram, is written to the capture
+//! (the capture format is just the raw device bytes, decodable with `pfe decode`; it holds
+//! the scans reported, not those still arriving while the device is stopped). The port is opened before the output is touched, the bytes go
 //! to a temporary file beside the output, and that file is renamed to the output at the end,
 //! also when the run is stopped or fails halfway with bytes received, so a capture is never
 //! lost and an existing file is never emptied by a run that could not start.
@@ -81,7 +82,9 @@ pub fn record(
     if !opts.overwrite && out.symlink_metadata().is_ok() {
         return Err(OutputExists(out.to_path_buf()).into());
     }
-    let mut tty = TtyPort::open(port)?;
+    pfe_formats::outfile::check_dir(out)?;
+    // A port that cannot be opened as a tty is bad input (exit 2), as for `pfe listen`.
+    let mut tty = TtyPort::open(port).map_err(|e| crate::Exit::bad_input(format!("{e:#}")))?;
     if let Some(stop) = &opts.stop {
         tty = tty.with_stop(stop.clone());
     }
@@ -92,6 +95,7 @@ pub fn record(
         .open(&tmp)
         .with_context(|| format!("creating {}", tmp.display()))?;
     let tty = tty.with_capture(Box::new(std::io::BufWriter::new(sink)));
+    let capturing = tty.capture_switch();
     let stopped = || {
         opts.stop
             .as_ref()
@@ -114,6 +118,9 @@ pub fn record(
             break;
         }
     }
+    // The capture ends with the last scan's telegram: the scans still arriving while the
+    // device is told to stop are not kept, so the capture holds the scans reported.
+    capturing.store(false, Ordering::Relaxed);
     // Leave the device quiet (request mode); a failure here does not spoil the capture.
     if !interrupted {
         let _ = lms.stop();

@@ -15,11 +15,13 @@ use lms2xx::driver::{Clock, SetBaud};
 use nix::sys::termios::{self, BaudRate, SetArg};
 
 /// A tty opened raw and non-blocking, usable as an `embedded-io` UART by the firmware driver.
-/// Every received byte is also appended to an optional capture sink.
+/// Every byte handed to the driver is also appended to an optional capture sink, until the
+/// capture is switched off ([`TtyPort::capture_switch`]).
 pub struct TtyPort {
     file: File,
     buf: Vec<u8>,
     capture: Option<Box<dyn Write + Send>>,
+    capturing: Arc<AtomicBool>,
     captured: u64,
     stop: Option<Arc<AtomicBool>>,
 }
@@ -58,15 +60,23 @@ impl TtyPort {
             file,
             buf: Vec::new(),
             capture: None,
+            capturing: Arc::new(AtomicBool::new(true)),
             captured: 0,
             stop: None,
         })
     }
 
-    /// Copies every received byte into `sink`.
+    /// Copies every byte the driver reads into `sink`. While capturing, a read hands out one
+    /// byte: the driver then holds no byte it has not decoded, so the capture ends exactly
+    /// where the driver's last telegram ended when the capture is switched off.
     pub fn with_capture(mut self, sink: Box<dyn Write + Send>) -> Self {
         self.capture = Some(sink);
         self
+    }
+
+    /// Clearing this flag ends the capture: later bytes are not written to it.
+    pub fn capture_switch(&self) -> Arc<AtomicBool> {
+        self.capturing.clone()
     }
 
     /// Fails every read once `stop` is set (so a blocked driver returns, e.g. on Ctrl-C).
@@ -91,12 +101,7 @@ impl TtyPort {
         let mut tmp = [0u8; 1024];
         match self.file.read(&mut tmp) {
             Ok(n) => {
-                let got = tmp.get(..n).unwrap_or(&[]);
-                if let Some(c) = self.capture.as_mut() {
-                    c.write_all(got)?;
-                }
-                self.captured += n as u64;
-                self.buf.extend_from_slice(got);
+                self.buf.extend_from_slice(tmp.get(..n).unwrap_or(&[]));
                 Ok(())
             }
             Err(e) if e.kind() == ErrorKind::WouldBlock || e.kind() == ErrorKind::Interrupted => {
@@ -133,9 +138,15 @@ impl embedded_io::Read for TtyPort {
         if self.buf.is_empty() {
             self.fill()?;
         }
-        let n = out.len().min(self.buf.len());
+        let capturing = self.capture.is_some() && self.capturing.load(Ordering::Relaxed);
+        let most = if capturing { 1 } else { out.len() };
+        let n = out.len().min(self.buf.len()).min(most);
         for (d, s) in out.iter_mut().zip(self.buf.drain(..n)) {
             *d = s;
+        }
+        if let (true, Some(c)) = (capturing, self.capture.as_mut()) {
+            c.write_all(out.get(..n).unwrap_or(&[]))?;
+            self.captured += n as u64;
         }
         Ok(n)
     }

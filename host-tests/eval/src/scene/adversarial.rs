@@ -5,7 +5,7 @@
 //! Every scan is LMS range codes (as a B0 telegram carries them) with its unit: 361 values
 //! (180° at 0.5°) unless stated, 401 values for 100° at 0.25°.
 
-use pfe_core::{Extractor, Feature, Ranges, Scan, ScanGeometry, Stats, LMS_MAX_VALID_8M};
+use pfe_core::{Config, Extractor, Feature, Ranges, Scan, ScanGeometry, Stats, LMS_MAX_VALID_8M};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -63,7 +63,7 @@ impl AdversarialScan {
             quantum: self.mm_per_unit(),
         };
         let mut ex = Extractor::<401, 48>::new();
-        let _ = ex.extract(&scan, &firmware::app::ConfigChoice::Default.config());
+        let _ = ex.extract(&scan, &BOARD_CONFIG);
         let circles = ex
             .features()
             .iter()
@@ -75,6 +75,10 @@ impl AdversarialScan {
         }
     }
 }
+
+/// The board firmware's configuration, `firmware::app::ConfigChoice::Default` (host-tests'
+/// `board_config` test keeps the two equal; pfe-eval does not depend on the firmware crate).
+pub const BOARD_CONFIG: Config = Config::default_config().with_scrutiny(false);
 
 /// What pfe-core did with a scan: its counters and the circles among its features (a circle
 /// costs an algebraic fit and its geometric refinement).
