@@ -250,14 +250,9 @@ pub fn run(a: Args) -> Result<(), Failure> {
     if let Some(e) = error {
         return Err(e);
     }
-    if n == 0 && bytes.load(std::sync::atomic::Ordering::Relaxed) > 0 {
-        return Err(nothing_found(file, format, "scan"));
-    }
     if n == 0 {
-        return Err(Failure::input(format!(
-            "{}: empty: no scan",
-            file.display()
-        )));
+        let bytes = bytes.load(std::sync::atomic::Ordering::Relaxed);
+        return Err(nothing_found(file, format, "scan", bytes));
     }
     if without_odometry > 0 {
         eprintln!(
