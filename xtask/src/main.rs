@@ -11,6 +11,7 @@ mod fuzz;
 mod fw;
 mod mutants;
 mod no_panic;
+mod pose;
 mod realdata;
 mod run_qemu;
 mod size;
@@ -40,6 +41,7 @@ const HELP: &str = "cargo xtask <command> [args]
   run-qemu      firmware in QEMU between a scanner tty/pty and a feature pty (--scanner, --output)
   soak          long runs with 1% damage: in-process, on a pty, and the firmware under QEMU
   realdata      features re-found in the next scan on the shared CARMEN logs -> docs/REALDATA.md
+  pose          pose benchmark (pfe posebench) on the shared CARMEN logs -> docs/POSE.md (--quick)
 ";
 
 fn main() -> Result<()> {
@@ -67,6 +69,7 @@ fn main() -> Result<()> {
         "no-panic" => no_panic::run(rest),
         "soak" => soak::run(rest),
         "realdata" => realdata::run(rest),
+        "pose" => pose::run(rest),
         "run-qemu" => run_qemu::run(rest),
         other => bail!("unknown command `{other}` (rest: {rest:?})\n\n{HELP}"),
     }

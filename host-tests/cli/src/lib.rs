@@ -34,7 +34,9 @@ pub mod interrupt;
 pub mod link;
 pub mod listen;
 mod lms_args;
+pub mod odometry;
 pub mod plot;
+pub mod posebench;
 pub mod realdata;
 pub mod record;
 
@@ -76,6 +78,10 @@ enum Command {
     Realdata(realdata::Args),
     /// Read the firmware's feature frames: one JSON object per scan on stdout.
     Listen(listen::Args),
+    /// The pose of every scan from its features (pfe-pose): one JSON object per scan.
+    Odometry(odometry::Args),
+    /// Pose benchmark on CARMEN logs against their poses: a Markdown table.
+    Posebench(posebench::Args),
     /// Print a shell completion script on stdout (e.g. for bash: pfe completions bash >
     /// ~/.local/share/bash-completion/completions/pfe).
     Completions {
@@ -206,6 +212,8 @@ pub fn run(args: impl IntoIterator<Item = OsString>) -> ExitCode {
         Command::Record(a) => record::run(a).map_err(|e| Failure::of("record", &e)),
         Command::Realdata(a) => realdata::run(a).map_err(|e| Failure::of("realdata", &e)),
         Command::Listen(a) => listen::run(a),
+        Command::Odometry(a) => odometry::run(a),
+        Command::Posebench(a) => posebench::run(a).map_err(|e| Failure::of("posebench", &e)),
         Command::Completions { shell } => completions(shell),
         Command::Man { command } => man(command.as_deref()),
     };

@@ -7,6 +7,8 @@
 
 pub mod bench;
 pub mod methods;
+pub mod plicp;
+pub mod posebench;
 pub mod realdata;
 pub mod report;
 pub mod scene;

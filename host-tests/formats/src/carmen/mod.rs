@@ -145,6 +145,8 @@ pub struct Reader {
     held: std::collections::VecDeque<(u64, String)>,
     /// An error met while lines were held: it comes after them.
     deferred: Option<InputError>,
+    /// The odometry pose of the last scan read (`FLASER` only).
+    odometry: Option<[f64; 3]>,
 }
 
 impl Reader {
@@ -163,7 +165,22 @@ impl Reader {
             laser: None,
             held: std::collections::VecDeque::new(),
             deferred: None,
+            odometry: None,
         }
+    }
+
+    /// The wheel-odometry pose (x m, y m, θ rad) of the last scan returned, when its line
+    /// carries one as numbers (`FLASER`'s `odom_x odom_y odom_θ`; `None` for the other kinds).
+    ///
+    /// ```
+    /// use pfe_formats::carmen::Reader;
+    /// let log = "FLASER 5 1 2 3 4 5 0.5 0 0 10.25 -3 0.5 7.0 host 7.0\n";
+    /// let mut r = Reader::new(Box::new(log.as_bytes()));
+    /// assert!(r.next().is_some_and(|s| s.is_ok()));
+    /// assert_eq!(r.odometry(), Some([10.25, -3.0, 0.5]));
+    /// ```
+    pub fn odometry(&self) -> Option<[f64; 3]> {
+        self.odometry
     }
 
     /// The kind of message read (`None` before the first scan).
@@ -192,11 +209,13 @@ impl Reader {
         let mut record = checked_record(line, 0, geometry, ranges)?;
         record.pose = pose([x.parse::<f64>().ok(), field(0), field(1)]);
         record.time = field(5).filter(|t| t.is_finite());
+        self.odometry = pose([field(2), field(3), field(4)]);
         Ok(record)
     }
 
     /// Reads a scan of kind `laser` from the rest of line `line`.
     fn read(&mut self, line: u64, rest: &str, laser: Laser) -> Result<Record, InputError> {
+        self.odometry = None;
         match laser {
             Laser::Flaser => self.flaser(line, rest),
             _ => laser::read(line, rest, laser, self.r_max),

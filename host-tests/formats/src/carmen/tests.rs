@@ -166,3 +166,22 @@ fn missing_or_bad_pose_fields_give_none() {
     let r = first("FLASER 5 1 2 3 4 5 1.5 2 x 0 0 0 t host 0\n");
     assert_eq!((r.pose, r.time), (None, None));
 }
+
+/// The odometry of a `FLASER` line follows each scan; a `ROBOTLASER1` line has none, and
+/// non-numeric odometry fields give none.
+#[test]
+fn odometry_of_each_scan() {
+    let log = "FLASER 5 1 2 3 4 5 0.5 0 0 1 2 0.5 7.0 host 7.0\n\
+               FLASER 5 1 2 3 4 5 0.5 0 0 x 2 0.5 8.0 host 8.0\n\
+               FLASER 5 1 2 3 4 5 0.5 0 0 3 4 -0.5 9.0 host 9.0\n";
+    let mut r = Reader::new(Box::new(log.as_bytes()));
+    let mut seen = Vec::new();
+    while let Some(s) = r.next() {
+        assert!(s.is_ok());
+        seen.push(r.odometry());
+    }
+    assert_eq!(seen, [Some([1.0, 2.0, 0.5]), None, Some([3.0, 4.0, -0.5])]);
+    let mut r = Reader::new(Box::new(ROBOT.as_bytes()));
+    assert!(r.next().is_some_and(|s| s.is_ok()));
+    assert_eq!(r.odometry(), None);
+}
