@@ -22,6 +22,7 @@ pub mod frame;
 pub mod refit;
 pub mod report;
 pub mod shared;
+pub mod visible;
 mod svg;
 #[cfg(test)]
 mod tests;
