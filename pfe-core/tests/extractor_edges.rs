@@ -71,7 +71,7 @@ fn distant_walls_at_any_heading_are_lines() {
                             && off(l.start, w) < 4.0 * sigma
                             && off(l.end, w) < 4.0 * sigma
                     }
-                    Feature::Circle(_) => false,
+                    _ => false,
                 }));
             }
         }

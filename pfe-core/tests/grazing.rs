@@ -64,7 +64,7 @@ fn distant_corridor_walls_are_lines() {
                         && (f64::from(l.start.y) - wall_y).abs() < 4.0 * SIGMA
                         && (f64::from(l.end.y) - wall_y).abs() < 4.0 * SIGMA
                 }
-                Feature::Circle(_) => false,
+                _ => false,
             });
             covered += usize::from(on_line);
         }

@@ -140,6 +140,8 @@ fn bits(f: &Feature) -> Vec<u32> {
             .chain([c.center.x, c.center.y, c.radius, c.start_angle, c.end_angle].iter())
             .map(|v| v.to_bits())
             .collect(),
+        Feature::Object(o) => o.values().iter().map(|v| v.to_bits()).collect(),
+        _ => Vec::new(),
     }
 }
 
