@@ -15,7 +15,7 @@
 
 use crate::config::Config;
 use crate::feature::{Feature, LineFeature, ObjectFeature};
-use crate::flags::VEIL;
+use crate::flags::{END, START, VEIL};
 use crate::geometry::Point;
 use crate::math;
 use crate::output::FeatureSink;
@@ -48,6 +48,9 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
                     }
                 }
                 freed += 1;
+                // Its segment: no feature, as one whose fit failed.
+                pass.stats.features = pass.stats.features.saturating_sub(1);
+                pass.stats.degenerate += 1;
             }
         }
     }
@@ -68,11 +71,12 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
             continue;
         }
         let e = run_end(pass, i);
-        if e + 1 - i >= OBJECT_MIN_POINTS && !held(out.features_mut(), i, e) {
+        if e + 1 - i >= OBJECT_MIN_POINTS
+            && whole_segments(pass, i, e)
+            && !held(out.features_mut(), i, e)
+        {
             if let Some(o) = object(pass, i, e, config) {
-                for k in i..=e {
-                    pass.clear(k, VEIL);
-                }
+                one_segment(pass, i, e, config.min_points);
                 if out.push(Feature::Object(o)) {
                     pass.stats.features += 1;
                     pass.stats.objects += 1;
@@ -88,7 +92,6 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
         out.features_mut()
             .sort_unstable_by_key(|f| (f.first(), f.last()));
     }
-    pass.stats.features = pass.stats.features.saturating_sub(freed);
     pass.stats.veils = pass.flags.iter().filter(|&&f| f & VEIL != 0).count();
 }
 
@@ -114,6 +117,39 @@ fn undetermined_object(pass: &Pass<'_>, l: &LineFeature) -> bool {
     }
     let e = run_end(pass, first);
     e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e) <= OBJECT_MAX_MM
+}
+
+/// True when the run `s..=e` is made of whole segments: it starts one and the point after it
+/// (if any) starts another or is invalid.
+fn whole_segments(pass: &Pass<'_>, s: usize, e: usize) -> bool {
+    pass.flag(s) & START != 0 && (!pass.valid(e + 1) || pass.flag(e + 1) & START != 0)
+}
+
+/// Makes the segments of the run `s..=e` (short, or without a feature) one segment, the
+/// object's: its marks at `s` and `e` only, the statistics counting it once.
+fn one_segment(pass: &mut Pass<'_>, s: usize, e: usize, min_points: usize) {
+    let mut a = s;
+    let mut undone = 0usize;
+    while a <= e {
+        let mut b = a;
+        while b < e && pass.flag(b + 1) & START == 0 {
+            b += 1;
+        }
+        undone += 1;
+        let stats = &mut *pass.stats;
+        if b + 1 - a < min_points {
+            stats.short_segments = stats.short_segments.saturating_sub(1);
+        } else {
+            stats.degenerate = stats.degenerate.saturating_sub(1);
+        }
+        a = b + 1;
+    }
+    pass.stats.segments = (pass.stats.segments + 1).saturating_sub(undone);
+    for k in s..=e {
+        pass.clear(k, START | END | VEIL);
+    }
+    pass.set(s, START);
+    pass.set(e, END);
 }
 
 /// True when the range jumps by at least [`OBJECT_JUMP_MM`] from point `i` to `i + 1`.
@@ -185,7 +221,8 @@ fn object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<Object
         return None;
     }
     let (ux, uy) = (c.x / d, c.y / d);
-    let depth = config.sigma_r * config.sigma_r / nf + config.sigma_sys * config.sigma_sys + w * w / 12.0;
+    let depth =
+        config.sigma_r * config.sigma_r / nf + config.sigma_sys * config.sigma_sys + w * w / 12.0;
     let cxx = xx * scatter + depth * ux * ux;
     let cxy = xy * scatter + depth * ux * uy;
     let cyy = yy * scatter + depth * uy * uy;

@@ -22,10 +22,10 @@ pub mod frame;
 pub mod refit;
 pub mod report;
 pub mod shared;
-pub mod visible;
 mod svg;
 #[cfg(test)]
 mod tests;
+pub mod visible;
 
 use std::path::Path;
 
