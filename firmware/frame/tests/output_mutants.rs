@@ -298,8 +298,8 @@ fn five_decoded_bytes_are_not_too_short() {
     assert_eq!(decode_frame(&mut body), Err(DecodeError::Payload));
 }
 
-/// The test vector of docs/FRAME.md (its hex block: 127 bytes with the terminator): a version 2
-/// frame, which the decoder still reads (version 3 adds small objects only).
+/// The test vector of docs/FRAME.md (its hex block: 127 bytes with the terminator) as it was in
+/// version 2 (version byte 02, its CRC): the decoder still reads it.
 const SPEC_VECTOR: [u8; 127] = [
     0x02, 0x02, 0x01, 0x0c, 0xc0, 0xc4, 0x07, 0xac, 0x02, 0x02, 0x11, 0x01, 0x9a, 0x01, 0x02, 0x02,
     0x02, 0x01, 0x0b, 0x70, 0xf2, 0x01, 0x83, 0x01, 0x5c, 0xfd, 0xa3, 0xb7, 0xd9, 0x10, 0xfa, 0x44,
