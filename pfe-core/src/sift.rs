@@ -89,10 +89,33 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
         i = e + 1;
     }
     if added {
-        out.features_mut()
-            .sort_unstable_by_key(|f| (f.first(), f.last()));
+        in_scan_order(out.features_mut());
     }
     pass.stats.veils = pass.flags.iter().filter(|&&f| f & VEIL != 0).count();
+}
+
+/// Sorts `features` by first beam (an insertion sort: they are in order but for the objects
+/// appended; no panic path, unlike the library's sorts).
+fn in_scan_order(features: &mut [Feature]) {
+    for i in 1..features.len() {
+        let Some(&f) = features.get(i) else { break };
+        let mut j = i;
+        while j > 0 {
+            let Some(&p) = features.get(j - 1) else {
+                break;
+            };
+            if p.first() <= f.first() {
+                break;
+            }
+            if let Some(slot) = features.get_mut(j) {
+                *slot = p;
+            }
+            j -= 1;
+        }
+        if let Some(slot) = features.get_mut(j) {
+            *slot = f;
+        }
+    }
 }
 
 /// True when the scanner can have seen `l` as a surface: at most 85° incidence at its
