@@ -34,7 +34,7 @@ pub const OBJECT_MAX_MM: f32 = 300.0;
 pub fn incidence_deg(alpha: f32, start: [f32; 2], end: [f32; 2]) -> f32 {
     let (mx, my) = (0.5 * (start[0] + end[0]), 0.5 * (start[1] + end[1]));
     let d = mx.hypot(my);
-    if !(d > 0.0) {
+    if d.is_nan() || d <= 0.0 {
         return 90.0;
     }
     let c = ((mx * alpha.cos() + my * alpha.sin()) / d).abs().min(1.0);
@@ -44,7 +44,7 @@ pub fn incidence_deg(alpha: f32, start: [f32; 2], end: [f32; 2]) -> f32 {
 /// The point of beam `i` of a scan of `g` with `ranges` (mm, NaN: no return).
 fn point(g: &ScanGeometry, ranges: &[f32], i: usize) -> Option<(f32, f32)> {
     let r = *ranges.get(i)?;
-    if !(r.is_finite() && r > 0.0 && r <= g.r_max) {
+    if !r.is_finite() || r <= 0.0 || r > g.r_max {
         return None;
     }
     let b = g.bearing(i);
