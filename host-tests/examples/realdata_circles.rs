@@ -66,7 +66,7 @@ fn main() -> Result<()> {
             .iter()
             .filter_map(|f| match f {
                 Feature::Circle(c) => Some(c),
-                Feature::Line(_) => None,
+                _ => None,
             })
             .map(|c| {
                 let (mut sse, mut n) = (0.0f64, 0usize);

@@ -75,6 +75,7 @@ fn lines_and_circles(e: &Extraction) -> (Vec<pfe_core::LineFeature>, Vec<pfe_cor
         match f {
             Feature::Line(l) => lines.push(*l),
             Feature::Circle(c) => circles.push(*c),
+            _ => {}
         }
     }
     (lines, circles)

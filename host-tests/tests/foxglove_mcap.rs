@@ -188,6 +188,11 @@ fn foxglove_file_reads_back_message_for_message() {
                     }
                     assert_eq!(e["lines"].as_array().unwrap().len(), 4);
                 }
+                Feature::Object(o) => {
+                    assert_eq!(meta("kind"), "object");
+                    assert_eq!(meta("extent_mm").parse::<f32>().unwrap(), o.extent);
+                }
+                _ => {}
             }
         }
     }

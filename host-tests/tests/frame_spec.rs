@@ -221,7 +221,7 @@ mod spec {
             crc32fast::hash(payload)
         );
         let mut r = R(payload);
-        assert_eq!(r.u8(), 2, "version");
+        assert_eq!(r.u8(), 3, "version");
         assert_eq!(r.varint(), 0, "Header::Scan");
         let seq = r.varint();
         let time_ms = r.varint();

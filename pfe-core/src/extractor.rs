@@ -9,7 +9,7 @@ use crate::classify;
 use crate::config::Config;
 use crate::error::ExtractError;
 use crate::feature::Feature;
-use crate::flags::{END, START, VALID};
+use crate::flags::{END, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::mark::{self, Neighbours};
 use crate::output::{FeatureSink, Stats};
@@ -19,6 +19,7 @@ use crate::reach;
 use crate::rule::Rule;
 use crate::scan::Scan;
 use crate::segment;
+use crate::sift;
 use crate::sweeps;
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
@@ -96,6 +97,8 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
                     predictions: 0,
                     sweeps_aligned: 0,
                     scan_sigma_um: 0,
+                    objects: 0,
+                    veils: 0,
                 },
             },
         }
@@ -169,6 +172,21 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             .enumerate()
             .filter(|(_, f)| **f & (START | END) != 0)
             .map(|(i, _)| i)
+    }
+
+    /// True when point `i` is a mixed pixel: a point of a line the scanner cannot see (over
+    /// 85° incidence at its midpoint, or shorter than 10 mm), in no feature (with
+    /// [`Config::scrutiny`]; their number is [`Stats::veils`]).
+    ///
+    /// ```
+    /// use pfe_core::{Config, Extractor, ScanGeometry, Scan};
+    /// let mut ex = Extractor::<361, 32>::new();
+    /// ex.extract(&Scan::from_mm(ScanGeometry::LMS200_180_050, &[2000.0; 361]), &Config::default())?;
+    /// assert!(!(0..361).any(|i| ex.is_veil(i)));
+    /// # Ok::<(), pfe_core::ExtractError>(())
+    /// ```
+    pub fn is_veil(&self, i: usize) -> bool {
+        i < self.work.len && self.work.flags.get(i).is_some_and(|f| f & VEIL != 0)
     }
 
     /// True when point `i` is a mark point.
@@ -275,6 +293,13 @@ fn run(
     // lie on them.
     if let (true, Some(noise)) = (checks, rule.noise()) {
         reach::extend(&mut pass, noise, out.features_mut());
+    }
+    // Ours, with the checks for real scans: no line the scanner cannot see; small objects.
+    if checks {
+        sift::sift(&mut pass, config, out);
+        if classify::honest(config, checks) {
+            sweeps::inherit_objects(out.features_mut(), marks.alignment);
+        }
     }
     outcome(pass.stats)
 }

@@ -1,4 +1,4 @@
-//! Per-point flags of one scan (valid, segment start, segment end, jump) and a search over
+//! Per-point flags of one scan (valid, segment start, segment end, jump, veil) and a search over
 //! them that reads four flags at a time.
 
 /// A valid point.
@@ -9,6 +9,9 @@ pub(crate) const START: u8 = 2;
 pub(crate) const END: u8 = 4;
 /// A segment start caused by a jump (never inside one surface, so never merged).
 pub(crate) const JUMP: u8 = 8;
+/// A point of a line the scanner cannot see (a mixed pixel of a veil along a line of sight),
+/// in no feature.
+pub(crate) const VEIL: u8 = 16;
 
 /// What [`next_flag`] looks for.
 #[derive(Clone, Copy)]

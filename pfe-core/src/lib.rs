@@ -17,6 +17,7 @@
 //! | line and circle fits with covariance | §3.5 | [`fit::line`], [`fit::circle`] |
 //! | the features inherit the sweep offsets' error | ours | `sweeps` |
 //! | line ends over the beams beside them that lie on them ([`Config::scrutiny`]) | ours | `reach` |
+//! | no line the scanner cannot see; small objects ([`ObjectFeature`]) ([`Config::scrutiny`]) | ours | `sift` |
 //! | output | | [`feature`], [`Stats`] |
 //!
 //! A module imports only modules below it: the steps import none of each other (but `segment`
@@ -59,6 +60,7 @@ mod reach;
 mod rule;
 pub mod scan;
 mod segment;
+mod sift;
 #[cfg(feature = "internals")]
 pub mod sweeps;
 #[cfg(not(feature = "internals"))]
@@ -68,7 +70,9 @@ pub use config::{Config, NoiseModel, Threshold, Typing, NP};
 pub use correction::RangeCorrection;
 pub use error::{ExtractError, FitError};
 pub use extractor::Extractor;
-pub use feature::{circle_feature, line_feature, CircleFeature, Feature, LineFeature};
+pub use feature::{
+    circle_feature, line_feature, CircleFeature, Feature, LineFeature, ObjectFeature,
+};
 pub use fit::circle::{
     circle_covariance, circle_covariance_range, fit_circle, refine_circle, Circle, CircleMethod,
 };

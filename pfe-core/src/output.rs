@@ -32,6 +32,12 @@ pub struct Stats {
     /// The scan's own σ_r in µm, when it scattered well beyond the configured one and the
     /// extraction used it (with [`Config::scrutiny`](crate::Config::scrutiny)); else 0.
     pub scan_sigma_um: u32,
+    /// Small objects reported (with [`Config::scrutiny`](crate::Config::scrutiny)).
+    pub objects: usize,
+    /// Points of lines the scanner cannot see (over 85° incidence at their midpoint, or
+    /// shorter than 10 mm: mixed pixels), in no feature (with
+    /// [`Config::scrutiny`](crate::Config::scrutiny); `Extractor::is_veil` tells which).
+    pub veils: usize,
 }
 
 /// Where the segment step puts the features (an extractor's buffer, whatever its capacity).
@@ -40,6 +46,8 @@ pub(crate) trait FeatureSink {
     fn push(&mut self, f: Feature) -> bool;
     /// The features stored, in the order pushed.
     fn features_mut(&mut self) -> &mut [Feature];
+    /// Keeps only the features `keep` says, in order.
+    fn retain(&mut self, keep: &mut dyn FnMut(&Feature) -> bool);
 }
 
 impl<const M: usize> FeatureSink for Vec<Feature, M> {
@@ -48,5 +56,8 @@ impl<const M: usize> FeatureSink for Vec<Feature, M> {
     }
     fn features_mut(&mut self) -> &mut [Feature] {
         self
+    }
+    fn retain(&mut self, keep: &mut dyn FnMut(&Feature) -> bool) {
+        Vec::retain(self, |f| keep(f));
     }
 }

@@ -155,6 +155,8 @@ fn distance(f: &Feature, p: &Point) -> f32 {
         Feature::Circle(CircleFeature { center, radius, .. }) => {
             math::abs(p.distance(center) - radius)
         }
+        // Objects are made after the reach.
+        Feature::Object(o) => p.distance(&o.center),
     }
 }
 
@@ -309,7 +311,7 @@ mod tests {
     fn ends(f: &Feature) -> (Point, Point) {
         match f {
             Feature::Line(l) => (l.start, l.end),
-            Feature::Circle(_) => panic!("a line"),
+            _ => panic!("a line"),
         }
     }
 

@@ -21,7 +21,7 @@
 //! [`SweepOffset::CHI2_SIGNIFICANT`]) and moves some point by more than
 //! [`SweepOffset::MIN_SHIFT_MM`]; otherwise the points stay as they are.
 
-use crate::feature::{CircleFeature, Feature, LineFeature};
+use crate::feature::{CircleFeature, Feature, LineFeature, ObjectFeature};
 use crate::flags::{START, VALID};
 use crate::geometry::Point;
 use crate::math;
@@ -218,8 +218,30 @@ pub(crate) fn inherit(features: &mut [Feature], alignment: [f32; 3]) {
         match f {
             Feature::Line(lf) => aligned_line(lf, alignment),
             Feature::Circle(cf) => aligned_circle(cf, alignment),
+            Feature::Object(of) => aligned_object(of, alignment),
         }
     }
+}
+
+/// [`inherit`] for the small objects only (they are made after the lines and circles
+/// inherited theirs).
+pub(crate) fn inherit_objects(features: &mut [Feature], alignment: [f32; 3]) {
+    for f in features {
+        if let Feature::Object(of) = f {
+            aligned_object(of, alignment);
+        }
+    }
+}
+
+/// Adds to an object's centre covariance what it inherits from the offsets that moved
+/// interleaved sweeps, as a circle's centre does.
+fn aligned_object(of: &mut ObjectFeature, [xx, yy, tt]: [f32; 3]) {
+    let c = of.center;
+    let [[cxx, cxy], [cyx, cyy]] = &mut of.cov;
+    *cxx += xx + tt * c.y * c.y;
+    *cyy += yy + tt * c.x * c.x;
+    *cxy -= tt * c.x * c.y;
+    *cyx -= tt * c.x * c.y;
 }
 
 /// Adds to a line's covariance what it inherits from the offsets that moved interleaved

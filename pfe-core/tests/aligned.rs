@@ -107,7 +107,7 @@ fn features_of_aligned_sweeps_carry_the_offsets_error() {
                             cy.add(y, c.cov[1][1]);
                         }
                     }
-                    Feature::Line(_) => {}
+                    _ => {}
                 }
             }
         }

@@ -62,7 +62,11 @@ fn a_corner_is_never_a_circle() {
                 let mut noise = Noise::new(100 * ci as u64 + t);
                 let ranges = noisy(&exact, 10.0, &mut noise);
                 ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
-                circles += ex.features().iter().filter(|f| !f.is_line()).count();
+                circles += ex
+                    .features()
+                    .iter()
+                    .filter(|f| matches!(f, Feature::Circle(_)))
+                    .count();
             }
         }
     }

@@ -240,7 +240,7 @@ fn score(hits: &[Option<usize>], marks: &[usize], features: &[Feature], s: &mut 
     let runs = common::runs(hits, 10);
     let span = |f: &Feature| match f {
         Feature::Line(l) => (usize::from(l.first), usize::from(l.last)),
-        Feature::Circle(c) => (usize::from(c.first), usize::from(c.last)),
+        _ => (f.first(), f.last()),
     };
     let overlap =
         |a: (usize, usize), b: (usize, usize)| (a.1.min(b.1) + 1).saturating_sub(a.0.max(b.0));

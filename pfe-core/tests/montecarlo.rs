@@ -260,7 +260,11 @@ fn circle_covariance_range_noise_through_extractor() {
             .collect();
         ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
             .unwrap();
-        let circles: Vec<_> = ex.features().iter().filter(|f| !f.is_line()).collect();
+        let circles: Vec<_> = ex
+            .features()
+            .iter()
+            .filter(|f| matches!(f, Feature::Circle(_)))
+            .collect();
         let [c] = circles[..] else {
             split += 1;
             continue;

@@ -158,7 +158,7 @@ fn sweeps_that_pass_each_other_close_to_the_scanner_are_one_wall() {
                     .iter()
                     .filter_map(|f| match f {
                         Feature::Line(l) => Some(l),
-                        Feature::Circle(_) => None,
+                        _ => None,
                     })
                     .collect();
                 assert_eq!(lines.len(), 1, "{d} mm, {side}: {features:?}");

@@ -103,7 +103,7 @@ fn views(shape: Shape, seed: u64) -> Vec<([f64; 2], [[f64; 2]; 2])> {
             .iter()
             .filter_map(|f| match f {
                 Feature::Circle(c) => Some(c),
-                Feature::Line(_) => None,
+                _ => None,
             })
             .collect();
         if let [cf] = circles[..] {

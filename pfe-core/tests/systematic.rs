@@ -74,7 +74,9 @@ fn a_scans_rounding_adds_the_part_its_beams_share() {
     let loud = Config::default().with_sigma_r(50.0);
     for (a, b) in features(loud).iter().zip(&features_rounded(loud, 50.0)) {
         let (Feature::Line(a), Feature::Line(b)) = (a, b) else {
-            panic!("{a:?} vs {b:?}")
+            // A small object of the noisy scene: the same in both.
+            assert!(a.is_object() && a == b, "{a:?} vs {b:?}");
+            continue;
         };
         assert_eq!((a.alpha, a.rho, a.var_alpha), (b.alpha, b.rho, b.var_alpha));
         assert!(

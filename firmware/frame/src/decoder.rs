@@ -1,11 +1,11 @@
 //! The host-side frame reader: sans-IO, byte chunks in, frames out.
 
 use heapless::Vec;
-use pfe_core::{CircleFeature, Feature, LineFeature, Point};
+use pfe_core::{CircleFeature, Feature, LineFeature, ObjectFeature, Point};
 
 use super::cobs::cobs_decode_in_place;
 use super::crc::crc32;
-use super::wire::{Header, ScanHeader, MAX_FEATURES, WIRE_VERSION};
+use super::wire::{Header, ScanHeader, MAX_FEATURES, OLDER_VERSIONS, WIRE_VERSION};
 
 /// A decoded frame. `#[non_exhaustive]`: later wire versions may carry more.
 #[derive(Clone, Debug, PartialEq)]
@@ -75,7 +75,7 @@ impl core::fmt::Display for DecodeError {
             }
             DecodeError::UnknownVersion { version } => write!(
                 f,
-                "frame version {version}, this decoder reads version {WIRE_VERSION}"
+                "frame version {version}, this decoder reads versions {OLDER_VERSIONS:?} and {WIRE_VERSION}"
             ),
             DecodeError::Payload => f.write_str("payload is not a valid header and features"),
             DecodeError::TooManyFeatures { n } => write!(f, "{n} features announced, too many"),
@@ -185,9 +185,11 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
         return Err(DecodeError::Crc { expected, got });
     }
     let (&version, payload) = payload.split_first().ok_or(DecodeError::TooShort)?;
-    if version != WIRE_VERSION {
+    if version != WIRE_VERSION && !OLDER_VERSIONS.contains(&version) {
         return Err(DecodeError::UnknownVersion { version });
     }
+    // Version 2 had no small objects (tag 2).
+    let max_tag = if version == WIRE_VERSION { 2 } else { 1 };
     let (header, mut rest): (Header, &[u8]) =
         postcard::take_from_bytes(payload).map_err(|_| DecodeError::Payload)?;
     let mut features = Vec::new();
@@ -196,7 +198,7 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
             return Err(DecodeError::TooManyFeatures { n: h.n_features });
         }
         for _ in 0..h.n_features {
-            let (f, r) = take_feature(rest).ok_or(DecodeError::Payload)?;
+            let (f, r) = take_feature(rest, max_tag).ok_or(DecodeError::Payload)?;
             features
                 .push(f)
                 .map_err(|_| DecodeError::TooManyFeatures { n: h.n_features })?;
@@ -211,9 +213,12 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
 
 /// One feature off the front of `data` (the layout the encoder writes: variant index, first,
 /// last, points as varints, then the `f32`s little-endian), and the bytes after it.
-fn take_feature(data: &[u8]) -> Option<(Feature, &[u8])> {
+fn take_feature(data: &[u8], max_tag: u16) -> Option<(Feature, &[u8])> {
     let mut r = Reader(data);
     let tag = r.varint()?;
+    if tag > max_tag {
+        return None;
+    }
     let (first, last, points) = (r.varint()?, r.varint()?, r.varint()?);
     let f = match tag {
         0 => {
@@ -243,6 +248,17 @@ fn take_feature(data: &[u8]) -> Option<(Feature, &[u8])> {
                 start_angle,
                 end_angle,
             })
+        }
+        2 => {
+            let [cx, cy, a, b, c, d, extent] = r.floats()?;
+            Feature::Object(ObjectFeature::new(
+                first,
+                last,
+                points,
+                Point::new(cx, cy),
+                [[a, b], [c, d]],
+                extent,
+            ))
         }
         _ => return None,
     };

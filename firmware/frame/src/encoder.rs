@@ -45,6 +45,14 @@ fn feature_bytes(f: &Feature, out: &mut [u8]) -> usize {
             w.head(1, [c.first, c.last, c.points]);
             w.floats(c.values());
         }
+        Feature::Object(o) => {
+            w.head(2, [o.first, o.last, o.points]);
+            w.floats(o.values());
+        }
+        // A kind this version of the frame does not know: a zero-point line that the decoder
+        // refuses, never silently another feature (pfe-core adds kinds only with a new
+        // frame version).
+        _ => w.head(u16::MAX, [0, 0, 0]),
     }
     w.at
 }
@@ -175,6 +183,8 @@ mod tests {
     enum Spec {
         Line(u16, u16, u16, [f32; 5], [f32; 2], [f32; 2]),
         Circle(u16, u16, u16, [f32; 2], f32, [[f32; 3]; 3], f32, f32),
+        Object(u16, u16, u16, [f32; 2], [[f32; 2]; 2], f32),
+        Unknown,
     }
 
     impl From<&Feature> for Spec {
@@ -198,6 +208,15 @@ mod tests {
                     c.start_angle,
                     c.end_angle,
                 ),
+                Feature::Object(o) => Spec::Object(
+                    o.first,
+                    o.last,
+                    o.points,
+                    [o.center.x, o.center.y],
+                    o.cov,
+                    o.extent,
+                ),
+                _ => Spec::Unknown,
             }
         }
     }

@@ -64,5 +64,5 @@ pub use decoder::{decode_frame, DecodeError, Feed, Frame, FrameDecoder};
 pub use encoder::{write_report, write_scan, EncodeError};
 pub use wire::{
     max_frame_len, Counters, Header, Report, ScanHeader, ScanStatus, Stage, MAX_FEATURES,
-    MAX_FEATURE_LEN, WIRE_VERSION,
+    MAX_FEATURE_LEN, OLDER_VERSIONS, WIRE_VERSION,
 };

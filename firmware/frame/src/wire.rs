@@ -6,7 +6,11 @@ use serde::{Deserialize, Serialize};
 /// Version of the frame layout described here, the first byte of every frame's payload; bump it
 /// when a wire struct or the feature layout changes. A receiver drops a frame of another version
 /// ([`DecodeError::UnknownVersion`](super::DecodeError::UnknownVersion)).
-pub const WIRE_VERSION: u8 = 2;
+pub const WIRE_VERSION: u8 = 3;
+
+/// The older versions the decoder still reads: version 2, the same layout without small
+/// objects (feature tag 2).
+pub const OLDER_VERSIONS: [u8; 1] = [2];
 
 /// Most features one decoded frame can hold.
 pub const MAX_FEATURES: usize = 64;

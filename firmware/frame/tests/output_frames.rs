@@ -140,6 +140,8 @@ fn bits(f: &Feature) -> Vec<u32> {
             .chain([c.center.x, c.center.y, c.radius, c.start_angle, c.end_angle].iter())
             .map(|v| v.to_bits())
             .collect(),
+        Feature::Object(o) => o.values().iter().map(|v| v.to_bits()).collect(),
+        _ => Vec::new(),
     }
 }
 
@@ -376,7 +378,7 @@ fn version_is_the_first_payload_byte_and_time_travels() {
     let wire = scan_frame(3, &[line(1)]);
     let raw = cobs::decode_vec(&wire[..wire.len() - 1]).unwrap();
     assert_eq!(raw[0], WIRE_VERSION);
-    assert_eq!(WIRE_VERSION, 2);
+    assert_eq!(WIRE_VERSION, 3);
     let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
     assert_eq!(
         got[0].as_ref().unwrap().scan().unwrap().time_ms,
@@ -388,11 +390,11 @@ fn version_is_the_first_payload_byte_and_time_travels() {
 fn an_intact_frame_of_another_version_is_dropped_not_misparsed() {
     let good = scan_frame(1, &mixed());
     let mut stream = Vec::new();
-    for v in [0u8, 1, 3, 0xFF] {
+    for v in [0u8, 1, 4, 0xFF] {
         stream.extend(reframed(&good, |raw| raw[0] = v));
     }
-    // Version 3 with a payload that would also parse as version 2.
-    stream.extend(reframed(&good, |raw| raw[0] = 3));
+    // Version 4 with a payload that would also parse as version 3.
+    stream.extend(reframed(&good, |raw| raw[0] = 4));
     stream.extend_from_slice(&scan_frame(2, &[]));
     let got = decode_chunks(&mut FrameDecoder::new(), [&stream[..]]);
     let errs: Vec<_> = got
@@ -401,7 +403,7 @@ fn an_intact_frame_of_another_version_is_dropped_not_misparsed() {
         .collect();
     assert_eq!(
         errs,
-        [0u8, 1, 3, 0xFF, 3].map(|version| DecodeError::UnknownVersion { version })
+        [0u8, 1, 4, 0xFF, 4].map(|version| DecodeError::UnknownVersion { version })
     );
     assert_eq!(got.last().unwrap().as_ref().unwrap().scan().unwrap().seq, 2);
     // A damaged frame is a CRC error even when the damage is in the version byte.
@@ -411,6 +413,55 @@ fn an_intact_frame_of_another_version_is_dropped_not_misparsed() {
     assert!(matches!(got[..], [Err(DecodeError::Crc { .. })]), "{got:?}");
 }
 
+/// A small object round-trips bit for bit (tag 2, its seven floats in declaration order).
+#[test]
+fn an_object_round_trips() {
+    let o = Feature::Object(pfe_core::ObjectFeature::new(
+        40,
+        43,
+        4,
+        pfe_core::Point::new(1234.5, -67.25),
+        [[16.5, -2.0], [-2.0, 9.25]],
+        38.0,
+    ));
+    let features = [line(1), o, circle(60)];
+    let wire = scan_frame(9, &features);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    let frame = got[0].as_ref().unwrap();
+    assert_eq!(frame.features.len(), 3);
+    for (a, b) in frame.features.iter().zip(&features) {
+        assert_eq!(bits(a), bits(b));
+        assert_eq!(a, b);
+    }
+}
+
+/// Version 2 frames (lines and circles, the same layout) still decode: a frame of version 2
+/// built byte by byte here, as postcard wrote it (version, header variant 0, seq, time,
+/// four link counters, valid, segments, dropped, n_features, status 0; then one line).
+#[test]
+fn a_version_2_frame_still_decodes() {
+    let mut raw = vec![2u8, 0, 7, 100, 1, 0, 0, 0, 181, 1, 3, 0, 1, 0];
+    // A line: tag 0, first 5, last 20, points 16, then α, ρ, σ_α², σ_ρ², cov, start, end.
+    raw.extend_from_slice(&[0, 5, 20, 16]);
+    let values = [0.5f32, 2000.0, 1e-4, 4.0, -0.01, 1.0, 2.0, 3.0, 4.0];
+    for v in values {
+        raw.extend_from_slice(&v.to_le_bytes());
+    }
+    let crc = crc32fast::hash(&raw);
+    raw.extend_from_slice(&crc.to_le_bytes());
+    let mut wire = cobs::encode_vec(&raw);
+    wire.push(0);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+    let frame = got[0].as_ref().unwrap();
+    let h = frame.scan().unwrap();
+    assert_eq!((h.seq, h.time_ms, h.valid, h.n_features), (7, 100, 181, 1));
+    let [Feature::Line(l)] = frame.features[..] else {
+        panic!("{:?}", frame.features)
+    };
+    assert_eq!((l.first, l.last, l.points), (5, 20, 16));
+    assert_eq!(l.values(), values);
+}
+
 #[test]
 fn a_feature_with_an_unknown_variant_or_overlong_varint_is_rejected() {
     let good = scan_frame(1, &[line(1)]);
@@ -418,13 +469,18 @@ fn a_feature_with_an_unknown_variant_or_overlong_varint_is_rejected() {
         let raw = cobs::decode_vec(&good[..good.len() - 1]).unwrap();
         raw.len() - 4 - (4 + 9 * 4) // line(1): tag 0, first 1, last 21, points 19: 1 byte each
     };
-    let tag2 = reframed(&good, |raw| raw[hdr_len] = 2);
+    let tag3 = reframed(&good, |raw| raw[hdr_len] = 3);
+    // Tag 2 (a small object) is not in version 2.
+    let old_tag2 = reframed(&good, |raw| {
+        raw[0] = 2;
+        raw[hdr_len] = 2;
+    });
     let long = reframed(&good, |raw| {
         raw[hdr_len + 1] = 0x81;
         raw.insert(hdr_len + 2, 0x80);
         raw.insert(hdr_len + 3, 0x80);
     });
-    for wire in [tag2, long] {
+    for wire in [tag3, old_tag2, long] {
         let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
         assert_eq!(got, [Err(DecodeError::Payload)]);
     }

@@ -156,7 +156,7 @@ fn zero_free_circle(k: u8) -> Feature {
 /// alone (version, variant index, the header's integers as LEB128 in table order, status
 /// index; a circle as variant 1, first, last, points, then its 14 f32 little-endian).
 fn spec_scan_payload(h: &ScanHeader, circles: &[Feature]) -> Vec<u8> {
-    let mut p = vec![2u8, 0];
+    let mut p = vec![3u8, 0];
     let c = &h.counters;
     for v in [
         h.seq,
@@ -231,12 +231,12 @@ fn a_full_cobs_block_followed_by_more_adds_no_zero() {
             }
         }
         let payload = spec_scan_payload(&h, &circles);
-        // The header by hand: 02 (version) 00 (Scan), then 127, 128, 16383, 16384,
+        // The header by hand: 03 (version) 00 (Scan), then 127, 128, 16383, 16384,
         // u32::MAX, 300, 355, 9, 1, 5 as LEB128, then 01 (FeatureCapacity).
         assert_eq!(
             payload[..23],
             [
-                0x02, 0x00, 0x7f, 0x80, 0x01, 0xff, 0x7f, 0x80, 0x80, 0x01, 0xff, 0xff, 0xff, 0xff,
+                0x03, 0x00, 0x7f, 0x80, 0x01, 0xff, 0x7f, 0x80, 0x80, 0x01, 0xff, 0xff, 0xff, 0xff,
                 0x0f, 0xac, 0x02, 0xe3, 0x02, 0x09, 0x01, 0x05, 0x01
             ]
         );
@@ -252,7 +252,7 @@ fn a_full_cobs_block_followed_by_more_adds_no_zero() {
             wire, want,
             "the cobs crate's encoding of the spec's payload"
         );
-        assert_eq!(wire[..3], [0x02, 0x02, 0xff]);
+        assert_eq!(wire[..3], [0x02, 0x03, 0xff]);
         assert_eq!(wire[3..257], payload[2..256]);
         if zero_at_256 {
             assert_eq!(
@@ -271,7 +271,7 @@ fn a_full_cobs_block_followed_by_more_adds_no_zero() {
 /// docs/FRAME.md: a frame is dropped as too short only when it has fewer than 5 bytes after
 /// COBS decoding (a version byte and a CRC is the least). So 1 to 4 bytes are `TooShort`
 /// (even 4 zero bytes, the CRC of the empty payload), while exactly 5 bytes with a good
-/// CRC reach the version check (version 3: `UnknownVersion`) or, at version 2, the header
+/// CRC reach the version check (version 4: `UnknownVersion`) or, at version 3, the header
 /// parser (no header: `Payload`).
 #[test]
 fn five_decoded_bytes_are_not_too_short() {
@@ -289,16 +289,17 @@ fn five_decoded_bytes_are_not_too_short() {
             "{raw:?}"
         );
     }
-    let mut body = cobs_body(&with_crc(&[3]));
+    let mut body = cobs_body(&with_crc(&[4]));
     assert_eq!(
         decode_frame(&mut body),
-        Err(DecodeError::UnknownVersion { version: 3 })
+        Err(DecodeError::UnknownVersion { version: 4 })
     );
     let mut body = cobs_body(&with_crc(&[WIRE_VERSION]));
     assert_eq!(decode_frame(&mut body), Err(DecodeError::Payload));
 }
 
-/// The test vector of docs/FRAME.md (its hex block: 127 bytes with the terminator).
+/// The test vector of docs/FRAME.md (its hex block: 127 bytes with the terminator) as it was in
+/// version 2 (version byte 02, its CRC): the decoder still reads it.
 const SPEC_VECTOR: [u8; 127] = [
     0x02, 0x02, 0x01, 0x0c, 0xc0, 0xc4, 0x07, 0xac, 0x02, 0x02, 0x11, 0x01, 0x9a, 0x01, 0x02, 0x02,
     0x02, 0x01, 0x0b, 0x70, 0xf2, 0x01, 0x83, 0x01, 0x5c, 0xfd, 0xa3, 0xb7, 0xd9, 0x10, 0xfa, 0x44,

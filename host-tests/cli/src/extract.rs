@@ -97,6 +97,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
         let line = Line {
             scan: ScanJson::new(record.id, &ex)
                 .with_status(StatusJson::of(&method.last_result()))
+                .with_veils(method.veils())
                 .with_input(record),
             stamp_ns: scan.stamp_ns,
             frame_id: scan.frame_id.as_deref(),

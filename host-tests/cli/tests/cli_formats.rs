@@ -58,8 +58,12 @@ fn check_schema(v: &Value) {
     let o = v.as_object().unwrap();
     let mut keys: Vec<&str> = o.keys().map(|k| k.as_str()).collect();
     keys.sort();
-    // docs/JSON.md: `time` and `pose` only when the input has them.
-    keys.retain(|k| !matches!(*k, "time" | "pose"));
+    // docs/JSON.md: `time` and `pose` only when the input has them, `veils` when there are.
+    keys.retain(|k| !matches!(*k, "time" | "pose" | "veils"));
+    if let Some(veils) = v.get("veils") {
+        let veils = common::u64s(veils);
+        assert!(!veils.is_empty() && veils.windows(2).all(|w| w[0] < w[1]));
+    }
     assert_eq!(keys, ["features", "marks", "scan", "status"]);
     assert!(v["scan"].is_u64());
     let status = v["status"].as_object().unwrap();
@@ -124,6 +128,26 @@ fn check_schema(v: &Value) {
                     for (j, c) in row.iter().enumerate() {
                         assert_eq!(c, &cov[j][i], "covariance symmetric to the bit");
                     }
+                }
+            }
+            "object" => {
+                assert_eq!(
+                    keys,
+                    ["center", "cov", "extent", "first", "kind", "last", "points"]
+                );
+                pair(&f["center"]);
+                let w = num(&f["extent"]);
+                assert!(
+                    w > 0.0 && w <= 300.0,
+                    "a small object is at most 0.3 m across"
+                );
+                let cov = f["cov"].as_array().unwrap();
+                assert_eq!(cov.len(), 2);
+                for (i, row) in cov.iter().enumerate() {
+                    let row = row.as_array().unwrap();
+                    assert_eq!(row.len(), 2);
+                    assert!(num(&row[i]) > 0.0, "variances are positive");
+                    assert_eq!(&row[1 - i], &cov[1 - i][i], "symmetric to the bit");
                 }
             }
             k => panic!("unknown kind {k}"),

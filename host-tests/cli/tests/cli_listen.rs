@@ -69,11 +69,11 @@ fn damage_and_other_versions_are_counted_and_dropped() {
     let mut bad = frame(1);
     bad[10] ^= 0x20; // CRC error
     stream.extend(bad);
-    // An intact frame of version 3: re-framed with a fresh CRC.
+    // An intact frame of version 4: re-framed with a fresh CRC.
     let good = frame(2);
     let mut raw = cobs::decode_vec(&good[..good.len() - 1]).unwrap();
     raw.truncate(raw.len() - 4);
-    raw[0] = 3;
+    raw[0] = 4;
     let crc = crc32fast::hash(&raw);
     raw.extend_from_slice(&crc.to_le_bytes());
     stream.extend(cobs::encode_vec(&raw));

@@ -126,6 +126,7 @@ fn check_scene(d: &Value, k: u32, stamp: u64) {
                 assert!(near(&p["x"], f64::from(c.center.x) * 1e-3));
                 assert_eq!(meta("sigma_radius_mm").parse::<f64>().unwrap(), 1.0);
             }
+            _ => {}
         }
     }
     // And the whole message is what the shared scene code makes of the features (both through

@@ -9,11 +9,14 @@
 //!   marked) / counted points. A mark shifted by one beam therefore counts 2.
 //! - **Matching**: a predicted feature matches a truth feature when their index ranges
 //!   `[first, last]` overlap with IoU ≥ [`MIN_IOU`]; one-to-one, greedily by best IoU.
-//! - **FalseIdenRatio** = (truth circles matched by a line + truth lines matched by a circle)
-//!   / matched features (the paper divides by all features; unmatched ones have no type to
-//!   judge).
+//! - **FalseIdenRatio** = (truth circles matched by a line + truth lines matched by a circle
+//!   or a small object) / matched features (the paper divides by all features; unmatched ones
+//!   have no type to judge). A small object (`Feature::Object`) matched to a truth circle (a
+//!   small pillar) is found and of the right kind (it has no radius to score).
 //! - **missed** = truth features without a match, **spurious** = predicted features without a
-//!   match, both reported as fractions of the number of truth features.
+//!   match, both reported as fractions of the number of truth features. A small object over
+//!   fewer beams than a truth feature (`truth::MIN_RUN`) is outside what the truth lists: not
+//!   spurious when it matches nothing.
 //! - **Parameter errors** of matched features of the right type: line |Δρ| (mm) and |Δα| (rad,
 //!   wrapped; (α, ρ) and (α + π, −ρ) are the same line), circle centre distance and |ΔR| (mm),
 //!   each with the Cramér–Rao bound of its truth feature.
@@ -280,7 +283,19 @@ pub fn score(ex: &Extraction, gt: &GroundTruth) -> Score {
     let matches = match_features(&gt.features, &ex.features);
     s.matched = matches.len();
     s.missed = gt.features.len() - matches.len();
-    s.spurious = ex.features.len() - matches.len();
+    // A small object over fewer beams than a truth feature has (`MIN_RUN`) is outside what
+    // the truth can score: not spurious (before objects, such runs gave no feature).
+    let unscorable = ex
+        .features
+        .iter()
+        .enumerate()
+        .filter(|(pi, f)| {
+            f.is_object()
+                && f.last() + 1 - f.first() < crate::scene::truth::MIN_RUN
+                && !matches.iter().any(|m| m.1 == *pi)
+        })
+        .count();
+    s.spurious = ex.features.len() - matches.len() - unscorable;
     for (ti, pi) in matches {
         let (Some(t), Some(p)) = (gt.features.get(ti), ex.features.get(pi)) else {
             continue;
@@ -308,6 +323,12 @@ pub fn score(ex: &Extraction, gt: &GroundTruth) -> Score {
             }
             (TruthKind::Line { .. }, Feature::Circle(_)) => s.lines_as_circles += 1,
             (TruthKind::Circle { .. }, Feature::Line(_)) => s.circles_as_lines += 1,
+            // A small object on a truth circle (a small pillar) is found: matched, with no
+            // circle error (it states no radius). On a truth line it is the wrong kind,
+            // counted with the lines taken for circles (FalseIden).
+            (TruthKind::Circle { .. }, Feature::Object(_)) => {}
+            (TruthKind::Line { .. }, _) => s.lines_as_circles += 1,
+            (TruthKind::Circle { .. }, _) => s.circles_as_lines += 1,
         }
     }
     s

@@ -52,6 +52,29 @@ pub enum FeatureJson {
         /// Bearing from the centre to the last point, rad.
         end_angle: f32,
     },
+    /// A small object (a leg, a post): a short run of returns apart from its neighbours.
+    Object {
+        /// First beam index.
+        first: usize,
+        /// Last beam index.
+        last: usize,
+        /// Valid points.
+        points: usize,
+        /// Centre (the mean of its points), mm.
+        center: [f32; 2],
+        /// Covariance of the centre, mm², row by row; symmetric to the bit.
+        cov: [[f32; 2]; 2],
+        /// Extent across, mm.
+        extent: f32,
+    },
+    /// A feature of a kind this version of pfe-formats does not know (never written by this
+    /// workspace's pfe-core).
+    Unknown {
+        /// First beam index.
+        first: usize,
+        /// Last beam index.
+        last: usize,
+    },
 }
 
 /// `cov` with each off-diagonal pair set to the mean of the two (bit-symmetric output).
@@ -89,6 +112,21 @@ impl From<&Feature> for FeatureJson {
                 cov: symmetrised(c.cov),
                 start_angle: c.start_angle,
                 end_angle: c.end_angle,
+            },
+            Feature::Object(o) => {
+                let m = 0.5 * (o.cov[0][1] + o.cov[1][0]);
+                FeatureJson::Object {
+                    first: usize::from(o.first),
+                    last: usize::from(o.last),
+                    points: usize::from(o.points),
+                    center: [o.center.x, o.center.y],
+                    cov: [[o.cov[0][0], m], [m, o.cov[1][1]]],
+                    extent: o.extent,
+                }
+            }
+            f => FeatureJson::Unknown {
+                first: f.first(),
+                last: f.last(),
             },
         }
     }
@@ -148,6 +186,10 @@ pub struct ScanJson {
     pub marks: Option<Vec<usize>>,
     /// Features in scan order.
     pub features: Vec<FeatureJson>,
+    /// Mixed pixels: points of lines the scanner cannot see, in no feature (beam indices);
+    /// absent when there are none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub veils: Vec<usize>,
     /// How the extraction went.
     pub status: StatusJson,
 }
@@ -161,8 +203,15 @@ impl ScanJson {
             pose: None,
             marks: Some(extraction.marks.clone()),
             features: extraction.features.iter().map(FeatureJson::from).collect(),
+            veils: Vec::new(),
             status: StatusJson::default(),
         }
+    }
+
+    /// With the extraction's mixed pixels (`pfe_core::Extractor::is_veil`).
+    pub fn with_veils(mut self, veils: Vec<usize>) -> Self {
+        self.veils = veils;
+        self
     }
 
     /// With the extraction's status.

@@ -377,6 +377,8 @@ pub fn ulps_apart(a: &pfe_core::Feature, b: &pfe_core::Feature) -> Option<u32> {
         match f {
             Feature::Line(l) => (0, [l.first, l.last, l.points], l.values().to_vec()),
             Feature::Circle(c) => (1, [c.first, c.last, c.points], c.values().to_vec()),
+            Feature::Object(o) => (2, [o.first, o.last, o.points], o.values().to_vec()),
+            _ => (u8::MAX, [0; 3], Vec::new()),
         }
     };
     let (ka, ia, va) = fields(a);

@@ -54,6 +54,10 @@ int main(void) {
         if (f.kind == PFE_FEATURE_LINE) {
             printf("line   beams %3u to %3u: alpha %.4f rad, rho %.1f mm (sd %.2f mm)\n", f.first,
                    f.last, f.shape.line.alpha, f.shape.line.rho, sqrtf(f.shape.line.var_rho));
+        } else if (f.kind == PFE_FEATURE_OBJECT) {
+            printf("object beams %3u to %3u: centre (%.1f, %.1f) mm, %.0f mm across\n", f.first,
+                   f.last, f.shape.object.center.x, f.shape.object.center.y,
+                   f.shape.object.extent);
         } else {
             printf("circle beams %3u to %3u: centre (%.1f, %.1f) mm, radius %.1f mm\n", f.first,
                    f.last, f.shape.circle.center.x, f.shape.circle.center.y,

@@ -93,6 +93,8 @@ enum pfe_feature_kind
   PFE_FEATURE_LINE = 1,
   // `shape.circle` holds it.
   PFE_FEATURE_CIRCLE = 2,
+  // `shape.object` holds it.
+  PFE_FEATURE_OBJECT = 3,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -311,12 +313,24 @@ typedef struct pfe_circle {
   float end_angle;
 } pfe_circle;
 
+// A small object (a leg, a post): a short run of returns apart from its neighbours.
+typedef struct pfe_object {
+  // Centre (the mean of its points), mm.
+  struct pfe_point center;
+  // Covariance of the centre, mm².
+  float cov[2][2];
+  // Extent across, mm.
+  float extent;
+} pfe_object;
+
 // A feature's geometry: the member `pfe_feature.kind` names.
 typedef union pfe_feature_shape {
   // For `PFE_FEATURE_LINE`.
   struct pfe_line line;
   // For `PFE_FEATURE_CIRCLE`.
   struct pfe_circle circle;
+  // For `PFE_FEATURE_OBJECT`.
+  struct pfe_object object;
 } pfe_feature_shape;
 
 // One extracted feature.

@@ -340,9 +340,9 @@ pub(crate) fn unit_ok(unit_mm: f32) -> bool {
     unit_mm.is_finite() && unit_mm > 0.0
 }
 
-/// The C form of `f`.
-pub(crate) fn feature_to_c(f: &Feature) -> pfe_feature {
-    match f {
+/// The C form of `f` (`None` for a kind the C API does not know).
+pub(crate) fn feature_to_c(f: &Feature) -> Option<pfe_feature> {
+    Some(match f {
         Feature::Line(l) => pfe_feature {
             kind: pfe_feature_kind::PFE_FEATURE_LINE,
             first: l.first,
@@ -384,7 +384,24 @@ pub(crate) fn feature_to_c(f: &Feature) -> pfe_feature {
                 },
             },
         },
-    }
+        Feature::Object(o) => pfe_feature {
+            kind: pfe_feature_kind::PFE_FEATURE_OBJECT,
+            first: o.first,
+            last: o.last,
+            points: o.points,
+            shape: pfe_feature_shape {
+                object: pfe_object {
+                    center: pfe_point {
+                        x: o.center.x,
+                        y: o.center.y,
+                    },
+                    cov: o.cov,
+                    extent: o.extent,
+                },
+            },
+        },
+        _ => return None,
+    })
 }
 
 /// The C form of `s`.

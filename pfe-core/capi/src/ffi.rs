@@ -378,7 +378,7 @@ pub unsafe extern "C" fn pfe_feature_get(
 ) -> pfe_status {
     // SAFETY: the caller's contract, checked by `state`.
     let f = match unsafe { state(ex) } {
-        Ok(s) => s.features().get(i).map(convert::feature_to_c),
+        Ok(s) => s.features().get(i).and_then(convert::feature_to_c),
         Err(e) => return e,
     };
     match f {

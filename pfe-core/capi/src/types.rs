@@ -263,6 +263,20 @@ pub enum pfe_feature_kind {
     PFE_FEATURE_LINE = 1,
     /// `shape.circle` holds it.
     PFE_FEATURE_CIRCLE = 2,
+    /// `shape.object` holds it.
+    PFE_FEATURE_OBJECT = 3,
+}
+
+/// A small object (a leg, a post): a short run of returns apart from its neighbours.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct pfe_object {
+    /// Centre (the mean of its points), mm.
+    pub center: pfe_point,
+    /// Covariance of the centre, mm².
+    pub cov: [[f32; 2]; 2],
+    /// Extent across, mm.
+    pub extent: f32,
 }
 
 /// A feature's geometry: the member `pfe_feature.kind` names.
@@ -273,6 +287,8 @@ pub union pfe_feature_shape {
     pub line: pfe_line,
     /// For `PFE_FEATURE_CIRCLE`.
     pub circle: pfe_circle,
+    /// For `PFE_FEATURE_OBJECT`.
+    pub object: pfe_object,
 }
 
 /// One extracted feature.

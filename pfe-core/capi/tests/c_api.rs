@@ -283,6 +283,11 @@ fn print_result(
         let (tag, first, last, points, values): (_, _, _, _, Vec<f32>) = match feature {
             Feature::Line(l) => ("L", l.first, l.last, l.points, l.values().to_vec()),
             Feature::Circle(c) => ("C", c.first, c.last, c.points, c.values().to_vec()),
+            Feature::Object(o) => ("O", o.first, o.last, o.points, {
+                let [x, y, a, b, c, d, w] = o.values();
+                vec![x, y, a, b, c, d, w]
+            }),
+            _ => continue,
         };
         write!(out, "{tag} {first} {last} {points}").ok();
         for v in values {

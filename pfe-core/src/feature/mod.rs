@@ -1,4 +1,5 @@
-//! The extractor's output: lines and circles with their uncertainty and point range.
+//! The extractor's output: lines, circles and small objects with their uncertainty and point
+//! range.
 
 use crate::fit::circle::{circle_covariance_range, Circle};
 use crate::fit::line::{LineCovariance, LineFit};
@@ -131,11 +132,72 @@ pub struct CircleFeature {
     serde(tag = "kind", rename_all = "lowercase"),
     serde(try_from = "tagged::Tagged")
 )]
+#[non_exhaustive]
 pub enum Feature {
     /// A straight segment.
     Line(LineFeature),
     /// A circular arc.
     Circle(CircleFeature),
+    /// A small object: a short run of returns, apart from its neighbours, that is neither a
+    /// determined line nor a circle.
+    Object(ObjectFeature),
+}
+
+/// A small object (a chair or table leg, a person's leg, a post): a run of at least three
+/// returns, separated from its neighbours by a range jump or no return on both sides, at
+/// most 0.3 m across, too short or too little determined for a line or a circle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub struct ObjectFeature {
+    /// Index of the first beam of the run.
+    pub first: u16,
+    /// Index of the last beam of the run.
+    pub last: u16,
+    /// Number of valid points.
+    pub points: u16,
+    /// Centre: the mean of its points, mm.
+    pub center: Point,
+    /// Covariance of the centre, mm²: the range noise along the beam, the points' scatter,
+    /// and where on an object as wide as its extent the points can lie.
+    pub cov: [[f32; 2]; 2],
+    /// Extent across (the widest distance between its points), mm.
+    pub extent: f32,
+}
+
+impl ObjectFeature {
+    /// An object of beams `first..=last` with `points` valid points, centre `center`, its
+    /// covariance `cov` and extent `extent` (the struct is `#[non_exhaustive]`).
+    ///
+    /// ```
+    /// use pfe_core::{ObjectFeature, Point};
+    /// let o = ObjectFeature::new(10, 13, 4, Point::new(1000.0, 0.0), [[4.0, 0.0], [0.0, 9.0]], 30.0);
+    /// assert_eq!(o.values(), [1000.0, 0.0, 4.0, 0.0, 0.0, 9.0, 30.0]);
+    /// ```
+    pub const fn new(
+        first: u16,
+        last: u16,
+        points: u16,
+        center: Point,
+        cov: [[f32; 2]; 2],
+        extent: f32,
+    ) -> Self {
+        Self {
+            first,
+            last,
+            points,
+            center,
+            cov,
+            extent,
+        }
+    }
+
+    /// Its numbers in declaration order: centre x, y, the covariance row by row, extent.
+    pub fn values(&self) -> [f32; 7] {
+        let [[a, b], [c, d]] = self.cov;
+        [self.center.x, self.center.y, a, b, c, d, self.extent]
+    }
 }
 
 impl Feature {
@@ -144,6 +206,7 @@ impl Feature {
         match self {
             Feature::Line(l) => usize::from(l.first),
             Feature::Circle(c) => usize::from(c.first),
+            Feature::Object(o) => usize::from(o.first),
         }
     }
 
@@ -152,6 +215,7 @@ impl Feature {
         match self {
             Feature::Line(l) => usize::from(l.last),
             Feature::Circle(c) => usize::from(c.last),
+            Feature::Object(o) => usize::from(o.last),
         }
     }
 
@@ -160,11 +224,17 @@ impl Feature {
         matches!(self, Feature::Line(_))
     }
 
+    /// True for a small object.
+    pub fn is_object(&self) -> bool {
+        matches!(self, Feature::Object(_))
+    }
+
     /// True when every parameter is finite and first ≤ last.
     pub fn is_well_formed(&self) -> bool {
         match self {
             Feature::Line(l) => l.first <= l.last && math::all_finite(&l.values()),
             Feature::Circle(c) => c.first <= c.last && math::all_finite(&c.values()),
+            Feature::Object(o) => o.first <= o.last && math::all_finite(&o.values()),
         }
     }
 }

@@ -58,8 +58,8 @@ pub(super) fn ellipse_svg(
     )
 }
 
-/// The ellipses of a feature: the end points of a line, the centre of a circle (data units,
-/// before exaggeration).
+/// The ellipses of a feature: the end points of a line, the centre of a circle or of a small
+/// object (data units, before exaggeration).
 pub(super) fn feature_ellipses(f: &Feature) -> Vec<(f64, f64, (f64, f64, f64))> {
     match f {
         Feature::Line(l) => {
@@ -89,6 +89,18 @@ pub(super) fn feature_ellipses(f: &Feature) -> Vec<(f64, f64, (f64, f64, f64))> 
                 ellipse(cov, ELLIPSE_SIGMA),
             )]
         }
+        Feature::Object(o) => {
+            let cov = [
+                [f64::from(o.cov[0][0]), f64::from(o.cov[0][1])],
+                [f64::from(o.cov[1][0]), f64::from(o.cov[1][1])],
+            ];
+            vec![(
+                f64::from(o.center.x),
+                f64::from(o.center.y),
+                ellipse(cov, ELLIPSE_SIGMA),
+            )]
+        }
+        _ => Vec::new(),
     }
 }
 

@@ -41,6 +41,7 @@ const POINT: &str = "#5a6b7d";
 const MARK: &str = "#d62728";
 const LINE: &str = "#1f77b4";
 const CIRCLE: &str = "#e67e00";
+const OBJECT: &str = "#9b30c8";
 const GRID: &str = "#e4e4e4";
 const BARE_MARK: &str = "#999999";
 
@@ -256,6 +257,15 @@ pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
                     sy(cy)
                 );
             }
+            Feature::Object(o) => {
+                // A small circle with a cross at its centre (its 3σ ellipse below).
+                let (cx, cy) = (sx(f64::from(o.center.x)), sy(f64::from(o.center.y)));
+                let _ = writeln!(
+                    s,
+                    r#"<circle cx="{cx:.1}" cy="{cy:.1}" r="5" fill="none" stroke="{OBJECT}" stroke-width="1.5"/><path d="M{cx:.1},{cy:.1}m-4,-4l8,8m0,-8l-8,8" stroke="{OBJECT}" stroke-width="1.5"/>"#
+                );
+            }
+            _ => {}
         }
     }
     // Uncertainty: 3σ ellipses, exaggerated by one factor for the whole plot.
@@ -263,10 +273,10 @@ pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
         .features
         .iter()
         .flat_map(|f| {
-            let colour = if matches!(f, Feature::Line(_)) {
-                LINE
-            } else {
-                CIRCLE
+            let colour = match f {
+                Feature::Line(_) => LINE,
+                Feature::Object(_) => OBJECT,
+                _ => CIRCLE,
             };
             feature_ellipses(f).into_iter().map(move |e| (e, colour))
         })
@@ -281,13 +291,9 @@ pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
     }
     // Mark points on top; a mark no feature covers (its segment was too short to fit) grey.
     let covered = |i: usize| {
-        ex.features.iter().any(|f| {
-            let (a, b) = match f {
-                Feature::Line(l) => (l.first, l.last),
-                Feature::Circle(c) => (c.first, c.last),
-            };
-            (usize::from(a)..=usize::from(b)).contains(&i)
-        })
+        ex.features
+            .iter()
+            .any(|f| (f.first()..=f.last()).contains(&i))
     };
     let mut bare = 0;
     for &i in &ex.marks {

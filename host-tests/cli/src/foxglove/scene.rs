@@ -1,6 +1,6 @@
 //! The messages: `foxglove.LaserScan` of a scan, `foxglove.SceneUpdate` of its features.
 
-use pfe_core::{CircleFeature, Feature, LineFeature};
+use pfe_core::{CircleFeature, Feature, LineFeature, ObjectFeature};
 use serde_json::{json, Value};
 
 use pfe_formats::Record;
@@ -59,6 +59,17 @@ pub fn scene_update(stamp_ns: u64, frame_id: &str, features: &[Feature]) -> Valu
         .map(|(k, f)| match f {
             Feature::Line(l) => line_entity(stamp_ns, frame_id, k, l),
             Feature::Circle(c) => circle_entity(stamp_ns, frame_id, k, c),
+            Feature::Object(o) => object_entity(stamp_ns, frame_id, k, o),
+            f => entity(
+                stamp_ns,
+                frame_id,
+                k,
+                &[
+                    ("kind", "unknown".into()),
+                    ("first", f.first().to_string()),
+                    ("last", f.last().to_string()),
+                ],
+            ),
         })
         .collect();
     json!({
@@ -252,6 +263,48 @@ fn circle_entity(stamp_ns: u64, frame_id: &str, k: usize, c: &CircleFeature) -> 
         (cy + r) * MM,
         format!("C{k} r {:.0} mm σr {:.1} mm", r, sigma_r)
     )]);
+    e
+}
+
+/// A small object: a sphere at its centre as wide as its extent, and its centre's 3σ ellipse.
+fn object_entity(stamp_ns: u64, frame_id: &str, k: usize, o: &ObjectFeature) -> Value {
+    let (cx, cy, w) = (
+        f64::from(o.center.x),
+        f64::from(o.center.y),
+        f64::from(o.extent),
+    );
+    let cov = |i: usize, j: usize| f64::from(o.cov[i][j]);
+    let (sxx, syy, sxy) = (cov(0, 0), cov(1, 1), 0.5 * (cov(0, 1) + cov(1, 0)));
+    let mean = 0.5 * (sxx + syy);
+    let dev = (0.25 * (sxx - syy).powi(2) + sxy * sxy).sqrt();
+    let (major, minor) = ((mean + dev).max(0.0).sqrt(), (mean - dev).max(0.0).sqrt());
+    let phi = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let mut e = entity(
+        stamp_ns,
+        frame_id,
+        k,
+        &[
+            ("kind", "object".into()),
+            ("first", o.first.to_string()),
+            ("last", o.last.to_string()),
+            ("center_x_mm", o.center.x.to_string()),
+            ("center_y_mm", o.center.y.to_string()),
+            ("extent_mm", o.extent.to_string()),
+        ],
+    );
+    let size = w.max(20.0) * MM;
+    e["spheres"] = json!([{
+        "pose": pose(cx * MM, cy * MM),
+        "size": { "x": size, "y": size, "z": size },
+        "color": color(0.6, 0.2, 0.8, 0.6),
+    }]);
+    e["lines"] = json!([line_primitive(
+        LINE_LOOP,
+        ellipse(cx, cy, 3.0 * major, 3.0 * minor, phi, 24),
+        0.005,
+        color(0.6, 0.2, 0.8, 0.8)
+    )]);
+    e["texts"] = json!([text(cx * MM, cy * MM, format!("O{k} {:.0} mm", w))]);
     e
 }
 

@@ -202,6 +202,7 @@ impl ListenJson {
                 pose: None,
                 marks: None,
                 features: frame.features.iter().map(FeatureJson::from).collect(),
+                veils: Vec::new(),
                 status: status_json(&h),
             },
             seq: h.seq,

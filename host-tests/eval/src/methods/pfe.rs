@@ -43,6 +43,13 @@ impl Pfe {
     pub fn last_result(&self) -> Result<(), ExtractError> {
         self.last
     }
+
+    /// The mixed pixels of the last extraction: points of lines the scanner cannot see, in no
+    /// feature ([`Extractor::is_veil`]).
+    pub fn veils(&self) -> Vec<usize> {
+        let n = self.extractor.points().len();
+        (0..n).filter(|&i| self.extractor.is_veil(i)).collect()
+    }
 }
 
 impl Method for Pfe {

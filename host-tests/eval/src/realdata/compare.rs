@@ -68,6 +68,8 @@ impl Seen {
                     ],
                     radius: f64::from(c.radius),
                 }),
+                // Small objects are not compared here (yet).
+                _ => {}
             }
         }
         s

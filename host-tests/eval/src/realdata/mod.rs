@@ -25,6 +25,7 @@ pub mod shared;
 mod svg;
 #[cfg(test)]
 mod tests;
+pub mod visible;
 
 use std::path::Path;
 

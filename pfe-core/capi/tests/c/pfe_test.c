@@ -227,6 +227,13 @@ static void print_result(int status, const char *cfg, const char *path, long id)
                    f.first, f.last, f.points, bits(l->alpha), bits(l->rho), bits(l->var_alpha),
                    bits(l->var_rho), bits(l->cov_alpha_rho), bits(l->start.x), bits(l->start.y),
                    bits(l->end.x), bits(l->end.y));
+        } else if (f.kind == PFE_FEATURE_OBJECT) {
+            const pfe_object *o = &f.shape.object;
+            printf("O %u %u %u %08" PRIx32 " %08" PRIx32 " %08" PRIx32 " %08" PRIx32
+                   " %08" PRIx32 " %08" PRIx32 " %08" PRIx32 "\n",
+                   f.first, f.last, f.points, bits(o->center.x), bits(o->center.y),
+                   bits(o->cov[0][0]), bits(o->cov[0][1]), bits(o->cov[1][0]),
+                   bits(o->cov[1][1]), bits(o->extent));
         } else {
             const pfe_circle *c = &f.shape.circle;
             printf("C %u %u %u %08" PRIx32 " %08" PRIx32 " %08" PRIx32, f.first, f.last,

@@ -154,6 +154,12 @@ pub fn refit(pts: &[Point], features: &[Feature], sigma_r: f32) -> crate::method
             let (first, last, model) = match f {
                 Feature::Line(l) => (l.first, l.last, Model::Line),
                 Feature::Circle(c) => (c.first, c.last, Model::Circle),
+                // An object's centre is its points' mean: as cheap as a line's fit.
+                f => (
+                    u16::try_from(f.first()).unwrap_or(u16::MAX),
+                    u16::try_from(f.last()).unwrap_or(u16::MAX),
+                    Model::Line,
+                ),
             };
             Piece {
                 first: usize::from(first),
@@ -251,6 +257,7 @@ mod tests {
                     match f {
                         Feature::Line(_) => lines += 1,
                         Feature::Circle(_) => circles += 1,
+                        _ => {}
                     }
                 }
             }

@@ -1,0 +1,102 @@
+//! Issue 39 on the shared recordings (skipped, with a message, when `../shared/data` is absent):
+//! pfe `default`, as `pfe extract` runs it, reports no line seen at more than 85° from the
+//! scanner at its midpoint and none shorter than 10 mm, and every feature's covariance is
+//! finite; the share of small objects some feature holds is printed per recording
+//! (`pfe_eval::realdata::visible`).
+#![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code
+
+use std::path::PathBuf;
+
+use pfe_eval::methods::{Method, Pfe, ScanContext};
+use pfe_eval::realdata::log_scans;
+use pfe_eval::realdata::visible::{Seen, Visibility};
+use pfe_formats::Format;
+
+fn data_dir(test: &str) -> Option<PathBuf> {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
+    if d.join("carmen").is_dir() && d.join("hokuyo-cylinders").is_dir() {
+        Some(d)
+    } else {
+        pfe_testkit::skip::skip(
+            test,
+            &format!(
+                "real data folder {} is absent (it sits beside the repository as shared/data)",
+                d.display()
+            ),
+            pfe_testkit::skip::Need::InCi,
+        );
+        None
+    }
+}
+
+fn pfe(format: Format) -> Pfe {
+    Pfe::new(
+        "pfe-default",
+        pfe_core::Config::default()
+            .with_sigma_r(format.sigma_r())
+            .with_sigma_sys(format.sigma_sys()),
+    )
+}
+
+/// Counts one scan, checking every feature is finite.
+fn count(v: &mut Visibility, m: &mut Pfe, r: &pfe_formats::Record, context: &ScanContext) {
+    let ex = m.extract_in(&r.geometry, &r.ranges_mm, context);
+    for f in &ex.features {
+        assert!(f.is_well_formed(), "{f:?}");
+    }
+    let seen: Vec<Seen> = ex.features.iter().map(Seen::from).collect();
+    v.add(&r.geometry, &r.ranges_mm, &seen);
+}
+
+#[test]
+fn no_line_the_scanner_cannot_see_on_the_shared_recordings() {
+    let Some(d) = data_dir("no_line_the_scanner_cannot_see_on_the_shared_recordings") else {
+        return;
+    };
+    let mut logs: Vec<PathBuf> = std::fs::read_dir(d.join("carmen"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.to_string_lossy().ends_with(".log.gz"))
+        .collect();
+    logs.sort();
+    assert_eq!(logs.len(), 10, "the ten CARMEN logs");
+    let mut all = Vec::new();
+    for log in &logs {
+        let mut m = pfe(Format::Carmen);
+        let mut v = Visibility::default();
+        for s in log_scans(log).unwrap() {
+            let s = s.unwrap();
+            count(&mut v, &mut m, &s.record, &s.context);
+        }
+        all.push((log.file_name().unwrap().to_string_lossy().to_string(), v));
+    }
+    let hokuyo = d.join("hokuyo-cylinders/scans.txt.gz");
+    let input = pfe_formats::open_for(&hokuyo, Format::Hokuyo, |r| r).unwrap();
+    let mut m = pfe(Format::Hokuyo);
+    let mut v = Visibility::default();
+    for r in pfe_formats::scans(Format::Hokuyo, input) {
+        let r = r.unwrap();
+        let context = ScanContext {
+            odometry: None,
+            sweeps: 1,
+            quantum: pfe_formats::range_quantum(&r.ranges_mm, r.geometry.r_max),
+        };
+        count(&mut v, &mut m, &r, &context);
+    }
+    all.push(("hokuyo-cylinders".into(), v));
+    for (name, v) in &all {
+        eprintln!(
+            "{name}: {} scans, {} lines, {} > 85°, {} < 10 mm; small objects {} covered {:.1} %",
+            v.scans,
+            v.lines,
+            v.steep,
+            v.short,
+            v.objects,
+            v.covered_pct()
+        );
+    }
+    for (name, v) in &all {
+        assert!(v.scans > 0 && v.lines > 0, "{name}: {v:?}");
+        assert_eq!((v.steep, v.short), (0, 0), "{name}: {v:?}");
+    }
+}

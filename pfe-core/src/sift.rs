@@ -1,0 +1,261 @@
+//! Ours, with the checks for real scans, after the fits: only what the scanner can see, and
+//! small objects as such.
+//!
+//! - A line seen at more than 85° incidence from the scanner at its midpoint (the angle
+//!   between the beam to its midpoint and its normal), or shorter than 10 mm, is no surface
+//!   the beams could have measured: the mixed pixels of a veil along a line of sight at an
+//!   object's edge, or a run with no extent. It is not reported.
+//! - A small object (a run of at least [`OBJECT_MIN_POINTS`] returns with a range jump of at
+//!   least [`OBJECT_JUMP_MM`] or no return on both sides, at most [`OBJECT_MAX_MM`] across)
+//!   that no feature holds, or that only a line of undetermined direction (σ_α above
+//!   [`MAX_SIGMA_ALPHA`]) holds, is reported as an [`ObjectFeature`]: a chair leg, a person's
+//!   leg, a post. Its arc, where its points show one, was a circle and stays one.
+//! - The points of a line not reported that are no small object are flagged as mixed pixels
+//!   ([`VEIL`]) and counted in [`Stats::veils`](crate::Stats).
+
+use crate::config::Config;
+use crate::feature::{Feature, LineFeature, ObjectFeature};
+use crate::flags::{END, START, VEIL};
+use crate::geometry::Point;
+use crate::math;
+use crate::output::FeatureSink;
+use crate::pass::Pass;
+
+/// cos 85°: a line whose normal makes a larger angle with the beam to its midpoint is not seen.
+const COS_MAX_INCIDENCE: f32 = 0.087_155_74;
+/// Shortest line reported, mm.
+const MIN_LINE_MM: f32 = 10.0;
+/// Fewest returns of a small object.
+pub(crate) const OBJECT_MIN_POINTS: usize = 3;
+/// Range jump that separates a small object from its neighbours, mm.
+pub(crate) const OBJECT_JUMP_MM: f32 = 300.0;
+/// Widest small object, mm.
+pub(crate) const OBJECT_MAX_MM: f32 = 300.0;
+/// σ_α beyond which a line's direction is undetermined, rad (a line over a small object with
+/// it is reported as the object).
+const MAX_SIGMA_ALPHA: f32 = 0.1;
+
+/// Sifts the features in `out` as the module says.
+pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
+    // Lines not reported: their points freed (flagged as veils until an object takes them).
+    let mut freed = 0usize;
+    for f in out.features_mut().iter() {
+        if let Feature::Line(l) = f {
+            if !seen(l) || undetermined_object(pass, l) {
+                for i in usize::from(l.first)..=usize::from(l.last) {
+                    if pass.valid(i) {
+                        pass.set(i, VEIL);
+                    }
+                }
+                freed += 1;
+                // Its segment: no feature, as one whose fit failed.
+                pass.stats.features = pass.stats.features.saturating_sub(1);
+                pass.stats.degenerate += 1;
+            }
+        }
+    }
+    if freed > 0 {
+        let pass = &*pass;
+        out.retain(&mut |f| match f {
+            Feature::Line(l) => seen(l) && !undetermined_object(pass, l),
+            _ => true,
+        });
+    }
+    // Small objects no feature holds.
+    let len = pass.len();
+    let mut i = 0usize;
+    let mut added = false;
+    while i < len {
+        if !pass.valid(i) {
+            i += 1;
+            continue;
+        }
+        let e = run_end(pass, i);
+        if e + 1 - i >= OBJECT_MIN_POINTS
+            && whole_segments(pass, i, e)
+            && !held(out.features_mut(), i, e)
+        {
+            if let Some(o) = object(pass, i, e, config) {
+                one_segment(pass, i, e, config.min_points);
+                if out.push(Feature::Object(o)) {
+                    pass.stats.features += 1;
+                    pass.stats.objects += 1;
+                    added = true;
+                } else {
+                    pass.stats.dropped += 1;
+                }
+            }
+        }
+        i = e + 1;
+    }
+    if added {
+        in_scan_order(out.features_mut());
+    }
+    pass.stats.veils = pass.flags.iter().filter(|&&f| f & VEIL != 0).count();
+}
+
+/// Sorts `features` by first beam (an insertion sort: they are in order but for the objects
+/// appended; no panic path, unlike the library's sorts).
+fn in_scan_order(features: &mut [Feature]) {
+    for i in 1..features.len() {
+        let Some(&f) = features.get(i) else { break };
+        let mut j = i;
+        while j > 0 {
+            let Some(&p) = features.get(j - 1) else {
+                break;
+            };
+            if p.first() <= f.first() {
+                break;
+            }
+            if let Some(slot) = features.get_mut(j) {
+                *slot = p;
+            }
+            j -= 1;
+        }
+        if let Some(slot) = features.get_mut(j) {
+            *slot = f;
+        }
+    }
+}
+
+/// True when the scanner can have seen `l` as a surface: at most 85° incidence at its
+/// midpoint, and at least 10 mm long.
+fn seen(l: &LineFeature) -> bool {
+    let m = Point::new(0.5 * (l.start.x + l.end.x), 0.5 * (l.start.y + l.end.y));
+    let d = m.norm();
+    let (sin, cos) = math::sin_cos(l.alpha);
+    let along = math::abs(m.x * cos + m.y * sin);
+    d > 0.0 && along >= COS_MAX_INCIDENCE * d && l.start.distance(&l.end) >= MIN_LINE_MM
+}
+
+/// True when `l` has an undetermined direction and lies on a small object.
+fn undetermined_object(pass: &Pass<'_>, l: &LineFeature) -> bool {
+    if !(l.var_alpha > MAX_SIGMA_ALPHA * MAX_SIGMA_ALPHA) {
+        return false;
+    }
+    let (first, last) = (usize::from(l.first), usize::from(l.last));
+    let mut s = first;
+    while s > 0 && pass.valid(s - 1) && !jump(pass, s - 1) {
+        s -= 1;
+    }
+    let e = run_end(pass, first);
+    e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e) <= OBJECT_MAX_MM
+}
+
+/// True when the run `s..=e` is made of whole segments: it starts one and the point after it
+/// (if any) starts another or is invalid.
+fn whole_segments(pass: &Pass<'_>, s: usize, e: usize) -> bool {
+    pass.flag(s) & START != 0 && (!pass.valid(e + 1) || pass.flag(e + 1) & START != 0)
+}
+
+/// Makes the segments of the run `s..=e` (short, or without a feature) one segment, the
+/// object's: its marks at `s` and `e` only, the statistics counting it once.
+fn one_segment(pass: &mut Pass<'_>, s: usize, e: usize, min_points: usize) {
+    let mut a = s;
+    let mut undone = 0usize;
+    while a <= e {
+        let mut b = a;
+        while b < e && pass.flag(b + 1) & START == 0 {
+            b += 1;
+        }
+        undone += 1;
+        let stats = &mut *pass.stats;
+        if b + 1 - a < min_points {
+            stats.short_segments = stats.short_segments.saturating_sub(1);
+        } else {
+            stats.degenerate = stats.degenerate.saturating_sub(1);
+        }
+        a = b + 1;
+    }
+    pass.stats.segments = (pass.stats.segments + 1).saturating_sub(undone);
+    for k in s..=e {
+        pass.clear(k, START | END | VEIL);
+    }
+    pass.set(s, START);
+    pass.set(e, END);
+}
+
+/// True when the range jumps by at least [`OBJECT_JUMP_MM`] from point `i` to `i + 1`.
+fn jump(pass: &Pass<'_>, i: usize) -> bool {
+    !(math::abs(pass.range(i + 1) - pass.range(i)) < OBJECT_JUMP_MM)
+}
+
+/// The last point of the run of returns from the valid point `s` without a jump.
+fn run_end(pass: &Pass<'_>, s: usize) -> usize {
+    let mut e = s;
+    while e + 1 < pass.len() && pass.valid(e + 1) && !jump(pass, e) {
+        e += 1;
+    }
+    e
+}
+
+/// True when a feature holds a point of `s..=e`.
+fn held(features: &[Feature], s: usize, e: usize) -> bool {
+    features.iter().any(|f| f.first() <= e && f.last() >= s)
+}
+
+/// The widest distance from either end of the run `s..=e` to its points, mm (its extent).
+fn extent(pass: &Pass<'_>, s: usize, e: usize) -> f32 {
+    let (a, b) = (pass.point(s), pass.point(e));
+    (s..=e)
+        .filter(|&k| pass.valid(k))
+        .map(|k| {
+            let p = pass.point(k);
+            p.distance(&a).max(p.distance(&b))
+        })
+        .fold(0.0, f32::max)
+}
+
+/// The object of the run `s..=e`, when it is one (at most [`OBJECT_MAX_MM`] across).
+///
+/// Its centre is the mean of its points. The centre's covariance adds: the points' scatter
+/// over their number; the range noise along the beam to the centre (σ_r² over the points, and
+/// the systematic σ_sys², shared by them); and, along that beam, the variance of where on an
+/// object as deep as it is wide its surface lies (w²/12: the points show its near side, which
+/// moves against the centre as it is seen from elsewhere).
+fn object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<ObjectFeature> {
+    let w = extent(pass, s, e);
+    if !(w <= OBJECT_MAX_MM) {
+        return None;
+    }
+    let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
+    for k in (s..=e).filter(|&k| pass.valid(k)) {
+        let p = pass.point(k);
+        n += 1;
+        sx += p.x;
+        sy += p.y;
+    }
+    if n < OBJECT_MIN_POINTS {
+        return None;
+    }
+    let nf = n as f32;
+    let c = Point::new(sx / nf, sy / nf);
+    let (mut xx, mut xy, mut yy) = (0.0f32, 0.0f32, 0.0f32);
+    for k in (s..=e).filter(|&k| pass.valid(k)) {
+        let p = pass.point(k);
+        let (dx, dy) = (p.x - c.x, p.y - c.y);
+        xx += dx * dx;
+        xy += dx * dy;
+        yy += dy * dy;
+    }
+    let scatter = 1.0 / ((nf - 1.0) * nf);
+    let d = c.norm();
+    if !(d > 0.0) {
+        return None;
+    }
+    let (ux, uy) = (c.x / d, c.y / d);
+    let depth =
+        config.sigma_r * config.sigma_r / nf + config.sigma_sys * config.sigma_sys + w * w / 12.0;
+    let cxx = xx * scatter + depth * ux * ux;
+    let cxy = xy * scatter + depth * ux * uy;
+    let cyy = yy * scatter + depth * uy * uy;
+    let o = ObjectFeature::new(
+        u16::try_from(s).ok()?,
+        u16::try_from(e).ok()?,
+        u16::try_from(n).ok()?,
+        c,
+        [[cxx, cxy], [cxy, cyy]],
+        w,
+    );
+    Feature::Object(o).is_well_formed().then_some(o)
+}
