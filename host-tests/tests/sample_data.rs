@@ -38,7 +38,7 @@ fn the_samples_are_the_same_room_and_give_its_three_walls() {
             .iter()
             .map(|f| match f {
                 Feature::Line(l) => (l.alpha, l.rho),
-                Feature::Circle(c) => panic!("scan {}: a circle {c:?}", a.id),
+                other => panic!("scan {}: not a line: {other:?}", a.id),
             })
             .collect();
         // Right wall (normal at −90°), front wall (0°), left wall (+90°), in beam order.

@@ -121,7 +121,7 @@ pub enum Observation {
 
 impl Observation {
     /// A pfe-core feature as an observation: a line keeps (α, ρ), its covariance and its
-    /// segment; a circle becomes its centre with the centre's covariance. `None` when the
+    /// segment; a circle or a small object becomes its centre with the centre's covariance. `None` when the
     /// feature is not well formed or its covariance is not positive definite (a fit from
     /// noise-free points has zero variance: give such scans a range noise).
     ///
@@ -153,6 +153,11 @@ impl Observation {
                 c.center.y,
                 [[c.cov[0][0], c.cov[0][1]], [c.cov[1][0], c.cov[1][1]]],
             )),
+            // A small object: its centre with the centre's covariance (which holds where on an
+            // object of its extent the visible points lie, so another viewpoint stays within it).
+            Feature::Object(o) => Observation::Point(PointObs::new(o.center.x, o.center.y, o.cov)),
+            // A feature kind this crate does not know yet is not used.
+            _ => return None,
         };
         o.is_valid().then_some(o)
     }
