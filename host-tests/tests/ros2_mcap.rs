@@ -107,6 +107,14 @@ fn assert_features_match(a: &[Feature], b: &[Feature], what: &str) {
                 assert!(close(x.center.y, y.center.y, 1e-5), "{what}: circle {k}");
                 assert!(close(x.radius, y.radius, 1e-5), "{what}: circle {k} radius");
             }
+            (Feature::Object(x), Feature::Object(y)) => {
+                assert_eq!((x.first, x.last), (y.first, y.last), "{what}: object {k}");
+                assert!(
+                    close(x.center.x, y.center.x, 1e-5) && close(x.center.y, y.center.y, 1e-5),
+                    "{what}: object {k} {x:?} {y:?}"
+                );
+                assert!(close(x.extent, y.extent, 1e-5), "{what}: object {k} extent");
+            }
             _ => panic!("{what}: feature {k} differs in kind: {fa:?} vs {fb:?}"),
         }
     }
