@@ -5,7 +5,7 @@
 //!
 //! `cargo run -p host-tests --release --example visibility -- FORMAT LOG JSONL`
 //!
-//! JSONL: `pfe extract --format FORMAT LOG`'s output (e.g. `/work/bitcheck/run.sh`'s). Prints
+//! JSONL: `pfe extract --format FORMAT LOG`'s output. Prints
 //! one line: scans, lines, lines > 85°, lines < 10 mm, small objects, covered %, and the
 //! objects and veil points the JSON reports (0 before the object feature).
 
