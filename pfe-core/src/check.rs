@@ -16,6 +16,7 @@ use crate::rule::Rule;
 /// mode's walk set right after another one, in increasing order, when it noted them all (else
 /// every flag is read); `moved`: interleaved sweeps were moved onto sweep 0 by an estimate of
 /// their offset (see [`out_and_back`]).
+#[inline(never)]
 pub(crate) fn check(pass: &mut Pass<'_>, rule: &Rule, noted: Option<&[u16]>, moved: bool) {
     match noted {
         // The default mode's walk noted every start next to another (in increasing order):

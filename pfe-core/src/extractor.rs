@@ -356,6 +356,7 @@ struct Marks {
 /// estimated from the scan, when the marks of `walk` (which noted `noted`) or, with the checks
 /// for real scans, the scan's scatter show them out of place, and walked again; otherwise the
 /// walk's marks stand.
+#[inline(always)]
 fn in_place(
     (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
     slots: (&mut [Point], &mut [f32], &mut [u8]),
@@ -367,9 +368,24 @@ fn in_place(
     if !(sweeps > 1 && scan.deskewing().is_none() && walk.rule.noise().is_some()) {
         return Marks::standing(walk, noted);
     }
-    match config.scrutinised() {
-        true => scrutinised((beams, scan, config), slots, walk, noted, stats),
-        false => suspected((beams, scan), slots, walk, noted, stats),
+    if config.scrutinised() {
+        return scrutinised((beams, scan, config), slots, walk, noted, stats);
+    }
+    let (points, ranges, flags) = slots;
+    match suspected(scan, (points, ranges, flags), noted.is_some(), stats) {
+        Suspect::No => Marks::standing(walk, noted),
+        // Nothing to move: the marks stand (the check step reads every flag).
+        Suspect::Unmoved => Marks::standing(walk, None),
+        Suspect::Moved => {
+            // Walked here, not in `suspected`: its frame stays off the walk's stack path.
+            let noted = walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
+            Marks {
+                by: walk,
+                noted,
+                moved: true,
+                alignment: [0.0; 3],
+            }
+        }
     }
 }
 
@@ -385,33 +401,36 @@ impl Marks {
     }
 }
 
+/// What [`suspected`] did with the walk's marks.
+enum Suspect {
+    /// Not suspect: they stand.
+    No,
+    /// Suspect, but no sweep was moved: they stand.
+    Unmoved,
+    /// The sweeps were moved onto sweep 0: the points are to be walked again.
+    Moved,
+}
+
 /// [`in_place`] without the checks for real scans: the sweeps are moved when the walk's marks
-/// are suspect ([`sweeps::suspect`]), and walked again with the same rule.
+/// (`noted`: whether it noted every neighbouring start) are suspect ([`sweeps::suspect`]);
+/// the caller walks them again with the same rule.
 #[inline(never)]
 fn suspected(
-    (beams, scan): (Beams<'_>, &Scan<'_>),
+    scan: &Scan<'_>,
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
-    walk: Marking,
-    noted: Neighbours,
+    noted: bool,
     stats: &mut Stats,
-) -> Marks {
+) -> Suspect {
     // The marks' evidence (many segment starts): no fit is made before aligning.
-    if !sweeps::suspect(flags, noted.is_some(), stats.valid) {
-        return Marks::standing(walk, noted);
+    if !sweeps::suspect(flags, noted, stats.valid) {
+        return Suspect::No;
     }
     let sweeps = usize::from(scan.sweeps.max(1));
     let step = scan.geometry.angle_step;
     stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
-    if stats.sweeps_aligned == 0 {
-        // Nothing to move: the marks stand (the check step reads every flag).
-        return Marks::standing(walk, None);
-    }
-    let noted = walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
-    Marks {
-        by: walk,
-        noted,
-        moved: true,
-        alignment: [0.0; 3],
+    match stats.sweeps_aligned {
+        0 => Suspect::Unmoved,
+        _ => Suspect::Moved,
     }
 }
 

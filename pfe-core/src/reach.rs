@@ -18,6 +18,7 @@ use crate::rule::NoiseRule;
 /// Extends every line of `features` (in scan order; a feature out of order is left as it is)
 /// over the beams of `pass` next to its ends that lie on it. The marks follow: a line's ends
 /// stay the ends of its segment, and what is left of a short segment beside it keeps its own.
+#[inline(never)]
 pub(crate) fn extend(pass: &mut Pass<'_>, rule: &NoiseRule, features: &mut [Feature]) {
     for i in 0..features.len() {
         let (before, rest) = features.split_at_mut(i);

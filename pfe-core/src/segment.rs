@@ -31,6 +31,7 @@ const CHAIN_MIN: usize = 5;
 const CHAIN_MAX: usize = 64;
 
 /// Pairs the marks of `pass` into segments and emits the feature of each into `out`.
+#[inline(never)]
 pub(crate) fn segments(
     pass: &mut Pass<'_>,
     rule: &Rule,
