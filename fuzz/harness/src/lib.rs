@@ -355,20 +355,12 @@ impl ExtractorInput {
         let float_bits = flags & Self::FLOAT_BITS != 0;
         let geometry = if float_bits {
             let [s, a, r] = [0; 3].map(|_: u8| f32::from_le_bytes(take::<4>(&mut rest)));
-            ScanGeometry {
-                start_angle: s,
-                angle_step: a,
-                r_max: r,
-            }
+            ScanGeometry::new(s, a, r)
         } else {
             let s = i16::from_le_bytes(take::<2>(&mut rest));
             let a = i16::from_le_bytes(take::<2>(&mut rest));
             let r = u16::from_le_bytes(take::<2>(&mut rest));
-            ScanGeometry {
-                start_angle: f32::from(s) * 0.01f32.to_radians(),
-                angle_step: f32::from(a) * 0.001f32.to_radians(),
-                r_max: f32::from(r),
-            }
+            ScanGeometry::new(f32::from(s) * 0.01f32.to_radians(), f32::from(a) * 0.001f32.to_radians(), f32::from(r))
         };
         let (mut codes, mut mm) = (Vec::new(), Vec::new());
         if flags & Self::RAW != 0 {
