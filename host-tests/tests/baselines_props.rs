@@ -61,12 +61,8 @@ fn geometry() -> impl Strategy<Value = ScanGeometry> {
         3 => Just(ScanGeometry::LMS200_180_050),
         1 => Just(ScanGeometry::lms200(180.0, 1.0)),
         1 => Just(ScanGeometry::lms200(100.0, 0.25)),
-        1 => (-4.0f32..4.0, -0.2f32..0.2, 1.0f32..90000.0).prop_map(|(s, d, r)| ScanGeometry {
-            start_angle: s,
-            angle_step: d,
-            r_max: r,
-        }),
-        1 => Just(ScanGeometry { start_angle: f32::NAN, angle_step: 0.0, r_max: f32::INFINITY }),
+        1 => (-4.0f32..4.0, -0.2f32..0.2, 1.0f32..90000.0).prop_map(|(s, d, r)| ScanGeometry::new(s, d, r)),
+        1 => Just(ScanGeometry::new(f32::NAN, 0.0, f32::INFINITY)),
     ]
 }
 

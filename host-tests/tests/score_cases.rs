@@ -33,31 +33,31 @@ fn truth_circle(first: usize, last: usize, center: [f64; 2], radius: f64) -> Tru
 }
 
 fn line(first: usize, last: usize, alpha: f32, rho: f32) -> Feature {
-    Feature::Line(LineFeature {
-        first: first as u16,
-        last: last as u16,
-        points: (last + 1 - first) as u16,
+    Feature::Line(LineFeature::new(
+        first as u16,
+        last as u16,
+        (last + 1 - first) as u16,
         alpha,
         rho,
-        var_alpha: 0.0,
-        var_rho: 0.0,
-        cov_alpha_rho: 0.0,
-        start: Point::new(0.0, 0.0),
-        end: Point::new(0.0, 0.0),
-    })
+        0.0,
+        0.0,
+        0.0,
+        Point::new(0.0, 0.0),
+        Point::new(0.0, 0.0),
+    ))
 }
 
 fn circle(first: usize, last: usize, c: [f32; 2], r: f32) -> Feature {
-    Feature::Circle(CircleFeature {
-        first: first as u16,
-        last: last as u16,
-        points: (last + 1 - first) as u16,
-        center: Point::new(c[0], c[1]),
-        radius: r,
-        cov: [[0.0; 3]; 3],
-        start_angle: 0.0,
-        end_angle: 0.0,
-    })
+    Feature::Circle(CircleFeature::new(
+        first as u16,
+        last as u16,
+        (last + 1 - first) as u16,
+        Point::new(c[0], c[1]),
+        r,
+        [[0.0; 3]; 3],
+        0.0,
+        0.0,
+    ))
 }
 
 /// 100 beams: a line on 10..=39, a circle on 45..=59, a line on 60..=89; the rest don't care.

@@ -73,42 +73,42 @@ impl Replay {
             let (first, last) = (f.first as u16, f.last as u16);
             let points = last + 1 - first;
             match f.kind {
-                TruthKind::Line { alpha, rho } => Feature::Line(LineFeature {
+                TruthKind::Line { alpha, rho } => Feature::Line(LineFeature::new(
                     first,
                     last,
                     points,
-                    alpha: alpha as f32,
-                    rho: rho as f32,
-                    var_alpha: 0.0,
-                    var_rho: 0.0,
-                    cov_alpha_rho: 0.0,
-                    start: Point::new(0.0, 0.0),
-                    end: Point::new(0.0, 0.0),
-                }),
+                    alpha as f32,
+                    rho as f32,
+                    0.0,
+                    0.0,
+                    0.0,
+                    Point::new(0.0, 0.0),
+                    Point::new(0.0, 0.0),
+                )),
                 TruthKind::Circle { center, radius } if !swap_circles => {
-                    Feature::Circle(CircleFeature {
+                    Feature::Circle(CircleFeature::new(
                         first,
                         last,
                         points,
-                        center: Point::new(center[0] as f32, center[1] as f32),
-                        radius: radius as f32,
-                        cov: [[0.0; 3]; 3],
-                        start_angle: 0.0,
-                        end_angle: 0.0,
-                    })
+                        Point::new(center[0] as f32, center[1] as f32),
+                        radius as f32,
+                        [[0.0; 3]; 3],
+                        0.0,
+                        0.0,
+                    ))
                 }
-                TruthKind::Circle { .. } => Feature::Line(LineFeature {
+                TruthKind::Circle { .. } => Feature::Line(LineFeature::new(
                     first,
                     last,
                     points,
-                    alpha: 0.0,
-                    rho: 1000.0,
-                    var_alpha: 0.0,
-                    var_rho: 0.0,
-                    cov_alpha_rho: 0.0,
-                    start: Point::new(0.0, 0.0),
-                    end: Point::new(0.0, 0.0),
-                }),
+                    0.0,
+                    1000.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    Point::new(0.0, 0.0),
+                    Point::new(0.0, 0.0),
+                )),
             }
         };
         Self {
@@ -132,18 +132,18 @@ impl Method for Replay {
         self.next += 1;
         let mut features = self.truth[k].clone();
         if self.extra {
-            features.push(Feature::Line(LineFeature {
-                first: 0,
-                last: 1,
-                points: 2,
-                alpha: 0.0,
-                rho: 1.0,
-                var_alpha: 0.0,
-                var_rho: 0.0,
-                cov_alpha_rho: 0.0,
-                start: Point::new(0.0, 0.0),
-                end: Point::new(0.0, 0.0),
-            }));
+            features.push(Feature::Line(LineFeature::new(
+                0,
+                1,
+                2,
+                0.0,
+                1.0,
+                0.0,
+                0.0,
+                0.0,
+                Point::new(0.0, 0.0),
+                Point::new(0.0, 0.0),
+            )));
         }
         Extraction {
             marks: self.marks[k].clone(),

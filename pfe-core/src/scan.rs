@@ -7,6 +7,7 @@ use crate::motion::Motion;
 /// Where the beams point and how far the scanner sees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct ScanGeometry {
     /// Bearing of beam 0, rad (x forward, y left, counter-clockwise positive).
     pub start_angle: f32,
@@ -17,6 +18,22 @@ pub struct ScanGeometry {
 }
 
 impl ScanGeometry {
+    /// A geometry from beam 0's bearing (rad), the bearing step (rad) and the maximum range (mm).
+    ///
+    /// ```
+    /// use pfe_core::ScanGeometry;
+    /// let g = ScanGeometry::new(-1.0, 0.01, 4000.0);
+    /// assert!(g.is_valid());
+    /// assert_eq!(g.bearing(100), -1.0 + 0.01 * 100.0);
+    /// ```
+    pub const fn new(start_angle: f32, angle_step: f32, r_max: f32) -> Self {
+        Self {
+            start_angle,
+            angle_step,
+            r_max,
+        }
+    }
+
     /// The SICK LMS200 in its default variant: 180° at 0.5° (361 beams from −90°), 8 m mode.
     pub const LMS200_180_050: ScanGeometry = ScanGeometry {
         start_angle: -core::f32::consts::FRAC_PI_2,

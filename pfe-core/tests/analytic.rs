@@ -22,11 +22,7 @@ fn one_degree_scan(
     n: usize,
     range: impl Fn(usize, f64) -> f64,
 ) -> (ScanGeometry, Vec<f32>) {
-    let g = ScanGeometry {
-        start_angle: start_deg.to_radians(),
-        angle_step: 1f32.to_radians(),
-        r_max: 8000.0,
-    };
+    let g = ScanGeometry::new(start_deg.to_radians(), 1f32.to_radians(), 8000.0);
     let ranges = (0..n)
         .map(|i| range(i, g.bearing(i) as f64) as f32)
         .collect();

@@ -529,11 +529,7 @@ fn the_extractor_reports_its_last_extraction() {
     ];
     let step = 1f64.to_radians();
     let (long, _) = scan(&prims, 0.0, step, 360, 7900.0);
-    let g = ScanGeometry {
-        start_angle: 0.0,
-        angle_step: 1f32.to_radians(),
-        r_max: 8000.0,
-    };
+    let g = ScanGeometry::new(0.0, 1f32.to_radians(), 8000.0);
     let mut ex = Extractor::<400, 32>::new();
     let config = Config::default();
     let first = ex.extract(&Scan::from_mm(g, &long), &config).unwrap();
@@ -565,7 +561,7 @@ fn the_extractor_reports_its_last_extraction() {
 /// and finite numbers.
 #[test]
 fn a_circle_feature_carries_its_arc_seen_from_its_centre() {
-    use pfe_core::{Circle, CircleFeature};
+    use pfe_core::Circle;
     let center = Point::new(1000.0, 2000.0);
     let r = 300.0f32;
     let angles: Vec<f32> = (0..9).map(|k| -2.5 + 0.1 * k as f32).collect();
@@ -592,16 +588,11 @@ fn a_circle_feature_carries_its_arc_seen_from_its_centre() {
     assert_eq!(v[12..], [c.start_angle, c.end_angle]);
     assert!(f.is_well_formed());
 
-    let turned = CircleFeature {
-        first: 18,
-        last: 10,
-        ..c
-    };
+    let mut turned = c;
+    (turned.first, turned.last) = (18, 10);
     assert!(!Feature::Circle(turned).is_well_formed());
-    let nan = CircleFeature {
-        radius: f32::NAN,
-        ..c
-    };
+    let mut nan = c;
+    nan.radius = f32::NAN;
     assert!(!Feature::Circle(nan).is_well_formed());
 }
 
@@ -690,11 +681,7 @@ fn raw_codes_beyond_the_valid_ones_are_no_return() {
 /// A beam step must be below 1 rad (and not 0): 1 rad exactly is refused.
 #[test]
 fn a_beam_step_of_one_radian_is_refused() {
-    let g = |angle_step: f32| ScanGeometry {
-        start_angle: 0.0,
-        angle_step,
-        r_max: 8000.0,
-    };
+    let g = |angle_step: f32| ScanGeometry::new(0.0, angle_step, 8000.0);
     assert!(g(0.999).is_valid() && g(-0.999).is_valid());
     assert!(!g(1.0).is_valid() && !g(-1.0).is_valid() && !g(0.0).is_valid());
 }
@@ -732,7 +719,7 @@ fn a_scan_of_range_codes_extracts_as_its_ranges_in_mm() {
                 }
             })
             .collect();
-        let geometry = ScanGeometry { r_max: 8000.0, ..g };
+        let geometry = ScanGeometry::new(g.start_angle, g.angle_step, 8000.0);
         let (mut a, mut b) = (Extractor::<361, 32>::new(), Extractor::<361, 32>::new());
         let config = Config::default().with_sigma_r(5.0);
         let sa = a
@@ -814,7 +801,7 @@ fn the_papers_threshold_grows_with_range() {
 fn a_code_one_past_the_largest_valid_one_is_no_return() {
     let g = ScanGeometry::LMS200_180_050;
     for (unit, r_max, largest) in [(1.0f32, 8000.0f32, 8000u16), (10.0, 81_820.0, 8182)] {
-        let geometry = ScanGeometry { r_max, ..g };
+        let geometry = ScanGeometry::new(g.start_angle, g.angle_step, r_max);
         let mut codes = [1000u16; 361];
         (codes[100], codes[101], codes[200]) = (largest, largest + 1, largest);
         let mut ex = Extractor::<361, 32>::new();

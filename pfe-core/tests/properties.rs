@@ -31,9 +31,9 @@ fn geometry() -> impl Strategy<Value = ScanGeometry> {
     prop_oneof![
         3 => Just(ScanGeometry::LMS200_180_050),
         1 => (-4.0f32..4.0, -0.05f32..0.05, 1.0f32..100_000.0)
-            .prop_map(|(s, d, r)| ScanGeometry { start_angle: s, angle_step: d, r_max: r }),
+            .prop_map(|(s, d, r)| ScanGeometry::new(s, d, r)),
         1 => (any::<f32>(), any::<f32>(), any::<f32>())
-            .prop_map(|(s, d, r)| ScanGeometry { start_angle: s, angle_step: d, r_max: r }),
+            .prop_map(|(s, d, r)| ScanGeometry::new(s, d, r)),
     ]
 }
 
@@ -150,10 +150,7 @@ fn edge_cases() {
             check_output(&ex, ranges.len());
         }
         // A zero angular step puts every beam on one ray: rejected as a geometry error.
-        let flat = ScanGeometry {
-            angle_step: 0.0,
-            ..g
-        };
+        let flat = ScanGeometry::new(g.start_angle, 0.0, g.r_max);
         assert_eq!(
             ex.extract(&Scan::from_mm(flat, &[1000.0; 10]), &cfg),
             Err(ExtractError::InvalidGeometry)

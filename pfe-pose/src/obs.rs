@@ -128,11 +128,9 @@ impl Observation {
     /// ```
     /// use pfe_core::{Feature, LineFeature, Point};
     /// use pfe_pose::Observation;
-    /// let f = Feature::Line(LineFeature {
-    ///     first: 0, last: 9, points: 10, alpha: 0.5, rho: 2000.0, var_alpha: 1e-6,
-    ///     var_rho: 4.0, cov_alpha_rho: 0.0,
-    ///     start: Point::new(1.0, 2.0), end: Point::new(3.0, 4.0),
-    /// });
+    /// let f = Feature::Line(LineFeature::new(
+    ///     0, 9, 10, 0.5, 2000.0, 1e-6, 4.0, 0.0, Point::new(1.0, 2.0), Point::new(3.0, 4.0),
+    /// ));
     /// assert!(matches!(Observation::from_feature(&f), Some(Observation::Line(l)) if l.rho == 2000.0));
     /// ```
     pub fn from_feature(f: &Feature) -> Option<Observation> {

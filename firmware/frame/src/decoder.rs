@@ -223,7 +223,7 @@ fn take_feature(data: &[u8], max_tag: u16) -> Option<(Feature, &[u8])> {
     let f = match tag {
         0 => {
             let [alpha, rho, var_alpha, var_rho, cov_alpha_rho, sx, sy, ex, ey] = r.floats()?;
-            Feature::Line(LineFeature {
+            Feature::Line(LineFeature::new(
                 first,
                 last,
                 points,
@@ -232,22 +232,22 @@ fn take_feature(data: &[u8], max_tag: u16) -> Option<(Feature, &[u8])> {
                 var_alpha,
                 var_rho,
                 cov_alpha_rho,
-                start: Point::new(sx, sy),
-                end: Point::new(ex, ey),
-            })
+                Point::new(sx, sy),
+                Point::new(ex, ey),
+            ))
         }
         1 => {
             let [cx, cy, radius, a, b, c, d, e, g, h, i, j, start_angle, end_angle] = r.floats()?;
-            Feature::Circle(CircleFeature {
+            Feature::Circle(CircleFeature::new(
                 first,
                 last,
                 points,
-                center: Point::new(cx, cy),
+                Point::new(cx, cy),
                 radius,
-                cov: [[a, b, c], [d, e, g], [h, i, j]],
+                [[a, b, c], [d, e, g], [h, i, j]],
                 start_angle,
                 end_angle,
-            })
+            ))
         }
         2 => {
             let [cx, cy, a, b, c, d, extent] = r.floats()?;

@@ -291,29 +291,29 @@ mod tests {
             let idx = |r: u64| edges[(r % 8) as usize].wrapping_add((r >> 8) as u16 % 3);
             let (first, last, points) = (idx(next()), idx(next()), idx(next()));
             let f = if k % 2 == 0 {
-                Feature::Line(LineFeature {
+                Feature::Line(LineFeature::new(
                     first,
                     last,
                     points,
-                    alpha: a,
-                    rho: b,
-                    var_alpha: c,
-                    var_rho: d,
-                    cov_alpha_rho: e,
-                    start: Point::new(g, h),
-                    end: Point::new(i, j),
-                })
+                    a,
+                    b,
+                    c,
+                    d,
+                    e,
+                    Point::new(g, h),
+                    Point::new(i, j),
+                ))
             } else {
-                Feature::Circle(CircleFeature {
+                Feature::Circle(CircleFeature::new(
                     first,
                     last,
                     points,
-                    center: Point::new(a, b),
-                    radius: c,
-                    cov: [[d, e, g], [h, i, j], [l, m, n]],
-                    start_angle: o,
-                    end_angle: p + q,
-                })
+                    Point::new(a, b),
+                    c,
+                    [[d, e, g], [h, i, j], [l, m, n]],
+                    o,
+                    p + q,
+                ))
             };
             let mut want = [0u8; MAX_FEATURE_LEN];
             let want = postcard::to_slice(&Spec::from(&f), &mut want)?;

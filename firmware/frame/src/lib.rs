@@ -28,10 +28,10 @@
 //! ```
 //! use pfe_frame::{write_scan, Counters, FrameDecoder, Header, ScanHeader, Feed};
 //! use pfe_core::{Feature, LineFeature, Point};
-//! let f = Feature::Line(LineFeature {
-//!     first: 10, last: 40, points: 31, alpha: 0.1, rho: 2000.0, var_alpha: 1e-6,
-//!     var_rho: 4.0, cov_alpha_rho: 1e-4, start: Point::new(1.0, 2.0), end: Point::new(3.0, 4.0),
-//! });
+//! // first, last, points, α, ρ, σ_α², σ_ρ², cov(α, ρ), start, end
+//! let f = Feature::Line(LineFeature::new(
+//!     10, 40, 31, 0.1, 2000.0, 1e-6, 4.0, 1e-4, Point::new(1.0, 2.0), Point::new(3.0, 4.0),
+//! ));
 //! let header = ScanHeader { seq: 7, time_ms: 1234, counters: Counters::default(), valid: 300, segments: 5,
 //!     dropped: 0, n_features: 1, status: Default::default() };
 //! let mut buf = [0u8; 512];

@@ -14,31 +14,31 @@ use pfe_frame::{
 };
 
 fn line(i: u16) -> Feature {
-    Feature::Line(LineFeature {
-        first: i,
-        last: i + 20,
-        points: 19,
-        alpha: -2.5 + f32::from(i) * 0.01,
-        rho: 1234.567 + f32::from(i),
-        var_alpha: 1.5e-7,
-        var_rho: 3.25,
-        cov_alpha_rho: -2.0e-5,
-        start: Point::new(100.0, -0.0),
-        end: Point::new(f32::MIN_POSITIVE, 7e30),
-    })
+    Feature::Line(LineFeature::new(
+        i,
+        i + 20,
+        19,
+        -2.5 + f32::from(i) * 0.01,
+        1234.567 + f32::from(i),
+        1.5e-7,
+        3.25,
+        -2.0e-5,
+        Point::new(100.0, -0.0),
+        Point::new(f32::MIN_POSITIVE, 7e30),
+    ))
 }
 
 fn circle(i: u16) -> Feature {
-    Feature::Circle(CircleFeature {
-        first: i,
-        last: i + 9,
-        points: 10,
-        center: Point::new(1500.25, -320.5),
-        radius: 100.0 + f32::from(i),
-        cov: [[1.0, 0.5, -0.25], [0.5, 2.0, 0.0], [-0.25, 0.0, 3.0]],
-        start_angle: -3.0,
-        end_angle: 3.1,
-    })
+    Feature::Circle(CircleFeature::new(
+        i,
+        i + 9,
+        10,
+        Point::new(1500.25, -320.5),
+        100.0 + f32::from(i),
+        [[1.0, 0.5, -0.25], [0.5, 2.0, 0.0], [-0.25, 0.0, 3.0]],
+        -3.0,
+        3.1,
+    ))
 }
 
 fn header(seq: u32, n: u16) -> ScanHeader {
@@ -529,18 +529,7 @@ mod props {
                 .enumerate()
                 .map(|(k, &n)| {
                     let i = 9 * k;
-                    Feature::Line(LineFeature {
-                        first: n,
-                        last: n.wrapping_mul(3),
-                        points: n / 2,
-                        alpha: f(i),
-                        rho: f(i + 1),
-                        var_alpha: f(i + 2),
-                        var_rho: f(i + 3),
-                        cov_alpha_rho: f(i + 4),
-                        start: Point::new(f(i + 5), f(i + 6)),
-                        end: Point::new(f(i + 7), f(i + 8)),
-                    })
+                    Feature::Line(LineFeature::new(n, n.wrapping_mul(3), n / 2, f(i), f(i + 1), f(i + 2), f(i + 3), f(i + 4), Point::new(f(i + 5), f(i + 6)), Point::new(f(i + 7), f(i + 8))))
                 })
                 .collect();
             let wire = scan_frame(u32::from(lens[0]), &feats);

@@ -140,16 +140,16 @@ fn leb128_helper_gives_the_definitions_vectors() {
 /// with four non-zero bytes).
 fn zero_free_circle(k: u8) -> Feature {
     let f = |i: u32| f32::from_bits(0x4123_4567 + u32::from(k) * 0x0001_0100 + i * 0x0101_0101);
-    Feature::Circle(CircleFeature {
-        first: 10 + u16::from(k),
-        last: 30 + u16::from(k),
-        points: 17,
-        center: Point::new(f(0), f(1)),
-        radius: f(2),
-        cov: [[f(3), f(4), f(5)], [f(6), f(7), f(8)], [f(9), f(10), f(11)]],
-        start_angle: f(12),
-        end_angle: f(13),
-    })
+    Feature::Circle(CircleFeature::new(
+        10 + u16::from(k),
+        30 + u16::from(k),
+        17,
+        Point::new(f(0), f(1)),
+        f(2),
+        [[f(3), f(4), f(5)], [f(6), f(7), f(8)], [f(9), f(10), f(11)]],
+        f(12),
+        f(13),
+    ))
 }
 
 /// The payload of `Header::Scan(h)` followed by circles, built from docs/FRAME.md's tables
@@ -394,16 +394,16 @@ fn max_feature_len_and_max_frame_len_are_the_frame_md_figures() {
     assert_eq!(MAX_FEATURE_LEN, 70);
     assert_eq!(max_frame_len(64), 4567);
     assert_eq!(max_frame_len(0), 64 + 4 + 1 + 1);
-    let big = Feature::Circle(CircleFeature {
-        first: u16::MAX,
-        last: u16::MAX,
-        points: u16::MAX,
-        center: Point::new(1.0, 2.0),
-        radius: 3.0,
-        cov: [[4.0; 3]; 3],
-        start_angle: 5.0,
-        end_angle: 6.0,
-    });
+    let big = Feature::Circle(CircleFeature::new(
+        u16::MAX,
+        u16::MAX,
+        u16::MAX,
+        Point::new(1.0, 2.0),
+        3.0,
+        [[4.0; 3]; 3],
+        5.0,
+        6.0,
+    ));
     let h = ScanHeader::default();
     let payload_len = |features: &[Feature]| {
         let mut wire = Vec::new();

@@ -28,8 +28,8 @@ use lms2xx::codec::frame::{encode_telegram, Telegram, MAX_TELEGRAM, STX};
 use lms2xx::codec::frame::{Decoder, DecoderStats, Event};
 use lms2xx::codec::reply::{parse_reply, Reply, ReplyOptions};
 use lms2xx::codec::types::MeasuringMode;
-use pfe_formats::{scans, Format};
 use pfe_core::{Config, ExtractError, Extractor, Feature, Scan, ScanGeometry};
+use pfe_formats::{scans, Format};
 use pfe_frame::{write_report, write_scan, Feed, Frame, FrameDecoder, Header};
 
 /// A deterministic chunking of a byte stream, chosen by the fuzzer's first two bytes.
@@ -153,7 +153,10 @@ pub fn check_telegram(t: &Telegram<'_>, cap: usize) {
         "re-encoding differs"
     );
     for realtime_index in [false, true] {
-        if let Ok(p) = parse_reply(t.payload(), ReplyOptions::default().with_realtime_index(realtime_index)) {
+        if let Ok(p) = parse_reply(
+            t.payload(),
+            ReplyOptions::default().with_realtime_index(realtime_index),
+        ) {
             if let Reply::Values(v) = p.reply {
                 assert_eq!(v.len(), usize::from(v.count_word() & 0x3FF));
                 let mut codes = [0u16; 1024];
@@ -355,20 +358,16 @@ impl ExtractorInput {
         let float_bits = flags & Self::FLOAT_BITS != 0;
         let geometry = if float_bits {
             let [s, a, r] = [0; 3].map(|_: u8| f32::from_le_bytes(take::<4>(&mut rest)));
-            ScanGeometry {
-                start_angle: s,
-                angle_step: a,
-                r_max: r,
-            }
+            ScanGeometry::new(s, a, r)
         } else {
             let s = i16::from_le_bytes(take::<2>(&mut rest));
             let a = i16::from_le_bytes(take::<2>(&mut rest));
             let r = u16::from_le_bytes(take::<2>(&mut rest));
-            ScanGeometry {
-                start_angle: f32::from(s) * 0.01f32.to_radians(),
-                angle_step: f32::from(a) * 0.001f32.to_radians(),
-                r_max: f32::from(r),
-            }
+            ScanGeometry::new(
+                f32::from(s) * 0.01f32.to_radians(),
+                f32::from(a) * 0.001f32.to_radians(),
+                f32::from(r),
+            )
         };
         let (mut codes, mut mm) = (Vec::new(), Vec::new());
         if flags & Self::RAW != 0 {
@@ -507,6 +506,8 @@ pub fn check_extraction<const N: usize, const M: usize>(
         let points = match f {
             Feature::Line(l) => usize::from(l.points),
             Feature::Circle(c) => usize::from(c.points),
+            Feature::Object(o) => usize::from(o.points),
+            _ => unreachable!("a feature kind the harness does not check: {f:?}"),
         };
         let need = if f.is_line() { 2 } else { 3 };
         assert!(
@@ -562,9 +563,7 @@ pub fn readers(data: &[u8]) -> usize {
             None => return records,
             Some(Ok(r)) => {
                 records += 1;
-                assert!(
-                    !r.ranges_mm.is_empty() && r.ranges_mm.len() <= pfe_formats::MAX_BEAMS
-                );
+                assert!(!r.ranges_mm.is_empty() && r.ranges_mm.len() <= pfe_formats::MAX_BEAMS);
                 assert!(
                     r.geometry.is_valid(),
                     "{format}: unusable geometry {:?}",

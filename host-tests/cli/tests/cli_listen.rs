@@ -10,18 +10,18 @@ use pfe_testkit::qemu::VecWriter;
 use serde_json::Value;
 
 fn frame(seq: u32) -> Vec<u8> {
-    let f = Feature::Line(LineFeature {
-        first: 3,
-        last: 40,
-        points: 38,
-        alpha: 0.25,
-        rho: 1500.0,
-        var_alpha: 1e-6,
-        var_rho: 2.0,
-        cov_alpha_rho: 1e-5,
-        start: Point::new(1.0, -2.0),
-        end: Point::new(3.0, 4.0),
-    });
+    let f = Feature::Line(LineFeature::new(
+        3,
+        40,
+        38,
+        0.25,
+        1500.0,
+        1e-6,
+        2.0,
+        1e-5,
+        Point::new(1.0, -2.0),
+        Point::new(3.0, 4.0),
+    ));
     let h = ScanHeader {
         seq,
         time_ms: 1000 + seq,

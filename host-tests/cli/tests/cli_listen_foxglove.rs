@@ -23,29 +23,29 @@ use tungstenite::Message;
 /// Scan `k`: a line, and from the second scan on a circle; firmware times 133 ms apart
 /// starting just before the u32 wrap.
 fn scan(k: u32) -> (u32, Vec<Feature>) {
-    let mut f = vec![Feature::Line(LineFeature {
-        first: 3,
-        last: 40,
-        points: 38,
-        alpha: 0.25 + 0.01 * k as f32,
-        rho: 1500.0 + k as f32,
-        var_alpha: 1e-6,
-        var_rho: 2.0,
-        cov_alpha_rho: 1e-5,
-        start: Point::new(1400.0, -200.0),
-        end: Point::new(1300.0, 400.0),
-    })];
+    let mut f = vec![Feature::Line(LineFeature::new(
+        3,
+        40,
+        38,
+        0.25 + 0.01 * k as f32,
+        1500.0 + k as f32,
+        1e-6,
+        2.0,
+        1e-5,
+        Point::new(1400.0, -200.0),
+        Point::new(1300.0, 400.0),
+    ))];
     if k > 0 {
-        f.push(Feature::Circle(CircleFeature {
-            first: 100,
-            last: 120,
-            points: 21,
-            center: Point::new(800.0, 900.0 + k as f32),
-            radius: 150.0,
-            cov: [[4.0, 1.0, 0.5], [1.0, 9.0, 0.25], [0.5, 0.25, 1.0]],
-            start_angle: 0.5,
-            end_angle: 1.0,
-        }));
+        f.push(Feature::Circle(CircleFeature::new(
+            100,
+            120,
+            21,
+            Point::new(800.0, 900.0 + k as f32),
+            150.0,
+            [[4.0, 1.0, 0.5], [1.0, 9.0, 0.25], [0.5, 0.25, 1.0]],
+            0.5,
+            1.0,
+        )));
     }
     ((u32::MAX - 200).wrapping_add(133 * k), f)
 }

@@ -220,11 +220,7 @@ fn step_error_estimator_on_synthetic_rooms() {
         ] {
             out.push(Record {
                 id: 0,
-                geometry: ScanGeometry {
-                    start_angle: -std::f32::consts::FRAC_PI_2,
-                    angle_step: step,
-                    r_max: 50_000.0,
-                },
+                geometry: ScanGeometry::new(-std::f32::consts::FRAC_PI_2, step, 50_000.0),
                 ranges_mm: ranges.clone(),
                 time: None,
                 pose: None,

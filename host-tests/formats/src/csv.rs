@@ -74,11 +74,7 @@ pub fn parse_line(line: u64, text: &str) -> Result<Record, InputError> {
             ),
         ));
     }
-    let geometry = ScanGeometry {
-        start_angle: start_deg.to_radians(),
-        angle_step: step_deg.to_radians(),
-        r_max: MAX_RANGE_MM,
-    };
+    let geometry = ScanGeometry::new(start_deg.to_radians(), step_deg.to_radians(), MAX_RANGE_MM);
     checked_record(line, id, geometry, ranges)
 }
 

@@ -65,11 +65,7 @@ pub fn parse_line(line: u64, id: u64, text: &str) -> Result<Record, InputError> 
             ),
         ));
     }
-    let geometry = ScanGeometry {
-        start_angle: angle_min,
-        angle_step: angle_inc,
-        r_max: hi,
-    };
+    let geometry = ScanGeometry::new(angle_min, angle_inc, hi);
     let mut record = checked_record(line, id, geometry, ranges)?;
     record.time = Some(stamp).filter(|s| s.is_finite());
     Ok(record)

@@ -13,6 +13,7 @@ mod tagged;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct LineFeature {
     /// Index of the first beam of the segment (counting every beam, valid or not).
     pub first: u16,
@@ -37,15 +38,49 @@ pub struct LineFeature {
 }
 
 impl LineFeature {
+    /// A line feature from all its fields, in declaration order.
+    ///
+    /// ```
+    /// use pfe_core::{LineFeature, Point};
+    /// let l = LineFeature::new(
+    ///     0, 9, 10, 0.5, 2000.0, 1e-6, 4.0, 0.0, Point::new(1.0, 2.0), Point::new(3.0, 4.0),
+    /// );
+    /// assert_eq!((l.last, l.rho), (9, 2000.0));
+    /// ```
+    #[allow(clippy::too_many_arguments)] // one per field, in declaration order
+    pub const fn new(
+        first: u16,
+        last: u16,
+        points: u16,
+        alpha: f32,
+        rho: f32,
+        var_alpha: f32,
+        var_rho: f32,
+        cov_alpha_rho: f32,
+        start: Point,
+        end: Point,
+    ) -> Self {
+        Self {
+            first,
+            last,
+            points,
+            alpha,
+            rho,
+            var_alpha,
+            var_rho,
+            cov_alpha_rho,
+            start,
+            end,
+        }
+    }
+
     /// Its numbers in declaration order: α, ρ, σ_α², σ_ρ², cov(α, ρ), start x, y, end x, y.
     ///
     /// ```
     /// use pfe_core::{LineFeature, Point};
-    /// let l = LineFeature {
-    ///     first: 0, last: 9, points: 10, alpha: 0.5, rho: 2000.0, var_alpha: 1e-6,
-    ///     var_rho: 4.0, cov_alpha_rho: 0.0,
-    ///     start: Point::new(1.0, 2.0), end: Point::new(3.0, 4.0),
-    /// };
+    /// let l = LineFeature::new(
+    ///     0, 9, 10, 0.5, 2000.0, 1e-6, 4.0, 0.0, Point::new(1.0, 2.0), Point::new(3.0, 4.0),
+    /// );
     /// assert_eq!(l.values(), [0.5, 2000.0, 1e-6, 4.0, 0.0, 1.0, 2.0, 3.0, 4.0]);
     /// ```
     pub fn values(&self) -> [f32; 9] {
@@ -65,16 +100,46 @@ impl LineFeature {
 }
 
 impl CircleFeature {
+    /// A circle feature from all its fields, in declaration order.
+    ///
+    /// ```
+    /// use pfe_core::{CircleFeature, Point};
+    /// let c = CircleFeature::new(0, 9, 10, Point::new(1.0, 2.0), 3.0, [[0.0; 3]; 3], -0.5, 0.5);
+    /// assert_eq!((c.points, c.radius), (10, 3.0));
+    /// ```
+    #[allow(clippy::too_many_arguments)] // one per field, in declaration order
+    pub const fn new(
+        first: u16,
+        last: u16,
+        points: u16,
+        center: Point,
+        radius: f32,
+        cov: [[f32; 3]; 3],
+        start_angle: f32,
+        end_angle: f32,
+    ) -> Self {
+        Self {
+            first,
+            last,
+            points,
+            center,
+            radius,
+            cov,
+            start_angle,
+            end_angle,
+        }
+    }
+
     /// Its numbers in declaration order: centre x, y, radius, the covariance row by row, start
     /// and end angle.
     ///
     /// ```
     /// use pfe_core::{CircleFeature, Point};
-    /// let c = CircleFeature {
-    ///     first: 0, last: 9, points: 10, center: Point::new(1.0, 2.0), radius: 3.0,
-    ///     cov: [[4.0, 5.0, 6.0], [5.0, 7.0, 8.0], [6.0, 8.0, 9.0]],
-    ///     start_angle: -0.5, end_angle: 0.5,
-    /// };
+    /// let c = CircleFeature::new(
+    ///     0, 9, 10, Point::new(1.0, 2.0), 3.0,
+    ///     [[4.0, 5.0, 6.0], [5.0, 7.0, 8.0], [6.0, 8.0, 9.0]],
+    ///     -0.5, 0.5,
+    /// );
     /// assert_eq!(c.values()[..5], [1.0, 2.0, 3.0, 4.0, 5.0]);
     /// assert_eq!(c.values()[11..], [9.0, -0.5, 0.5]);
     /// ```
@@ -104,6 +169,7 @@ impl CircleFeature {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
 pub struct CircleFeature {
     /// Index of the first beam of the segment.
     pub first: u16,

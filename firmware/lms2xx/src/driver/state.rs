@@ -5,6 +5,7 @@ use crate::codec::types::{Baud, MeasuringMode, Unit, Variant};
 /// What the driver knows about the device after initialisation.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct DeviceState {
     /// Baud rate the device runs at (None before the probe).
     pub baud: Option<Baud>,
@@ -23,6 +24,7 @@ pub struct DeviceState {
 /// Driver counters. All saturate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[non_exhaustive]
 pub struct Counters {
     /// Telegrams with a good CRC.
     pub telegrams_ok: u32,

@@ -93,11 +93,7 @@ fn the_plot_draws_uncertainty_and_explains_bare_marks() {
         .map(|i| 2000.0 / (f64::from(i - 30).to_radians().cos() as f32))
         .collect();
     ranges.extend([f32::NAN, f32::NAN, 900.0, f32::NAN, f32::NAN]);
-    let geometry = pfe_core::ScanGeometry {
-        start_angle: -30f32.to_radians(),
-        angle_step: 1f32.to_radians(),
-        r_max: 8000.0,
-    };
+    let geometry = pfe_core::ScanGeometry::new(-30f32.to_radians(), 1f32.to_radians(), 8000.0);
     let record = Record {
         id: 0,
         geometry,

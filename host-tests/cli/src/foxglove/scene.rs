@@ -315,21 +315,21 @@ mod tests {
 
     #[test]
     fn line_band_is_sigma_rho_at_the_foot_of_the_normal() {
-        let l = LineFeature {
-            first: 0,
-            last: 9,
-            points: 10,
-            alpha: 0.0,
-            rho: 2000.0,
-            var_alpha: 1e-4,
-            var_rho: 25.0,
-            cov_alpha_rho: 0.0,
-            start: Point { x: 2000.0, y: 0.0 },
-            end: Point {
+        let l = LineFeature::new(
+            0,
+            9,
+            10,
+            0.0,
+            2000.0,
+            1e-4,
+            25.0,
+            0.0,
+            Point { x: 2000.0, y: 0.0 },
+            Point {
                 x: 2000.0,
                 y: 1000.0,
             },
-        };
+        );
         let e = line_entity(5, "laser", 3, &l);
         let band = &e["lines"][1]["points"];
         // At t = 0: ±5 mm; at t = 1000 mm: ±sqrt(25 + 100) mm.

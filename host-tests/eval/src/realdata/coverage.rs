@@ -116,18 +116,18 @@ mod tests {
     use pfe_core::{LineFeature, Point};
 
     fn line(first: u16, last: u16) -> Feature {
-        Feature::Line(LineFeature {
+        Feature::Line(LineFeature::new(
             first,
             last,
-            points: last - first + 1,
-            alpha: 0.0,
-            rho: 1000.0,
-            var_alpha: 1e-6,
-            var_rho: 1.0,
-            cov_alpha_rho: 0.0,
-            start: Point::new(1000.0, 0.0),
-            end: Point::new(1000.0, 1.0),
-        })
+            last - first + 1,
+            0.0,
+            1000.0,
+            1e-6,
+            1.0,
+            0.0,
+            Point::new(1000.0, 0.0),
+            Point::new(1000.0, 1.0),
+        ))
     }
 
     #[test]

@@ -86,11 +86,7 @@ pub(super) fn read(
     } else {
         fov / n.saturating_sub(1).max(1) as f64
     };
-    let geometry = ScanGeometry {
-        start_angle: start as f32,
-        angle_step: step as f32,
-        r_max,
-    };
+    let geometry = ScanGeometry::new(start as f32, step as f32, r_max);
     let mut record = checked_record(line, 0, geometry, ranges)?;
     // CARMEN's laser types: 0 a SICK LMS, 1 a SICK PLS, 2 a Hokuyo URG, 3 simulated, 4 a
     // SICK S300 (5 and 6, in some versions, a laser emulated from a Kinect or a stereo

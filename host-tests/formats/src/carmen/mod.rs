@@ -115,11 +115,7 @@ impl AngleConvention {
             AngleConvention::DropEnd => false,
         };
         let intervals = if end_to_end { n.saturating_sub(1) } else { n };
-        ScanGeometry {
-            start_angle: -PI / 2.0,
-            angle_step: PI / intervals.max(1) as f32,
-            r_max,
-        }
+        ScanGeometry::new(-PI / 2.0, PI / intervals.max(1) as f32, r_max)
     }
 }
 

@@ -208,11 +208,11 @@ impl LaserScanMsg {
                 "{n} ranges, more than the {MAX_BEAMS} the extractor holds"
             ));
         }
-        let geometry = ScanGeometry {
-            start_angle: self.angle_min,
-            angle_step: self.angle_increment,
-            r_max: self.range_max * 1000.0,
-        };
+        let geometry = ScanGeometry::new(
+            self.angle_min,
+            self.angle_increment,
+            self.range_max * 1000.0,
+        );
         if !(geometry.is_valid() && self.range_min.is_finite() && self.range_min >= 0.0) {
             return Err(format!(
                 "unusable geometry (angle_min {} rad, angle_increment {} rad, range {}..{} m)",
