@@ -459,7 +459,9 @@ pub fn check_extraction<const N: usize, const M: usize>(
         }
         Err(ExtractError::FeatureCapacity { dropped }) => {
             assert!(dropped > 0);
-            assert_eq!(feats.len(), M);
+            // Full, but for the lines the real-scan checks removed as unseeable after the
+            // capacity was reached (their room is not refilled).
+            assert!(feats.len() <= M);
         }
         Err(ExtractError::TooManyReadings { got, .. }) => {
             assert_eq!(got, n);
