@@ -3,10 +3,16 @@
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use std::collections::BTreeSet;
+use std::future::{poll_fn, Future};
+use std::pin::pin;
+use std::task::{Context, Poll, Waker};
 
-use lms200_emulator::{Emulator, EmulatorConfig, Faults, Link, SentScan, SourceKind, TaggedSource};
+use lms200_emulator::{
+    Emulator, EmulatorConfig, Faults, HostPort, Link, LinkDelay, LinkError, SentScan, SourceKind,
+    TaggedSource,
+};
 use lms2xx::codec::types::Baud;
-use lms2xx::driver::{Config, Counters, Driver};
+use lms2xx::driver::{AsyncDriver, AsyncSetBaud, Config, Counters, Driver, SetBaud};
 
 struct Run {
     delivered: Vec<u32>,
@@ -17,7 +23,7 @@ struct Run {
 fn run(faults: Faults, seed: u64, initial: Baud, n: usize, driver: Config) -> Run {
     let cfg = EmulatorConfig {
         source: SourceKind::Tagged,
-        faults,
+        faults: faults.clone(),
         seed,
         initial_baud: initial,
         ..Default::default()
@@ -39,11 +45,19 @@ fn run(faults: Faults, seed: u64, initial: Baud, n: usize, driver: Config) -> Ru
         assert!(!sent.damaged, "damaged scan {tag} accepted");
         delivered.push(tag);
     }
-    Run {
+    let run = Run {
         delivered,
         sent: link.with_emulator(|e| e.report().scans.clone()).unwrap(),
         counters: lms.counters(),
-    }
+    };
+    let a = run_async(faults, seed, initial, n, driver);
+    assert_eq!(a.delivered, run.delivered, "async driver: other scans");
+    assert_eq!(
+        format!("{:?}", a.counters),
+        format!("{:?}", run.counters),
+        "async driver: other counters"
+    );
+    run
 }
 
 /// Delivered exactly once each, in order, and every intact scan up to the last delivered one.
@@ -273,4 +287,98 @@ fn damaged_replies_during_init_are_retried() {
     eprintln!("damaged replies {damaged}, driver retries {retries}");
     assert!(damaged >= 5, "only {damaged} replies damaged");
     assert!(retries >= 3, "only {retries} retries");
+}
+
+/// The async driver ([`AsyncDriver`]) on the same emulated device, faults and seed: it must
+/// deliver the same scans with the same counters as the blocking one (one state machine).
+fn run_async(faults: Faults, seed: u64, initial: Baud, n: usize, driver: Config) -> Run {
+    let cfg = EmulatorConfig {
+        source: SourceKind::Tagged,
+        faults,
+        seed,
+        initial_baud: initial,
+        ..Default::default()
+    };
+    let link = Link::new(Emulator::from_config(cfg), Some(9600));
+    let mut lms = AsyncDriver::new(
+        AsyncPort(link.host_port()),
+        AsyncDelay(link.delay()),
+        link.clock(),
+        driver,
+    );
+    let mut delivered = Vec::new();
+    while delivered.len() < n {
+        let s = block_on(lms.next_scan()).expect("async driver recovers");
+        let tag = TaggedSource::tag_of(s.codes()).expect("tagged scan");
+        delivered.push(tag);
+    }
+    Run {
+        delivered,
+        sent: link.with_emulator(|e| e.report().scans.clone()).unwrap(),
+        counters: lms.counters(),
+    }
+}
+
+/// Runs `f` to completion; a future pending for a million polls is a hang.
+fn block_on<F: Future>(f: F) -> F::Output {
+    let mut f = pin!(f);
+    let mut cx = Context::from_waker(Waker::noop());
+    for _ in 0..1_000_000 {
+        if let Poll::Ready(v) = f.as_mut().poll(&mut cx) {
+            return v;
+        }
+    }
+    panic!("future pending for a million polls");
+}
+
+/// The emulator's host port through the async traits: a read with nothing available is
+/// pending until bytes arrive, which in virtual time happens only when a delay advances it.
+struct AsyncPort(HostPort);
+struct AsyncDelay(LinkDelay);
+
+/// The link's error as an embedded-io-async error.
+#[derive(Debug)]
+struct PortError(#[allow(dead_code)] LinkError);
+impl core::fmt::Display for PortError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{:?}", self.0)
+    }
+}
+impl std::error::Error for PortError {}
+impl embedded_io_async::Error for PortError {
+    fn kind(&self) -> embedded_io_async::ErrorKind {
+        embedded_io_async::ErrorKind::Other
+    }
+}
+impl embedded_io_async::ErrorType for AsyncPort {
+    type Error = PortError;
+}
+impl embedded_io_async::Read for AsyncPort {
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, PortError> {
+        use embedded_io::{Read, ReadReady};
+        poll_fn(|_| match self.0.read_ready() {
+            Ok(true) => Poll::Ready(self.0.read(buf).map_err(PortError)),
+            Ok(false) => Poll::Pending,
+            Err(e) => Poll::Ready(Err(PortError(e))),
+        })
+        .await
+    }
+}
+impl embedded_io_async::Write for AsyncPort {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, PortError> {
+        embedded_io::Write::write(&mut self.0, buf).map_err(PortError)
+    }
+    async fn flush(&mut self) -> Result<(), PortError> {
+        embedded_io::Write::flush(&mut self.0).map_err(PortError)
+    }
+}
+impl AsyncSetBaud for AsyncPort {
+    async fn set_baud(&mut self, baud: u32) -> Result<(), PortError> {
+        SetBaud::set_baud(&mut self.0, baud).map_err(PortError)
+    }
+}
+impl embedded_hal_async::delay::DelayNs for AsyncDelay {
+    async fn delay_ns(&mut self, ns: u32) {
+        embedded_hal::delay::DelayNs::delay_ns(&mut self.0, ns);
+    }
 }
