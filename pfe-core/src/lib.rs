@@ -31,6 +31,8 @@
 // One audited exception: `math::sqrt`'s `vsqrt.f32` on hard-float Arm.
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
+// Beyond the workspace lints: no indexing that can panic in the library.
+#![deny(clippy::indexing_slicing)]
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 

@@ -42,6 +42,8 @@
 #![no_std]
 #![deny(unsafe_code)]
 #![deny(missing_docs)]
+// Beyond the workspace lints: no indexing that can panic in the library.
+#![deny(clippy::indexing_slicing)]
 // The C names, as the header spells them.
 #![allow(non_camel_case_types)]
 
