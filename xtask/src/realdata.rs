@@ -5,36 +5,14 @@
 //! data is absent.
 
 use crate::util;
-use anyhow::{Context, Result};
-
-/// The shared logs, relative to the repository root.
-const LOGS: &str = "../shared/data/carmen";
+use anyhow::Result;
 
 /// Runs the command.
 pub fn run(args: &[String]) -> Result<()> {
-    let dir = util::root().join(LOGS);
-    if !dir.is_dir() {
-        // Listed with the test step's skips; under CI (which has the data) a failure.
-        pfe_testkit::skip::skip(
-            "realdata",
-            "../shared/data not found",
-            pfe_testkit::skip::Need::InCi,
-        );
+    let Some(logs) = util::shared_carmen_logs("realdata")? else {
         return Ok(());
-    }
-    let mut logs: Vec<String> = std::fs::read_dir(&dir)
-        .with_context(|| format!("reading {}", dir.display()))?
-        .filter_map(|e| e.ok())
-        .map(|e| e.file_name().to_string_lossy().to_string())
-        .filter(|n| pfe_formats::carmen::is_log_name(n))
-        .map(|n| format!("{LOGS}/{n}"))
-        .collect();
-    logs.sort();
-    let mut named = String::from("cargo xtask realdata");
-    for a in args {
-        named.push(' ');
-        named.push_str(a);
-    }
+    };
+    let named = util::xtask_command("realdata", args);
     let mut cmd = util::pfe();
     cmd.arg("realdata").args(&logs);
     if args.iter().any(|a| a == "--check") {

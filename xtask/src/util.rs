@@ -130,3 +130,39 @@ pub fn llvm_tool(name: &str) -> Result<PathBuf> {
     run(Command::new("rustup").args(["component", "add", "llvm-tools"]))?;
     find().with_context(|| format!("{name} not found after `rustup component add llvm-tools`"))
 }
+
+/// The shared CARMEN logs, relative to the repository root.
+const SHARED_LOGS: &str = "../shared/data/carmen";
+
+/// Every CARMEN log in `../shared/data/carmen` (relative paths, sorted), or `None` after a loud
+/// skip named `job` when the shared data is absent (under CI, which has it, a failure).
+pub fn shared_carmen_logs(job: &str) -> Result<Option<Vec<String>>> {
+    let dir = root().join(SHARED_LOGS);
+    if !dir.is_dir() {
+        pfe_testkit::skip::skip(
+            job,
+            "../shared/data not found",
+            pfe_testkit::skip::Need::InCi,
+        );
+        return Ok(None);
+    }
+    let mut logs: Vec<String> = std::fs::read_dir(&dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().to_string())
+        .filter(|n| pfe_formats::carmen::is_log_name(n))
+        .map(|n| format!("{SHARED_LOGS}/{n}"))
+        .collect();
+    logs.sort();
+    Ok(Some(logs))
+}
+
+/// `cargo xtask JOB ARGS…`, as a generated document names the command that wrote it.
+pub fn xtask_command(job: &str, args: &[String]) -> String {
+    let mut named = format!("cargo xtask {job}");
+    for a in args {
+        named.push(' ');
+        named.push_str(a);
+    }
+    named
+}
