@@ -71,12 +71,12 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
             continue;
         }
         let e = run_end(pass, i);
-        if e + 1 - i >= OBJECT_MIN_POINTS
-            && whole_segments(pass, i, e)
-            && !held(out.features_mut(), i, e)
-        {
+        let whole = (e + 1 - i >= OBJECT_MIN_POINTS && !held(out.features_mut(), i, e))
+            .then(|| segment_bounds(pass, i, e, config.min_points))
+            .flatten();
+        if let Some((a, b)) = whole {
             if let Some(o) = object(pass, i, e, config) {
-                one_segment(pass, i, e, config.min_points);
+                one_segment(pass, i, e, a, b, config.min_points);
                 if out.push(Feature::Object(o)) {
                     pass.stats.features += 1;
                     pass.stats.objects += 1;
@@ -142,37 +142,72 @@ fn undetermined_object(pass: &Pass<'_>, l: &LineFeature) -> bool {
     e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e) <= OBJECT_MAX_MM
 }
 
-/// True when the run `s..=e` is made of whole segments: it starts one and the point after it
-/// (if any) starts another or is invalid.
-fn whole_segments(pass: &Pass<'_>, s: usize, e: usize) -> bool {
-    pass.flag(s) & START != 0 && (!pass.valid(e + 1) || pass.flag(e + 1) & START != 0)
+/// The first and last point of the segments that hold the run `s..=e`, when the run can be
+/// made a segment of its own: a segment that reaches over the jump at either end (the paired
+/// marks of a short segment across it) keeps fewer than `min_points` points outside the run,
+/// so that it stays a short segment without a feature.
+fn segment_bounds(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    min_points: usize,
+) -> Option<(usize, usize)> {
+    let mut a = s;
+    while pass.flag(a) & START == 0 {
+        let prev = a.checked_sub(1)?;
+        if !pass.valid(prev) || s - prev >= min_points {
+            return None;
+        }
+        if pass.flag(prev) & END != 0 {
+            break;
+        }
+        a = prev;
+    }
+    let mut b = e;
+    while pass.flag(b) & END == 0 && pass.valid(b + 1) && pass.flag(b + 1) & START == 0 {
+        b += 1;
+        if b - e >= min_points {
+            return None;
+        }
+    }
+    (s - a < min_points && b - e < min_points).then_some((a, b))
 }
 
 /// Makes the segments of the run `s..=e` (short, or without a feature) one segment, the
-/// object's: its marks at `s` and `e` only, the statistics counting it once.
-fn one_segment(pass: &mut Pass<'_>, s: usize, e: usize, min_points: usize) {
-    let mut a = s;
+/// object's: its marks at `s` and `e` only, the statistics counting it once. The segments
+/// that hold it span `a..=b`; what lies of them outside the run (fewer than `min_points`
+/// points, see [`segment_bounds`]) stays a short segment.
+fn one_segment(pass: &mut Pass<'_>, s: usize, e: usize, a: usize, b: usize, min_points: usize) {
+    let mut from = a;
     let mut undone = 0usize;
-    while a <= e {
-        let mut b = a;
-        while b < e && pass.flag(b + 1) & START == 0 {
-            b += 1;
+    while from <= e {
+        let mut to = from;
+        while to < b && pass.flag(to + 1) & START == 0 {
+            to += 1;
         }
         undone += 1;
         let stats = &mut *pass.stats;
-        if b + 1 - a < min_points {
+        if to + 1 - from < min_points {
             stats.short_segments = stats.short_segments.saturating_sub(1);
         } else {
             stats.degenerate = stats.degenerate.saturating_sub(1);
         }
-        a = b + 1;
+        from = to + 1;
     }
-    pass.stats.segments = (pass.stats.segments + 1).saturating_sub(undone);
+    let kept = usize::from(a < s) + usize::from(b > e);
+    pass.stats.short_segments += kept;
+    pass.stats.segments = (pass.stats.segments + 1 + kept).saturating_sub(undone);
     for k in s..=e {
         pass.clear(k, START | END | VEIL);
     }
     pass.set(s, START);
     pass.set(e, END);
+    if a < s {
+        pass.set(s - 1, END);
+    }
+    if b > e {
+        pass.set(e + 1, START);
+    }
 }
 
 /// True when the range jumps by at least [`OBJECT_JUMP_MM`] from point `i` to `i + 1`.
