@@ -5,7 +5,7 @@
 //!   (by `(Δα/0.1)² + (Δρ/300 mm)²`) within the gate |Δα| < [`GATE_ALPHA`],
 //!   |Δρ| < [`GATE_RHO_MM`] whose extent overlaps theirs along its direction.
 //! - **Circles** are matched to the k+1 circle whose centre is nearest, within
-//!   [`GATE_CENTER_MM`].
+//!   [`GATE_CENTER_MM`]; **small objects** to the nearest small object of k+1 alike.
 
 use pfe_core::Feature;
 
@@ -37,6 +37,8 @@ pub struct Seen {
     pub lines: Vec<LineObs>,
     /// Circles.
     pub circles: Vec<CircleObs>,
+    /// Small objects (their centre and its covariance; `radius`: half their extent).
+    pub objects: Vec<CircleObs>,
 }
 
 impl Seen {
@@ -68,7 +70,14 @@ impl Seen {
                     ],
                     radius: f64::from(c.radius),
                 }),
-                // Small objects are not compared here (yet).
+                Feature::Object(o) => s.objects.push(CircleObs {
+                    center: [f64::from(o.center.x), f64::from(o.center.y)],
+                    cov: [
+                        [f64::from(o.cov[0][0]), f64::from(o.cov[0][1])],
+                        [f64::from(o.cov[1][0]), f64::from(o.cov[1][1])],
+                    ],
+                    radius: 0.5 * f64::from(o.extent),
+                }),
                 _ => {}
             }
         }
@@ -79,7 +88,8 @@ impl Seen {
     pub fn scaled(&self, k: f64) -> Self {
         let mut s = self.clone();
         let lines = s.lines.iter_mut().map(|l| &mut l.cov);
-        for cov in lines.chain(s.circles.iter_mut().map(|c| &mut c.cov)) {
+        let points = s.circles.iter_mut().chain(s.objects.iter_mut());
+        for cov in lines.chain(points.map(|c| &mut c.cov)) {
             for v in cov.iter_mut().flatten() {
                 *v *= k;
             }
@@ -119,6 +129,57 @@ pub struct PairTally {
     /// Centre NIS of matched circles after the pair's pose refit from its lines (pairs with
     /// a refit only).
     pub circle_nis_refit: Vec<f64>,
+    /// Small objects of scan k.
+    pub objects: usize,
+    /// Of those, re-appearing (an object of k+1 within [`GATE_CENTER_MM`]).
+    pub objects_matched: usize,
+    /// Centre NIS of matched objects.
+    pub object_nis: Vec<f64>,
+    /// Centre NIS of matched objects after the pair's pose refit from its lines.
+    pub object_nis_refit: Vec<f64>,
+}
+
+/// What the centres of one kind of point feature gave over a pair: seen in k, matched in
+/// k+1, their NIS and their NIS after the lines' refit.
+struct Centres<'a> {
+    seen: &'a mut usize,
+    matched: &'a mut usize,
+    nis: &'a mut Vec<f64>,
+    nis_refit: &'a mut Vec<f64>,
+}
+
+impl Centres<'_> {
+    /// Moves each of `a` by `change`, matches it to the nearest of `b` within
+    /// [`GATE_CENTER_MM`] and adds the result.
+    fn add(
+        self,
+        a: &[CircleObs],
+        b: &[CircleObs],
+        change: &FrameChange,
+        delta: Option<&Correction>,
+    ) {
+        for c in a {
+            *self.seen += 1;
+            let moved = change.circle(c);
+            let best = b
+                .iter()
+                .map(|o| {
+                    let d = [moved.center[0] - o.center[0], moved.center[1] - o.center[1]];
+                    (d[0].hypot(d[1]), d, o)
+                })
+                .filter(|(dist, _, _)| *dist < GATE_CENTER_MM)
+                .min_by(|x, y| x.0.total_cmp(&y.0));
+            if let Some((_, d, o)) = best {
+                *self.matched += 1;
+                let s = super::frame::add(&moved.cov, &o.cov);
+                self.nis.extend(nis(d, &s));
+                if let Some(delta) = delta {
+                    let (r, s) = refit_centre(&moved, o, delta);
+                    self.nis_refit.extend(nis(r, &s));
+                }
+            }
+        }
+    }
 }
 
 /// Scan `a`'s lines of ≥ [`MIN_LINE_POINTS`] points that re-appear in scan `b` (`change`:
@@ -183,28 +244,21 @@ impl PairTally {
         // The lines' pose correction, applied to the moved circle centres too, with its own
         // uncertainty.
         let delta = correction(&innovations).zip(correction_covariance(&innovations));
-        for c in &a.circles {
-            self.circles += 1;
-            let moved = change.circle(c);
-            let best = b
-                .circles
-                .iter()
-                .map(|o| {
-                    let d = [moved.center[0] - o.center[0], moved.center[1] - o.center[1]];
-                    (d[0].hypot(d[1]), d, o)
-                })
-                .filter(|(dist, _, _)| *dist < GATE_CENTER_MM)
-                .min_by(|x, y| x.0.total_cmp(&y.0));
-            if let Some((_, d, o)) = best {
-                self.circles_matched += 1;
-                let s = super::frame::add(&moved.cov, &o.cov);
-                self.circle_nis.extend(nis(d, &s));
-                if let Some(delta) = &delta {
-                    let (r, s) = refit_centre(&moved, o, delta);
-                    self.circle_nis_refit.extend(nis(r, &s));
-                }
-            }
+        let delta = delta.as_ref();
+        Centres {
+            seen: &mut self.circles,
+            matched: &mut self.circles_matched,
+            nis: &mut self.circle_nis,
+            nis_refit: &mut self.circle_nis_refit,
         }
+        .add(&a.circles, &b.circles, &change, delta);
+        Centres {
+            seen: &mut self.objects,
+            matched: &mut self.objects_matched,
+            nis: &mut self.object_nis,
+            nis_refit: &mut self.object_nis_refit,
+        }
+        .add(&a.objects, &b.objects, &change, delta);
     }
 }
 

@@ -2,7 +2,11 @@
 //! bare mark points.
 //!
 //! - A beam is **valid** when it has a return (finite, > 0, ≤ r_max).
-//! - A beam is **in a feature** when it lies in a feature's beam span `first..=last`.
+//! - A beam is **in a feature** when it lies in the beam span `first..=last` of a feature a
+//!   consumer can use ([`usable`]): any circle or small object, and a line the scanner can have
+//!   seen (at most 85° incidence at its midpoint, at least 10 mm long) whose direction and
+//!   place are known well enough to match it again (σ_α ≤ [`MAX_SIGMA_ALPHA`], and the σ of
+//!   its distance at its midpoint ≤ [`MAX_SIGMA_MID_MM`]).
 //! - A **smooth run** is a maximal run of at least [`MIN_SMOOTH_RUN`] consecutive valid beams
 //!   whose neighbours differ in range by less than [`SMOOTH_STEP_MM`]. Its beams that lie in
 //!   no feature are **bare**: a surface the scanner saw continuously but the method described
@@ -16,6 +20,52 @@ use pfe_core::{Feature, ScanGeometry};
 pub const MIN_SMOOTH_RUN: usize = 10;
 /// Largest range step between neighbours inside a smooth run, mm.
 pub const SMOOTH_STEP_MM: f32 = 300.0;
+
+/// Largest σ_α of a usable line, rad: beyond it (±17° at 3σ) a line's direction no longer
+/// tells one wall from the next, and a localiser's gate (the benchmark's own: 0.1 rad) cannot
+/// hold it.
+pub const MAX_SIGMA_ALPHA: f32 = 0.1;
+/// Largest σ of a usable line's distance at its midpoint, mm: beyond it (±0.3 m at 3σ) a line
+/// no longer tells itself from a wall a door's depth behind it (the benchmark's gate: 0.3 m).
+/// Not σ_ρ itself: ρ is measured at the foot of the normal from the scanner, which can lie
+/// metres from the segment, so σ_ρ grows with that distance times σ_α for a well placed wall.
+pub const MAX_SIGMA_MID_MM: f32 = 100.0;
+
+/// True when a consumer can use `f`: every circle and small object, and a line the scanner can
+/// have seen as a surface whose σ_α and σ at its midpoint are within [`MAX_SIGMA_ALPHA`] and
+/// [`MAX_SIGMA_MID_MM`].
+///
+/// ```
+/// use pfe_core::{Feature, LineFeature, Point};
+/// use pfe_eval::realdata::coverage::usable;
+/// let wall = |var_alpha| Feature::Line(LineFeature::new(
+///     0, 9, 10, 0.0, 1000.0, var_alpha, 4.0, 0.0,
+///     Point::new(1000.0, -100.0), Point::new(1000.0, 100.0),
+/// ));
+/// assert!(usable(&wall(1e-4)));
+/// assert!(!usable(&wall(0.02))); // σ_α 0.14 rad
+/// ```
+pub fn usable(f: &Feature) -> bool {
+    match f {
+        Feature::Line(l) => {
+            let (s, e) = ([l.start.x, l.start.y], [l.end.x, l.end.y]);
+            let len = (e[0] - s[0]).hypot(e[1] - s[1]);
+            super::visible::incidence_deg(l.alpha, s, e) <= super::visible::MAX_INCIDENCE_DEG
+                && len >= super::visible::MIN_LINE_MM
+                && l.var_alpha <= MAX_SIGMA_ALPHA * MAX_SIGMA_ALPHA
+                && var_at_midpoint(l) <= MAX_SIGMA_MID_MM * MAX_SIGMA_MID_MM
+        }
+        _ => true,
+    }
+}
+
+/// The variance of `l`'s distance at its segment's midpoint, mm²: with t the midpoint's
+/// coordinate along the line, δd = t·δα − δρ.
+fn var_at_midpoint(l: &pfe_core::LineFeature) -> f32 {
+    let (mx, my) = (0.5 * (l.start.x + l.end.x), 0.5 * (l.start.y + l.end.y));
+    let t = -l.alpha.sin() * mx + l.alpha.cos() * my;
+    t * t * l.var_alpha - 2.0 * t * l.cov_alpha_rho + l.var_rho
+}
 
 /// Beam counts of one scan (or a sum of scans).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -32,11 +82,11 @@ pub struct Coverage {
 }
 
 impl Coverage {
-    /// Counts one scan's beams.
+    /// Counts one scan's beams (the features a consumer cannot use, [`usable`], hold none).
     pub fn of(geometry: &ScanGeometry, ranges_mm: &[f32], features: &[Feature]) -> Self {
         let n = ranges_mm.len();
         let mut covered = vec![false; n];
-        for f in features {
+        for f in features.iter().filter(|f| usable(f)) {
             for c in covered.iter_mut().take(f.last() + 1).skip(f.first()) {
                 *c = true;
             }
@@ -125,8 +175,8 @@ mod tests {
             1e-6,
             1.0,
             0.0,
-            Point::new(1000.0, 0.0),
-            Point::new(1000.0, 1.0),
+            Point::new(1000.0, -100.0),
+            Point::new(1000.0, 100.0),
         ))
     }
 

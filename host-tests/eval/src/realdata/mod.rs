@@ -73,6 +73,8 @@ pub struct Tally {
     pub coverage: Coverage,
     /// Pair results.
     pub pairs: PairTally,
+    /// Small objects found.
+    pub objects: usize,
 }
 
 /// One method's figures on one log.
@@ -116,6 +118,16 @@ pub struct Summary {
     pub circle_nis: f64,
     /// Median centre NIS of matched circles after the pose refit of their pair's lines.
     pub circle_nis_refit: f64,
+    /// Small objects per scan.
+    pub objects_per_scan: f64,
+    /// Small objects of scan k that re-appear in k+1, %.
+    pub objects_reappear_pct: f64,
+    /// Matched small objects.
+    pub objects_matched: usize,
+    /// Median centre NIS of matched small objects.
+    pub object_nis: f64,
+    /// Median centre NIS of matched small objects after the pose refit of their pair's lines.
+    pub object_nis_refit: f64,
 }
 
 impl Tally {
@@ -149,6 +161,15 @@ impl Tally {
             circles_matched: p.circles_matched,
             circle_nis: quantile(&p.circle_nis, 0.5),
             circle_nis_refit: quantile(&p.circle_nis_refit, 0.5),
+            objects_per_scan: if self.scans == 0 {
+                f64::NAN
+            } else {
+                self.objects as f64 / self.scans as f64
+            },
+            objects_reappear_pct: pct(p.objects_matched, p.objects),
+            objects_matched: p.objects_matched,
+            object_nis: quantile(&p.object_nis, 0.5),
+            object_nis_refit: quantile(&p.object_nis_refit, 0.5),
         }
     }
 }
@@ -282,6 +303,11 @@ pub fn run_records(
         for ((method, tally), prev) in methods.iter_mut().zip(&mut tallies).zip(&mut previous) {
             let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
             tally.scans += 1;
+            tally.objects += ex
+                .features
+                .iter()
+                .filter(|f| matches!(f, pfe_core::Feature::Object(_)))
+                .count();
             tally.coverage.add(&Coverage::of(
                 &record.geometry,
                 &record.ranges_mm,

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use pfe_formats::outfile;
 
 use super::compare::{CONSISTENT_DRAWS, GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, MIN_LINE_POINTS};
-use super::coverage::{MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
+use super::coverage::{MAX_SIGMA_ALPHA, MAX_SIGMA_MID_MM, MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
 use super::refit::{MIN_LINES, MIN_SPREAD};
 use super::shared::Shared;
 use super::svg::grouped_bars;
@@ -15,7 +15,7 @@ use super::{LogReport, Summary};
 /// Median of a χ²₂ variable (2 ln 2): the line and circle NIS median of consistent covariances.
 pub const CHI2_2_MEDIAN: f64 = 1.386_294_361;
 
-const HEADER: [&str; 16] = [
+const HEADER: [&str; 20] = [
     "method",
     "feat%",
     "bare%",
@@ -32,6 +32,10 @@ const HEADER: [&str; 16] = [
     "n circ",
     "circ NIS",
     "circ NIS refit",
+    "obj/scan",
+    "obj%",
+    "obj NIS",
+    "obj NIS refit",
 ];
 
 fn num(v: f64, digits: usize) -> String {
@@ -42,7 +46,7 @@ fn num(v: f64, digits: usize) -> String {
     }
 }
 
-fn row(s: &Summary) -> [String; 16] {
+fn row(s: &Summary) -> [String; 20] {
     [
         s.method.clone(),
         num(s.in_features_pct, 1),
@@ -60,6 +64,10 @@ fn row(s: &Summary) -> [String; 16] {
         s.circles_matched.to_string(),
         num(s.circle_nis, 2),
         num(s.circle_nis_refit, 2),
+        num(s.objects_per_scan, 2),
+        num(s.objects_reappear_pct, 1),
+        num(s.object_nis, 2),
+        num(s.object_nis_refit, 2),
     ]
 }
 
@@ -111,7 +119,7 @@ fn title(r: &LogReport) -> String {
 
 /// One log's text table.
 pub fn table(r: &LogReport) -> String {
-    let rows: Vec<[String; 16]> = r.methods.iter().map(row).collect();
+    let rows: Vec<[String; 20]> = r.methods.iter().map(row).collect();
     let mut out = format!("{}\n", title(r));
     aligned(&mut out, &HEADER, &rows);
     let _ = writeln!(
@@ -165,7 +173,12 @@ their offset shows); each pair of consecutive scans k, k+1 is compared through t
 the laser's and as exact. In these logs consecutive scans are about 1 m and 0.1–0.4 rad apart \
 (freiburg-079: 0.1 m), one scan per step of the robot.\n\n\
 ## Columns\n\n\
-- **feat%**: valid beams (a return, ≤ r_max) inside a feature's beam span, % of valid beams.\n\
+- **feat%**: valid beams (a return, ≤ r_max) inside the beam span of a feature a consumer can \
+use, % of valid beams. Every circle and small object counts; a line counts when the scanner \
+can have seen it (≤ 85° incidence at its midpoint, ≥ 10 mm long) and its σ_α ≤ {:.1} rad and \
+the σ of its distance at its midpoint ≤ {:.0} mm (beyond them, ±3σ spans more than the benchmark's own gates of 0.1 rad and \
+0.3 m: a localiser could not tell that wall from the next); the other lines hold no beam, here \
+and in bare%.\n\
 - **bare%**: beams of smooth runs that lie in no feature, % of valid beams. A smooth run is a \
 maximal run of ≥ {MIN_SMOOTH_RUN} consecutive valid beams whose neighbours differ in range by \
 less than {:.1} m: a surface seen continuously that the method left as bare mark points (or \
@@ -204,7 +217,11 @@ splits both by class of line.\n\
 centres by the pair's pose refit from its lines (pairs with a refit; the refit is fitted to \
 the lines only, so it costs the circles no degree of freedom; its own uncertainty, the inverse \
 of its normal matrix, is added to the centres' covariance). `cargo run -p host-tests --release \
---example realdata_circles -- LOG` splits it by class of circle.\n\n\
+--example realdata_circles -- LOG` splits it by class of circle.\n\
+- **obj/scan**: small objects (pfe's third kind of feature: a run of ≥ 3 returns between \
+range jumps, at most 0.3 m across) per scan; **obj%**: those of scan k whose moved centre \
+lies within {:.1} m of a small object's centre in k+1; **obj NIS** and **obj NIS refit**: as \
+for circles, with the objects' centre covariances (a method without small objects: –).\n\n\
 Under each log's table, pfe `default`'s lines against each other method's, beam by beam. \
 lines% weighs each method's lines by their own points, so a method that also makes lines \
 where another makes none is not scored on the same beams as it; this table is. A beam of scan \
@@ -215,9 +232,12 @@ re-found%**: of those, the share whose line (pfe `default`'s, the other method's
 in k+1, matched as for lines%; **only default** and **only other**: beams only that method \
 holds in such lines, with the share re-found.\n\n\
 Figures are over the whole log; `–` = nothing to measure.\n\n",
+        f64::from(MAX_SIGMA_ALPHA),
+        f64::from(MAX_SIGMA_MID_MM),
         f64::from(SMOOTH_STEP_MM) / 1000.0,
         f64::from(SMOOTH_STEP_MM) / 1000.0,
         GATE_RHO_MM / 1000.0,
+        GATE_CENTER_MM / 1000.0,
         GATE_CENTER_MM / 1000.0,
     );
     md.push_str("## Tables\n\n");

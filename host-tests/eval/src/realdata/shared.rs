@@ -32,7 +32,7 @@ pub enum BeamLine {
 ///     alpha: 0.0, rho: 2000.0, cov: [[1e-6, 0.0], [0.0, 1.0]],
 ///     start: [2000.0, -500.0], end: [2000.0, 500.0], points: 12, beams: [2, 13],
 /// };
-/// let a = Seen { pose: [0.0; 3], lines: vec![wall], circles: vec![] };
+/// let a = Seen { pose: [0.0; 3], lines: vec![wall], ..Seen::default() };
 /// let b = a.clone();
 /// let c = beam_lines(&a, &b, 16);
 /// assert_eq!(c[1], BeamLine::None);
@@ -157,6 +157,7 @@ mod tests {
             pose: [0.0; 3],
             lines: vec![line([0, 8], 9), line([10, 30], 21)],
             circles: vec![],
+            objects: vec![],
         };
         let c = beam_lines(&a, &a, 20);
         assert_eq!(c.len(), 20);
