@@ -105,9 +105,9 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// Extracts the features of `scan`. On `Err(FeatureCapacity)` the features that fitted are
-    /// still available from [`features`](Self::features): the first `M`, less the lines the
-    /// real-scan checks then found the scanner could not have seen (the capacity they held is
-    /// not refilled), plus small objects where room is left.
+    /// still available from [`features`](Self::features): the first `M` reported ones (a line
+    /// the real-scan checks will not report gives its room up to the next feature), plus small
+    /// objects where room is left.
     pub fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> Result<Stats, ExtractError> {
         self.work.len = 0;
         self.out.features.clear();

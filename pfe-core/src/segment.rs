@@ -20,6 +20,7 @@ use crate::geometry::Point;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
 use crate::rule::{NoiseRule, Rule};
+use crate::sift;
 
 /// Sizes of the union of two neighbouring segments tested for being one arc (fewer points do
 /// not show an arc above the noise).
@@ -253,9 +254,35 @@ fn place(
     pass.stats.segments += 1;
     match feature {
         None => pass.stats.short_segments += 1,
-        Some(Some(f)) => store(pass, f, out),
+        Some(Some(f)) => store_making_room(pass, f, out),
         Some(None) => pass.stats.degenerate += 1,
     }
+}
+
+/// Stores `f` as [`store`] does; when there is no room, a stored line the sift step will not
+/// report (the scanner cannot have seen it) gives up its room first, so that the capacity
+/// holds features that are reported.
+fn store_making_room(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
+    if out.push(f) {
+        pass.stats.features += 1;
+        return;
+    }
+    let victim = out
+        .features_mut()
+        .iter()
+        .enumerate()
+        .find_map(|(k, g)| sift::unreported(pass, g).map(|l| (k, l)));
+    let Some((k, l)) = victim else {
+        pass.stats.dropped += 1;
+        return;
+    };
+    sift::free(pass, &l);
+    let mut at = 0usize;
+    out.retain(&mut |_| {
+        at += 1;
+        at != k + 1
+    });
+    store(pass, f, out);
 }
 
 /// Stores `f`, counting it as stored or dropped.

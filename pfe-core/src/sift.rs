@@ -40,26 +40,14 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
     // Lines not reported: their points freed (flagged as veils until an object takes them).
     let mut freed = 0usize;
     for f in out.features_mut().iter() {
-        if let Feature::Line(l) = f {
-            if !seen(l) || undetermined_object(pass, l) {
-                for i in usize::from(l.first)..=usize::from(l.last) {
-                    if pass.valid(i) {
-                        pass.set(i, VEIL);
-                    }
-                }
-                freed += 1;
-                // Its segment: no feature, as one whose fit failed.
-                pass.stats.features = pass.stats.features.saturating_sub(1);
-                pass.stats.degenerate += 1;
-            }
+        if let Some(l) = unreported(pass, f) {
+            free(pass, &l);
+            freed += 1;
         }
     }
     if freed > 0 {
         let pass = &*pass;
-        out.retain(&mut |f| match f {
-            Feature::Line(l) => seen(l) && !undetermined_object(pass, l),
-            _ => true,
-        });
+        out.retain(&mut |f| unreported(pass, f).is_none());
     }
     // Small objects no feature holds.
     let len = pass.len();
@@ -92,6 +80,27 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
         in_scan_order(out.features_mut());
     }
     pass.stats.veils = pass.flags.iter().filter(|&&f| f & VEIL != 0).count();
+}
+
+/// The line `f` when it is not reported: the scanner cannot have seen it, or it is a line of
+/// undetermined direction over a small object.
+pub(crate) fn unreported(pass: &Pass<'_>, f: &Feature) -> Option<LineFeature> {
+    match f {
+        Feature::Line(l) if !seen(l) || undetermined_object(pass, l) => Some(*l),
+        _ => None,
+    }
+}
+
+/// Frees the points of the line `l`, not reported: flagged as veils (until an object takes
+/// them), its segment counted as one whose fit failed.
+pub(crate) fn free(pass: &mut Pass<'_>, l: &LineFeature) {
+    for i in usize::from(l.first)..=usize::from(l.last) {
+        if pass.valid(i) {
+            pass.set(i, VEIL);
+        }
+    }
+    pass.stats.features = pass.stats.features.saturating_sub(1);
+    pass.stats.degenerate += 1;
 }
 
 /// Sorts `features` by first beam (an insertion sort: they are in order but for the objects

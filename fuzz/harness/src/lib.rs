@@ -459,8 +459,9 @@ pub fn check_extraction<const N: usize, const M: usize>(
         }
         Err(ExtractError::FeatureCapacity { dropped }) => {
             assert!(dropped > 0);
-            // Full, but for the lines the real-scan checks removed as unseeable after the
-            // capacity was reached (their room is not refilled).
+            // Full, but for a line the real-scan checks found unseeable only after the
+            // capacity was reached (reaching over its neighbour beams made it so): the lines
+            // they find unseeable when stored give their room up.
             assert!(feats.len() <= M);
         }
         Err(ExtractError::TooManyReadings { got, .. }) => {
