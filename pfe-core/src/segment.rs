@@ -17,6 +17,7 @@ use crate::fit::line::fit_line;
 use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::geometry::Point;
+use crate::math;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
 use crate::rule::{NoiseRule, Rule};
@@ -226,8 +227,82 @@ fn emit<const SCRUTINY: bool>(
                 continue;
             }
         }
-        place(pass, s, e, feature, out);
+        match visible_part(pass, s, e, feature.as_ref(), config) {
+            Some((a, b, line)) => place_visible(pass, s, e, (a, b), line, config, out),
+            None => place(pass, s, e, feature, out),
+        }
     }
+}
+
+/// For a line seen at more than 85° incidence at its midpoint (a wall running away from the
+/// scanner, [`sift`]), the part of its segment from its near end that the scanner sees as a
+/// surface (the longest whose midpoint is within 85°: `a..=b`) and that part's line, when it
+/// is one the sift step reports.
+fn visible_part(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    feature: Option<&Option<Feature>>,
+    config: &Config,
+) -> Option<(usize, usize, Feature)> {
+    let Some(Some(Feature::Line(l))) = feature else {
+        return None;
+    };
+    if sift::seen(l) {
+        return None;
+    }
+    // Position along the line: |t| ≤ ρ·tan 85° is within 85° of the line's normal.
+    let (sin, cos) = math::sin_cos(l.alpha);
+    let along = |i: usize| {
+        let p = pass.point(i);
+        cos * p.y - sin * p.x
+    };
+    let reach = math::abs(l.rho) * sift::TAN_MAX_INCIDENCE;
+    let (ts, te) = (along(s), along(e));
+    let (a, b) = if math::abs(ts) <= math::abs(te) {
+        let b = (s..=e)
+            .rev()
+            .find(|&k| pass.valid(k) && math::abs(ts + along(k)) <= 2.0 * reach)?;
+        (s, b)
+    } else {
+        let a = (s..=e).find(|&k| pass.valid(k) && math::abs(te + along(k)) <= 2.0 * reach)?;
+        (a, e)
+    };
+    if (a, b) == (s, e) {
+        return None;
+    }
+    match typed::<true>(pass, a, b, config) {
+        Some(Some(f @ Feature::Line(_))) if sift::unreported(pass, &f).is_none() => Some((a, b, f)),
+        _ => None,
+    }
+}
+
+/// Places the segment `s..=e` as the line `line` over its visible part `a..=b` and what lies
+/// beyond it as a segment without a feature (a wall's far part, seen at more than 85°).
+fn place_visible(
+    pass: &mut Pass<'_>,
+    s: usize,
+    e: usize,
+    (a, b): (usize, usize),
+    line: Feature,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+) {
+    let rest = if a > s { (s, a - 1) } else { (b + 1, e) };
+    let short = (rest.1 + 1 - rest.0 < config.min_points).then_some(());
+    let (first, second) = if a > s {
+        (
+            (rest.0, rest.1, short.map_or(Some(None), |()| None)),
+            (a, b, Some(Some(line))),
+        )
+    } else {
+        (
+            (a, b, Some(Some(line))),
+            (rest.0, rest.1, short.map_or(Some(None), |()| None)),
+        )
+    };
+    place(pass, first.0, first.1, first.2, out);
+    place(pass, second.0, second.1, second.2, out);
 }
 
 /// The feature of the segment `s..=e`: `None` when it is short, `Some(None)` when its fit

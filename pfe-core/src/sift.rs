@@ -4,7 +4,10 @@
 //! - A line seen at more than 85° incidence from the scanner at its midpoint (the angle
 //!   between the beam to its midpoint and its normal), or shorter than 10 mm, is no surface
 //!   the beams could have measured: the mixed pixels of a veil along a line of sight at an
-//!   object's edge, or a run with no extent. It is not reported.
+//!   object's edge, or a run with no extent. It is not reported. (A wall running away from the
+//!   scanner is cut before this step: `segment` keeps the part of its segment from the near
+//!   end whose line is seen within 85° at its midpoint, and leaves the far part without a
+//!   feature.)
 //! - A small object (a run of at least [`OBJECT_MIN_POINTS`] returns with a range jump of at
 //!   least [`OBJECT_JUMP_MM`] or no return on both sides, at most [`OBJECT_MAX_MM`] across)
 //!   that no feature holds, or that only a line of undetermined direction (σ_α above
@@ -23,6 +26,9 @@ use crate::pass::Pass;
 
 /// cos 85°: a line whose normal makes a larger angle with the beam to its midpoint is not seen.
 const COS_MAX_INCIDENCE: f32 = 0.087_155_74;
+/// tan 85°: a point of a line farther along it from the normal's foot than ρ·tan 85° is seen
+/// at more than 85° incidence.
+pub(crate) const TAN_MAX_INCIDENCE: f32 = 11.430_052;
 /// Shortest line reported, mm.
 const MIN_LINE_MM: f32 = 10.0;
 /// Fewest returns of a small object.
@@ -129,7 +135,7 @@ fn in_scan_order(features: &mut [Feature]) {
 
 /// True when the scanner can have seen `l` as a surface: at most 85° incidence at its
 /// midpoint, and at least 10 mm long.
-fn seen(l: &LineFeature) -> bool {
+pub(crate) fn seen(l: &LineFeature) -> bool {
     let m = Point::new(0.5 * (l.start.x + l.end.x), 0.5 * (l.start.y + l.end.y));
     let d = m.norm();
     let (sin, cos) = math::sin_cos(l.alpha);
