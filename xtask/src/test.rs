@@ -333,7 +333,11 @@ pub fn run(args: &[String]) -> Result<()> {
 
 fn step(name: &str, f: impl FnOnce() -> Result<()>) -> Result<()> {
     eprintln!("\n=== {name} ===");
-    f().map_err(|e| e.context(format!("step `{name}` failed")))
+    let start = std::time::Instant::now();
+    let result = f().map_err(|e| e.context(format!("step `{name}` failed")));
+    // CI's time budget is spent step by step: each step says what it took.
+    eprintln!("=== {name}: {:.0} s ===", start.elapsed().as_secs_f64());
+    result
 }
 
 #[cfg(test)]
