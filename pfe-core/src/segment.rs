@@ -334,29 +334,28 @@ fn place(
     }
 }
 
-/// Stores `f` as [`store`] does; when there is no room, a stored line the sift step will not
-/// report (the scanner cannot have seen it) gives up its room first, so that the capacity
-/// holds features that are reported.
+/// Stores `f` as [`store`] does; when there is no room, the stored lines the sift step will
+/// not report (the scanner cannot have seen them) give up their room first, so that the
+/// capacity holds features that are reported.
 fn store_making_room(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
     if out.push(f) {
         pass.stats.features += 1;
         return;
     }
-    let victim = out
-        .features_mut()
-        .iter()
-        .enumerate()
-        .find_map(|(k, g)| sift::unreported(pass, g).map(|l| (k, l)));
-    let Some((k, l)) = victim else {
-        pass.stats.dropped += 1;
-        return;
-    };
-    sift::free(pass, &l);
-    let mut at = 0usize;
-    out.retain(&mut |_| {
-        at += 1;
-        at != k + 1
-    });
+    // Once a full sink held no such line, none has come in since: nothing was stored.
+    if pass.stats.dropped == 0 {
+        let mut freed = false;
+        for g in out.features_mut().iter() {
+            if let Some(l) = sift::unreported(pass, g) {
+                sift::free(pass, &l);
+                freed = true;
+            }
+        }
+        if freed {
+            let pass = &*pass;
+            out.retain(&mut |g| sift::unreported(pass, g).is_none());
+        }
+    }
     store(pass, f, out);
 }
 

@@ -149,11 +149,25 @@ fn undetermined_object(pass: &Pass<'_>, l: &LineFeature) -> bool {
         return false;
     }
     let (first, last) = (usize::from(l.first), usize::from(l.last));
+    // The run around the line, without a jump. A point farther than twice the widest object
+    // from the line's first point makes the run wider than an object (the triangle
+    // inequality through either end of the run): the walks stop there.
+    let a = pass.point(first);
+    let far = |k: usize| pass.point(k).distance(&a) > 2.0 * OBJECT_MAX_MM;
     let mut s = first;
     while s > 0 && pass.valid(s - 1) && !jump(pass, s - 1) {
         s -= 1;
+        if far(s) {
+            return false;
+        }
     }
-    let e = run_end(pass, first);
+    let mut e = first;
+    while e + 1 < pass.len() && pass.valid(e + 1) && !jump(pass, e) {
+        e += 1;
+        if far(e) {
+            return false;
+        }
+    }
     e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e) <= OBJECT_MAX_MM
 }
 
