@@ -284,6 +284,7 @@ fn run(
     // §2: readings to points (range correction, de-skew).
     let slots = (&mut *points, &mut *ranges, &mut *flags);
     preprocess::load(slots, &beams, motion, scan, config, stats);
+    probe.at(Step::Load);
     // Ours, with the checks for real scans: the readings' rounding joins the systematic error
     // (see `Scan::quantum`), and the walk takes the scan's own σ where it scatters well beyond
     // σ_r ([`scatter`]).
@@ -301,7 +302,7 @@ fn run(
         true => Marking::own(points, config, gauge, stats),
         false => Marking::of(config, gauge),
     };
-    probe.at(Step::Load);
+    probe.at(Step::Scatter);
     // §3.1–3.2, §3.6: mark points by prediction.
     let uneven = motion.is_some_and(|m| m.sweeps_apart());
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);

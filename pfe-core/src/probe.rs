@@ -7,9 +7,10 @@
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(not(feature = "probe"), allow(dead_code))]
 pub enum Step {
-    /// Readings to points (range correction, de-skew) and, with the checks for real scans,
-    /// the scan's own σ.
+    /// Readings to points (range correction, de-skew).
     Load,
+    /// The scan's own σ (with the checks for real scans).
+    Scatter,
     /// Mark points by prediction (the walk).
     Mark,
     /// Interleaved sweeps out of place moved onto sweep 0 and marked again (when they are).

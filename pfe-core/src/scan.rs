@@ -465,6 +465,8 @@ fn exp_neg(x: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
 
     /// `exp_neg` against f64's exp.
@@ -507,6 +509,64 @@ mod tests {
         ] {
             assert_eq!(at(q, s), 0.0, "q {q}, σ {s}");
         }
+    }
+
+    /// `Ranges::grid` on raw codes (its whole-unit shortcut included) equals it on the same
+    /// readings in mm, for codes on grids of 1 to 100 mm, few or many readings, no returns and
+    /// reserved codes among them.
+    #[test]
+    fn grid_of_codes_is_grid_of_their_mm() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut seen = [0usize; 9];
+        for case in 0..3000 {
+            let n = [5usize, 19, 20, 21, 40, 361, 401][case % 7];
+            let step = [1u64, 2, 3, 5, 7, 10, 20, 25, 50, 100][(next() % 10) as usize];
+            let kinds = 1 + next() % 9;
+            let base = next() % 4000;
+            let codes: std::vec::Vec<u16> = (0..n)
+                .map(|_| match next() % 20 {
+                    0 => 0,
+                    1 => 8183 + (next() % 8) as u16,
+                    _ => (base + step * (next() % kinds)) as u16,
+                })
+                .collect();
+            for (unit, max_valid, r_max) in [
+                (1.0f32, LMS_MAX_VALID_8M, 8182.0f32),
+                (10.0, LMS_MAX_VALID_8M, 81_820.0),
+                (1.0, LMS_MAX_VALID_8M, 3000.0),
+                (0.5, LMS_MAX_VALID_8M, 8000.0),
+            ] {
+                let raw = Ranges::Raw {
+                    values: &codes,
+                    mm_per_unit: unit,
+                    max_valid,
+                };
+                let mm: std::vec::Vec<f32> = codes
+                    .iter()
+                    .map(|&c| {
+                        code_mm(c, unit, max_valid)
+                            .and_then(|r| valid_mm(r, r_max))
+                            .unwrap_or(f32::NAN)
+                    })
+                    .collect();
+                let g = raw.grid(r_max);
+                assert_eq!(g, Ranges::Mm(&mm).grid(r_max), "{codes:?} {unit} {r_max}");
+                let k = [0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 25.0, 50.0, 100.0]
+                    .iter()
+                    .position(|&q| q == g);
+                if let Some(c) = k.and_then(|k| seen.get_mut(k)) {
+                    *c += 1;
+                }
+            }
+        }
+        // Every answer came up, unknown included.
+        assert!(seen.iter().all(|&c| c > 0), "{seen:?}");
     }
 
     /// `max_code` against the definition (a code is a return when `code_mm` and `valid_mm`

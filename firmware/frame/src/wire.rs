@@ -90,8 +90,10 @@ pub enum Stage {
     /// Telegram bytes to encoded output frame, everything.
     Pipeline,
     /// pfe-core's default extraction, step by step (`cargo xtask bench-mcu`, pfe-core's
-    /// `probe`): the scan built from the codes (sweeps, grid) and readings to points.
+    /// `probe`): readings to points.
     Load,
+    /// The scan's own σ.
+    Scatter,
     /// Mark points (the walk).
     Mark,
     /// Interleaved sweeps aligned (estimate, move, mark again).
@@ -106,6 +108,8 @@ pub enum Stage {
     Sift,
     /// Encoding the output frame of the features.
     Encode,
+    /// The pfe-core scan built from the codes (`RawScan::to_pfe`: sweeps, grid).
+    Scan,
 }
 
 /// Out-of-band reports of the firmware.

@@ -206,7 +206,10 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
     let Some(c) = listen_vs_extract("room", None, &["default"]) else {
         return;
     };
-    assert!(c.extracted.iter().all(|l| count(l, "line") >= 3), "a room has walls");
+    assert!(
+        c.extracted.iter().all(|l| count(l, "line") >= 3),
+        "a room has walls"
+    );
 }
 
 #[test]
@@ -248,10 +251,7 @@ fn carmen_half_degree(log: &str, wanted: usize) -> Option<Vec<Vec<f32>>> {
 
 #[test]
 fn real_half_degree_scans() {
-    for log in [
-        "csail-corrected.log.gz",
-        "freiburg-079-corrected.log.gz",
-    ] {
+    for log in ["csail-corrected.log.gz", "freiburg-079-corrected.log.gz"] {
         let Some(scans) = carmen_half_degree(log, SCANS as usize + 4) else {
             return;
         };
@@ -313,5 +313,8 @@ fn quarter_degree_scans_with_their_sweeps_out_of_place() {
         .flat_map(|l| l["features"].as_array().unwrap().clone())
         .filter_map(|f| f["last"].as_u64())
         .max();
-    assert!(last.is_some_and(|b| b > 360 && b <= 400), "last beam {last:?}");
+    assert!(
+        last.is_some_and(|b| b > 360 && b <= 400),
+        "last beam {last:?}"
+    );
 }

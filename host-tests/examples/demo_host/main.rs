@@ -164,13 +164,15 @@ impl BenchRun {
 
 /// The stages pfe-bench reports, in table order: (key, label, part of the default extraction's
 /// steps).
-const STAGES: [(&str, &str, bool); 12] = [
+const STAGES: [(&str, &str, bool); 14] = [
     ("decode", "decode one B0 telegram (CRC, values)", false),
     (
-        "load",
-        "· scan from the codes (sweeps, grid), readings to points, the scan's own σ",
-        true,
+        "scan",
+        "pfe-core scan from the codes (`RawScan::to_pfe`: sweeps, grid)",
+        false,
     ),
+    ("load", "· readings to points", true),
+    ("scatter", "· the scan's own σ", true),
     ("mark", "· mark points (the walk)", true),
     (
         "sweeps",
@@ -233,6 +235,8 @@ fn run_bench(elf: &Path) -> Result<BenchRun> {
                     Stage::ExtractDefault => "default",
                     Stage::Pipeline => "pipeline",
                     Stage::Load => "load",
+                    Stage::Scatter => "scatter",
+                    Stage::Scan => "scan",
                     Stage::Mark => "mark",
                     Stage::Sweeps => "sweeps",
                     Stage::Check => "check",

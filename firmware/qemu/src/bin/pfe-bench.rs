@@ -5,8 +5,9 @@
 //! extracted as the firmware does (`RawScan::to_pfe`: the variant from the value count, the unit
 //! from the telegram, the sweeps and grid from them; `ConfigChoice`'s configurations, everything
 //! on). For every scan it measures, with SysTick, decoding the telegram, pfe-core `paper`,
-//! pfe-core `default` step by step (pfe-core's `probe`: load, mark, sweeps, check, segments,
-//! reach, sift; the scan's construction counted in load), encoding the frame, and the whole
+//! building the scan from the codes (`RawScan::to_pfe`), pfe-core `default` step by step
+//! (pfe-core's `probe`: load, scatter, mark, sweeps, check, segments, reach, sift), encoding
+//! the frame, and the whole
 //! pipeline (telegram bytes → features → encoded frame, without the probe), and sends one
 //! `Report::Timing` frame per measurement on UART1, then `Report::Stack` and `Report::Done`.
 //! Instructions = ticks × 10 / 256 (instruction counts, not cycles).
@@ -101,8 +102,9 @@ mod fw {
     }
 
     /// The probe's steps in the order they report, as timing stages.
-    const STEPS: [(Step, Stage); 7] = [
+    const STEPS: [(Step, Stage); 8] = [
         (Step::Load, Stage::Load),
+        (Step::Scatter, Stage::Scatter),
         (Step::Mark, Stage::Mark),
         (Step::Sweeps, Stage::Sweeps),
         (Step::Check, Stage::Check),
@@ -147,8 +149,9 @@ mod fw {
             // The default extraction step by step: each step's ticks since the one before.
             let mut steps = [0u64; STEPS.len()];
             let t0 = time::ticks();
-            let mut last = t0;
             let scan = raw.to_pfe();
+            let t_scan = time::ticks() - t0;
+            let mut last = time::ticks();
             let r_default = core::hint::black_box(ex.extract_probed(&scan, &default, &mut |s| {
                 let now = time::ticks();
                 if let Some(k) = STEPS.iter().position(|(step, _)| *step == s) {
@@ -224,6 +227,7 @@ mod fw {
                 (Stage::ExtractPaper, t_paper),
                 (Stage::ExtractDefault, t_default),
                 (Stage::Encode, t_enc),
+                (Stage::Scan, t_scan),
                 (Stage::Pipeline, t_pipe),
             ] {
                 send(stage, t);
