@@ -470,6 +470,8 @@ fn worst(o: &Opts) -> Result<()> {
     );
     // kind → (scans, values, max pipeline, max paper, max default, max host work)
     let mut rows: Vec<(&str, usize, usize, f64, f64, f64, usize)> = Vec::new();
+    // kind → the scan of its max pipeline
+    let mut costliest: Vec<(&str, usize, f64)> = Vec::new();
     let stage = |name: &str, i: usize| {
         run.stages
             .get(name)
@@ -480,6 +482,11 @@ fn worst(o: &Opts) -> Result<()> {
         let (pipe, pts) = stage("pipeline", i);
         let (paper, default) = (stage("paper", i).0, stage("default", i).0);
         let work: usize = work.parse().unwrap_or(0);
+        match costliest.iter_mut().find(|c| c.0 == *kind) {
+            Some(c) if c.2 >= pipe => {}
+            Some(c) => *c = (kind, i, pipe),
+            None => costliest.push((kind, i, pipe)),
+        }
         match rows.iter_mut().find(|r| r.0 == *kind) {
             Some(r) => {
                 r.1 += 1;
@@ -510,6 +517,21 @@ fn worst(o: &Opts) -> Result<()> {
         md.push_str(&format!(
             "| {kind} | {n} | {values} | {work} | {paper:.0} | {default:.0} | {pipe:.0} | {b:.0} ({visits}) |\n"
         ));
+    }
+    md.push_str(
+        "\nThe costliest scan of each kind, step by step (instructions; pfe-core's `probe`):\n\n\
+         | scan kind | pipeline | decode | scan | load | own σ | mark | sweeps | check | segments | reach | sift | encode |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (kind, i, pipe) in &costliest {
+        md.push_str(&format!("| {kind} | {pipe:.0} |"));
+        for key in [
+            "decode", "scan", "load", "scatter", "mark", "sweeps", "check", "segments", "reach",
+            "sift", "encode",
+        ] {
+            md.push_str(&format!(" {:.0} |", stage(key, *i).0));
+        }
+        md.push('\n');
     }
     md.push_str(&format!(
         "\nBudget: whole pipeline ≤ {WORST_BUDGET:.0} instructions per scan (worst case): \
@@ -547,35 +569,55 @@ fn demo(o: &Opts) -> Result<()> {
     let (mut equal, mut compared, mut worst_ulps) = (0usize, 0usize, 0u32);
     let mut stack = None;
     let mut done = None;
+    let mut next = 0usize;
     println!("scan  valid  segs  features  lines  circles  telegrams  crc-dropped  skipped  reinits  host-equal");
     for f in &s.frames {
         match f.header {
             Header::Scan(h) => {
-                let k = h.seq as usize;
                 let lines = f.features.iter().filter(|w| w.is_line()).count();
-                let sent = s.emulator.scans.get(k);
-                let host = match sent {
-                    Some(sc) if !sc.damaged => Some(qemu::host_features(&sc.words, choice)?),
-                    _ => None,
-                };
-                let same = match &host {
-                    Some(hf) => {
-                        compared += 1;
-                        let mut ok = hf.len() == f.features.len();
-                        for (a, b) in hf.iter().zip(f.features.iter()) {
-                            if let Some(u) = qemu::ulps_apart(a, b) {
-                                worst_ulps = worst_ulps.max(u);
-                                ok = false;
-                            }
-                        }
-                        equal += usize::from(ok);
-                        if ok {
-                            "yes"
-                        } else {
-                            "NO"
+                // The telegram of this scan: the first intact one from `next` on whose host
+                // features are the scan's (telegrams lost or cut by a re-initialisation are no
+                // scans to the firmware, so sequence numbers and telegrams can part); when none
+                // is, the scan is compared with telegram `next`.
+                let same_as = |words: &[u16]| -> Result<(bool, u32)> {
+                    let hf = qemu::host_features(words, choice)?;
+                    let mut worst = 0;
+                    let mut ok = hf.len() == f.features.len();
+                    for (a, b) in hf.iter().zip(f.features.iter()) {
+                        if let Some(u) = qemu::ulps_apart(a, b) {
+                            worst = worst.max(u);
+                            ok = false;
                         }
                     }
-                    None => "n/a",
+                    Ok((ok, worst))
+                };
+                let mut found = None;
+                let mut first = None;
+                for (j, sc) in s.emulator.scans.iter().enumerate().skip(next) {
+                    if sc.damaged {
+                        continue;
+                    }
+                    let r = same_as(&sc.words)?;
+                    first.get_or_insert(r);
+                    if r.0 {
+                        found = Some(j);
+                        break;
+                    }
+                }
+                let k = found.unwrap_or(next);
+                let same = match (found, first) {
+                    (Some(j), _) => {
+                        compared += 1;
+                        equal += 1;
+                        next = j + 1;
+                        "yes"
+                    }
+                    (None, Some((_, u))) => {
+                        compared += 1;
+                        worst_ulps = worst_ulps.max(u);
+                        "NO"
+                    }
+                    (None, None) => "n/a",
                 };
                 println!(
                     "{:4}  {:5}  {:4}  {:8}  {:5}  {:7}  {:9}  {:11}  {:7}  {:7}  {same}",
@@ -596,7 +638,7 @@ fn demo(o: &Opts) -> Result<()> {
                         features: f.features.to_vec(),
                     };
                     total.add(&pfe_eval::score::score_sim(&ex, sim));
-                    if k == 0 {
+                    if h.seq == 0 {
                         if let Some(path) = o.get("svg") {
                             let rec = pfe_formats::Record {
                                 id: 0,
