@@ -37,7 +37,13 @@ fn skip(why: &str) -> Option<PathBuf> {
     None
 }
 
+/// The pfe-qemu firmware under test: `PFE_E2E_FIRMWARE` (a pfe-qemu ELF built elsewhere, to
+/// check these tests against another build, such as the one-sweep firmware before the board
+/// ran the host's extraction), else this tree's, built here.
 fn firmware_elf() -> Option<PathBuf> {
+    if let Some(elf) = std::env::var_os("PFE_E2E_FIRMWARE") {
+        return Some(PathBuf::from(elf));
+    }
     if !qemu::have("qemu-system-arm") {
         return skip("qemu-system-arm not found");
     }
