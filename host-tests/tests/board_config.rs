@@ -12,7 +12,7 @@ fn pfe_eval_scores_the_board_s_configuration() {
     assert_ne!(BOARD_CONFIG, ConfigChoice::Paper.config());
     assert_ne!(BOARD_CONFIG, Config::default());
     // Everything on, as `pfe extract --format lms200` runs it.
-    assert!(BOARD_CONFIG.scrutiny);
+    const { assert!(BOARD_CONFIG.scrutiny) };
     assert_eq!(
         BOARD_CONFIG,
         Config::default()

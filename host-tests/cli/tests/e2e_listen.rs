@@ -10,7 +10,12 @@
 //!
 //! Without qemu-system-arm or the thumbv7em target it prints `SKIPPED: …` and passes, except
 //! under `CI=true`, where it fails.
-#![allow(clippy::unwrap_used, clippy::expect_used, clippy::indexing_slicing)]
+#![allow(
+    clippy::unwrap_used,
+    clippy::expect_used,
+    clippy::indexing_slicing,
+    clippy::panic
+)] // test code: a panic fails the test
 
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -182,8 +187,8 @@ fn listen_vs_extract(
         let k = (next..want.len())
             .find(|&k| want[k]["features"] == g["features"])
             .unwrap_or_else(|| {
-                let near = (g["counters"]["telegrams"].as_u64().unwrap() as usize)
-                    .min(want.len() - 1);
+                let near =
+                    (g["counters"]["telegrams"].as_u64().unwrap() as usize).min(want.len() - 1);
                 panic!(
                     "scan {} (telegrams {}): no telegram from {next} on gives its features\n\
                      firmware: {}\nhost, telegram {near}: {}",

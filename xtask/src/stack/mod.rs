@@ -138,9 +138,7 @@ pub fn build(
                 let known = INDIRECT
                     .iter()
                     .find(|(caller, _)| f.name.ends_with(caller))
-                    .and_then(|(_, callee)| {
-                        functions.iter().position(|g| g.name == *callee)
-                    });
+                    .and_then(|(_, callee)| functions.iter().position(|g| g.name == *callee));
                 match known {
                     Some(k) => {
                         if !callees.iter().any(|(c, _)| *c == k) {
