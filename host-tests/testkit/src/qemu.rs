@@ -95,12 +95,17 @@ pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
 }
 
 /// [`test_firmware`] with firmware-qemu's cargo `features` (`pfe-qemu-async` needs `async`).
+/// `PFE_E2E_FIRMWARE` names a pfe-qemu ELF built elsewhere to run instead of `pfe-qemu` (to
+/// check a test against another build, such as an older firmware).
 #[allow(
     clippy::panic,
     reason = "a test helper: its panic is the calling test's failure"
 )]
 pub fn test_firmware_with(test: &str, bin: &str, features: &[&str], dir: &str) -> Option<PathBuf> {
     use crate::skip::{skip, Need};
+    if let (Some(elf), "pfe-qemu") = (std::env::var_os("PFE_E2E_FIRMWARE"), bin) {
+        return Some(PathBuf::from(elf));
+    }
     if std::env::var_os("PFE_SKIP_QEMU").is_some() {
         skip(
             test,
