@@ -11,4 +11,12 @@ fn pfe_eval_scores_the_board_s_configuration() {
     // and it is not a configuration that would pass whichever it were
     assert_ne!(BOARD_CONFIG, ConfigChoice::Paper.config());
     assert_ne!(BOARD_CONFIG, Config::default());
+    // Everything on, as `pfe extract --format lms200` runs it.
+    const { assert!(BOARD_CONFIG.scrutiny) };
+    assert_eq!(
+        BOARD_CONFIG,
+        Config::default()
+            .with_sigma_r(pfe_formats::Format::Lms200.sigma_r())
+            .with_sigma_sys(pfe_formats::Format::Lms200.sigma_sys())
+    );
 }

@@ -1,10 +1,10 @@
 //! The firmware's application loop on the host, end to end over emulated UART bytes: the
 //! LMS200 emulator (in-process link, virtual time, baud modelled) → the real driver →
-//! `firmware::app::App` → feature frames → decoder. The features must equal pfe-core run on
-//! the value words the emulator sent, also when the link damages telegrams, and match the
-//! simulator's ground truth in type and parameters (Cramér–Rao bounds). The firmware side
-//! here is the same code as the host's, in the same process: `e2e_qemu` compares the
-//! Cortex-M4F build under QEMU with the host.
+//! `firmware::app::App` → feature frames → decoder. The features must equal what `pfe extract
+//! --format lms200` gives on the telegrams the emulator sent (`host_features`: pfe-formats'
+//! reader and the CLI's configuration, sweeps and grid), also when the link damages
+//! telegrams, and match the simulator's ground truth in type and parameters (Cramér–Rao
+//! bounds). `e2e_qemu` compares the Cortex-M4F build under QEMU with the host.
 #![allow(clippy::unwrap_used, clippy::expect_used, clippy::panic)] // test code: a panic fails the test
 
 use host_tests::qemu;
@@ -65,7 +65,9 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
     let (frames, report) = run(&sims, 6, Faults::default());
     assert_eq!(frames.len(), 6);
     let mut total = pfe_eval::score::Score::default();
+    let mut objects = 0;
     for (k, f) in frames.iter().enumerate() {
+        objects += f.features.iter().filter(|f| f.is_object()).count();
         let h = f.scan().unwrap();
         assert_eq!(h.seq, k as u32);
         assert_eq!(h.status, ScanStatus::Ok);
@@ -98,9 +100,14 @@ fn clean_link_features_equal_host_and_match_ground_truth() {
         "{mistyped} of {} matched features mistyped",
         total.matched
     );
-    assert_eq!(
-        total.line_errors.len() + total.circle_errors.len() + mistyped,
-        total.matched
+    // Every match is scored, but for small objects on truth circles (a small pillar: found,
+    // with no radius to score).
+    let scored = total.line_errors.len() + total.circle_errors.len() + mistyped;
+    assert!(scored <= total.matched);
+    assert!(
+        total.matched - scored <= objects,
+        "{} matches unscored, {objects} objects",
+        total.matched - scored
     );
     let mut z2 = Vec::new();
     for e in &total.line_errors {

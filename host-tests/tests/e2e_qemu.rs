@@ -1,6 +1,8 @@
 //! End to end: the pfe-qemu firmware under QEMU (mps2-an386) initialises the emulated LMS200
 //! over UART0, extracts features from simulated scans and sends them on UART1; the features
-//! must be bit-identical to pfe-core run on the host on the same B0 values.
+//! must be bit-identical to what `pfe extract --format lms200` gives on the host on the same
+//! B0 telegrams (`host_features`), everything on: the checks for real scans and the 0.5°
+//! scans' two sweeps.
 //!
 //! Skipped (with a message) when `qemu-system-arm` or the `thumbv7em-none-eabihf` target is
 //! missing; `cargo xtask test` installs both, so CI runs it.

@@ -118,6 +118,12 @@ pub struct Config {
 /// Points in the prediction window (paper: Np = 3).
 pub const NP: usize = 3;
 
+/// Range noise of a SICK LMS2xx, mm ([`Config::for_lms2xx`]).
+pub const LMS2XX_SIGMA_R: f32 = 5.0;
+/// Beam-to-beam systematic range error of a SICK LMS2xx, mm ([`Config::for_lms2xx`]): the
+/// data sheet's ±15 mm typical, taken as 3σ.
+pub const LMS2XX_SIGMA_SYS: f32 = 5.0;
+
 impl Config {
     /// The paper's method, faithfully: Np 3, d_0 50 mm, λ 2, check step, d_f 20 mm, Kåsa fit.
     pub const fn paper() -> Self {
@@ -194,6 +200,20 @@ impl Config {
     pub const fn with_sigma_sys(mut self, sigma_sys: f32) -> Self {
         self.sigma_sys = sigma_sys;
         self
+    }
+
+    /// The same configuration for a SICK LMS2xx: σ_r [`LMS2XX_SIGMA_R`], σ_sys
+    /// [`LMS2XX_SIGMA_SYS`]. With [`Scan::lms2xx`](crate::Scan::lms2xx), what `pfe extract
+    /// --format lms200` and the firmware run.
+    ///
+    /// ```
+    /// use pfe_core::Config;
+    /// let c = Config::default().for_lms2xx();
+    /// assert_eq!((c.sigma_r, c.sigma_sys, c.scrutiny), (5.0, 5.0, true));
+    /// ```
+    pub const fn for_lms2xx(self) -> Self {
+        self.with_sigma_r(LMS2XX_SIGMA_R)
+            .with_sigma_sys(LMS2XX_SIGMA_SYS)
     }
 
     /// The same configuration with a systematic range correction.

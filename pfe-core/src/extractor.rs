@@ -15,6 +15,7 @@ use crate::mark::{self, Neighbours};
 use crate::output::{FeatureSink, Stats};
 use crate::pass::Pass;
 use crate::preprocess::{self, scatter};
+use crate::probe::{Probe, Step};
 use crate::reach;
 use crate::rule::Rule;
 use crate::scan::Scan;
@@ -109,6 +110,40 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     /// the real-scan checks will not report gives its room up to the next feature), plus small
     /// objects where room is left.
     pub fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> Result<Stats, ExtractError> {
+        self.extract_with(scan, config, Probe::none())
+    }
+
+    /// [`extract`](Self::extract), calling `report` at the end of each step (feature `probe`,
+    /// for benchmarks: the firmware's per-stage instruction counts).
+    ///
+    /// ```
+    /// use pfe_core::probe::Step;
+    /// use pfe_core::{Config, Extractor, Scan, ScanGeometry};
+    /// let mut ex = Extractor::<361, 32>::new();
+    /// let mut steps = Vec::new();
+    /// let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &[2000.0; 361]);
+    /// ex.extract_probed(&scan, &Config::default(), &mut |s| steps.push(s))?;
+    /// assert_eq!(steps.first(), Some(&Step::Load));
+    /// assert_eq!(steps.last(), Some(&Step::Sift));
+    /// # Ok::<(), pfe_core::ExtractError>(())
+    /// ```
+    #[cfg(feature = "probe")]
+    pub fn extract_probed(
+        &mut self,
+        scan: &Scan<'_>,
+        config: &Config,
+        report: &mut dyn FnMut(Step),
+    ) -> Result<Stats, ExtractError> {
+        self.extract_with(scan, config, Probe::to(report))
+    }
+
+    #[inline(always)]
+    fn extract_with(
+        &mut self,
+        scan: &Scan<'_>,
+        config: &Config,
+        mut probe: Probe<'_>,
+    ) -> Result<Stats, ExtractError> {
         self.work.len = 0;
         self.out.features.clear();
         self.out.stats = Stats::default();
@@ -122,6 +157,7 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             config,
             &mut out.stats,
             &mut out.features,
+            &mut probe,
         )
     }
 
@@ -241,12 +277,14 @@ fn run(
     config: &Config,
     stats: &mut Stats,
     out: &mut dyn FeatureSink,
+    probe: &mut Probe<'_>,
 ) -> Result<Stats, ExtractError> {
     let motion = scan.deskewing();
     let checks = config.scrutinised();
     // §2: readings to points (range correction, de-skew).
     let slots = (&mut *points, &mut *ranges, &mut *flags);
     preprocess::load(slots, &beams, motion, scan, config, stats);
+    probe.at(Step::Load);
     // Ours, with the checks for real scans: the readings' rounding joins the systematic error
     // (see `Scan::quantum`), and the walk takes the scan's own σ where it scatters well beyond
     // σ_r ([`scatter`]).
@@ -264,13 +302,16 @@ fn run(
         true => Marking::own(points, config, gauge, stats),
         false => Marking::of(config, gauge),
     };
+    probe.at(Step::Scatter);
     // §3.1–3.2, §3.6: mark points by prediction.
     let uneven = motion.is_some_and(|m| m.sweeps_apart());
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
     let noted = mark::mark(&mut pass, &walk.rule, uneven);
+    probe.at(Step::Mark);
     // Ours: interleaved sweeps out of place (no odometry) moved onto sweep 0 and marked again.
     let parts = (beams, scan, config);
     let marks = in_place(parts, (points, ranges, flags), walk, noted, stats);
+    probe.at(Step::Sweeps);
     let fitted;
     let config = match checks {
         true => {
@@ -285,17 +326,20 @@ fn run(
     if config.check_step {
         check::check(&mut pass, rule, marks.noted.as_deref(), marks.moved);
     }
+    probe.at(Step::Check);
     // §3.4–3.5: segments and pairing, merges, the type and fit of each.
     segment::segments(&mut pass, rule, config, out);
     // Ours: the features inherit the error of the offsets that moved the sweeps.
     if classify::honest(config, checks) {
         sweeps::inherit(out.features_mut(), marks.alignment);
     }
+    probe.at(Step::Segments);
     // Ours, with the checks for real scans: line ends reach over the beams beside them that
     // lie on them.
     if let (true, Some(noise)) = (checks, rule.noise()) {
         reach::extend(&mut pass, noise, out.features_mut());
     }
+    probe.at(Step::Reach);
     // Ours, with the checks for real scans: no line the scanner cannot see; small objects.
     if checks {
         sift::sift(&mut pass, config, out);
@@ -303,6 +347,7 @@ fn run(
             sweeps::inherit_objects(out.features_mut(), marks.alignment);
         }
     }
+    probe.at(Step::Sift);
     outcome(pass.stats)
 }
 

@@ -58,6 +58,10 @@ pub mod predict;
 pub mod preprocess;
 #[cfg(not(feature = "internals"))]
 mod preprocess;
+#[cfg(feature = "probe")]
+pub mod probe;
+#[cfg(not(feature = "probe"))]
+mod probe;
 mod reach;
 mod rule;
 pub mod scan;

@@ -150,6 +150,13 @@ pub(crate) fn abs(x: f32) -> f32 {
     f32::from_bits(x.to_bits() & 0x7fff_ffff)
 }
 
+/// `x` rounded to the nearest whole number, halfway cases away from zero (libm's `roundf`,
+/// std's `f32::round`).
+#[inline]
+pub(crate) fn round(x: f32) -> f32 {
+    libm::roundf(x)
+}
+
 /// Hypotenuse.
 pub(crate) fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)

@@ -63,6 +63,29 @@ impl ScanGeometry {
             && math::abs(self.angle_step) < 1.0
             && self.r_max > 0.0
     }
+
+    /// The interleaved sweeps an LMS2xx scan of this geometry is made of: 2 at 0.5°, 4 at
+    /// 0.25° ([`BeamTiming::lms2xx`](crate::BeamTiming::lms2xx)); 1 at 1° and for a step no
+    /// LMS2xx has (more than 1 % from 0.25°, 0.5° and 1°: another scanner's).
+    ///
+    /// ```
+    /// use pfe_core::ScanGeometry;
+    /// assert_eq!(ScanGeometry::lms200(180.0, 0.5).lms2xx_sweeps(), 2);
+    /// assert_eq!(ScanGeometry::lms200(100.0, 0.25).lms2xx_sweeps(), 4);
+    /// assert_eq!(ScanGeometry::lms200(180.0, 1.0).lms2xx_sweeps(), 1);
+    /// assert_eq!(ScanGeometry::lms200(240.0, 0.352).lms2xx_sweeps(), 1); // a Hokuyo URG
+    /// ```
+    pub fn lms2xx_sweeps(&self) -> u8 {
+        let deg = math::abs(self.angle_step).to_degrees();
+        let lms = [0.25f32, 0.5, 1.0]
+            .iter()
+            .any(|r| math::abs(deg / r - 1.0) < 0.01);
+        if lms {
+            crate::motion::BeamTiming::lms2xx(deg).sweeps
+        } else {
+            1
+        }
+    }
 }
 
 /// Range readings of one scan.
@@ -106,6 +129,122 @@ impl Ranges<'_> {
             } => code_mm(*values.get(i)?, *mm_per_unit, *max_valid)?,
         };
         valid_mm(r, r_max)
+    }
+
+    /// The grid the readings (the returns within `r_max`) lie on, mm: the coarsest of 100, 50,
+    /// 25, 20, 10, 5, 2 and 1 mm that divides every one of them, when all are whole mm (to
+    /// 0.05 mm: logs in m read through f32) and at least 20 of them, of at least 5 distinct
+    /// values, tell; otherwise 0 (unknown). What [`Scan::lms2xx`] takes as its
+    /// [`quantum`](Scan::quantum), and the host's formats for every recording.
+    ///
+    /// ```
+    /// use pfe_core::Ranges;
+    /// let grid: Vec<f32> = (0..181).map(|i| 1000.0 + 50.0 * (i % 7) as f32).collect();
+    /// assert_eq!(Ranges::Mm(&grid).grid(80_000.0), 50.0);
+    /// let codes: Vec<u16> = (0..361).map(|i| 1000 + i).collect();
+    /// let raw = Ranges::Raw { values: &codes, mm_per_unit: 10.0, max_valid: 8182 };
+    /// assert_eq!(raw.grid(81_820.0), 10.0);
+    /// let fine: Vec<f32> = (0..181).map(|i| 2000.0 + 0.37 * i as f32).collect();
+    /// assert_eq!(Ranges::Mm(&fine).grid(80_000.0), 0.0);
+    /// ```
+    pub fn grid(&self, r_max: f32) -> f32 {
+        let mut tally = Tally::new();
+        match *self {
+            Ranges::Raw {
+                values,
+                mm_per_unit,
+                max_valid,
+            } if (1.0..=100.0).contains(&mm_per_unit)
+                && (mm_per_unit as u32) as f32 == mm_per_unit =>
+            {
+                // Whole mm per code: every return is whole, so the first 20 of 5 distinct
+                // values on a grid of 1 mm settle it.
+                let top = max_code(mm_per_unit, max_valid, r_max);
+                let unit = mm_per_unit as u32;
+                for &v in values {
+                    if v != 0 && v <= top {
+                        tally.add(u32::from(v) * unit);
+                        if tally.settled() {
+                            break;
+                        }
+                    }
+                }
+            }
+            _ => {
+                for i in 0..self.len() {
+                    let Some(r) = self.get_mm(i, r_max) else {
+                        continue;
+                    };
+                    let m = math::round(r);
+                    if math::abs(r - m) > 0.05 || m > u32::MAX as f32 {
+                        return 0.0;
+                    }
+                    tally.add(m as u32);
+                }
+            }
+        }
+        tally.grid()
+    }
+}
+
+/// Grids readings may lie on, mm, coarsest first: a scanner's or a log's unit (1 mm, 1 cm)
+/// and coarser roundings seen in published logs (whole scans of three shared CARMEN logs lie
+/// on 50 mm).
+const GRIDS_MM: [u32; 8] = [100, 50, 25, 20, 10, 5, 2, 1];
+
+/// Whole-mm readings counted for [`Ranges::grid`]: how many, up to 5 distinct values, and the
+/// greatest common divisor of all (a grid divides every reading when it divides that).
+struct Tally {
+    count: usize,
+    distinct: [u32; 5],
+    kinds: usize,
+    gcd: u32,
+}
+
+impl Tally {
+    const fn new() -> Self {
+        Self {
+            count: 0,
+            distinct: [0; 5],
+            kinds: 0,
+            gcd: 0,
+        }
+    }
+
+    #[inline]
+    fn add(&mut self, m: u32) {
+        self.count += 1;
+        if self.kinds < self.distinct.len() {
+            let seen = self.distinct.get(..self.kinds).unwrap_or(&[]);
+            if !seen.contains(&m) {
+                if let Some(slot) = self.distinct.get_mut(self.kinds) {
+                    *slot = m;
+                }
+                self.kinds += 1;
+            }
+        }
+        if self.gcd != 1 {
+            let (mut a, mut b) = (self.gcd, m);
+            while b != 0 {
+                (a, b) = (b, a % b);
+            }
+            self.gcd = a;
+        }
+    }
+
+    /// True when no further reading can change the grid: 1 mm, told by enough readings.
+    fn settled(&self) -> bool {
+        self.gcd == 1 && self.count >= 20 && self.kinds >= 5
+    }
+
+    fn grid(&self) -> f32 {
+        if self.count < 20 || self.kinds < 5 {
+            return 0.0;
+        }
+        GRIDS_MM
+            .iter()
+            .find(|&&q| self.gcd % q == 0)
+            .map_or(0.0, |&q| q as f32)
     }
 }
 
@@ -217,6 +356,28 @@ impl<'a> Scan<'a> {
         }
     }
 
+    /// A scan from a SICK LMS2xx as `pfe extract --format lms200` and the firmware build it:
+    /// its interleaved sweeps from the geometry's step ([`ScanGeometry::lms2xx_sweeps`]: 2 at
+    /// 0.5°, 4 at 0.25°) and its [`quantum`](Self::quantum) the grid its readings lie on
+    /// ([`Ranges::grid`]), no motion.
+    ///
+    /// ```
+    /// use pfe_core::{Ranges, Scan, ScanGeometry};
+    /// let codes: Vec<u16> = (0..361).map(|i| 2000 + 10 * (i % 9)).collect();
+    /// let ranges = Ranges::Raw { values: &codes, mm_per_unit: 1.0, max_valid: 8182 };
+    /// let scan = Scan::lms2xx(ScanGeometry::LMS200_180_050, ranges);
+    /// assert_eq!((scan.sweeps, scan.quantum), (2, 10.0));
+    /// ```
+    pub fn lms2xx(geometry: ScanGeometry, ranges: Ranges<'a>) -> Self {
+        Self {
+            geometry,
+            ranges,
+            motion: None,
+            sweeps: geometry.lms2xx_sweeps(),
+            quantum: ranges.grid(geometry.r_max),
+        }
+    }
+
     /// The same scan, its readings on a grid of `quantum` mm (see [`Self::quantum`]).
     ///
     /// ```
@@ -304,6 +465,8 @@ fn exp_neg(x: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
 
     /// `exp_neg` against f64's exp.
@@ -346,6 +509,64 @@ mod tests {
         ] {
             assert_eq!(at(q, s), 0.0, "q {q}, σ {s}");
         }
+    }
+
+    /// `Ranges::grid` on raw codes (its whole-unit shortcut included) equals it on the same
+    /// readings in mm, for codes on grids of 1 to 100 mm, few or many readings, no returns and
+    /// reserved codes among them.
+    #[test]
+    fn grid_of_codes_is_grid_of_their_mm() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut seen = [0usize; 9];
+        for case in 0..3000 {
+            let n = [5usize, 19, 20, 21, 40, 361, 401][case % 7];
+            let step = [1u64, 2, 3, 5, 7, 10, 20, 25, 50, 100][(next() % 10) as usize];
+            let kinds = 1 + next() % 9;
+            let base = next() % 4000;
+            let codes: std::vec::Vec<u16> = (0..n)
+                .map(|_| match next() % 20 {
+                    0 => 0,
+                    1 => 8183 + (next() % 8) as u16,
+                    _ => (base + step * (next() % kinds)) as u16,
+                })
+                .collect();
+            for (unit, max_valid, r_max) in [
+                (1.0f32, LMS_MAX_VALID_8M, 8182.0f32),
+                (10.0, LMS_MAX_VALID_8M, 81_820.0),
+                (1.0, LMS_MAX_VALID_8M, 3000.0),
+                (0.5, LMS_MAX_VALID_8M, 8000.0),
+            ] {
+                let raw = Ranges::Raw {
+                    values: &codes,
+                    mm_per_unit: unit,
+                    max_valid,
+                };
+                let mm: std::vec::Vec<f32> = codes
+                    .iter()
+                    .map(|&c| {
+                        code_mm(c, unit, max_valid)
+                            .and_then(|r| valid_mm(r, r_max))
+                            .unwrap_or(f32::NAN)
+                    })
+                    .collect();
+                let g = raw.grid(r_max);
+                assert_eq!(g, Ranges::Mm(&mm).grid(r_max), "{codes:?} {unit} {r_max}");
+                let k = [0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 25.0, 50.0, 100.0]
+                    .iter()
+                    .position(|&q| q == g);
+                if let Some(c) = k.and_then(|k| seen.get_mut(k)) {
+                    *c += 1;
+                }
+            }
+        }
+        // Every answer came up, unknown included.
+        assert!(seen.iter().all(|&c| c > 0), "{seen:?}");
     }
 
     /// `max_code` against the definition (a code is a return when `code_mm` and `valid_mm`

@@ -1,9 +1,12 @@
 //! `cargo xtask bench-mcu [--scans N | --worst]`: instruction counts of the firmware pipeline
-//! on QEMU mps2-an386 with `-icount shift=10` (SysTick-measured; instruction counts, not
-//! cycles), for pfe-core with libm and with micromath; refreshes docs/PERFORMANCE.md and fails
-//! when the whole pipeline needs more than 200 instructions per point (median). `--worst`:
-//! the adversarial scans instead, the maximum per scan kind beside the algorithmic bound;
-//! fails above 1 000 000 instructions per scan.
+//! with everything on (the host's extraction) on QEMU mps2-an386 with `-icount shift=10`
+//! (SysTick-measured; instruction counts, not cycles), stage by stage (pfe-core's `probe`
+//! feature, in the bench firmware only), on three sets of N scans (still at 0.5°, moving at
+//! 0.5° with the sweeps out of place, moving at 0.25°), for pfe-core with libm and with
+//! micromath; refreshes docs/PERFORMANCE.md and fails when the whole pipeline needs more than
+//! 200 instructions per point (median, in any set). `--worst`: the adversarial scans instead,
+//! the maximum per scan kind beside the algorithmic bound; fails above 1 000 000 instructions
+//! per scan.
 //!
 //! Steps: simulated scans → B0 telegrams (`demo_host bench-scans`), built into the
 //! `pfe-bench` firmware (`PFE_BENCH_SCANS`), run under QEMU, timing frames decoded and
@@ -43,16 +46,18 @@ pub fn run(args: &[String]) -> Result<()> {
         &accuracy()?,
     )?;
     let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
-    // With pfe-core's `scrutiny`: the `Config::default()` row runs the host's configuration.
-    let libm = build_fw("pfe-bench", &["scrutiny"], &env, &base.join("libm"))?;
+    // With pfe-core's step probe: the per-stage rows.
+    let libm = build_fw("pfe-bench", &["probe"], &env, &base.join("libm"))?;
     let mm = build_fw(
         "pfe-bench",
-        &["micromath", "scrutiny"],
+        &["micromath", "probe"],
         &env,
         &base.join("micromath"),
     )?;
     demo_host(&[
         "bench".as_ref(),
+        "--scans".as_ref(),
+        scans.as_ref(),
         "--elf".as_ref(),
         libm.as_os_str(),
         "--elf-micromath".as_ref(),
@@ -78,7 +83,7 @@ fn worst() -> Result<()> {
     ])?;
     let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
     // The libm build's directory: only the bench binary rebuilds.
-    let elf = build_fw("pfe-bench", &["scrutiny"], &env, &base.join("libm"))?;
+    let elf = build_fw("pfe-bench", &["probe"], &env, &base.join("libm"))?;
     let md = util::root().join("docs").join("PERFORMANCE.md");
     demo_host(&[
         "worst".as_ref(),

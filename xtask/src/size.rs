@@ -2,9 +2,10 @@
 //! stack high-water mark measured under QEMU (cortex-m-rt `paint-stack`, reported by the
 //! firmware in its output frames after 20 scans from the emulated LMS200).
 //!
-//! Budgets (exit non-zero when broken): flash (vector table + text + rodata + data) ≤ 64 KiB;
-//! static RAM (data + bss + uninit) + stack high-water mark ≤ 32 KiB, with a 361-point scan
-//! capacity. Refreshes the `size` section of docs/PERFORMANCE.md.
+//! Budgets (exit non-zero when broken), for the firmware with everything on (pfe-core's
+//! `scrutiny`: the host's extraction): flash (vector table + text + rodata + data) ≤ 96 KiB;
+//! static RAM (data + bss + uninit) + stack high-water mark ≤ 48 KiB, with room for every
+//! LMS200 variant (401 values). Refreshes the `size` section of docs/PERFORMANCE.md.
 //!
 //! Also runs `cargo xtask stack` (its own `-Z emit-stack-sizes` build of pfe-qemu, about a
 //! minute) and prints the static worst-case stack bound beside the painted mark; a bound below
@@ -18,8 +19,8 @@ use anyhow::{bail, Context, Result};
 use crate::fw::{build_fw, demo_host, target_dir, write_section, FIRMWARE_OPT_LEVEL};
 use crate::util;
 
-const FLASH_BUDGET: u64 = 64 * 1024;
-const RAM_BUDGET: u64 = 32 * 1024;
+const FLASH_BUDGET: u64 = 96 * 1024;
+const RAM_BUDGET: u64 = 48 * 1024;
 /// Initialised statics, bytes: the extractor and the application start as all zeros (.bss),
 /// so only small driver and HAL statics belong here.
 const DATA_LIMIT: u64 = 1024;
@@ -162,9 +163,11 @@ pub fn run(args: &[String]) -> Result<()> {
             ram + stack
         ));
         println!(
-            "{name}: flash {flash} B ({:.1} KiB of 64), static RAM {ram} B + stack {stack} B = {:.1} KiB of 32",
+            "{name}: flash {flash} B ({:.1} KiB of {}), static RAM {ram} B + stack {stack} B = {:.1} KiB of {}",
             flash as f64 / 1024.0,
-            (ram + stack) as f64 / 1024.0
+            FLASH_BUDGET / 1024,
+            (ram + stack) as f64 / 1024.0,
+            RAM_BUDGET / 1024
         );
         if flash > FLASH_BUDGET {
             broken.push(format!("{name}: flash {flash} > {FLASH_BUDGET}"));
@@ -210,10 +213,11 @@ pub fn run(args: &[String]) -> Result<()> {
         ));
     }
     md.push_str(&format!(
-        "\nThe same run compares the features the firmware sent (Cortex-M4F, QEMU) with pfe-core \
-         on the host (x86-64) for the same B0 values: {equal}/{compared} scans bit-identical \
-         (libm is pure software on both targets and rustc does not contract f32 mul/add into \
-         FMA, so no ulp differences are expected).\n"
+        "\nThe same run compares the features the firmware sent (Cortex-M4F, QEMU) with what \
+         `pfe extract --format lms200` gives on the host (x86-64) on a capture of the same B0 \
+         telegrams (pfe-formats' reader, the CLI's configuration, sweeps and grid): \
+         {equal}/{compared} scans bit-identical (libm is pure software on both targets and \
+         rustc does not contract f32 mul/add into FMA, so no ulp differences are expected).\n"
     ));
     md.push_str(&format!(
         "\nBudgets: flash ≤ {FLASH_BUDGET} B, static RAM + stack ≤ {RAM_BUDGET} B, and .data ≤ \

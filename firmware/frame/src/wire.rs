@@ -89,6 +89,27 @@ pub enum Stage {
     ExtractDefault,
     /// Telegram bytes to encoded output frame, everything.
     Pipeline,
+    /// pfe-core's default extraction, step by step (`cargo xtask bench-mcu`, pfe-core's
+    /// `probe`): readings to points.
+    Load,
+    /// The scan's own σ.
+    Scatter,
+    /// Mark points (the walk).
+    Mark,
+    /// Interleaved sweeps aligned (estimate, move, mark again).
+    Sweeps,
+    /// The check step.
+    Check,
+    /// Segments, their type and fits.
+    Segments,
+    /// Line ends over the beams beside them.
+    Reach,
+    /// No unseeable lines, small objects.
+    Sift,
+    /// Encoding the output frame of the features.
+    Encode,
+    /// The pfe-core scan built from the codes (`RawScan::to_pfe`: sweeps, grid).
+    Scan,
 }
 
 /// Out-of-band reports of the firmware.

@@ -50,15 +50,19 @@ mod source;
 pub use scan::{RawScan, ScanDataExt};
 pub use source::{link_counters, ScanSource};
 
-/// The named pfe-core configurations.
+/// The named pfe-core configurations, each for a SICK LMS2xx as `pfe extract --format lms200
+/// [--config paper]` runs it on the host ([`Config::for_lms2xx`]: σ_r 5 mm, σ_sys 5 mm); with
+/// the scans as [`RawScan::to_pfe`] builds them the board's features are the host's, bit for
+/// bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ConfigChoice {
     /// `Config::paper()`: the method as published.
     Paper,
-    /// `Config::default()` without its checks for real scans (`Config::scrutiny`, about
-    /// 5 instructions a point): noise-model threshold, boundary localisation, fit comparison,
-    /// within the board's budget of 200 instructions a point.
+    /// `Config::default()`, everything on: noise-model threshold, boundary localisation, fit
+    /// comparison, the checks for real scans (`Config::scrutiny`: the scan's own σ, joined
+    /// short segments, corner splits, reach, no unseeable lines, small objects) and the
+    /// interleaved sweeps aligned.
     Default,
 }
 
@@ -66,8 +70,8 @@ impl ConfigChoice {
     /// The configuration.
     pub const fn config(self) -> Config {
         match self {
-            ConfigChoice::Paper => Config::paper(),
-            ConfigChoice::Default => Config::default_config().with_scrutiny(false),
+            ConfigChoice::Paper => Config::paper().for_lms2xx(),
+            ConfigChoice::Default => Config::default_config().for_lms2xx(),
         }
     }
 }
@@ -141,7 +145,7 @@ impl ConfigSlot {
 
 /// What [`ConfigSlot::Default`] and [`ConfigSlot::Paper`] stand for.
 static DEFAULT: Config = ConfigChoice::Default.config();
-static PAPER: Config = Config::paper();
+static PAPER: Config = ConfigChoice::Paper.config();
 
 impl<const N: usize, const M: usize> App<N, M> {
     /// A new application (`const`: it can live in a `static`).
@@ -149,9 +153,7 @@ impl<const N: usize, const M: usize> App<N, M> {
         Self::with_slot(ConfigSlot::named(choice))
     }
 
-    /// A new application with any configuration (one with `Config::scrutiny` on is refused by
-    /// every extraction when pfe-core is built without its `scrutiny` feature, as the firmware
-    /// binaries build it).
+    /// A new application with any configuration.
     pub const fn with_config(config: Config) -> Self {
         Self::with_slot(ConfigSlot::Custom(config))
     }

@@ -33,21 +33,24 @@ impl<'a> RawScan<'a> {
         }
     }
 
-    /// The pfe-core input for this scan.
+    /// The pfe-core input for this scan, as `pfe extract --format lms200` builds it
+    /// ([`Scan::lms2xx`]): the raw codes, the interleaved sweeps of the geometry's step (2 at
+    /// 0.5°, 4 at 0.25°) and the grid the readings lie on.
+    ///
+    /// ```
+    /// use firmware::app::RawScan;
+    /// use pfe_core::ScanGeometry;
+    /// let codes: Vec<u16> = (0..361).map(|i| 1000 + i).collect();
+    /// let scan = RawScan::lms_8m(ScanGeometry::LMS200_180_050, &codes, 1.0).to_pfe();
+    /// assert_eq!((scan.sweeps, scan.quantum), (2, 1.0));
+    /// ```
     pub fn to_pfe(&self) -> Scan<'a> {
-        Scan {
-            geometry: self.geometry,
-            ranges: Ranges::Raw {
-                values: self.values,
-                mm_per_unit: self.mm_per_unit,
-                max_valid: self.max_valid,
-            },
-            motion: None,
-            // One sweep: the interleaved sweeps' alignment (`Scan::with_sweeps`, host side)
-            // does not fit the board's budget of 200 instructions a point (docs/PERFORMANCE.md).
-            sweeps: 1,
-            quantum: self.mm_per_unit,
-        }
+        let ranges = Ranges::Raw {
+            values: self.values,
+            mm_per_unit: self.mm_per_unit,
+            max_valid: self.max_valid,
+        };
+        Scan::lms2xx(self.geometry, ranges)
     }
 }
 

@@ -88,7 +88,8 @@ impl Format {
     /// `pfe bench`'s σ_r for the CARMEN logs.
     pub fn sigma_r(self) -> f32 {
         match self {
-            Format::Csv | Format::Lms200 => 5.0,
+            Format::Csv => 5.0,
+            Format::Lms200 => pfe_core::config::LMS2XX_SIGMA_R,
             Format::Carmen | Format::Hokuyo | Format::Mcap => 10.0,
         }
     }
@@ -103,7 +104,8 @@ impl Format {
     pub fn sigma_sys(self) -> f32 {
         match self {
             Format::Csv => 0.0,
-            Format::Lms200 | Format::Carmen | Format::Hokuyo | Format::Mcap => 5.0,
+            Format::Lms200 => pfe_core::config::LMS2XX_SIGMA_SYS,
+            Format::Carmen | Format::Hokuyo | Format::Mcap => 5.0,
         }
     }
 }
@@ -475,18 +477,8 @@ fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
 /// ```
 pub fn sweeps_of(format: Format, geometry: &pfe_core::ScanGeometry) -> u8 {
     match format {
-        Format::Lms200 | Format::Carmen => {
-            let deg = geometry.angle_step.abs().to_degrees();
-            // Only an LMS2xx's own steps: another scanner's (a Hokuyo URG's 0.352°) is one sweep.
-            let lms = [0.25f32, 0.5, 1.0]
-                .iter()
-                .any(|r| (deg / r - 1.0).abs() < 0.01);
-            if lms {
-                pfe_core::BeamTiming::lms2xx(deg).sweeps
-            } else {
-                1
-            }
-        }
+        // Only an LMS2xx's own steps: another scanner's (a Hokuyo URG's 0.352°) is one sweep.
+        Format::Lms200 | Format::Carmen => geometry.lms2xx_sweeps(),
         _ => 1,
     }
 }

@@ -1,15 +1,11 @@
 //! The grid a recording's ranges lie on (`pfe_core::Scan::quantum`).
 
-/// Grids a recording's ranges may lie on, mm: a scanner's or a log's unit (1 mm, 1 cm) and
-/// coarser roundings seen in published logs (whole scans of three shared CARMEN logs lie on
-/// 50 mm).
-const GRIDS_MM: [u32; 8] = [100, 50, 25, 20, 10, 5, 2, 1];
-
 /// The grid the valid readings (finite, > 0, ≤ `r_max`) of one scan lie on, mm: the coarsest
 /// of 1, 2, 5, 10, 20, 25, 50 and 100 mm that divides every one of them, when all are whole
 /// mm (to 0.05 mm: logs in m read through f32) and at least 20 of them, of at least 5
 /// distinct values, tell; otherwise 0 (unknown). The extractor counts the rounding's
-/// variance q²/12 as systematic (`pfe_core::Scan::quantum`).
+/// variance q²/12 as systematic (`pfe_core::Scan::quantum`). pfe-core's
+/// [`Ranges::grid`](pfe_core::Ranges::grid), which the firmware runs on the scanner's codes.
 ///
 /// ```
 /// use pfe_formats::range_quantum;
@@ -21,27 +17,7 @@ const GRIDS_MM: [u32; 8] = [100, 50, 25, 20, 10, 5, 2, 1];
 /// assert_eq!(range_quantum(&fine, 80_000.0), 0.0);
 /// ```
 pub fn range_quantum(ranges_mm: &[f32], r_max: f32) -> f32 {
-    let valid = ranges_mm
-        .iter()
-        .filter(|&&r| r.is_finite() && r > 0.0 && r <= r_max);
-    let mut whole = Vec::new();
-    for &r in valid {
-        let m = r.round();
-        if (r - m).abs() > 0.05 || m > u32::MAX as f32 {
-            return 0.0;
-        }
-        whole.push(m as u32);
-    }
-    let mut distinct = whole.clone();
-    distinct.sort_unstable();
-    distinct.dedup();
-    if whole.len() < 20 || distinct.len() < 5 {
-        return 0.0;
-    }
-    GRIDS_MM
-        .iter()
-        .find(|&&q| whole.iter().all(|m| m % q == 0))
-        .map_or(0.0, |&q| q as f32)
+    pfe_core::Ranges::Mm(ranges_mm).grid(r_max)
 }
 
 #[cfg(test)]

@@ -95,12 +95,17 @@ pub fn test_firmware(test: &str, bin: &str, dir: &str) -> Option<PathBuf> {
 }
 
 /// [`test_firmware`] with firmware-qemu's cargo `features` (`pfe-qemu-async` needs `async`).
+/// `PFE_E2E_FIRMWARE` names a pfe-qemu ELF built elsewhere to run instead of `pfe-qemu` (to
+/// check a test against another build, such as an older firmware).
 #[allow(
     clippy::panic,
     reason = "a test helper: its panic is the calling test's failure"
 )]
 pub fn test_firmware_with(test: &str, bin: &str, features: &[&str], dir: &str) -> Option<PathBuf> {
     use crate::skip::{skip, Need};
+    if let (Some(elf), "pfe-qemu") = (std::env::var_os("PFE_E2E_FIRMWARE"), bin) {
+        return Some(PathBuf::from(elf));
+    }
     if std::env::var_os("PFE_SKIP_QEMU").is_some() {
         skip(
             test,
@@ -321,35 +326,51 @@ pub fn rx_stats(stderr: &str) -> Option<std::collections::BTreeMap<String, u32>>
         .collect()
 }
 
-/// pfe-core on the host, through the same `App` and frame encoding as the firmware, on the
-/// value words the emulator sent: the features the firmware should have sent, as decoded.
+/// What `pfe extract --format lms200` (`--config paper` for [`ConfigChoice::Paper`]) gives on
+/// a capture of one B0 telegram of `words` in mm: the features the firmware should have sent.
+/// The CLI's way, not the firmware's: the telegram decoded by pfe-formats' LMS200 reader into
+/// ranges in mm, the configuration of `pfe extract` for the format (`Format::sigma_r`,
+/// `Format::sigma_sys`), the scan told its sweeps (`sweeps_of`) and grid (`range_quantum`), and
+/// pfe-core on the host with the host's capacities.
+///
+/// [`ConfigChoice::Paper`]: firmware::app::ConfigChoice::Paper
 pub fn host_features(
     words: &[u16],
     choice: firmware::app::ConfigChoice,
 ) -> Result<Vec<pfe_core::Feature>> {
-    use firmware::app::{App, RawScan};
-    use lms2xx::codec::types::Variant;
-    let v = Variant::A180_R050;
-    let mut g = pfe_core::ScanGeometry::lms200(f32::from(v.angle_deg), v.resolution_deg());
-    g.r_max = f32::from(pfe_core::LMS_MAX_VALID_8M);
-    let codes: Vec<u16> = words.iter().map(|w| w & 0x1FFF).collect();
-    let mut app = Box::new(App::<361, 48>::new(choice));
-    let mut out = VecWriter(Vec::new());
-    app.process(
-        &RawScan::lms_8m(g, &codes, 1.0),
-        pfe_frame::Counters::default(),
-        &mut out,
-    )
-    .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let (frames, errors) = decode_frames(&out.0);
-    if !errors.is_empty() {
-        bail!("host frame did not decode: {errors:?}");
+    host_features_unit(words, true, choice)
+}
+
+/// [`host_features`] of a telegram in mm (`mm`) or cm.
+pub fn host_features_unit(
+    words: &[u16],
+    mm: bool,
+    choice: firmware::app::ConfigChoice,
+) -> Result<Vec<pfe_core::Feature>> {
+    use firmware::app::ConfigChoice;
+    use pfe_core::{Config, Extractor, Scan};
+    use pfe_formats::{lms200, range_quantum, sweeps_of, Format, MAX_BEAMS, MAX_FEATURES};
+    let bytes = b0_telegram(words, mm)?;
+    let mut reader = lms200::Reader::new(Box::new(std::io::Cursor::new(bytes)));
+    let telegram = reader.next().context("no telegram decoded")??;
+    let record = telegram
+        .record()
+        .context("a value count no LMS200 variant sends")?;
+    let format = Format::Lms200;
+    let config = match choice {
+        ConfigChoice::Paper => Config::paper(),
+        ConfigChoice::Default => Config::default(),
     }
-    Ok(frames
-        .into_iter()
-        .next()
-        .map(|f| f.features.to_vec())
-        .unwrap_or_default())
+    .with_sigma_r(format.sigma_r())
+    .with_sigma_sys(format.sigma_sys());
+    let g = record.geometry;
+    let scan = Scan::from_mm(g, &record.ranges_mm)
+        .with_sweeps(sweeps_of(format, &g))
+        .with_quantum(range_quantum(&record.ranges_mm, g.r_max));
+    let mut ex = Box::new(Extractor::<MAX_BEAMS, MAX_FEATURES>::new());
+    // As `pfe extract`: a refused scan has no features (its status says why).
+    let _ = ex.extract(&scan, &config);
+    Ok(ex.features().to_vec())
 }
 
 /// `embedded_io::Write` into a `Vec`.

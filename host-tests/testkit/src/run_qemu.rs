@@ -49,6 +49,18 @@ impl RunQemu {
         config: &str,
         scans: u32,
     ) -> Result<Self> {
+        Self::start_with(elf, scanner, output, scans, &[config])
+    }
+
+    /// [`RunQemu::start`] with pfe-qemu's semihosting arguments after `scans` (`args`: config,
+    /// baud, slow_ms, slow_every, field, resolution; see pfe-qemu).
+    pub fn start_with(
+        elf: &Path,
+        scanner: &Path,
+        output: &Path,
+        scans: u32,
+        args: &[&str],
+    ) -> Result<Self> {
         let scanner_dev = tty_device(scanner, "--scanner")?;
         let existing = match std::fs::symlink_metadata(output) {
             Err(_) => None,
@@ -64,11 +76,14 @@ impl RunQemu {
             .as_ref()
             .map_or_else(|| "pty".to_string(), |d| d.display().to_string());
         let n = scans.to_string();
+        let all: Vec<&str> = std::iter::once(n.as_str())
+            .chain(args.iter().copied())
+            .collect();
         let mut cmd = qemu_command(
             elf,
             &scanner_dev.display().to_string(),
             &serial1,
-            &[&n, config],
+            &all,
             false,
         );
         cmd.stdin(Stdio::null())

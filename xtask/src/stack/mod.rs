@@ -10,7 +10,8 @@
 //!   body: `push` (4 B per register), `vpush` (4 per s-, 8 per d-register),
 //!   `str rN, [sp, #-n]!`, `sub sp, #imm` (the prologue in practice; a sum over every path is an
 //!   upper bound);
-//! - errors, because the bound would not be sound: an indirect call or jump (`blx rN`,
+//! - indirect calls with one known target ([`INDIRECT`]): an edge to it;
+//! - errors, because the bound would not be sound: any other indirect call or jump (`blx rN`,
 //!   `bx rN` other than `bx lr`, a load or move into `pc` that is not a return), a stack
 //!   adjusted by a register amount in a function without an entry, a branch into the middle
 //!   of another function, and a cycle (recursion), all only when reachable from a root;
@@ -47,6 +48,17 @@ pub const EXCEPTION_FRAME: u64 = 104;
 /// With CCR.STKALIGN (reset value 1 on the Cortex-M4) the core aligns the frame to 8 bytes,
 /// inserting 4 bytes when `sp` was only 4-aligned (between two pushes of a prologue).
 pub const FRAME_ALIGNMENT: u64 = 4;
+
+/// Indirect calls whose target is known, by demangled name: (a suffix of the caller, the one
+/// function its `blx` may reach). pfe-core's `FeatureSink::retain` takes a `&mut dyn FnMut`,
+/// and its one caller, the sift (`pfe_core::sift::sift`, with the checks for real scans),
+/// passes its one closure (`cargo xtask stack` fails if the callee is not in the binary, and a
+/// second caller with another closure would be a change to pfe-core that must extend this
+/// table). Every `blx` in the caller is taken to call the callee.
+const INDIRECT: [(&str, &str); 1] = [(
+    " as pfe_core::output::FeatureSink>::retain",
+    "pfe_core::sift::sift::{closure#0}",
+)];
 
 mod parse;
 #[cfg(test)]
@@ -123,7 +135,18 @@ pub fn build(
             let shown = || format!("{:x}: `{} {}`", i.addr, i.mnemonic, i.operands);
             let first_op = i.operands.split([',', ' ']).next().unwrap_or("");
             if is_op(m, "blx") {
-                problems.push(format!("indirect call {}", shown()));
+                let known = INDIRECT
+                    .iter()
+                    .find(|(caller, _)| f.name.ends_with(caller))
+                    .and_then(|(_, callee)| functions.iter().position(|g| g.name == *callee));
+                match known {
+                    Some(k) => {
+                        if !callees.iter().any(|(c, _)| *c == k) {
+                            callees.push((k, Edge::Call));
+                        }
+                    }
+                    None => problems.push(format!("indirect call {}", shown())),
+                }
             } else if is_op(m, "bx") {
                 if first_op != "lr" {
                     problems.push(format!("indirect jump {}", shown()));

@@ -132,6 +132,42 @@ fn tail_call_and_prologue_frame() {
 }
 
 #[test]
+fn a_known_indirect_call_is_an_edge_to_its_one_target() {
+    let dis = DIS
+        .replace(
+            "     112: f000 f80b    	bl	0x12c <__aeabi_dmul>    @ imm = #0x16",
+            "     112: 4798         	blx	r3",
+        )
+        .replace(
+            "00000110 <work>:",
+            "00000110 <<heapless::vec::Vec<F, 48> as pfe_core::output::FeatureSink>::retain>:",
+        )
+        .replace(
+            "0000012c <__aeabi_dmul>:",
+            "0000012c <pfe_core::sift::sift::{closure#0}>:",
+        );
+    let g = graph(&dis);
+    let path = g.worst(g.find("main").unwrap()).unwrap();
+    let names: Vec<&str> = path
+        .steps
+        .iter()
+        .map(|s| g.nodes[s.node].name.as_str())
+        .collect();
+    assert_eq!(
+        names.last(),
+        Some(&"pfe_core::sift::sift::{closure#0}"),
+        "{names:?}"
+    );
+    // The same call anywhere else is still an error.
+    let other = dis.replace(
+        "pfe_core::output::FeatureSink>::retain",
+        "pfe_core::output::FeatureSink>::other",
+    );
+    let g = graph(&other);
+    assert!(g.worst(g.find("main").unwrap()).is_err());
+}
+
+#[test]
 fn indirect_call_is_an_error_when_reachable() {
     let dis = DIS.replace(
         "     112: f000 f80b    	bl	0x12c <__aeabi_dmul>    @ imm = #0x16",

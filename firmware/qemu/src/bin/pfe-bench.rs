@@ -1,11 +1,16 @@
 //! Instruction counts of the pipeline on `mps2-an386` under QEMU `-icount shift=10`
 //! (`cargo xtask bench-mcu` builds and runs it).
 //!
-//! The scans are built in (`PFE_BENCH_SCANS`: back-to-back B0 telegrams from the simulator).
-//! For every scan it measures, with SysTick, decoding the telegram, pfe-core `paper`, pfe-core
-//! `default`, and the whole pipeline (telegram bytes → features → encoded frame), and sends
-//! one `Report::Timing` frame per measurement on UART1, then `Report::Stack` and
-//! `Report::Done`. Instructions = ticks × 10 / 256 (instruction counts, not cycles).
+//! The scans are built in (`PFE_BENCH_SCANS`: back-to-back B0 telegrams). Each scan is
+//! extracted as the firmware does (`RawScan::to_pfe`: the variant from the value count, the unit
+//! from the telegram, the sweeps and grid from them; `ConfigChoice`'s configurations, everything
+//! on). For every scan it measures, with SysTick, decoding the telegram, pfe-core `paper`,
+//! building the scan from the codes (`RawScan::to_pfe`), pfe-core `default` step by step
+//! (pfe-core's `probe`: load, scatter, mark, sweeps, check, segments, reach, sift), encoding
+//! the frame, and the whole
+//! pipeline (telegram bytes → features → encoded frame, without the probe), and sends one
+//! `Report::Timing` frame per measurement on UART1, then `Report::Stack` and `Report::Done`.
+//! Instructions = ticks × 10 / 256 (instruction counts, not cycles).
 #![cfg_attr(target_os = "none", no_std, no_main)]
 #![deny(clippy::indexing_slicing)]
 
@@ -18,7 +23,7 @@ fn main() {
 mod fw {
     use cortex_m_rt::entry;
     use defmt_semihosting as _;
-    use firmware::app::{RawScan, LMS_READINGS};
+    use firmware::app::{ConfigChoice, RawScan, LMS_READINGS};
     use firmware_qemu::rt::{self, report};
     use firmware_qemu::{
         sys, time,
@@ -26,12 +31,13 @@ mod fw {
     };
     use lms2xx::codec::frame::{Decoder, Event};
     use lms2xx::codec::reply::{MeasuredValues, ReplyOptions};
-    use lms2xx::codec::types::MeasuringMode;
-    use pfe_core::{Config, ExtractError, ScanGeometry};
-    use pfe_frame::{Counters, Report, Stage};
+    use lms2xx::codec::types::{MeasuringMode, Unit, Variant};
+    use pfe_core::probe::Step;
+    use pfe_core::{ExtractError, ScanGeometry};
+    use pfe_frame::{Counters, Report, ScanHeader, ScanStatus, Stage};
 
     static SCANS: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/bench_scans.bin"));
-    /// Values a telegram may hold (the bench's scans have 361).
+    /// Values a telegram may hold (every LMS200 variant).
     const N: usize = LMS_READINGS;
 
     /// Discards what it is given (the frame encoder's cost without UART polling).
@@ -48,8 +54,15 @@ mod fw {
         }
     }
 
-    /// Decodes the telegram at the front of `bytes` into `codes`; returns (bytes used, count).
-    fn decode(dec: &mut Decoder<812>, bytes: &[u8], codes: &mut [u16; N]) -> (usize, usize) {
+    /// A decoded telegram: its value count and mm per code.
+    struct Decoded {
+        used: usize,
+        n: usize,
+        mm_per_unit: f32,
+    }
+
+    /// Decodes the telegram at the front of `bytes` into `codes`.
+    fn decode(dec: &mut Decoder<812>, bytes: &[u8], codes: &mut [u16; N]) -> Decoded {
         let mut used = 0;
         while let Some(rest) = bytes.get(used..) {
             if rest.is_empty() {
@@ -59,15 +72,46 @@ mod fw {
             used += n;
             if let Some(Event::Telegram(t)) = ev {
                 if let Ok(v) = MeasuredValues::parse(t.payload(), ReplyOptions::default()) {
-                    return (used, v.range_codes(MeasuringMode(0), codes));
+                    let mm_per_unit = v.unit().unwrap_or(Unit::Mm).mm_per_unit();
+                    let n = v.range_codes(MeasuringMode(0), codes);
+                    return Decoded {
+                        used,
+                        n,
+                        mm_per_unit,
+                    };
                 }
             }
             if n == 0 {
                 break;
             }
         }
-        (used, 0)
+        Decoded {
+            used,
+            n: 0,
+            mm_per_unit: 1.0,
+        }
     }
+
+    /// The geometry of a scan of `n` values in `mm_per_unit` (as the driver's `ScanData`
+    /// gives it: the variant's field and resolution, the range of the measuring mode).
+    fn geometry(n: usize, mm_per_unit: f32) -> ScanGeometry {
+        let v = Variant::from_values(n).unwrap_or(Variant::A180_R050);
+        let mut g = ScanGeometry::lms200(f32::from(v.angle_deg), v.resolution_deg());
+        g.r_max = f32::from(MeasuringMode::M8_FIELDS_AB_DAZZLE.max_valid()) * mm_per_unit;
+        g
+    }
+
+    /// The probe's steps in the order they report, as timing stages.
+    const STEPS: [(Step, Stage); 8] = [
+        (Step::Load, Stage::Load),
+        (Step::Scatter, Stage::Scatter),
+        (Step::Mark, Stage::Mark),
+        (Step::Sweeps, Stage::Sweeps),
+        (Step::Check, Stage::Check),
+        (Step::Segments, Stage::Segments),
+        (Step::Reach, Stage::Reach),
+        (Step::Sift, Stage::Sift),
+    ];
 
     #[entry]
     fn main() -> ! {
@@ -85,28 +129,41 @@ mod fw {
         };
         let mut dec = Decoder::<812>::new();
         let mut codes = [0u16; N];
-        let g = ScanGeometry::LMS200_180_050;
-        let (paper, default) = (Config::paper(), Config::default_config());
+        let (paper, default) = (ConfigChoice::Paper.config(), ConfigChoice::Default.config());
         let mut pos = 0usize;
         let mut seq = 0u32;
         while let Some(rest) = SCANS.get(pos..).filter(|r| !r.is_empty()) {
             // Decode.
             let t0 = time::ticks();
-            let (used, n) = decode(&mut dec, rest, &mut codes);
+            let d = decode(&mut dec, rest, &mut codes);
             let t_dec = time::ticks() - t0;
-            if n == 0 {
+            if d.n == 0 {
                 break;
             }
-            let values = codes.get(..n).unwrap_or(&[]);
-            let scan = RawScan::lms_8m(g, values, 1.0).to_pfe();
+            let g = geometry(d.n, d.mm_per_unit);
+            let values = codes.get(..d.n).unwrap_or(&[]);
+            let raw = RawScan::lms_8m(g, values, d.mm_per_unit);
             let t0 = time::ticks();
-            let r_paper = core::hint::black_box(ex.extract(&scan, &paper));
+            let r_paper = core::hint::black_box(ex.extract(&raw.to_pfe(), &paper));
             let t_paper = time::ticks() - t0;
+            // The default extraction step by step: each step's ticks since the one before.
+            let mut steps = [0u64; STEPS.len()];
             let t0 = time::ticks();
-            let r_default = core::hint::black_box(ex.extract(&scan, &default));
+            let scan = raw.to_pfe();
+            let t_scan = time::ticks() - t0;
+            let mut last = time::ticks();
+            let r_default = core::hint::black_box(ex.extract_probed(&scan, &default, &mut |s| {
+                let now = time::ticks();
+                if let Some(k) = STEPS.iter().position(|(step, _)| *step == s) {
+                    if let Some(t) = steps.get_mut(k) {
+                        *t = now - last;
+                    }
+                }
+                last = now;
+            }));
             let t_default = time::ticks() - t0;
             // An extraction refused outright measures nothing (a full feature buffer is fine).
-            for r in [r_paper, r_default] {
+            for r in [&r_paper, &r_default] {
                 if let Err(
                     ExtractError::InvalidConfig
                     | ExtractError::InvalidGeometry
@@ -117,22 +174,43 @@ mod fw {
                     sys::exit(sys::EXIT_USAGE);
                 }
             }
-            // Whole pipeline: bytes → codes → features → frame.
+            // The output frame of these features.
+            let stats = ex.stats();
+            let sat = |v: usize| u16::try_from(v).unwrap_or(u16::MAX);
+            let header = ScanHeader {
+                seq,
+                time_ms: 0,
+                counters: Counters::default(),
+                valid: sat(stats.valid),
+                segments: sat(stats.segments),
+                dropped: sat(stats.dropped),
+                n_features: sat(ex.features().len()),
+                status: match r_default {
+                    Ok(_) => ScanStatus::Ok,
+                    Err(_) => ScanStatus::FeatureCapacity,
+                },
+            };
             let t0 = time::ticks();
-            let (_, n2) = decode(&mut dec, rest, &mut codes);
-            let raw = RawScan::lms_8m(g, codes.get(..n2).unwrap_or(&[]), 1.0);
+            let encoded = pfe_frame::write_scan(&mut Sink, &header, ex.features());
+            let t_enc = time::ticks() - t0;
+            if encoded.is_err() {
+                sys::exit(sys::EXIT_OUTPUT);
+            }
+            // Whole pipeline: bytes → codes → features → frame, as the firmware runs it.
+            let t0 = time::ticks();
+            let d2 = decode(&mut dec, rest, &mut codes);
+            let raw = RawScan::lms_8m(
+                geometry(d2.n, d2.mm_per_unit),
+                codes.get(..d2.n).unwrap_or(&[]),
+                d2.mm_per_unit,
+            );
             let r = app.process(&raw, Counters::default(), &mut Sink);
             let t_pipe = time::ticks() - t0;
             if r.is_err() {
                 sys::exit(sys::EXIT_OUTPUT);
             }
-            let points = n as u16;
-            for (stage, t) in [
-                (Stage::Decode, t_dec),
-                (Stage::ExtractPaper, t_paper),
-                (Stage::ExtractDefault, t_default),
-                (Stage::Pipeline, t_pipe),
-            ] {
+            let points = u16::try_from(d.n).unwrap_or(u16::MAX);
+            let mut send = |stage: Stage, t: u64| {
                 let ticks = u32::try_from(t).unwrap_or(u32::MAX);
                 report(
                     &mut out,
@@ -143,8 +221,21 @@ mod fw {
                         points,
                     },
                 );
+            };
+            for (stage, t) in [
+                (Stage::Decode, t_dec),
+                (Stage::ExtractPaper, t_paper),
+                (Stage::ExtractDefault, t_default),
+                (Stage::Encode, t_enc),
+                (Stage::Scan, t_scan),
+                (Stage::Pipeline, t_pipe),
+            ] {
+                send(stage, t);
             }
-            pos += used;
+            for ((_, stage), t) in STEPS.iter().zip(steps) {
+                send(*stage, t);
+            }
+            pos += d.used;
             seq += 1;
         }
         let (used, size) = sys::stack_usage();

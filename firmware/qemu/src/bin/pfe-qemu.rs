@@ -3,8 +3,10 @@
 //! the driver), pfe-core on every scan, one feature frame per scan on UART1
 //! (`pfe_frame`), defmt logs on semihosting stdout.
 //!
-//! Semihosting arguments: `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every]` (`0` or
-//! none: run forever; baud 9600/19200/38400/500000, default 38400). `slow_ms` makes the
+//! Semihosting arguments: `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every] [field
+//! resolution]` (`0` or none: run forever; baud 9600/19200/38400/500000, default 38400; the
+//! LMS200 variant as field of view in degrees and resolution in 1/100 degree, `100 25` for
+//! 100° at 0.25°, default 180° at 0.5°). `slow_ms` makes the
 //! extraction artificially slow: a busy-wait of that many ms after every `slow_every`-th
 //! scan (default every scan), to test the receive ring (`host-tests/tests/rx_slow_qemu.rs`).
 //! At the end it sends `Report::Stack` (painted-stack high-water mark) and `Report::Done`,
@@ -30,7 +32,7 @@ mod fw {
     use firmware_qemu::sys;
     use firmware_qemu::time::{Clock, Delay};
     use firmware_qemu::uart::{Uart, UART1};
-    use lms2xx::codec::types::Baud;
+    use lms2xx::codec::types::{Baud, Variant};
     use lms2xx::driver::{Config, Driver};
 
     /// Consecutive failed scans before giving up.
@@ -66,7 +68,15 @@ mod fw {
         let Some(scanner) = ScannerUart::new() else {
             sys::exit(sys::EXIT_USAGE)
         };
-        let mut lms = Driver::new(scanner, Delay, Clock, Config::default().with_baud(baud));
+        let variant = match (sys::arg_u32(5), sys::arg_u32(6)) {
+            (Some(field), Some(res)) => match (u16::try_from(field), u16::try_from(res)) {
+                (Ok(f), Ok(r)) => Variant::new(f, r),
+                _ => sys::exit(sys::EXIT_USAGE),
+            },
+            _ => Config::default().variant,
+        };
+        let config = Config::default().with_baud(baud).with_variant(variant);
+        let mut lms = Driver::new(scanner, Delay, Clock, config);
         let (mut failures, mut scan_errors) = (0u32, 0u32);
         while scans == 0 || app.seq() < scans {
             match app.step(&mut lms, &mut out) {

@@ -51,17 +51,14 @@ impl AdversarialScan {
     /// The host's [`Work`] of the board's default configuration on this scan
     /// (`ConfigChoice::Default`: the worst case is the board's).
     pub fn stats(&self) -> Work {
-        let scan = Scan {
-            geometry: self.geometry(),
-            ranges: Ranges::Raw {
-                values: &self.codes,
-                mm_per_unit: self.mm_per_unit(),
-                max_valid: LMS_MAX_VALID_8M,
-            },
-            motion: None,
-            sweeps: 1,
-            quantum: self.mm_per_unit(),
+        // As the firmware builds it (`RawScan::to_pfe`): sweeps from the variant, grid from
+        // the codes.
+        let ranges = Ranges::Raw {
+            values: &self.codes,
+            mm_per_unit: self.mm_per_unit(),
+            max_valid: LMS_MAX_VALID_8M,
         };
+        let scan = Scan::lms2xx(self.geometry(), ranges);
         let mut ex = Extractor::<401, 48>::new();
         let _ = ex.extract(&scan, &BOARD_CONFIG);
         let circles = ex
@@ -78,7 +75,7 @@ impl AdversarialScan {
 
 /// The board firmware's configuration, `firmware::app::ConfigChoice::Default` (host-tests'
 /// `board_config` test keeps the two equal; pfe-eval does not depend on the firmware crate).
-pub const BOARD_CONFIG: Config = Config::default_config().with_scrutiny(false);
+pub const BOARD_CONFIG: Config = Config::default_config().for_lms2xx();
 
 /// What pfe-core did with a scan: its counters and the circles among its features (a circle
 /// costs an algebraic fit and its geometric refinement).
