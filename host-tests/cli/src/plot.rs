@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use super::input::{bad_input, nothing_found, open_scans, MethodArgs, Scan};
 use super::Failure;
+use crate::figure;
 use pfe_eval::methods::{Extraction, Method};
 
 /// Most scans on one page or sheet.
@@ -116,15 +117,54 @@ pub fn run(a: Args) -> Result<(), Failure> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let plots: Vec<Plot> = found
+    // The range noise of one point (the along-line σ of a line's end points), mm.
+    let sigma_point_mm = f64::from(
+        a.method
+            .sigma_r
+            .unwrap_or(format.sigma_r())
+            .hypot(a.method.sigma_sys.unwrap_or(format.sigma_sys())),
+    );
+    let extracted: Vec<(Extraction, Vec<usize>)> = found
         .iter()
         .map(|s| {
             let context = a.method.context(&s.record);
             let ex = method.extract_in(&s.record.geometry, &s.record.ranges_mm, &context);
+            (ex, method.veils())
+        })
+        .collect();
+    // Pages of several scans: one view and one exaggeration for all, so that paging through
+    // them does not rescale.
+    let (view, exaggeration) = if found.len() > 1 {
+        let view = found
+            .iter()
+            .zip(&extracted)
+            .map(|(s, (ex, _))| figure::extent(&s.record, ex))
+            .reduce(figure::View::union);
+        let factor = view.map(|v| {
+            figure::exaggeration_in(
+                &v,
+                extracted.iter().flat_map(|(ex, _)| &ex.features),
+                sigma_point_mm,
+            )
+        });
+        (view, factor)
+    } else {
+        (None, None)
+    };
+    let plots: Vec<Plot> = found
+        .iter()
+        .zip(extracted)
+        .map(|(s, (ex, veils))| {
             let title = title(&name, s, method.name());
+            let opts = figure::Options {
+                veils,
+                sigma_point_mm,
+                view,
+                exaggeration,
+            };
             Plot {
                 id: s.record.id,
-                svg: crate::figure::svg(&s.record, &ex, &title),
+                svg: figure::svg_with(&s.record, &ex, &title, &opts),
                 title,
                 ex,
             }
