@@ -25,6 +25,7 @@
 
 mod axes;
 mod ellipses;
+pub mod world;
 
 pub use ellipses::{ellipse, end_point_cov, line_point_cov, line_sigma_at, ELLIPSE_SIGMA};
 
@@ -162,6 +163,146 @@ pub fn exaggeration_in<'a>(
     exaggeration(&all, scale_of(v))
 }
 
+/// The plot area of a figure: the data-to-pixel mapping (equal scales), the SVG's size, the
+/// axes.
+struct Canvas {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    /// px per mm.
+    scale: f64,
+    /// The larger side of the data's extent, mm (at least 500).
+    span: f64,
+    plot_w: f64,
+    plot_h: f64,
+    width: f64,
+    height: f64,
+}
+
+impl Canvas {
+    /// The plot area of data bounds `b`, padded by 4 %.
+    fn new(b: &Bounds) -> Self {
+        let span = (b.x1 - b.x0).max(b.y1 - b.y0).max(500.0);
+        let pad = 0.04 * span;
+        let (x0, x1) = (b.x0 - pad, b.x1 + pad);
+        let (mut y0, mut y1) = (b.y0 - pad, b.y1 + pad);
+        // Equal aspect: fit the width, then cap the height (a very tall scene scales down).
+        let mut scale = PLOT_W / (x1 - x0);
+        if (y1 - y0) * scale > PLOT_H_MAX {
+            scale = PLOT_H_MAX / (y1 - y0);
+        }
+        let plot_w = (x1 - x0) * scale;
+        // Keep the plot area at least 40 % as tall as wide so flat scenes stay readable.
+        let min_h = 0.4 * plot_w;
+        if (y1 - y0) * scale < min_h {
+            let extra = (min_h / scale - (y1 - y0)) / 2.0;
+            y0 -= extra;
+            y1 += extra;
+        }
+        let plot_h = (y1 - y0) * scale;
+        Canvas {
+            x0,
+            x1,
+            y0,
+            y1,
+            scale,
+            span,
+            plot_w,
+            plot_h,
+            width: LEFT + plot_w + 20.0 + LEGEND_W,
+            height: TOP + plot_h + BOTTOM,
+        }
+    }
+
+    fn sx(&self, x: f64) -> f64 {
+        LEFT + (x - self.x0) * self.scale
+    }
+
+    fn sy(&self, y: f64) -> f64 {
+        TOP + (self.y1 - y) * self.scale
+    }
+
+    /// The SVG's opening, its title, the clip path `plot`, the grid, ticks and axis labels.
+    fn header(&self, s: &mut String, title: &str, xlabel: &str, ylabel: &str) {
+        let (x0, x1, y0, y1) = (self.x0, self.x1, self.y0, self.y1);
+        let (width, height, plot_w, plot_h) = (self.width, self.height, self.plot_w, self.plot_h);
+        let sx = |x: f64| self.sx(x);
+        let sy = |y: f64| self.sy(y);
+        let _ = writeln!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="DejaVu Sans, Helvetica, Arial, sans-serif" font-size="12">"#
+        );
+        let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+        let _ = writeln!(
+            s,
+            r#"<text x="{:.1}" y="26" font-size="15" font-weight="bold">{}</text>"#,
+            LEFT,
+            escape(title)
+        );
+        // Clip everything drawn in data coordinates to the plot area.
+        let _ = writeln!(
+            s,
+            r#"<defs><clipPath id="plot"><rect x="{LEFT:.1}" y="{TOP:.1}" width="{plot_w:.1}" height="{plot_h:.1}"/></clipPath></defs>"#
+        );
+
+        // Grid and ticks.
+        let step = tick_step((x1 - x0).max(y1 - y0), 8.0);
+        let metres = step >= 100.0 && (x1 - x0).max(y1 - y0) >= 2000.0;
+        let unit = if metres { "m" } else { "mm" };
+        let mut grid = String::new();
+        let mut labels = String::new();
+        let mut t = (x0 / step).ceil() * step;
+        while t <= x1 {
+            let px = sx(t);
+            let _ = write!(grid, "M{px:.1},{TOP:.1}V{:.1}", TOP + plot_h);
+            let _ = writeln!(
+                labels,
+                r#"<line x1="{px:.1}" y1="{:.1}" x2="{px:.1}" y2="{:.1}" stroke="black"/><text x="{px:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
+                TOP + plot_h,
+                TOP + plot_h + 5.0,
+                TOP + plot_h + 19.0,
+                tick_label(t, step, metres)
+            );
+            t += step;
+        }
+        let mut t = (y0 / step).ceil() * step;
+        while t <= y1 {
+            let py = sy(t);
+            let _ = write!(grid, "M{LEFT:.1},{py:.1}H{:.1}", LEFT + plot_w);
+            let _ = writeln!(
+                labels,
+                r#"<line x1="{:.1}" y1="{py:.1}" x2="{LEFT:.1}" y2="{py:.1}" stroke="black"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"#,
+                LEFT - 5.0,
+                LEFT - 8.0,
+                py + 4.0,
+                tick_label(t, step, metres)
+            );
+            t += step;
+        }
+        let _ = writeln!(
+            s,
+            r#"<path d="{grid}" stroke="{GRID}" stroke-width="1" fill="none"/>"#
+        );
+        let _ = writeln!(
+            s,
+            r#"<rect x="{LEFT:.1}" y="{TOP:.1}" width="{plot_w:.1}" height="{plot_h:.1}" fill="none" stroke="black"/>"#
+        );
+        s.push_str(&labels);
+        let _ = writeln!(
+            s,
+            r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">{xlabel} ({unit})</text>"#,
+            LEFT + plot_w / 2.0,
+            TOP + plot_h + 40.0
+        );
+        let _ = writeln!(
+            s,
+            r#"<text transform="translate(18,{:.1}) rotate(-90)" text-anchor="middle">{ylabel} ({unit})</text>"#,
+            TOP + plot_h / 2.0
+        );
+    }
+}
+
 /// The SVG document for one scan: points, mark points, features, axes and a legend.
 pub fn svg(record: &Record, ex: &Extraction, title: &str) -> String {
     svg_with(record, ex, title, &Options::default())
@@ -182,101 +323,11 @@ pub fn svg_with(record: &Record, ex: &Extraction, title: &str, opts: &Options) -
         y0: v.y0,
         y1: v.y1,
     };
-    let span = (b.x1 - b.x0).max(b.y1 - b.y0).max(500.0);
-    let pad = 0.04 * span;
-    let (x0, x1) = (b.x0 - pad, b.x1 + pad);
-    let (mut y0, mut y1) = (b.y0 - pad, b.y1 + pad);
-    // Equal aspect: fit the width, then cap the height (a very tall scene scales down).
-    let mut scale = PLOT_W / (x1 - x0);
-    if (y1 - y0) * scale > PLOT_H_MAX {
-        scale = PLOT_H_MAX / (y1 - y0);
-    }
-    let plot_w = (x1 - x0) * scale;
-    // Keep the plot area at least 40 % as tall as wide so flat scenes stay readable.
-    let min_h = 0.4 * plot_w;
-    if (y1 - y0) * scale < min_h {
-        let extra = (min_h / scale - (y1 - y0)) / 2.0;
-        y0 -= extra;
-        y1 += extra;
-    }
-    let plot_h = (y1 - y0) * scale;
-    let width = LEFT + plot_w + 20.0 + LEGEND_W;
-    let height = TOP + plot_h + BOTTOM;
-    let sx = |x: f64| LEFT + (x - x0) * scale;
-    let sy = |y: f64| TOP + (y1 - y) * scale;
-
+    let c = Canvas::new(&b);
+    let (scale, span, plot_w) = (c.scale, c.span, c.plot_w);
+    let (sx, sy) = (|x: f64| c.sx(x), |y: f64| c.sy(y));
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="DejaVu Sans, Helvetica, Arial, sans-serif" font-size="12">"#
-    );
-    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
-    let _ = writeln!(
-        s,
-        r#"<text x="{:.1}" y="26" font-size="15" font-weight="bold">{}</text>"#,
-        LEFT,
-        escape(title)
-    );
-    // Clip everything drawn in data coordinates to the plot area.
-    let _ = writeln!(
-        s,
-        r#"<defs><clipPath id="plot"><rect x="{LEFT:.1}" y="{TOP:.1}" width="{plot_w:.1}" height="{plot_h:.1}"/></clipPath></defs>"#
-    );
-
-    // Grid and ticks.
-    let step = tick_step((x1 - x0).max(y1 - y0), 8.0);
-    let metres = step >= 100.0 && (x1 - x0).max(y1 - y0) >= 2000.0;
-    let unit = if metres { "m" } else { "mm" };
-    let mut grid = String::new();
-    let mut labels = String::new();
-    let mut t = (x0 / step).ceil() * step;
-    while t <= x1 {
-        let px = sx(t);
-        let _ = write!(grid, "M{px:.1},{TOP:.1}V{:.1}", TOP + plot_h);
-        let _ = writeln!(
-            labels,
-            r#"<line x1="{px:.1}" y1="{:.1}" x2="{px:.1}" y2="{:.1}" stroke="black"/><text x="{px:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
-            TOP + plot_h,
-            TOP + plot_h + 5.0,
-            TOP + plot_h + 19.0,
-            tick_label(t, step, metres)
-        );
-        t += step;
-    }
-    let mut t = (y0 / step).ceil() * step;
-    while t <= y1 {
-        let py = sy(t);
-        let _ = write!(grid, "M{LEFT:.1},{py:.1}H{:.1}", LEFT + plot_w);
-        let _ = writeln!(
-            labels,
-            r#"<line x1="{:.1}" y1="{py:.1}" x2="{LEFT:.1}" y2="{py:.1}" stroke="black"/><text x="{:.1}" y="{:.1}" text-anchor="end">{}</text>"#,
-            LEFT - 5.0,
-            LEFT - 8.0,
-            py + 4.0,
-            tick_label(t, step, metres)
-        );
-        t += step;
-    }
-    let _ = writeln!(
-        s,
-        r#"<path d="{grid}" stroke="{GRID}" stroke-width="1" fill="none"/>"#
-    );
-    let _ = writeln!(
-        s,
-        r#"<rect x="{LEFT:.1}" y="{TOP:.1}" width="{plot_w:.1}" height="{plot_h:.1}" fill="none" stroke="black"/>"#
-    );
-    s.push_str(&labels);
-    let _ = writeln!(
-        s,
-        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">x, forward ({unit})</text>"#,
-        LEFT + plot_w / 2.0,
-        TOP + plot_h + 40.0
-    );
-    let _ = writeln!(
-        s,
-        r#"<text transform="translate(18,{:.1}) rotate(-90)" text-anchor="middle">y, left ({unit})</text>"#,
-        TOP + plot_h / 2.0
-    );
+    c.header(&mut s, title, "x, forward", "y, left");
 
     let _ = writeln!(s, r#"<g clip-path="url(#plot)">"#);
     // Field of view: the first and last beam as faint rays.
