@@ -5,10 +5,10 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
+use super::extract::{create_foxglove, mcap_failure, DEFAULT_FRAME, SYNTHETIC_PERIOD_NS};
 use super::input::{
     self, bad_input, flush, nothing_found, open_scans, stdout, write_json, MethodArgs,
 };
-use super::extract::{create_foxglove, mcap_failure, DEFAULT_FRAME, SYNTHETIC_PERIOD_NS};
 use super::{interrupt, Failure};
 use crate::foxglove::odometry as fox;
 use crate::foxglove::FoxgloveWriter;
@@ -330,10 +330,7 @@ struct OdometryMcap {
 impl OdometryMcap {
     fn create(path: &std::path::Path, force: bool) -> Result<Self, Failure> {
         let mut w = create_foxglove(path, force)?;
-        let mut add = |c| {
-            w.add_channel(c)
-                .map_err(|e| mcap_failure(Some(path), &e))
-        };
+        let mut add = |c| w.add_channel(c).map_err(|e| mcap_failure(Some(path), &e));
         let (tf, pose, trajectory, map, log_trajectory) = (
             add(&fox::TF)?,
             add(&fox::POSE)?,
@@ -387,7 +384,8 @@ impl OdometryMcap {
             self.log.push(q);
         }
         if let Some(a) = self.anchor {
-            let tf = fox::frame_transform(stamp, fox::WORLD_FRAME, fox::ODOM_FRAME, (a[0], a[1], a[2]));
+            let tf =
+                fox::frame_transform(stamp, fox::WORLD_FRAME, fox::ODOM_FRAME, (a[0], a[1], a[2]));
             self.w.write_message(self.tf, stamp, &tf)?;
         }
         let m = fox::pose_in_frame(stamp, fox::ODOM_FRAME, pose);
@@ -397,8 +395,7 @@ impl OdometryMcap {
         // The trajectories: every scan at first, then every TRAJECTORY_EVERY-th (and the
         // last scan's, at finish).
         self.last_stamp = stamp;
-        if self.scans <= fox::TRAJECTORY_MESSAGES as u64
-            || self.scans % fox::TRAJECTORY_EVERY == 0
+        if self.scans <= fox::TRAJECTORY_MESSAGES as u64 || self.scans % fox::TRAJECTORY_EVERY == 0
         {
             self.write_trajectories(stamp)?;
         }

@@ -95,11 +95,21 @@ pub fn end_point_cov(l: &LineFeature, p: &pfe_core::Point, sigma_point: f64) -> 
     let t = x * d.0 + y * d.1;
     let across = line_sigma_at(l, t).powi(2);
     let r = x.hypot(y);
-    let cos_bd = if r > 0.0 { (x * d.0 + y * d.1) / r } else { 0.0 };
+    let cos_bd = if r > 0.0 {
+        (x * d.0 + y * d.1) / r
+    } else {
+        0.0
+    };
     let along = (sigma_point * cos_bd).powi(2);
     [
-        [across * n.0 * n.0 + along * d.0 * d.0, across * n.0 * n.1 + along * d.0 * d.1],
-        [across * n.0 * n.1 + along * d.0 * d.1, across * n.1 * n.1 + along * d.1 * d.1],
+        [
+            across * n.0 * n.0 + along * d.0 * d.0,
+            across * n.0 * n.1 + along * d.0 * d.1,
+        ],
+        [
+            across * n.0 * n.1 + along * d.0 * d.1,
+            across * n.1 * n.1 + along * d.1 * d.1,
+        ],
     ]
 }
 

@@ -73,10 +73,7 @@ pub fn pose_in_frame(stamp_ns: u64, frame_id: &str, (x, y, theta): (f64, f64, f6
 
 /// A `foxglove.PosesInFrame` of `poses` (x mm, y mm, θ rad).
 pub fn poses_in_frame(stamp_ns: u64, frame_id: &str, poses: &[[f64; 3]]) -> Value {
-    let poses: Vec<Value> = poses
-        .iter()
-        .map(|p| pose_value(p[0], p[1], p[2]))
-        .collect();
+    let poses: Vec<Value> = poses.iter().map(|p| pose_value(p[0], p[1], p[2])).collect();
     json!({ "timestamp": time(stamp_ns), "frame_id": frame_id, "poses": poses })
 }
 
@@ -129,7 +126,10 @@ pub fn map_update(
                     (p(l.start), p(l.end))
                 } else {
                     // No extent: 1 m either side of the foot of the normal.
-                    let (n, d) = ((l.alpha.cos(), l.alpha.sin()), (-l.alpha.sin(), l.alpha.cos()));
+                    let (n, d) = (
+                        (l.alpha.cos(), l.alpha.sin()),
+                        (-l.alpha.sin(), l.alpha.cos()),
+                    );
                     (
                         Point::new(l.rho * n.0 - 1000.0 * d.0, l.rho * n.1 - 1000.0 * d.1),
                         Point::new(l.rho * n.0 + 1000.0 * d.0, l.rho * n.1 + 1000.0 * d.1),
@@ -260,14 +260,19 @@ fn poses_in_frame_schema() -> Vec<u8> {
             "poses": array(pose_schema()),
         }),
     );
-    s["description"] = json!("An array of timestamped poses for an object or reference frame in 3D space");
+    s["description"] =
+        json!("An array of timestamped poses for an object or reference frame in 3D space");
     s.to_string().into_bytes()
 }
 
 /// The frames: `foxglove.FrameTransform` on `/tf`.
 pub const TF: Channel = Channel::new("/tf", "foxglove.FrameTransform", frame_transform_schema);
 /// The odometry's pose: `foxglove.PoseInFrame` on `/odometry/pose`.
-pub const POSE: Channel = Channel::new("/odometry/pose", "foxglove.PoseInFrame", pose_in_frame_schema);
+pub const POSE: Channel = Channel::new(
+    "/odometry/pose",
+    "foxglove.PoseInFrame",
+    pose_in_frame_schema,
+);
 /// The odometry's trajectory: `foxglove.PosesInFrame` on `/odometry/trajectory`.
 pub const TRAJECTORY: Channel = Channel::new(
     "/odometry/trajectory",
@@ -292,7 +297,10 @@ mod tests {
         let t = frame_transform(7, "odom", "laser", (1000.0, -500.0, 1.2));
         assert_eq!(t["translation"]["x"], 1.0);
         assert_eq!(t["translation"]["y"], -0.5);
-        let (z, w) = (t["rotation"]["z"].as_f64().unwrap(), t["rotation"]["w"].as_f64().unwrap());
+        let (z, w) = (
+            t["rotation"]["z"].as_f64().unwrap(),
+            t["rotation"]["w"].as_f64().unwrap(),
+        );
         assert!((2.0 * z.atan2(w) - 1.2).abs() < 1e-12 && (z * z + w * w - 1.0).abs() < 1e-12);
     }
 

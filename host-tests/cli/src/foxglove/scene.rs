@@ -94,7 +94,12 @@ pub(super) fn line_primitive(kind: u8, points: Vec<Value>, thickness: f64, c: Va
 pub(super) const LINE_STRIP: u8 = 0;
 pub(super) const LINE_LOOP: u8 = 1;
 
-pub(super) fn entity(stamp_ns: u64, frame_id: &str, k: usize, metadata: &[(&str, String)]) -> Value {
+pub(super) fn entity(
+    stamp_ns: u64,
+    frame_id: &str,
+    k: usize,
+    metadata: &[(&str, String)],
+) -> Value {
     let metadata: Vec<Value> = metadata
         .iter()
         .map(|(key, value)| json!({ "key": key, "value": value }))
