@@ -488,7 +488,7 @@ fn axes_of(svg: &str) -> ((f64, f64), (f64, f64)) {
 
 /// The points `M x,y …` of a path's or polyline's data in pixels.
 fn pixels(data: &str) -> Vec<(f64, f64)> {
-    data.split(|c| c == 'M' || c == ' ')
+    data.split(['M', ' '])
         .filter_map(|t| {
             let t = t.trim_end_matches("h0");
             let (x, y) = t.split_once(',')?;
