@@ -288,12 +288,6 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
             file.display()
         )));
     }
-    // The odometry starts at the first scan's pose in the log (the log's frame), else at the
-    // origin.
-    let anchor: Pose = scans
-        .first()
-        .and_then(|(r, _)| r.pose.map(mm))
-        .unwrap_or([0.0; 3]);
     let every = a
         .every
         .map(|n| usize::try_from(n).unwrap_or(usize::MAX))
@@ -310,7 +304,7 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
             map: Vec::new(),
             segments: Vec::new(),
         };
-        let (s0, c0) = anchor[2].sin_cos();
+        let mut raw: Vec<(Pose, [[f64; 2]; 2])> = Vec::with_capacity(scans.len());
         for (k, (_, features)) in scans.iter().enumerate() {
             let obs: Vec<pfe_pose::Observation> = features
                 .iter()
@@ -323,13 +317,29 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
                 pfe_pose::Status::None(_) => track.none.push(k),
             }
             let p = step.pose;
-            let pose = world::compose(
-                &anchor,
-                &[f64::from(p.x), f64::from(p.y), f64::from(p.theta)],
-            );
-            // The position's covariance turned into the world's axes: R C Rᵀ.
             let c = |i: usize, j: usize| f64::from(step.cov[i][j]);
-            let (xx, xy, yy) = (c(0, 0), 0.5 * (c(0, 1) + c(1, 0)), c(1, 1));
+            raw.push((
+                [f64::from(p.x), f64::from(p.y), f64::from(p.theta)],
+                [[c(0, 0), c(0, 1)], [c(1, 0), c(1, 1)]],
+            ));
+        }
+        // The odometry's frame in the log's: where the first scan with a log pose is in both
+        // (the first scan's log pose when it has one), else the origin.
+        let anchor: Pose = scans
+            .iter()
+            .zip(&raw)
+            .find_map(|((r, _), (o, _))| {
+                let l = mm(r.pose?);
+                let (s, c) = o[2].sin_cos();
+                let inv = [-(c * o[0] + s * o[1]), s * o[0] - c * o[1], -o[2]];
+                Some(world::compose(&l, &inv))
+            })
+            .unwrap_or([0.0; 3]);
+        let (s0, c0) = anchor[2].sin_cos();
+        for (p, cov) in &raw {
+            let pose = world::compose(&anchor, p);
+            // The position's covariance turned into the world's axes: R C Rᵀ.
+            let (xx, xy, yy) = (cov[0][0], 0.5 * (cov[0][1] + cov[1][0]), cov[1][1]);
             track.covs.push([
                 [
                     c0 * c0 * xx - 2.0 * s0 * c0 * xy + s0 * s0 * yy,
