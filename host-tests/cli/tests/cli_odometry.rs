@@ -430,6 +430,15 @@ fn posebench_quick_on_two_logs() {
     }
 }
 
+/// The drive of [`truth`] turned by 0.6 rad at every pose (it starts at a heading other than
+/// 0, so that the frames' rotations show).
+fn turned() -> Vec<[f64; 3]> {
+    truth()
+        .into_iter()
+        .map(|p| [p[0], p[1], p[2] + 0.6])
+        .collect()
+}
+
 /// Distance (mm) from `p` to the nearest wall or pillar surface of the analytic room.
 fn to_room(p: (f64, f64)) -> f64 {
     let mut best = f64::INFINITY;
@@ -505,7 +514,7 @@ fn pixels(data: &str) -> Vec<(f64, f64)> {
 #[test]
 fn world_plot_puts_the_points_on_the_walls() {
     let dir = TempDir::new("odometry-world");
-    let poses = truth();
+    let poses = turned();
     let log = write(&dir, "room.log", &carmen(&poses, &poses));
     let svg_path = dir.0.join("world.svg");
     let out = pfe(&[
@@ -618,7 +627,7 @@ fn world_plot_puts_the_points_on_the_walls() {
 fn odometry_mcap_holds_trajectory_and_map() {
     const TEST: &str = "cli_odometry::odometry_mcap_holds_trajectory_and_map";
     let dir = TempDir::new("odometry-mcap");
-    let poses = truth();
+    let poses = turned();
     let log = write(&dir, "room.log", &carmen(&poses, &poses));
     let path = dir.0.join("run.mcap");
     let out = pfe(&[

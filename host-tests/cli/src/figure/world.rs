@@ -91,7 +91,8 @@ const ELLIPSE_EVERY: usize = 25;
 
 /// The SVG of a log in the world frame.
 pub fn svg(w: &World) -> String {
-    // The view: the points drawn and both trajectories (an odometry far off the log's is
+    // The view: the points drawn (but their outermost 0.5 % on each side: a few far returns
+    // would shrink the scene) and both trajectories (an odometry far off the log's is
     // clipped, not allowed to shrink the scene to nothing: its positions count only within
     // the span of the rest, twice over).
     let mut b: Option<Bounds> = None;
@@ -113,10 +114,21 @@ pub fn svg(w: &World) -> String {
             .filter_map(|i| p.record.point(i))
             .map(|(x, y)| place(&p.pose, (f64::from(x), f64::from(y))))
             .collect();
-        for &(x, y) in &pts {
-            add(x, y);
-        }
         placed_pts.push(pts);
+    }
+    let quantiles = |mut v: Vec<f64>| -> Option<(f64, f64)> {
+        v.retain(|x| x.is_finite());
+        v.sort_by(f64::total_cmp);
+        let cut = v.len() / 200;
+        Some((*v.get(cut)?, *v.get(v.len() - 1 - cut)?))
+    };
+    let all = placed_pts.iter().flatten();
+    if let (Some((x0, x1)), Some((y0, y1))) = (
+        quantiles(all.clone().map(|p| p.0).collect()),
+        quantiles(all.map(|p| p.1).collect()),
+    ) {
+        add(x0, y0);
+        add(x1, y1);
     }
     for p in &w.log {
         add(p[0], p[1]);
