@@ -371,7 +371,7 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
             .as_ref()
             .map(|(p, _)| p.iter().copied().map(Some).collect())
             .unwrap_or_default();
-        ("the odometry's poses (the log has none)".into(), odo)
+        ("the odometry".into(), odo)
     } else {
         (
             "the log's poses".into(),
@@ -391,7 +391,8 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
                 pose: *pose,
             });
         }
-        if let Some(t) = track.as_mut() {
+        // The lines by the odometry's poses, beside those by the log's (not twice).
+        if let Some(t) = track.as_mut().filter(|_| !log.is_empty()) {
             if let Some(p) = t.poses.get(k).copied() {
                 for f in features {
                     if let Feature::Line(l) = f {
@@ -411,11 +412,13 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
         scans.first().map_or(0, |s| s.0.id),
         scans.last().map_or(0, |s| s.0.id),
     );
+    let frame = if log.is_empty() { "odometry" } else { "world" };
     let figure = World {
         title: format!(
-            "{name} — scans {first}..{last} in the world — {}",
+            "{name} — scans {first}..{last} in the {frame} frame — {}",
             method.name()
         ),
+        frame: frame.into(),
         placed_by,
         scans: drawn,
         read: scans.len(),

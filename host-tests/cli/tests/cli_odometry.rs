@@ -464,7 +464,7 @@ fn attr<'a>(tag: &'a str, name: &str) -> Option<&'a str> {
 /// The data-to-pixel mapping of a plot read from its tick labels alone: (x px of x mm, y px
 /// of y mm) as `px = a + b · mm`, from its first and last tick on each axis.
 fn axes_of(svg: &str) -> ((f64, f64), (f64, f64)) {
-    let unit = if svg.contains("world (m)") {
+    let unit = if svg.contains("world (m)") || svg.contains("odometry (m)") {
         1000.0
     } else {
         1.0

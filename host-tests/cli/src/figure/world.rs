@@ -72,8 +72,10 @@ pub struct OdometryTrack {
 pub struct World<'a> {
     /// The figure's title.
     pub title: String,
-    /// What places the scans ("the log's poses" or "the odometry's poses").
+    /// What places the scans ("the log's poses" or "the odometry").
     pub placed_by: String,
+    /// The frame's name on the axes ("world", or "odometry" for a log without poses).
+    pub frame: String,
     /// The scans drawn.
     pub scans: Vec<Placed<'a>>,
     /// Scans read (the drawn ones are every `every`-th).
@@ -155,7 +157,12 @@ pub fn svg(w: &World) -> String {
     let c = Canvas::new(&b);
     let (sx, sy) = (|x: f64| c.sx(x), |y: f64| c.sy(y));
     let mut s = String::new();
-    c.header(&mut s, &w.title, "x, world", "y, world");
+    c.header(
+        &mut s,
+        &w.title,
+        &format!("x, {}", w.frame),
+        &format!("y, {}", w.frame),
+    );
     let _ = writeln!(s, r#"<g clip-path="url(#plot)">"#);
 
     // Points of the drawn scans.
@@ -415,7 +422,11 @@ pub fn svg(w: &World) -> String {
                 ly + 176.0,
                 lx + 24.0
             ),
-            "lines by its poses".to_string(),
+            if o.segments.is_empty() {
+                "(lines placed by it: blue)".to_string()
+            } else {
+                "lines by its poses".to_string()
+            },
         ));
         entries.push((
             format!(
