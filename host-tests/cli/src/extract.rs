@@ -141,7 +141,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
 }
 
 /// Starts the Foxglove file `path`: an existing file is bad input unless `force`.
-fn create_foxglove(path: &Path, force: bool) -> Result<FoxgloveWriter, Failure> {
+pub(crate) fn create_foxglove(path: &Path, force: bool) -> Result<FoxgloveWriter, Failure> {
     pfe_formats::outfile::check_dir(path).map_err(|e| Failure::input(format!("--mcap {e}")))?;
     let w = if force {
         FoxgloveWriter::create_overwriting(path)
@@ -152,7 +152,7 @@ fn create_foxglove(path: &Path, force: bool) -> Result<FoxgloveWriter, Failure> 
 }
 
 /// A failure writing the Foxglove file: an existing file is bad input (exit 2).
-fn mcap_failure(path: Option<&Path>, e: &io::Error) -> Failure {
+pub(crate) fn mcap_failure(path: Option<&Path>, e: &io::Error) -> Failure {
     let name = path.map(|p| p.display().to_string()).unwrap_or_default();
     if e.kind() == io::ErrorKind::AlreadyExists {
         Failure::input(format!(

@@ -4,6 +4,9 @@
 //! pfe extract --format csv|carmen|lms200|hokuyo [--config paper|default] FILE   # JSON lines
 //! pfe decode  FILE                                                              # raw LMS200 telegrams
 //! pfe plot FILE --format F [--config C] --scan K -o out.svg                     # Fig. 7-style SVG
+//! pfe plot FILE --format F --scans A..B --html page.html|--sheet grid.svg       # several scans, one scale
+//! pfe plot LOG --format carmen --world world.svg [--odometry]                   # the log in the world frame
+//! pfe odometry --format F FILE [--mcap run.mcap]                                # poses (JSON), Foxglove
 //! pfe eval|bench|emulate|record ...                                             # see their --help
 //! pfe completions bash|zsh|fish|elvish|powershell                               # shell completions
 //! pfe man [COMMAND]                                                             # man page (roff)
@@ -64,7 +67,8 @@ enum Command {
     Extract(extract::Args),
     /// Decode a raw LMS200 capture: one JSON object per good 0xB0 telegram, summary on stderr.
     Decode(decode::Args),
-    /// Plot one scan with its mark points and features as SVG (like Fig. 7 of the paper).
+    /// Plot one scan with its mark points and features as SVG (like Fig. 7 of the paper), a
+    /// range of scans as an HTML page or a sheet, or a log in the world frame.
     Plot(plot::Args),
     /// Evaluate PFE, split-and-merge and ACF against ground truth on simulated scans.
     Eval(eval::Args),

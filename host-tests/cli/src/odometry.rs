@@ -5,10 +5,13 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
+use super::extract::{create_foxglove, mcap_failure, DEFAULT_FRAME, SYNTHETIC_PERIOD_NS};
 use super::input::{
     self, bad_input, flush, nothing_found, open_scans, stdout, write_json, MethodArgs,
 };
 use super::{interrupt, Failure};
+use crate::foxglove::odometry as fox;
+use crate::foxglove::FoxgloveWriter;
 use pfe_formats::{carmen, Format, InputError, Record};
 use pfe_pose::{Cov3, Observation, Odometry, Pose, Status};
 
@@ -39,6 +42,17 @@ pub struct Args {
     /// rotation), finite, ≥ 0.
     #[arg(long, default_value_t = 0.1, value_parser = non_negative)]
     prior_sigma_rel: f32,
+    /// Also write a Foxglove MCAP file: per scan, the scan (/scan) and its features
+    /// (/features) in frame "laser" as `pfe extract --mcap` writes them, the odometry's frames
+    /// (/tf: odom → laser, and world → odom at the log's first pose when it has poses), pose
+    /// (/odometry/pose), trajectory (/odometry/trajectory) and local map with the pose's
+    /// covariance (/odometry/map), and the log's own poses (/log/trajectory). Stamps as
+    /// `pfe extract --mcap`'s. Never replaces an existing file without --force.
+    #[arg(long, value_name = "OUT.mcap")]
+    mcap: Option<PathBuf>,
+    /// Let --mcap replace an existing file.
+    #[arg(long, requires = "mcap")]
+    force: bool,
 }
 
 /// A finite number > 0.
@@ -118,8 +132,8 @@ struct Line {
     log_pose: Option<[f64; 3]>,
 }
 
-/// A scan and the log's odometry pose for it.
-type Item = Result<(Record, Option<[f64; 3]>), InputError>;
+/// A scan, the log's odometry pose for it, its stamp (ns) and frame (bags).
+type Item = Result<(Record, Option<[f64; 3]>, Option<u64>, Option<String>), InputError>;
 
 /// The scans of a CARMEN log with the odometry of their lines.
 struct WithOdometry(carmen::Reader);
@@ -128,7 +142,7 @@ impl Iterator for WithOdometry {
     type Item = Item;
     fn next(&mut self) -> Option<Item> {
         let r = self.0.next()?;
-        Some(r.map(|record| (record, self.0.odometry())))
+        Some(r.map(|record| (record, self.0.odometry(), None, None)))
     }
 }
 
@@ -164,11 +178,19 @@ pub fn run(a: Args) -> Result<(), Failure> {
         } else {
             let source = open_scans(file, format, a.method.topic.as_deref())?;
             (
-                Box::new(source.scans.map(|s| s.map(|s| (s.record, None)))),
+                Box::new(
+                    source
+                        .scans
+                        .map(|s| s.map(|s| (s.record, None, s.stamp_ns, s.frame_id))),
+                ),
                 source.bar,
                 source.bytes,
             )
         };
+    let mut foxglove = match &a.mcap {
+        Some(path) => Some(OdometryMcap::create(path, a.force)?),
+        None => None,
+    };
     let mut odometry = Box::new(Odometry::<MAP>::new(pfe_pose::Config::default()));
     let mut out = stdout();
     let mut count = [0u64; 3];
@@ -182,7 +204,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             interrupted = true;
             break;
         }
-        let (record, odo) = match scan {
+        let (record, odo, stamp_ns, frame_id) = match scan {
             Ok(s) => s,
             Err(e) => {
                 error = Some(bad_input(file, format, n, &e));
@@ -224,6 +246,15 @@ pub fn run(a: Args) -> Result<(), Failure> {
             "degenerate" => 1,
             _ => 2,
         }] += 1;
+        if let Some(f) = foxglove.as_mut() {
+            let stamp = stamp_ns.unwrap_or((n - 1).saturating_mul(SYNTHETIC_PERIOD_NS));
+            let frame = frame_id.as_deref().unwrap_or(DEFAULT_FRAME);
+            let map: Vec<Observation> = odometry.map().collect();
+            if let Err(e) = f.write(stamp, frame, &record, &ex.features, &step, status, &map) {
+                error = Some(mcap_failure(a.mcap.as_deref(), &e));
+                break;
+            }
+        }
         let line = Line {
             scan: record.id,
             rel: PoseJson::new(&step.rel, &step.rel_cov),
@@ -241,6 +272,15 @@ pub fn run(a: Args) -> Result<(), Failure> {
     }
     flush(&mut out)?;
     bar.finish_and_clear();
+    // The scans read before an error or Ctrl-C are kept in the Foxglove file too.
+    if let Some(f) = foxglove {
+        match f.finish() {
+            Ok(path) => eprintln!("pfe: wrote {} ({n} scans)", path.display()),
+            Err(e) => {
+                error.get_or_insert(mcap_failure(a.mcap.as_deref(), &e));
+            }
+        }
+    }
     if interrupted && error.is_none() {
         error = Some(Failure {
             code: 130,
@@ -265,4 +305,126 @@ pub fn run(a: Args) -> Result<(), Failure> {
         count[0], count[1], count[2]
     );
     Ok(())
+}
+
+/// `--mcap`: the scans, features and the odometry's frames, pose, trajectory and map.
+struct OdometryMcap {
+    w: FoxgloveWriter,
+    tf: u16,
+    pose: u16,
+    trajectory: u16,
+    map: u16,
+    log_trajectory: u16,
+    /// Every pose so far, odometry frame (mm, mm, rad).
+    poses: Vec<[f64; 3]>,
+    /// Every log pose so far, its frame (mm, mm, rad).
+    log: Vec<[f64; 3]>,
+    /// The log's pose of the first scan: the odometry frame in the log's.
+    anchor: Option<[f64; 3]>,
+    scans: u64,
+    /// The last scan's stamp and the scans when the trajectories were last written.
+    last_stamp: u64,
+    trajectories_at: u64,
+}
+
+impl OdometryMcap {
+    fn create(path: &std::path::Path, force: bool) -> Result<Self, Failure> {
+        let mut w = create_foxglove(path, force)?;
+        let mut add = |c| w.add_channel(c).map_err(|e| mcap_failure(Some(path), &e));
+        let (tf, pose, trajectory, map, log_trajectory) = (
+            add(&fox::TF)?,
+            add(&fox::POSE)?,
+            add(&fox::TRAJECTORY)?,
+            add(&fox::MAP)?,
+            add(&fox::LOG_TRAJECTORY)?,
+        );
+        Ok(Self {
+            w,
+            tf,
+            pose,
+            trajectory,
+            map,
+            log_trajectory,
+            poses: Vec::new(),
+            log: Vec::new(),
+            anchor: None,
+            scans: 0,
+            last_stamp: 0,
+            trajectories_at: 0,
+        })
+    }
+
+    /// One scan: its scan and features, then the odometry's messages.
+    #[allow(clippy::too_many_arguments)]
+    fn write(
+        &mut self,
+        stamp: u64,
+        frame: &str,
+        record: &Record,
+        features: &[pfe_core::Feature],
+        step: &pfe_pose::Step,
+        status: &str,
+        map: &[Observation],
+    ) -> std::io::Result<()> {
+        self.w.write_scan(stamp, frame, record, features)?;
+        let p = &step.pose;
+        let pose = (f64::from(p.x), f64::from(p.y), f64::from(p.theta));
+        self.poses.push([pose.0, pose.1, pose.2]);
+        self.scans += 1;
+        let tf = fox::frame_transform(stamp, fox::ODOM_FRAME, frame, pose);
+        self.w.write_message(self.tf, stamp, &tf)?;
+        let log = record
+            .pose
+            .map(|q| [q[0] * 1000.0, q[1] * 1000.0, q[2]])
+            .filter(|q| q.iter().all(|v| v.is_finite()));
+        if self.scans == 1 {
+            self.anchor = log;
+        }
+        if let Some(q) = log {
+            self.log.push(q);
+        }
+        if let Some(a) = self.anchor {
+            let tf =
+                fox::frame_transform(stamp, fox::WORLD_FRAME, fox::ODOM_FRAME, (a[0], a[1], a[2]));
+            self.w.write_message(self.tf, stamp, &tf)?;
+        }
+        let m = fox::pose_in_frame(stamp, fox::ODOM_FRAME, pose);
+        self.w.write_message(self.pose, stamp, &m)?;
+        let m = fox::map_update(stamp, fox::ODOM_FRAME, map, &step.pose, &step.cov, status);
+        self.w.write_message(self.map, stamp, &m)?;
+        // The trajectories: every scan at first, then every TRAJECTORY_EVERY-th (and the
+        // last scan's, at finish).
+        self.last_stamp = stamp;
+        if self.scans <= fox::TRAJECTORY_MESSAGES as u64 || self.scans % fox::TRAJECTORY_EVERY == 0
+        {
+            self.write_trajectories(stamp)?;
+        }
+        Ok(())
+    }
+
+    fn write_trajectories(&mut self, stamp: u64) -> std::io::Result<()> {
+        self.trajectories_at = self.scans;
+        let m = fox::poses_in_frame(
+            stamp,
+            fox::ODOM_FRAME,
+            &fox::thin(&self.poses, fox::TRAJECTORY_POSES),
+        );
+        self.w.write_message(self.trajectory, stamp, &m)?;
+        if !self.log.is_empty() {
+            let m = fox::poses_in_frame(
+                stamp,
+                fox::WORLD_FRAME,
+                &fox::thin(&self.log, fox::TRAJECTORY_POSES),
+            );
+            self.w.write_message(self.log_trajectory, stamp, &m)?;
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> std::io::Result<PathBuf> {
+        if self.trajectories_at != self.scans {
+            self.write_trajectories(self.last_stamp)?;
+        }
+        self.w.finish()
+    }
 }

@@ -109,3 +109,86 @@ fn a_range_past_the_log_keeps_what_it_has_and_says_so() {
     assert!(!PathBuf::from("x.html").exists());
     std::fs::remove_dir_all(&d).unwrap();
 }
+
+/// The `<svg …>` tag and the grid of each plot in `text`, in order.
+fn frames(text: &str) -> Vec<(String, String)> {
+    text.split("<svg xmlns=")
+        .skip(1)
+        .map(|p| {
+            let tag = p[..p.find('>').unwrap()].to_string();
+            let grid = p
+                .split("<path ")
+                .find(|t| t.contains(r##"stroke="#e4e4e4""##))
+                .map(|t| t[..t.find("/>").unwrap()].to_string())
+                .unwrap();
+            (tag, grid)
+        })
+        .collect()
+}
+
+/// Scans of different extents (a wall 1.5 m ahead, then 6 m): alone, each gets its own
+/// scale; on one HTML page or sheet they share one size, one scale and one grid, so that
+/// paging does not jump.
+#[test]
+fn pages_keep_one_scale_across_scans() {
+    let d = scratch("scale");
+    let csv = d.join("walls.csv");
+    let scan = |id: u32, dist: f64| {
+        let r: Vec<String> = (0..181)
+            .map(|i| {
+                let b = f64::from(i - 90).to_radians();
+                format!("{:.0}", (dist / b.cos().max(0.25)).min(8000.0))
+            })
+            .collect();
+        format!("{id},-90,1,{}\n", r.join(","))
+    };
+    std::fs::write(&csv, scan(0, 1500.0) + &scan(1, 6000.0)).unwrap();
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_pfe"))
+            .args(["plot", "--format", "csv", arg(&csv)])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+    };
+    let alone: Vec<(String, String)> = (0..2)
+        .map(|k| {
+            let out = d.join(format!("scan{k}.svg"));
+            run(&["--scan", &k.to_string(), "-o", arg(&out)]);
+            frames(&std::fs::read_to_string(out).unwrap()).remove(0)
+        })
+        .collect();
+    assert_ne!(
+        alone[0].1, alone[1].1,
+        "the two scans have the same grid alone"
+    );
+    let (html, sheet) = (d.join("walls.html"), d.join("walls-sheet.svg"));
+    run(&[
+        "--scans",
+        "0..1",
+        "--html",
+        arg(&html),
+        "--sheet",
+        arg(&sheet),
+    ]);
+    let page = frames(&std::fs::read_to_string(&html).unwrap());
+    assert_eq!(page.len(), 2);
+    assert_eq!(page[0], page[1], "the page's plots differ in size or scale");
+    // The common view holds the larger scan: its grid, not the small one's.
+    assert_eq!(page[0].1, alone[1].1);
+    let sheet = std::fs::read_to_string(&sheet).unwrap();
+    let cells: Vec<(String, String)> = sheet
+        .split("<svg x=")
+        .skip(1)
+        .map(|c| {
+            let grid = c
+                .split("<path ")
+                .find(|t| t.contains(r##"stroke="#e4e4e4""##))
+                .unwrap();
+            (String::new(), grid[..grid.find("/>").unwrap()].to_string())
+        })
+        .collect();
+    assert_eq!(cells.len(), 2);
+    assert_eq!(cells[0], cells[1]);
+    std::fs::remove_dir_all(&d).unwrap();
+}

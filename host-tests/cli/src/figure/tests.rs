@@ -114,3 +114,102 @@ fn the_plot_draws_uncertainty_and_explains_bare_marks() {
     assert!(svg.contains("ellipses: 3σ × "), "{svg}");
     assert!(svg.contains("no feature (1): segment too short"), "{svg}");
 }
+
+/// The short line of hokuyo-cylinders scan 100, beams 370–374: 120 mm long at 4.7 m, σ_α 0.12
+/// rad, σ_ρ 92 mm (its σ across the line is 7.7 mm at its middle).
+fn short_far_line() -> pfe_core::LineFeature {
+    let (va, tc, vmin) = (0.01453f32, 764.5f32, 60.0f32);
+    pfe_core::LineFeature::new(
+        370,
+        374,
+        5,
+        -0.233_848_2,
+        4730.634,
+        va,
+        vmin + tc * tc * va,
+        tc * va,
+        pfe_core::Point::new(4765.386, -409.7695),
+        pfe_core::Point::new(4792.8584, -294.43906),
+    )
+}
+
+#[test]
+fn a_short_lines_band_stays_on_its_extent() {
+    let l = short_far_line();
+    let (n, d, t0, t1) = super::ellipses::line_frame(&l);
+    let (lo, hi) = (t0.min(t1), t0.max(t1));
+    let k = 3.0;
+    let widest = k * super::line_sigma_at(&l, t0).max(super::line_sigma_at(&l, t1));
+    let band = super::ellipses::line_band(&l, k);
+    assert_eq!(band.len(), 2 * 17);
+    for &(x, y) in &band {
+        let (t, off) = (x * d.0 + y * d.1, x * n.0 + y * n.1 - f64::from(l.rho));
+        assert!(t >= lo - 1e-6 && t <= hi + 1e-6, "t {t} outside {lo}..{hi}");
+        assert!(off.abs() <= widest + 1e-6, "offset {off} beyond {widest}");
+    }
+    // Narrow where the points are, not the foot-of-normal wedge (3 ρ σ_α = 1.7 m).
+    assert!(widest < 60.0, "{widest}");
+    // The end points: across, the band's width there; along, the point's own σ (10 mm) at
+    // most.
+    for p in [l.start, l.end] {
+        let (a, b, _) = super::ellipse(super::end_point_cov(&l, &p, 10.0), k);
+        assert!(
+            a <= k * 10f64.hypot(super::line_sigma_at(
+                &l,
+                f64::from(p.x) * d.0 + f64::from(p.y) * d.1
+            )) + 1e-9
+        );
+        assert!(b > 0.0 && a < 60.0, "{a} {b}");
+    }
+}
+
+#[test]
+fn objects_veils_and_bands_are_drawn_and_counted() {
+    use pfe_core::{Feature, ObjectFeature, Point};
+    use pfe_eval::methods::Extraction;
+    use pfe_formats::Record;
+    let g = pfe_core::ScanGeometry::new(-30f32.to_radians(), 1f32.to_radians(), 8000.0);
+    let record = Record {
+        id: 0,
+        geometry: g,
+        ranges_mm: vec![4800.0; 61],
+        time: None,
+        pose: None,
+        sweeps: None,
+    };
+    let ex = Extraction {
+        marks: vec![0, 60],
+        features: vec![
+            Feature::Line(short_far_line()),
+            Feature::Object(ObjectFeature::new(
+                10,
+                13,
+                4,
+                Point::new(3000.0, -800.0),
+                [[400.0, 0.0], [0.0, 100.0]],
+                120.0,
+            )),
+        ],
+    };
+    let opts = super::Options {
+        veils: vec![20, 21, 22],
+        sigma_point_mm: 10.0,
+        ..Default::default()
+    };
+    let svg = super::svg_with(&record, &ex, "t", &opts);
+    assert_eq!(svg.matches(r#"<polygon class="band""#).count(), 1);
+    assert!(svg.contains("small objects (1): extent"), "{svg}");
+    assert_eq!(svg.matches(r#"<circle class="object""#).count(), 1);
+    assert!(svg.contains("veils (3): mixed pixels"), "{svg}");
+    // No uncertainty drawn wider than a tenth of the plot (the old end-point ellipses of
+    // this line were 1.7 m across a 5 m scene).
+    for part in svg.split("<ellipse ").skip(1) {
+        let rx: f64 = part
+            .split("rx=\"")
+            .nth(1)
+            .and_then(|r| r.split('"').next())
+            .and_then(|r| r.parse().ok())
+            .unwrap();
+        assert!(rx < 82.0, "an ellipse {rx} px wide");
+    }
+}

@@ -126,6 +126,30 @@ impl FoxgloveWriter {
         self.write(self.scene_channel, sequence, log_time_ns, stamp_ns, &scene)
     }
 
+    /// Adds channel `c` (e.g. [`super::odometry::POSE`]); returns its id for
+    /// [`Self::write_message`].
+    pub fn add_channel(&mut self, c: &Channel) -> io::Result<u16> {
+        let w = self.writer_mut()?;
+        let schema = w
+            .add_schema(c.schema_name, SCHEMA_ENCODING, &c.schema())
+            .map_err(other)?;
+        w.add_channel(schema, c.topic, MESSAGE_ENCODING, &BTreeMap::new())
+            .map_err(other)
+    }
+
+    /// Writes `message` on a channel of [`Self::add_channel`], stamped `stamp_ns` (log and
+    /// publish time), with the sequence number of the last scan written (it belongs to it).
+    pub fn write_message(
+        &mut self,
+        channel: u16,
+        stamp_ns: u64,
+        message: &serde_json::Value,
+    ) -> io::Result<()> {
+        let data = serde_json::to_vec(message)?;
+        let sequence = self.sequence.wrapping_sub(1);
+        self.write(channel, sequence, stamp_ns, stamp_ns, &data)
+    }
+
     fn next_sequence(&mut self) -> u32 {
         let s = self.sequence;
         self.sequence = s.wrapping_add(1);

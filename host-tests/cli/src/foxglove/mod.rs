@@ -27,6 +27,7 @@
 //! file is replaced only by [`FoxgloveWriter::create_overwriting`].
 
 mod mcap_file;
+pub mod odometry;
 mod scene;
 mod schema;
 mod ws;

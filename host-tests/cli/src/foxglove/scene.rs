@@ -5,13 +5,13 @@ use serde_json::{json, Value};
 
 use pfe_formats::Record;
 
-const MM: f64 = 1e-3;
+pub(super) const MM: f64 = 1e-3;
 
-fn time(stamp_ns: u64) -> Value {
+pub(super) fn time(stamp_ns: u64) -> Value {
     json!({ "sec": stamp_ns / 1_000_000_000, "nsec": stamp_ns % 1_000_000_000 })
 }
 
-fn point(x: f64, y: f64) -> Value {
+pub(super) fn point(x: f64, y: f64) -> Value {
     json!({ "x": x, "y": y, "z": 0.0 })
 }
 
@@ -19,11 +19,11 @@ fn identity_pose() -> Value {
     pose(0.0, 0.0)
 }
 
-fn pose(x: f64, y: f64) -> Value {
+pub(super) fn pose(x: f64, y: f64) -> Value {
     json!({ "position": point(x, y), "orientation": { "x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0 } })
 }
 
-fn color(r: f64, g: f64, b: f64, a: f64) -> Value {
+pub(super) fn color(r: f64, g: f64, b: f64, a: f64) -> Value {
     json!({ "r": r, "g": g, "b": b, "a": a })
 }
 
@@ -78,7 +78,7 @@ pub fn scene_update(stamp_ns: u64, frame_id: &str, features: &[Feature]) -> Valu
     })
 }
 
-fn line_primitive(kind: u8, points: Vec<Value>, thickness: f64, c: Value) -> Value {
+pub(super) fn line_primitive(kind: u8, points: Vec<Value>, thickness: f64, c: Value) -> Value {
     json!({
         "type": kind,
         "pose": identity_pose(),
@@ -91,10 +91,15 @@ fn line_primitive(kind: u8, points: Vec<Value>, thickness: f64, c: Value) -> Val
     })
 }
 
-const LINE_STRIP: u8 = 0;
-const LINE_LOOP: u8 = 1;
+pub(super) const LINE_STRIP: u8 = 0;
+pub(super) const LINE_LOOP: u8 = 1;
 
-fn entity(stamp_ns: u64, frame_id: &str, k: usize, metadata: &[(&str, String)]) -> Value {
+pub(super) fn entity(
+    stamp_ns: u64,
+    frame_id: &str,
+    k: usize,
+    metadata: &[(&str, String)],
+) -> Value {
     let metadata: Vec<Value> = metadata
         .iter()
         .map(|(key, value)| json!({ "key": key, "value": value }))
@@ -122,7 +127,7 @@ fn text(x: f64, y: f64, label: String) -> Value {
     })
 }
 
-fn line_entity(stamp_ns: u64, frame_id: &str, k: usize, l: &LineFeature) -> Value {
+pub(super) fn line_entity(stamp_ns: u64, frame_id: &str, k: usize, l: &LineFeature) -> Value {
     let (alpha, rho) = (f64::from(l.alpha), f64::from(l.rho));
     let (n, d) = ((alpha.cos(), alpha.sin()), (-alpha.sin(), alpha.cos()));
     let along = |x: f32, y: f32| f64::from(x) * d.0 + f64::from(y) * d.1;
@@ -181,7 +186,7 @@ fn line_entity(stamp_ns: u64, frame_id: &str, k: usize, l: &LineFeature) -> Valu
 }
 
 /// `m` points around an ellipse centred at (cx, cy) mm with axes `a`, `b` mm, `a` at angle `phi`.
-fn ellipse(cx: f64, cy: f64, a: f64, b: f64, phi: f64, m: usize) -> Vec<Value> {
+pub(super) fn ellipse(cx: f64, cy: f64, a: f64, b: f64, phi: f64, m: usize) -> Vec<Value> {
     (0..m)
         .map(|i| {
             let t = std::f64::consts::TAU * i as f64 / m as f64;

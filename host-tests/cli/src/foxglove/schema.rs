@@ -4,11 +4,11 @@ use serde_json::{json, Value};
 
 use super::{FEATURES_TOPIC, SCAN_TOPIC};
 
-fn number() -> Value {
+pub(super) fn number() -> Value {
     json!({ "type": "number" })
 }
 
-fn object(title: Option<&str>, properties: Value) -> Value {
+pub(super) fn object(title: Option<&str>, properties: Value) -> Value {
     let mut o = json!({ "type": "object", "properties": properties });
     if let Some(t) = title {
         o["title"] = json!(t);
@@ -16,25 +16,25 @@ fn object(title: Option<&str>, properties: Value) -> Value {
     o
 }
 
-fn array(items: Value) -> Value {
+pub(super) fn array(items: Value) -> Value {
     json!({ "type": "array", "items": items })
 }
 
-fn time_schema() -> Value {
+pub(super) fn time_schema() -> Value {
     object(
         Some("time"),
         json!({ "sec": { "type": "integer" }, "nsec": { "type": "integer" } }),
     )
 }
 
-fn vector3_schema() -> Value {
+pub(super) fn vector3_schema() -> Value {
     object(
         Some("foxglove.Vector3"),
         json!({ "x": number(), "y": number(), "z": number() }),
     )
 }
 
-fn pose_schema() -> Value {
+pub(super) fn pose_schema() -> Value {
     object(
         Some("foxglove.Pose"),
         json!({
@@ -47,7 +47,7 @@ fn pose_schema() -> Value {
     )
 }
 
-fn color_schema() -> Value {
+pub(super) fn color_schema() -> Value {
     object(
         Some("foxglove.Color"),
         json!({ "r": number(), "g": number(), "b": number(), "a": number() }),
@@ -71,7 +71,7 @@ fn laser_scan_schema() -> Vec<u8> {
     s.to_string().into_bytes()
 }
 
-fn scene_update_schema() -> Vec<u8> {
+pub(super) fn scene_update_schema() -> Vec<u8> {
     let line = object(
         Some("foxglove.LinePrimitive"),
         json!({
@@ -160,6 +160,19 @@ pub struct Channel {
 }
 
 impl Channel {
+    /// A channel on `topic` with the JSON Schema `schema` named `schema_name`.
+    pub(super) const fn new(
+        topic: &'static str,
+        schema_name: &'static str,
+        schema: fn() -> Vec<u8>,
+    ) -> Self {
+        Channel {
+            topic,
+            schema_name,
+            schema,
+        }
+    }
+
     /// The JSON Schema, UTF-8.
     pub fn schema(&self) -> Vec<u8> {
         (self.schema)()
