@@ -47,6 +47,7 @@ mod extractor;
 pub mod feature;
 pub mod fit;
 mod flags;
+pub mod interleave;
 pub mod geometry;
 mod mark;
 mod math;

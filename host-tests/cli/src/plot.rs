@@ -116,10 +116,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let mut auto = a.method.auto_sweeps();
     let plots: Vec<Plot> = found
         .iter()
         .map(|s| {
-            let context = a.method.context(&s.record);
+            let context = a.method.context(&s.record, &mut auto);
             let ex = method.extract_in(&s.record.geometry, &s.record.ranges_mm, &context);
             let title = title(&name, s, method.name());
             Plot {
