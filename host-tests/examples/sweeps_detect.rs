@@ -40,6 +40,10 @@ fn main() -> Result<()> {
     match args.first().map(String::as_str) {
         Some("sim") => sim(scans, &seeds),
         Some("score") => score(scans, &seeds, sigma),
+        Some("csv") => match rest.as_slice() {
+            [out] => csv(out, scans, &seeds, sigma),
+            _ => bail!("csv OUT"),
+        },
         Some("log") => match rest.as_slice() {
             [format, file] => log(format, file),
             _ => bail!("log FORMAT FILE"),
@@ -132,8 +136,10 @@ fn sim(scans: usize, seeds: &[u64]) -> Result<()> {
     Ok(())
 }
 
-/// pfe-default with the sweeps detected (`--sweeps auto` where the format cannot say).
-struct Auto(Pfe, String);
+/// pfe-default with `--sweeps auto` as `pfe extract --format csv` takes it: detected from each
+/// scan and held over the input's later scans (`pfe_formats::AutoSweeps`), or, with `held`
+/// false, each scan on its own.
+struct Auto(Pfe, String, pfe_formats::AutoSweeps, bool);
 
 impl Method for Auto {
     fn name(&self) -> &str {
@@ -148,9 +154,19 @@ impl Method for Auto {
         r: &[f32],
         context: &ScanContext,
     ) -> Extraction {
-        let d = detect(&Scan::from_mm(*g, r).with_quantum(context.quantum));
+        let record = pfe_formats::Record {
+            id: 0,
+            geometry: *g,
+            ranges_mm: r.to_vec(),
+            time: None,
+            pose: None,
+            sweeps: None,
+        };
+        if !self.3 {
+            self.2 = pfe_formats::AutoSweeps::new(Format::Csv);
+        }
         let c = ScanContext {
-            sweeps: usize::from(d.sweeps),
+            sweeps: usize::from(self.2.sweeps(&record)),
             ..*context
         };
         self.0.extract_in(g, r, &c)
@@ -194,9 +210,11 @@ fn score(scans: usize, seeds: &[u64], sigma: f32) -> Result<()> {
                 sims.iter_mut().for_each(|s| s.sweeps = 2);
             }
             let mut told = Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma));
-            let mut auto = Auto(Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma)), "auto".into());
-            let mut one = One(Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma)), "one".into());
-            let mut m: [&mut dyn Method; 3] = [&mut told, &mut auto, &mut one];
+            let pfe = || Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma));
+            let mut auto = Auto(pfe(), "auto".into(), pfe_formats::AutoSweeps::new(Format::Csv), true);
+            let mut each = Auto(pfe(), "auto-each".into(), pfe_formats::AutoSweeps::new(Format::Csv), false);
+            let mut one = One(pfe(), "one".into());
+            let mut m: [&mut dyn Method; 4] = [&mut told, &mut auto, &mut each, &mut one];
             let res = run_methods(&mut m, &sims);
             println!("seed {seed} σ {sigma} {name}: truth {}", sims.iter().map(|s| s.truth.len()).sum::<usize>());
             for r in &res {
@@ -261,5 +279,22 @@ fn log(format: &str, file: &str) -> Result<()> {
         q(0.99),
         q(1.0)
     );
+    Ok(())
+}
+
+/// Writes the interleaved 8 mm / 6 mrad scenes of the first seed as `pfe extract --format csv`
+/// reads them.
+fn csv(out: &str, scans: usize, seeds: &[u64], sigma: f32) -> Result<()> {
+    use std::fmt::Write as _;
+    let mut text = String::new();
+    for (k, sc) in scenarios(scans, &seeds[..1], sigma).into_iter().enumerate() {
+        let s = sc.with_motion(MOVING_V, MOVING_OMEGA).simulate();
+        let _ = write!(text, "{k},-90,0.5");
+        for r in &s.ranges_mm {
+            let _ = write!(text, ",{}", if r.is_finite() { *r } else { 0.0 });
+        }
+        text.push('\n');
+    }
+    std::fs::write(out, text)?;
     Ok(())
 }
