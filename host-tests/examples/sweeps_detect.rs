@@ -209,19 +209,44 @@ fn score(scans: usize, seeds: &[u64], sigma: f32) -> Result<()> {
             if name.contains("declared 2") {
                 sims.iter_mut().for_each(|s| s.sweeps = 2);
             }
-            let mut told = Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma));
-            let pfe = || Pfe::new("pfe-default", pfe_core::Config::default().with_sigma_r(sigma));
-            let mut auto = Auto(pfe(), "auto".into(), pfe_formats::AutoSweeps::new(Format::Csv), true);
-            let mut each = Auto(pfe(), "auto-each".into(), pfe_formats::AutoSweeps::new(Format::Csv), false);
+            let mut told = Pfe::new(
+                "pfe-default",
+                pfe_core::Config::default().with_sigma_r(sigma),
+            );
+            let pfe = || {
+                Pfe::new(
+                    "pfe-default",
+                    pfe_core::Config::default().with_sigma_r(sigma),
+                )
+            };
+            let mut auto = Auto(
+                pfe(),
+                "auto".into(),
+                pfe_formats::AutoSweeps::new(Format::Csv),
+                true,
+            );
+            let mut each = Auto(
+                pfe(),
+                "auto-each".into(),
+                pfe_formats::AutoSweeps::new(Format::Csv),
+                false,
+            );
             let mut one = One(pfe(), "one".into());
             let mut m: [&mut dyn Method; 4] = [&mut told, &mut auto, &mut each, &mut one];
             let res = run_methods(&mut m, &sims);
-            println!("seed {seed} σ {sigma} {name}: truth {}", sims.iter().map(|s| s.truth.len()).sum::<usize>());
+            println!(
+                "seed {seed} σ {sigma} {name}: truth {}",
+                sims.iter().map(|s| s.truth.len()).sum::<usize>()
+            );
             for r in &res {
                 let s = &r.score;
                 println!(
                     "  {:<12} FalseMark {:.4} FalseIden {:.4} missed {:.3} spurious {:.3}",
-                    if r.name == "pfe-default" { "told" } else { &r.name },
+                    if r.name == "pfe-default" {
+                        "told"
+                    } else {
+                        &r.name
+                    },
                     s.false_mark_ratio(),
                     s.false_iden_ratio(),
                     s.missed_ratio(),
@@ -256,7 +281,10 @@ fn log(format: &str, file: &str) -> Result<()> {
         }] += 1;
         e2.push(d.evidence2);
         if std::env::var_os("PER_SCAN").is_some() {
-            println!("scan {} sweeps {} ev2 {:.2} ev4 {:.2}", record.id, d.sweeps, d.evidence2, d.evidence4);
+            println!(
+                "scan {} sweeps {} ev2 {:.2} ev4 {:.2}",
+                record.id, d.sweeps, d.evidence2, d.evidence4
+            );
         }
         let t = record
             .sweeps
@@ -264,7 +292,11 @@ fn log(format: &str, file: &str) -> Result<()> {
         told[usize::from(t).min(4)] += 1;
     }
     e2.sort_by(f32::total_cmp);
-    let q = |p: f32| e2.get(((e2.len().max(1) - 1) as f32 * p) as usize).copied().unwrap_or(0.0);
+    let q = |p: f32| {
+        e2.get(((e2.len().max(1) - 1) as f32 * p) as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
     println!(
         "{file}: {} scans, format says 1:{} 2:{} 4:{}; detected 1:{} 2:{} 4:{}; ev2 p50 {:.2} p90 {:.2} p99 {:.2} max {:.2}",
         e2.len(),

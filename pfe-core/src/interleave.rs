@@ -234,7 +234,9 @@ fn median(v: &mut [f32]) -> f32 {
     match v.len() {
         0 => 0.0,
         n if n % 2 == 1 => v.get(n / 2).copied().unwrap_or(0.0),
-        n => 0.5 * (v.get(n / 2 - 1).copied().unwrap_or(0.0) + v.get(n / 2).copied().unwrap_or(0.0)),
+        n => {
+            0.5 * (v.get(n / 2 - 1).copied().unwrap_or(0.0) + v.get(n / 2).copied().unwrap_or(0.0))
+        }
     }
 }
 
@@ -386,11 +388,19 @@ fn invert(mut m: [[f32; P]; P]) -> Option<[[f32; P]; P]> {
             *v = 1.0;
         }
     }
-    let scale = m.iter().enumerate().map(|(i, r)| r.get(i).copied().unwrap_or(0.0)).fold(0.0f32, f32::max);
+    let scale = m
+        .iter()
+        .enumerate()
+        .map(|(i, r)| r.get(i).copied().unwrap_or(0.0))
+        .fold(0.0f32, f32::max);
     for col in 0..P {
         let mut piv = col;
         for row in col..P {
-            let v = |r: usize| m.get(r).and_then(|x| x.get(col)).map_or(0.0, |v| math::abs(*v));
+            let v = |r: usize| {
+                m.get(r)
+                    .and_then(|x| x.get(col))
+                    .map_or(0.0, |v| math::abs(*v))
+            };
             if v(row) > v(piv) {
                 piv = row;
             }

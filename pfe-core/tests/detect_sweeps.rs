@@ -76,8 +76,14 @@ fn sweeps_of_a_moving_scanner_are_found() {
         found4 += usize::from(d4 == 4);
     }
     eprintln!("found: 2 sweeps {found2}/{n}, 4 sweeps {found4}/{n}");
-    assert!(found2 as u64 >= n * 9 / 10, "2 sweeps found in {found2} of {n}");
-    assert!(found4 as u64 >= n * 9 / 10, "4 sweeps found in {found4} of {n}");
+    assert!(
+        found2 as u64 >= n * 9 / 10,
+        "2 sweeps found in {found2} of {n}"
+    );
+    assert!(
+        found4 as u64 >= n * 9 / 10,
+        "4 sweeps found in {found4} of {n}"
+    );
 }
 
 #[test]

@@ -119,7 +119,11 @@ fn auto_extracts_simulated_csv_as_the_sweeps_it_was_made_of() {
             args.extend_from_slice(extra);
             args.push(p);
             let out = pfe(&args);
-            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
             json_lines(&out)
         };
         let (auto, told_out) = (run(&[]), run(&["--sweeps", told]));
