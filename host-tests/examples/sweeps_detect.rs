@@ -5,7 +5,9 @@
 //!
 //! `cargo run -p host-tests --release --example sweeps_detect -- sim [--scans N] [--seeds A,B,..]`
 //! `cargo run -p host-tests --release --example sweeps_detect -- score [--scans N] [--seeds A,B,..] [--sigma MM]`
-//! `cargo run -p host-tests --release --example sweeps_detect -- log FORMAT FILE`
+//! `cargo run -p host-tests --release --example sweeps_detect -- log FORMAT FILE` (`PER_SCAN=1`: each scan)
+//! `cargo run -p host-tests --release --example sweeps_detect -- csv OUT [--scans N] [--seeds S] [--sigma MM]`
+//! (the interleaved scenes of seed S as CSV, for `pfe extract --format csv`)
 
 use anyhow::{bail, Context, Result};
 use pfe_core::interleave::detect;
@@ -190,7 +192,7 @@ impl Method for One {
 }
 
 fn score(scans: usize, seeds: &[u64], sigma: f32) -> Result<()> {
-    let cases: [(&str, fn(&mut Scenario)); 4] = [
+    let cases: [pfe_eval::Condition; 4] = [
         ("plain", |_| {}),
         ("interleaved 0.5°, 8 mm / 6 mrad, no odometry", |s| {
             *s = s.with_motion(MOVING_V, MOVING_OMEGA)
