@@ -272,10 +272,13 @@ fn log(format: &str, file: &str) -> Result<()> {
     let mut n = [0usize; 3];
     let mut e2 = Vec::new();
     let mut told = [0usize; 5];
+    let mut spent = std::time::Duration::ZERO;
     for record in pfe_formats::scans(format, input) {
         let record = record.map_err(|e| anyhow::anyhow!("{file}: {e}"))?;
         let q = pfe_formats::range_quantum(&record.ranges_mm, record.geometry.r_max);
+        let t0 = std::time::Instant::now();
         let d = detect(&Scan::from_mm(record.geometry, &record.ranges_mm).with_quantum(q));
+        spent += t0.elapsed();
         n[match d.sweeps {
             1 => 0,
             2 => 1,
@@ -300,7 +303,7 @@ fn log(format: &str, file: &str) -> Result<()> {
             .unwrap_or(0.0)
     };
     println!(
-        "{file}: {} scans, format says 1:{} 2:{} 4:{}; detected 1:{} 2:{} 4:{}; ev2 p50 {:.2} p90 {:.2} p99 {:.2} max {:.2}",
+        "{file}: {} scans, format says 1:{} 2:{} 4:{}; detected 1:{} 2:{} 4:{}; ev2 p50 {:.2} p90 {:.2} p99 {:.2} max {:.2}; detect {:.1} µs a scan",
         e2.len(),
         told[1],
         told[2],
@@ -311,7 +314,8 @@ fn log(format: &str, file: &str) -> Result<()> {
         q(0.5),
         q(0.9),
         q(0.99),
-        q(1.0)
+        q(1.0),
+        spent.as_secs_f64() * 1e6 / e2.len().max(1) as f64
     );
     Ok(())
 }

@@ -23,7 +23,8 @@
 //! (that would cost accuracy on plain scans), at the price of not seeing small offsets
 //! (a robot standing still, whose sweeps agree: then aligning them would change nothing).
 //!
-//! No allocation: one chunk's ranges on the stack. Never panics; a scan with no usable chunk
+//! No allocation: about 6 KiB of stack (one chunk's work, and up to 128 chunks' fits kept from the
+//! noise pass for the evidence pass). Never panics; a scan with no usable chunk
 //! is one sweep.
 
 use crate::math;
@@ -118,7 +119,7 @@ pub fn detect(scan: &Scan) -> Interleaving {
     let Some(sigma0) = noise.sigma(scan.quantum) else {
         return Interleaving::NONE;
     };
-    // Pass 2: the noise the fits leave, pooled.
+    // Pass 2: the noise the fits leave, pooled; the fits kept for pass 3 where they fit.
     let mut residual = Residual::default();
     chunks(scan, |first, r| residual.add(first, r, sigma0));
     let Some(sigma) = residual.sigma(scan.quantum) else {
@@ -126,7 +127,14 @@ pub fn detect(scan: &Scan) -> Interleaving {
     };
     // Pass 3: each chunk's offsets against that noise.
     let mut sum = Evidence::default();
-    chunks(scan, |first, r| sum.add(first, r, sigma0, sigma));
+    match residual.fits.get(..residual.count) {
+        Some(fits) if !residual.overflow => fits.iter().for_each(|f| sum.add(f, sigma)),
+        _ => chunks(scan, |first, r| {
+            if let Some(f) = fit_chunk(first, r, sigma0) {
+                sum.add(&f, sigma);
+            }
+        }),
+    }
     sum.decide(sigma, math::abs(scan.geometry.angle_step) < MAX_STEP4)
 }
 
@@ -259,11 +267,21 @@ fn regressors(g: usize, c: f32) -> [f32; P] {
 
 /// One chunk's fit: the alternating offset `h` and the period-4 pair, their variances in units
 /// of σ², its residual sum of squares and that sum's expectation in units of σ².
+#[derive(Clone, Copy)]
 struct ChunkFit {
     est: [f32; 3],
     var: [f32; 3],
     ss: f32,
     dof: f32,
+}
+
+impl ChunkFit {
+    const ZERO: ChunkFit = ChunkFit {
+        est: [0.0; 3],
+        var: [0.0; 3],
+        ss: 0.0,
+        dof: 0.0,
+    };
 }
 
 /// Least squares of the chunk's second differences on [`regressors`], leaving out those
@@ -317,23 +335,31 @@ fn fit_chunk(first: usize, r: &[f32], sigma: f32) -> Option<ChunkFit> {
     }
     let beta = solve(&inv, &a, &keep, m, &x);
     let kept = |j: usize| keep.get(j).copied().unwrap_or(false);
+    // g[j] = (XᵀX)⁻¹ x_j: its component p is row j's weight in parameter p (the inverse is
+    // symmetric), and x_k · g[j] is the hat matrix's (k, j).
+    let mut g = [[0.0f32; P]; CHUNK];
+    for (j, gj) in g.iter_mut().enumerate().take(m) {
+        let xj = x(j);
+        for (v, row) in gj.iter_mut().zip(&inv) {
+            *v = dot(row, &xj);
+        }
+    }
+    let zero = [0.0f32; P];
     let mut ss = 0.0f32;
     let mut trace_h_sigma = 0.0f32;
     let mut var = [0.0f32; 3];
     let mut n = 0usize;
     for j in (0..m).filter(|&j| kept(j)) {
-        let xj = x(j);
-        let res = a.get(j).copied().unwrap_or(0.0) - dot(&beta, &xj);
+        let gj = g.get(j).unwrap_or(&zero);
+        let res = a.get(j).copied().unwrap_or(0.0) - dot(&beta, &x(j));
         ss += res * res;
         n += 1;
         for k in (j..(j + 3).min(m)).filter(|&k| kept(k)) {
-            let xk = x(k);
-            let f = if k == j { 1.0 } else { 2.0 };
-            let rho = rho(k - j);
-            trace_h_sigma += f * quad(&inv, &xj, &xk) * rho;
+            let gk = g.get(k).unwrap_or(&zero);
+            let f = if k == j { 1.0 } else { 2.0 } * rho(k - j);
+            trace_h_sigma += f * dot(&x(k), gj);
             for (v, p) in var.iter_mut().zip([2usize, 4, 5]) {
-                let row = inv.get(p).copied().unwrap_or([0.0; P]);
-                *v += f * dot(&row, &xj) * dot(&row, &xk) * rho;
+                *v += f * gj.get(p).copied().unwrap_or(0.0) * gk.get(p).copied().unwrap_or(0.0);
             }
         }
     }
@@ -446,11 +472,29 @@ fn rho(d: usize) -> f32 {
     }
 }
 
-/// The residual variance of the chunks' fits, pooled.
-#[derive(Default)]
+/// Most chunk fits pass 2 keeps for pass 3 (4096 second differences); a longer scan is
+/// fitted again.
+const KEPT_FITS: usize = 128;
+
+/// The residual variance of the chunks' fits, pooled, and the fits.
 struct Residual {
     ss: f32,
     dof: f32,
+    fits: [ChunkFit; KEPT_FITS],
+    count: usize,
+    overflow: bool,
+}
+
+impl Default for Residual {
+    fn default() -> Self {
+        Self {
+            ss: 0.0,
+            dof: 0.0,
+            fits: [ChunkFit::ZERO; KEPT_FITS],
+            count: 0,
+            overflow: false,
+        }
+    }
 }
 
 impl Residual {
@@ -458,6 +502,13 @@ impl Residual {
         if let Some(f) = fit_chunk(first, r, sigma0) {
             self.ss += f.ss;
             self.dof += f.dof;
+            match self.fits.get_mut(self.count) {
+                Some(slot) => {
+                    *slot = f;
+                    self.count += 1;
+                }
+                None => self.overflow = true,
+            }
         }
     }
 
@@ -490,10 +541,7 @@ struct Evidence {
 }
 
 impl Evidence {
-    fn add(&mut self, first: usize, r: &[f32], sigma0: f32, sigma: f32) {
-        let Some(f) = fit_chunk(first, r, sigma0) else {
-            return;
-        };
+    fn add(&mut self, f: &ChunkFit, sigma: f32) {
         let [h, c4, s4] = f.est;
         let [vh, vc, vs] = f.var.map(|v| v * sigma * sigma);
         let z2 = h * h / vh;
