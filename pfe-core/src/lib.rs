@@ -27,6 +27,9 @@
 //! only), the work buffers of one scan and the output; every step is a function of slices, not
 //! generic over the capacities, so it is compiled once, in this crate. [`config`] holds the two
 //! named configurations, [`error`] the errors, [`geometry`] the shared plane geometry.
+//! [`interleave::detect`] tells from a scan's ranges alone whether it is made of 2 or 4
+//! interleaved sweeps, for a caller that does not know its scanner (the extractor does not
+//! call it: [`Scan::sweeps`] says what to align).
 #![no_std]
 // One audited exception: `math::sqrt`'s `vsqrt.f32` on hard-float Arm.
 #![deny(unsafe_code)]
@@ -48,6 +51,7 @@ pub mod feature;
 pub mod fit;
 mod flags;
 pub mod geometry;
+pub mod interleave;
 mod mark;
 mod math;
 pub mod motion;

@@ -64,6 +64,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
     let (mut scans, mut features) = (0u64, 0u64);
     let mut error = None;
     let mut interrupted = false;
+    let mut auto = a.method.auto_sweeps();
     for scan in input.scans {
         if interrupt::requested() {
             interrupted = true;
@@ -77,7 +78,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
             }
         };
         let record = &scan.record;
-        let context = a.method.context(record);
+        let context = a.method.context(record, &mut auto);
         let ex = method.extract_in(&record.geometry, &record.ranges_mm, &context);
         scans += 1;
         features += ex.features.len() as u64;

@@ -101,8 +101,10 @@ pub struct MethodArgs {
     /// Interleaved sweeps a scan is made of (1, 2 or 4: beam i in sweep i mod N), whose
     /// offset (a moving robot's) is then estimated from the scan and removed where it shows;
     /// `auto`: what a CARMEN ROBOTLASER1/RAWLASER1 line's laser type says (1 for a scanner
-    /// that is not a SICK LMS), else a SICK LMS2xx's for --format lms200 or carmen (2 at 0.5°, 4
-    /// at 0.25°, 1 for a step no LMS2xx has), else 1.
+    /// that is not a SICK LMS), else a SICK LMS2xx's for --format lms200 or carmen at its steps
+    /// (2 at 0.5°, 4 at 0.25°, 1 at 1°), else (csv, hokuyo, mcap, other steps) detected from
+    /// each scan: 2 or 4 where the offset of even and odd beams (or of the 4 phases) against
+    /// the surface shows beyond the noise, held for the file's later scans, else 1.
     #[arg(long, default_value = "auto", value_parser = sweeps_parser())]
     pub sweeps: Sweeps,
 }
@@ -152,20 +154,25 @@ impl MethodArgs {
             .method(self.sigma_r, self.sigma_sys, self.format)
     }
 
-    /// What the extractor is told besides the ranges of `record`: its sweeps and the grid its
-    /// ranges lie on.
-    pub fn context(&self, record: &pfe_formats::Record) -> pfe_eval::methods::ScanContext {
+    /// What the extractor is told besides the ranges of `record`: its sweeps (`--sweeps`, or
+    /// `auto` through `auto`, which holds what the input's earlier scans showed) and the grid
+    /// its ranges lie on.
+    pub fn context(
+        &self,
+        record: &pfe_formats::Record,
+        auto: &mut pfe_formats::AutoSweeps,
+    ) -> pfe_eval::methods::ScanContext {
         let geometry = &record.geometry;
         pfe_eval::methods::ScanContext {
             odometry: None,
-            sweeps: usize::from(
-                self.sweeps
-                    .0
-                    .or(record.sweeps)
-                    .unwrap_or_else(|| pfe_formats::sweeps_of(self.format, geometry)),
-            ),
+            sweeps: usize::from(self.sweeps.0.unwrap_or_else(|| auto.sweeps(record))),
             quantum: pfe_formats::range_quantum(&record.ranges_mm, geometry.r_max),
         }
+    }
+
+    /// `--sweeps auto`'s state over one input of this format.
+    pub fn auto_sweeps(&self) -> pfe_formats::AutoSweeps {
+        pfe_formats::AutoSweeps::new(self.format)
     }
 }
 

@@ -199,6 +199,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
     let mut interrupted = false;
     let mut last_odometry: Option<[f64; 3]> = None;
     let mut without_odometry = 0u64;
+    let mut auto = a.method.auto_sweeps();
     for scan in scans {
         if interrupt::requested() {
             interrupted = true;
@@ -211,7 +212,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
                 break;
             }
         };
-        let context = a.method.context(&record);
+        let context = a.method.context(&record, &mut auto);
         let ex = pfe_eval::methods::Method::extract_in(
             &mut method,
             &record.geometry,

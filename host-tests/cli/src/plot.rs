@@ -147,10 +147,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
             .unwrap_or(format.sigma_r())
             .hypot(a.method.sigma_sys.unwrap_or(format.sigma_sys())),
     );
+    let mut auto = a.method.auto_sweeps();
     let extracted: Vec<(Extraction, Vec<usize>)> = found
         .iter()
         .map(|s| {
-            let context = a.method.context(&s.record);
+            let context = a.method.context(&s.record, &mut auto);
             let ex = method.extract_in(&s.record.geometry, &s.record.ranges_mm, &context);
             (ex, method.veils())
         })
@@ -240,6 +241,7 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
     let bar = input.bar.clone();
     let mut scans: Vec<(pfe_formats::Record, Vec<Feature>)> = Vec::new();
     let mut count = 0u64;
+    let mut auto = a.method.auto_sweeps();
     for s in input.scans {
         if crate::interrupt::requested() {
             return Err(Failure {
@@ -255,7 +257,7 @@ fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
             }
             continue;
         }
-        let context = a.method.context(&s.record);
+        let context = a.method.context(&s.record, &mut auto);
         let ex = method.extract_in(&s.record.geometry, &s.record.ranges_mm, &context);
         scans.push((s.record, ex.features));
         if count % 256 == 0 {

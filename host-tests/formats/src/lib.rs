@@ -463,7 +463,8 @@ fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
 /// The interleaved sweeps of a scan of `geometry` read as `format`: a SICK LMS2xx's (LMS200
 /// telegrams and CARMEN logs) at 0.5° are 2, at 0.25° 4 ([`pfe_core::BeamTiming::lms2xx`]);
 /// 1 otherwise (1° or a step no LMS2xx has), and for every other format (no interleaving
-/// known). A record's own [`Record::sweeps`] comes first.
+/// known). A record's own [`Record::sweeps`] comes first. `--sweeps auto` detects them from the
+/// scan where the format cannot say ([`AutoSweeps`]).
 ///
 /// ```
 /// use pfe_formats::{sweeps_of, Format};
@@ -476,9 +477,90 @@ fn check_geometry(line: u64, g: &ScanGeometry) -> Result<(), InputError> {
 /// assert_eq!(sweeps_of(Format::Csv, &ScanGeometry::lms200(180.0, 0.5)), 1);
 /// ```
 pub fn sweeps_of(format: Format, geometry: &pfe_core::ScanGeometry) -> u8 {
+    sweeps_told(format, geometry).unwrap_or(1)
+}
+
+/// The interleaved sweeps `format` says a scan of `geometry` is made of: a SICK LMS2xx's at
+/// one of its steps (0.25°, 0.5°, 1°) for LMS200 telegrams and CARMEN logs; `None` where the
+/// format cannot say (CSV, Hokuyo, ROS 2 bags, another step).
+pub fn sweeps_told(format: Format, geometry: &pfe_core::ScanGeometry) -> Option<u8> {
     match format {
-        // Only an LMS2xx's own steps: another scanner's (a Hokuyo URG's 0.352°) is one sweep.
-        Format::Lms200 | Format::Carmen => geometry.lms2xx_sweeps(),
-        _ => 1,
+        Format::Lms200 | Format::Carmen => {
+            let deg = geometry.angle_step.abs().to_degrees();
+            // Only an LMS2xx's own steps: another scanner's (a Hokuyo URG's 0.352°) is not.
+            let lms = [0.25f32, 0.5, 1.0]
+                .iter()
+                .any(|r| (deg / r - 1.0).abs() < 0.01);
+            lms.then(|| geometry.lms2xx_sweeps())
+        }
+        _ => None,
+    }
+}
+
+/// `--sweeps auto` over the scans of one input: a record's own [`Record::sweeps`], else what
+/// its format says ([`sweeps_told`]), else the sweeps detected from the scan itself
+/// ([`pfe_core::interleave::detect`]), held: once a scan of an input shows 2 (4) sweeps, the
+/// later scans of the same geometry are taken as at least as many (a robot that stops shows no
+/// offset between its sweeps; aligning them then changes nothing, and one false detection
+/// costs little: a scan declared 2 sweeps whose offset is not significant is extracted as one).
+///
+/// ```
+/// use pfe_formats::{AutoSweeps, Format, Record};
+/// use pfe_core::ScanGeometry;
+/// let g = ScanGeometry::lms200(180.0, 0.5);
+/// // A wall 2 m ahead; the odd beams 8 mm further (a scanner moving back between sweeps).
+/// let ranges: Vec<f32> = (0..361)
+///     .map(|i| {
+///         let c = g.bearing(i).cos();
+///         (if c > 0.3 { 2000.0 / c } else { f32::NAN }) + (i % 2) as f32 * 8.0
+///     })
+///     .collect();
+/// let still: Vec<f32> = ranges.iter().enumerate().map(|(i, r)| r - (i % 2) as f32 * 8.0).collect();
+/// let record = |ranges: &[f32]| Record {
+///     id: 0, geometry: g, ranges_mm: ranges.to_vec(), time: None, pose: None, sweeps: None,
+/// };
+/// let mut auto = AutoSweeps::new(Format::Csv);
+/// assert_eq!(auto.sweeps(&record(&still)), 1);
+/// assert_eq!(auto.sweeps(&record(&ranges)), 2);
+/// assert_eq!(auto.sweeps(&record(&still)), 2, "held");
+/// // The format says: no detection.
+/// assert_eq!(AutoSweeps::new(Format::Carmen).sweeps(&record(&still)), 2);
+/// ```
+#[derive(Clone, Debug)]
+pub struct AutoSweeps {
+    format: Format,
+    /// The geometry (start, step, beams) and the most sweeps detected on it so far.
+    held: Option<((u32, u32, usize), u8)>,
+}
+
+impl AutoSweeps {
+    /// No scan seen yet, of `format`.
+    pub fn new(format: Format) -> Self {
+        Self { format, held: None }
+    }
+
+    /// The sweeps `record` (the input's next scan) is taken as.
+    pub fn sweeps(&mut self, record: &Record) -> u8 {
+        if let Some(s) = record.sweeps {
+            return s;
+        }
+        if let Some(s) = sweeps_told(self.format, &record.geometry) {
+            return s;
+        }
+        let g = &record.geometry;
+        let key = (
+            g.start_angle.to_bits(),
+            g.angle_step.to_bits(),
+            record.ranges_mm.len(),
+        );
+        let quantum = range_quantum(&record.ranges_mm, g.r_max);
+        let scan = pfe_core::Scan::from_mm(*g, &record.ranges_mm).with_quantum(quantum);
+        let found = pfe_core::interleave::detect(&scan).sweeps;
+        let held = match self.held {
+            Some((k, s)) if k == key => s.max(found),
+            _ => found,
+        };
+        self.held = Some((key, held));
+        held
     }
 }
