@@ -113,7 +113,17 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Self {
-        Self {
+        Self::DEFAULT
+    }
+}
+
+impl Config {
+    /// The default settings, as a constant (`Config::default()`).
+    ///
+    /// ```
+    /// assert_eq!(pfe_pose::Config::DEFAULT, pfe_pose::Config::default());
+    /// ```
+    pub const DEFAULT: Config = Self {
             max_translation: 3000.0,
             max_rotation: 1.75,
             line_floor: [0.008, 15.0],
@@ -132,9 +142,8 @@ impl Default for Config {
             max_hypotheses: 4096,
             min_matches: 3,
             scale_by_residuals: true,
-            ambiguity: 2.0,
-        }
-    }
+        ambiguity: 2.0,
+    };
 }
 
 /// Why there is no registration.
@@ -239,8 +248,8 @@ pub fn register_with(
     prior: Option<(Pose, Cov3)>,
     cfg: &Config,
 ) -> Registration {
-    let p = Set::from_obs(prev, cfg);
-    let c = Set::from_obs(curr, cfg);
+    let p = Set::from_obs(prev.iter().copied(), cfg);
+    let c = Set::from_obs(curr.iter().copied(), cfg);
     let mut assoc = Assoc::new();
     let mut r = register_sets(&p, &c, prior, cfg, &mut assoc);
     r.dropped = p.dropped.saturating_add(c.dropped);
