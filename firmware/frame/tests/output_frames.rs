@@ -644,8 +644,13 @@ fn the_pose_block_round_trips() {
 fn a_missing_or_broken_pose_block_is_rejected() {
     let mut good = Vec::new();
     let p = pose_block(PoseStatus::Ok);
-    write_scan_with_pose(&mut Writer(&mut good), &ScanHeader::default(), &[line(1)], Some(&p))
-        .unwrap();
+    write_scan_with_pose(
+        &mut Writer(&mut good),
+        &ScanHeader::default(),
+        &[line(1)],
+        Some(&p),
+    )
+    .unwrap();
     let cut = reframed(&good, |raw| raw.truncate(raw.len() - 12 * 4 - 1));
     let none = reframed(&scan_frame(1, &[line(1)]), |raw| {
         raw.pop();
