@@ -115,6 +115,8 @@ pub struct App<const N: usize, const M: usize> {
     config: ConfigSlot,
     seq: u32,
     pose: PoseStep,
+    /// The pose step is off (false, all zero, by default).
+    pose_off: bool,
 }
 
 /// The configuration an [`App`] uses. The named ones are tags only, so that a new `App` with
@@ -168,6 +170,7 @@ impl<const N: usize, const M: usize> App<N, M> {
             config,
             seq: 0,
             pose: PoseStep::new(),
+            pose_off: false,
         }
     }
 
@@ -209,6 +212,15 @@ impl<const N: usize, const M: usize> App<N, M> {
         counters: Counters,
         out: &mut W,
     ) -> Result<ScanHeader, EncodeError<W::Error>> {
+        let header = self.extract(scan, counters);
+        let pose = self.update_pose();
+        self.write_frame(out, &header, pose.as_ref())?;
+        Ok(header)
+    }
+
+    /// The first step of [`App::process`], alone (to measure each): extracts the features of
+    /// `scan` and returns the frame's header (the sequence number advances).
+    pub fn extract(&mut self, scan: &RawScan<'_>, counters: Counters) -> ScanHeader {
         let s = scan.to_pfe();
         let result = self.extractor.extract(&s, self.config.get());
         let stats = self.extractor.stats();
@@ -231,9 +243,36 @@ impl<const N: usize, const M: usize> App<N, M> {
             status,
         };
         self.seq = self.seq.wrapping_add(1);
-        let pose = self.pose.update(features);
-        pfe_frame::write_scan_with_pose(out, &header, features, Some(&pose))?;
-        Ok(header)
+        header
+    }
+
+    /// The second step of [`App::process`]: the pose of the features last extracted
+    /// ([`PoseStep::update`]); `None` with the pose step off ([`App::set_pose_step`]).
+    pub fn update_pose(&mut self) -> Option<pfe_frame::PoseBlock> {
+        if self.pose_off {
+            return None;
+        }
+        Some(self.pose.update(self.extractor.features()))
+    }
+
+    /// The last step of [`App::process`]: the frame of the features last extracted, with
+    /// `header` and the pose block `pose`.
+    pub fn write_frame<W: Write>(
+        &self,
+        out: &mut W,
+        header: &ScanHeader,
+        pose: Option<&pfe_frame::PoseBlock>,
+    ) -> Result<(), EncodeError<W::Error>> {
+        pfe_frame::write_scan_with_pose(out, header, self.extractor.features(), pose)
+    }
+
+    /// Switches the pose step on (the default) or off (frames then carry no pose block, and
+    /// the odometry restarts when it is switched on again).
+    pub fn set_pose_step(&mut self, on: bool) {
+        if on && self.pose_off {
+            self.pose.reset();
+        }
+        self.pose_off = !on;
     }
 
     /// Waits for the next scan from `source` and processes it.
