@@ -1,6 +1,8 @@
 //! End to end: the pfe-qemu firmware under QEMU (mps2-an386) initialises the emulated LMS200
-//! over UART0, extracts features from simulated scans and sends them on UART1; the features
-//! must be bit-identical to pfe-core run on the host on the same B0 values.
+//! over UART0, extracts features from simulated scans and sends them on UART1 with each scan's
+//! pose; the features must be bit-identical to pfe-core run on the host on the same B0 values,
+//! and the poses to pfe-pose's odometry on the host (on a simulated drive around a room, where
+//! they also follow the true motion).
 //!
 //! Skipped (with a message) when `qemu-system-arm` or the `thumbv7em-none-eabihf` target is
 //! missing; `cargo xtask test` installs both, so CI runs it.
@@ -63,6 +65,77 @@ fn check(elf: &std::path::Path, scans: u32, config: &str, choice: ConfigChoice, 
         .frames
         .iter()
         .any(|f| f.header == Header::Report(Report::Done { scans })));
+}
+
+/// The bits of every number of a pose block.
+fn pose_bits(b: &pfe_frame::PoseBlock) -> Vec<u32> {
+    let mut v = Vec::new();
+    for c in [b.rel, b.pose] {
+        v.extend([c.x, c.y, c.theta].map(f32::to_bits));
+        v.extend(c.cov.iter().flatten().map(|x| x.to_bits()));
+    }
+    if let pfe_frame::PoseStatus::Degenerate { direction } = b.status {
+        v.extend(direction.map(f32::to_bits));
+    }
+    v
+}
+
+#[test]
+fn firmware_pose_equals_host_odometry_on_a_drive() {
+    use pfe_pose::{FeatureOdometry, Pose};
+    let Some(elf) = firmware_elf() else { return };
+    let scans = 32u32;
+    let s = qemu::session_drive(&elf, scans, "default", 5, Duration::from_secs(240)).unwrap();
+    assert_eq!(
+        s.run.code,
+        Some(0),
+        "firmware exit code; stderr:\n{}",
+        s.run.stderr
+    );
+    assert!(s.bad_frames.is_empty(), "{:?}", s.bad_frames);
+    let board: Vec<_> = s.frames.iter().filter(|f| f.scan().is_some()).collect();
+    assert_eq!(board.len(), scans as usize);
+    let words: Vec<&[u16]> = s.emulator.scans[..scans as usize]
+        .iter()
+        .map(|sc| {
+            assert!(!sc.damaged);
+            &sc.words[..]
+        })
+        .collect();
+    let host = qemu::host_frames(&words, ConfigChoice::Default).unwrap();
+    // pfe odometry's call on the host's features, independently of the App.
+    let mut odo = Box::new(FeatureOdometry::new_default());
+    let truth0 = pfe_eval::scene::drive::pose(0);
+    let truth0 = Pose::new(truth0[0] as f32, truth0[1] as f32, truth0[2] as f32);
+    let mut ok = 0;
+    for (k, (b, h)) in board.iter().zip(&host).enumerate() {
+        assert_eq!(b.scan().unwrap().seq, k as u32);
+        assert_eq!(b.features.len(), h.features.len(), "scan {k}");
+        for (x, y) in b.features.iter().zip(h.features.iter()) {
+            assert_eq!(qemu::ulps_apart(x, y), None, "scan {k}");
+        }
+        let (bp, hp) = (b.pose.expect("a pose block"), h.pose.expect("a pose block"));
+        assert_eq!(
+            pose_bits(&bp),
+            pose_bits(&hp),
+            "scan {k}: board {bp:?} host {hp:?}"
+        );
+        assert_eq!(bp.status, hp.status, "scan {k}");
+        let step = firmware::app::pose_block(&odo.update_features(&h.features, None));
+        assert_eq!(
+            pose_bits(&bp),
+            pose_bits(&step),
+            "scan {k}: odometry {step:?}"
+        );
+        ok += usize::from(bp.status == pfe_frame::PoseStatus::Ok);
+        let t = pfe_eval::scene::drive::pose(k);
+        let t = truth0
+            .inverse()
+            .compose(&Pose::new(t[0] as f32, t[1] as f32, t[2] as f32));
+        let err = (bp.pose.x - t.x).hypot(bp.pose.y - t.y);
+        assert!(err < 100.0, "scan {k}: {err} mm from the true pose");
+    }
+    assert!(ok >= scans as usize * 9 / 10, "{ok} of {scans} ok");
 }
 
 #[test]

@@ -1,7 +1,8 @@
 //! End to end through the user's tools: the emulated LMS200 on a pty → the QEMU firmware
 //! between two serial lines (`cargo xtask run-qemu`'s `RunQemu`) → `pfe listen` on its output
 //! pty gives, scan for scan, exactly the features `pfe extract --format lms200` gives on a
-//! capture of the telegrams the emulator sent.
+//! capture of the telegrams the emulator sent, and exactly the pose `pfe odometry` gives on the
+//! capture of the telegrams the firmware received.
 //!
 //! Without qemu-system-arm or the thumbv7em target it prints `SKIPPED: …` and passes, except
 //! under `CI=true`, where it fails.
@@ -116,16 +117,10 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
     std::fs::write(&cap, &capture).unwrap();
     // The firmware runs one sweep, without `scrutiny`, where a systematic error is not added:
     // told one sweep and none.
+    let firmware_config = ["--format", "lms200", "--sweeps", "1", "--sigma-sys", "0"];
     let extracted = Command::new(env!("CARGO_BIN_EXE_pfe"))
-        .args([
-            "extract",
-            "--format",
-            "lms200",
-            "--sweeps",
-            "1",
-            "--sigma-sys",
-            "0",
-        ])
+        .arg("extract")
+        .args(firmware_config)
         .arg(&cap)
         .output()
         .unwrap();
@@ -149,5 +144,40 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
         );
         assert_eq!(g["status"], want[k]["status"]);
     }
+
+    // The pose: `pfe odometry` on the telegrams from the firmware's first scan (seq 0, where
+    // its odometry starts) on.
+    let mut received = Vec::new();
+    for s in &report.scans[offset..] {
+        received.extend(qemu::b0_telegram(&s.words, s.unit == Unit::Mm).unwrap());
+    }
+    let cap2 = tmp.join("received.lms");
+    std::fs::write(&cap2, &received).unwrap();
+    let odometry = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .arg("odometry")
+        .args(firmware_config)
+        .arg(&cap2)
+        .output()
+        .unwrap();
+    assert!(
+        odometry.status.success(),
+        "pfe odometry: {}",
+        String::from_utf8_lossy(&odometry.stderr)
+    );
+    let poses = json_lines(&odometry.stdout);
+    for g in &got {
+        let k = g["seq"].as_u64().unwrap() as usize;
+        let (board, host) = (&g["odometry"], &poses[k]);
+        assert!(
+            board.is_object(),
+            "scan {}: no pose from pfe listen",
+            g["seq"]
+        );
+        for key in ["rel", "pose", "status", "direction", "reason"] {
+            // Equal JSON numbers: f32 values printed in their shortest form, so equal bits.
+            assert_eq!(board.get(key), host.get(key), "scan {}: {key}", g["seq"]);
+        }
+    }
+    assert_eq!(poses[0]["status"], "ok", "the first scan defines the frame");
     let _ = std::fs::remove_dir_all(&tmp);
 }

@@ -25,11 +25,9 @@ use pfe_frame::{Header, Report, Stage};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let (cmd, rest) = args
-        .split_first()
-        .context(
-            "usage: demo_host <bench-scans|bench|worst-scans|worst|demo|pose-scans|pose-bench> ...",
-        )?;
+    let (cmd, rest) = args.split_first().context(
+        "usage: demo_host <bench-scans|bench|worst-scans|worst|demo|pose-scans|pose-bench> ...",
+    )?;
     let opts = Opts::parse(rest)?;
     match cmd.as_str() {
         "bench-scans" => bench_scans(&opts),

@@ -33,7 +33,8 @@ fn code(mm: f32) -> u16 {
 fn carmen_scans(o: &Opts, log: &Path) -> Result<Vec<Vec<u16>>> {
     let from = usize::try_from(o.num("carmen-from", 100)?)?;
     let n = usize::try_from(o.num("carmen-scans", 200)?)?;
-    let input = pfe_formats::open(log, |r| r).with_context(|| format!("opening {}", log.display()))?;
+    let input =
+        pfe_formats::open(log, |r| r).with_context(|| format!("opening {}", log.display()))?;
     let mut out = Vec::new();
     for r in pfe_formats::carmen::Reader::new(input)
         .filter_map(|r| r.ok())
@@ -99,7 +100,8 @@ pub fn pose_bench(o: &Opts) -> Result<()> {
         run.scans,
         kinds.len()
     );
-    let stage = |name: &str| -> Vec<(f64, f64)> { run.stages.get(name).cloned().unwrap_or_default() };
+    let stage =
+        |name: &str| -> Vec<(f64, f64)> { run.stages.get(name).cloned().unwrap_or_default() };
     let (pose, pipe) = (stage("pose"), stage("pipeline-pose"));
     anyhow::ensure!(
         pose.len() == kinds.len() && pipe.len() == kinds.len(),
@@ -129,7 +131,10 @@ pub fn pose_bench(o: &Opts) -> Result<()> {
     let mut rows = |label: &str, idx: &[usize]| {
         let mut p: Vec<f64> = idx.iter().map(|&i| pose[i].0).collect();
         let mut w: Vec<f64> = idx.iter().map(|&i| pipe[i].0).collect();
-        let mut per_point: Vec<f64> = idx.iter().map(|&i| pipe[i].0 / pipe[i].1.max(1.0)).collect();
+        let mut per_point: Vec<f64> = idx
+            .iter()
+            .map(|&i| pipe[i].0 / pipe[i].1.max(1.0))
+            .collect();
         let (pm, px) = (median(&mut p), p.iter().copied().fold(0.0, f64::max));
         let (wm, wx) = (median(&mut w), w.iter().copied().fold(0.0, f64::max));
         let ppm = median(&mut per_point);
@@ -156,7 +161,10 @@ pub fn pose_bench(o: &Opts) -> Result<()> {
     let (used, size) = run.stack.unwrap_or((0, 0));
     let ram = static_ram + u64::from(used);
     let verdict = |ok: bool| if ok { "met" } else { "BROKEN" };
-    let (ok_pose, ok_pipe) = (pose_median <= POSE_MEDIAN_BUDGET, pipe_max <= PIPELINE_WORST_BUDGET);
+    let (ok_pose, ok_pipe) = (
+        pose_median <= POSE_MEDIAN_BUDGET,
+        pipe_max <= PIPELINE_WORST_BUDGET,
+    );
     let ok_ram = static_ram > 0 && used > 0 && ram <= RAM_BUDGET;
     md.push_str(&format!(
         "\nRAM of `pfe-bench-pose` (the `App` in its static, .bss): static {static_ram} B + stack \
@@ -207,8 +215,12 @@ fn host_statuses(bytes: &[u8], kinds: &[&str]) -> Result<Vec<PoseStatus>> {
                 app.set_pose_step(true);
             }
             let mut w = VecWriter(Vec::new());
-            app.process(&RawScan::lms_8m(g, &codes[..k], 1.0), Default::default(), &mut w)
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            app.process(
+                &RawScan::lms_8m(g, &codes[..k], 1.0),
+                Default::default(),
+                &mut w,
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
             let (frames, _) = qemu::decode_frames(&w.0);
             let status = frames
                 .first()

@@ -134,7 +134,12 @@ mod fw {
         let (used, size) = sys::stack_usage();
         report(&mut out, Report::Stack { used, size });
         report(&mut out, Report::Done { scans: seq });
-        defmt::info!("bench-pose: {} scans, stack {} of {} bytes", seq, used, size);
+        defmt::info!(
+            "bench-pose: {} scans, stack {} of {} bytes",
+            seq,
+            used,
+            size
+        );
         sys::exit(sys::EXIT_OK)
     }
 }

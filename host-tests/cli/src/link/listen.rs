@@ -30,8 +30,8 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use nix::sys::termios::{self, SetArg};
 use pfe_frame::{
-    max_frame_len, DecodeError, Feed, Frame, FrameDecoder, Header, PoseBlock, PoseCov,
-    PoseStatus, ScanHeader, ScanStatus, MAX_FEATURES,
+    max_frame_len, DecodeError, Feed, Frame, FrameDecoder, Header, PoseBlock, PoseCov, PoseStatus,
+    ScanHeader, ScanStatus, MAX_FEATURES,
 };
 use serde::Serialize;
 
