@@ -84,6 +84,8 @@ impl<'a> Work<'a> {
         self.nc = 0;
         let (x, y) = (pose.x, pose.y);
         let (st, ct) = sin_cos(pose.theta);
+        // `pose.transform_point` with its sine and cosine computed once (the same arithmetic).
+        let transform = |p: [f32; 2]| [ct * p[0] - st * p[1] + x, st * p[0] + ct * p[1] + y];
         let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
         for (k, lk) in self.curr.lines().iter().enumerate() {
             let a = lk.a + pose.theta;
@@ -97,11 +99,19 @@ impl<'a> Work<'a> {
                 c: lk.cov.c + 2.0 * h * lk.cov.b + h * h * lk.cov.a,
             };
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
-            let ext = lk
-                .ext
-                .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)));
+            let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             for (i, li) in self.prev.lines().iter().enumerate() {
+                // The gates below, for both orientations at once: a pair that fails them
+                // either way is rejected whatever the sign, without the cosine.
+                let var_a = ct_.a + li.cov.a + sa2;
+                let var_r = ct_.c + li.cov.c + sr * sr;
+                let (ga, gr) = (gate * var_a, gate * var_r);
+                let (ep, em) = (wrap(a - li.a), wrap(a + PI - li.a));
+                let (rp, rm) = (r - li.r, -r - li.r);
+                if (ep * ep > ga || rp * rp > gr) && (em * em > ga || rm * rm > gr) {
+                    continue;
+                }
                 let dcos = libm::cosf(a - li.a);
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
                 let ea = if sign > 0.0 {
@@ -164,7 +174,7 @@ impl<'a> Work<'a> {
             self.record(hi, trusted);
         }
         for (k, pk) in self.curr.pts().iter().enumerate() {
-            let q = pose.transform_point(pk.p);
+            let q = transform(pk.p);
             let cq = pk.cov.rotate(st, ct);
             let reach = libm::hypotf(pk.p[0], pk.p[1]);
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * reach);
