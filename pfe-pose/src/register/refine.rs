@@ -103,13 +103,19 @@ impl<'a> Work<'a> {
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             for (i, li) in self.prev.lines().iter().enumerate() {
                 // The gates below, for both orientations at once: a pair that fails them
-                // either way is rejected whatever the sign, without the cosine.
+                // either way is rejected whatever the sign, without the cosine (the distance
+                // first: it needs no angle wrapped).
                 let var_a = ct_.a + li.cov.a + sa2;
                 let var_r = ct_.c + li.cov.c + sr * sr;
                 let (ga, gr) = (gate * var_a, gate * var_r);
-                let (ep, em) = (wrap(a - li.a), wrap(a + PI - li.a));
                 let (rp, rm) = (r - li.r, -r - li.r);
-                if (ep * ep > ga || rp * rp > gr) && (em * em > ga || rm * rm > gr) {
+                let fails = |rr: f32, turn: f32| {
+                    rr * rr > gr || {
+                        let e = wrap(a + turn - li.a);
+                        e * e > ga
+                    }
+                };
+                if fails(rp, 0.0) && fails(rm, PI) {
                     continue;
                 }
                 let dcos = libm::cosf(a - li.a);
