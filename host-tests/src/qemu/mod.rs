@@ -78,8 +78,9 @@ pub fn session_with(
 }
 
 /// [`session`] on consecutive scans of a robot driving around a room
-/// ([`pfe_eval::scene::drive::room_drive`], `scans` of them from noise seed `seed`): the
-/// firmware's pose step has a motion to find.
+/// ([`pfe_eval::scene::drive::room_drive`] from noise seed `seed`; the emulator's telegram `k`
+/// is the drive's scan `k`, for `4 · scans` telegrams: room for telegrams the firmware misses
+/// before the drive would start over): the firmware's pose step has a motion to find.
 pub fn session_drive(
     elf: &Path,
     scans: u32,
@@ -87,7 +88,7 @@ pub fn session_drive(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
-    let sims = pfe_eval::scene::drive::room_drive(scans.max(1) as usize, seed)
+    let sims = pfe_eval::scene::drive::room_drive(4 * scans.max(1) as usize, seed)
         .into_iter()
         .map(|d| d.scan)
         .collect();
