@@ -127,28 +127,37 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
     assert!(extracted.status.success());
     let want = json_lines(&extracted.stdout);
 
-    // Firmware seq k is the emulator's telegram k + offset (telegrams sent before the
-    // firmware's driver was streaming are not scans to it).
-    let seq0 = got[0]["seq"].as_u64().unwrap() as usize;
-    let offset = (0..want.len())
-        .find(|&j| want[j]["features"] == got[0]["features"])
-        .expect("the first scan received matches no telegram")
-        .checked_sub(seq0)
-        .expect("offset");
+    // Each scan received is the telegram whose features it carries, in order (the firmware
+    // misses telegrams: before it streams, and while the pose step of a scan runs longer than
+    // a scan period, docs/PERFORMANCE.md).
+    let mut used = Vec::new();
+    let mut next = 0usize;
     for g in &got {
-        let k = g["seq"].as_u64().unwrap() as usize + offset;
-        assert_eq!(
-            g["features"], want[k]["features"],
-            "scan {} (telegram {k})",
-            g["seq"]
-        );
-        assert_eq!(g["status"], want[k]["status"]);
+        let j = (next..want.len())
+            .find(|&j| want[j]["features"] == g["features"] && want[j]["status"] == g["status"])
+            .unwrap_or_else(|| panic!("scan {}: matches no telegram from {next} on", g["seq"]));
+        used.push(j);
+        next = j + 1;
     }
 
-    // The pose: `pfe odometry` on the telegrams from the firmware's first scan (seq 0, where
-    // its odometry starts) on.
+    // The pose: `pfe odometry` on the telegrams the firmware processed, from its first scan
+    // (seq 0, where its odometry starts).
+    let seq0 = got[0]["seq"].as_u64().unwrap();
+    let consecutive = got
+        .iter()
+        .enumerate()
+        .all(|(k, g)| g["seq"].as_u64() == Some(seq0 + k as u64));
+    assert!(consecutive, "pfe listen missed a frame");
+    if seq0 != 0 {
+        eprintln!(
+            "SKIPPED (pose part): e2e_listen: pfe listen joined at seq {seq0}; the odometry before it is unknown"
+        );
+        let _ = std::fs::remove_dir_all(&tmp);
+        return;
+    }
     let mut received = Vec::new();
-    for s in &report.scans[offset..] {
+    for &j in &used {
+        let s = &report.scans[j];
         received.extend(qemu::b0_telegram(&s.words, s.unit == Unit::Mm).unwrap());
     }
     let cap2 = tmp.join("received.lms");
@@ -165,9 +174,9 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
         String::from_utf8_lossy(&odometry.stderr)
     );
     let poses = json_lines(&odometry.stdout);
-    for g in &got {
-        let k = g["seq"].as_u64().unwrap() as usize;
-        let (board, host) = (&g["odometry"], &poses[k]);
+    assert_eq!(poses.len(), got.len());
+    for (g, host) in got.iter().zip(&poses) {
+        let board = &g["odometry"];
         assert!(
             board.is_object(),
             "scan {}: no pose from pfe listen",
@@ -179,5 +188,12 @@ fn listen_gives_what_extract_gives_on_the_same_telegrams() {
         }
     }
     assert_eq!(poses[0]["status"], "ok", "the first scan defines the frame");
+    eprintln!(
+        "e2e_listen: telegrams {used:?}; statuses {:?}",
+        poses
+            .iter()
+            .map(|p| p["status"].clone())
+            .collect::<Vec<_>>()
+    );
     let _ = std::fs::remove_dir_all(&tmp);
 }
