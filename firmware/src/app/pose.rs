@@ -40,7 +40,11 @@ impl PoseStep {
         self.odometry.reset();
     }
 
-    /// Registers the scan's `features` and returns its pose block.
+    /// Registers the scan's `features` and returns its pose block. Never inlined: its stack
+    /// (about 15 KiB: feature sets and per-match information) is taken only while it runs,
+    /// not by every caller's frame (with the pose step off, the pipeline's stack stays the
+    /// extraction's).
+    #[inline(never)]
     pub fn update(&mut self, features: &[Feature]) -> PoseBlock {
         pose_block(&self.odometry.update_features(features, None))
     }
