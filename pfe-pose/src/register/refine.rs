@@ -69,6 +69,24 @@ impl<'a> Work<'a> {
         &mut self,
         pose: &Pose,
         slack: f32,
+        out: Option<&mut Assoc>,
+    ) -> Normal {
+        self.associate_with::<true>(pose, slack, out)
+    }
+
+    /// The consensus score of [`Work::associate`] alone (bit for bit the same: the same
+    /// matches, summed in the same order), without the normal equations.
+    pub(super) fn score(&mut self, pose: &Pose, slack: f32) -> f32 {
+        self.associate_with::<false>(pose, slack, None).score
+    }
+
+    /// [`Work::associate`]; with `FULL` false only the score (and the match counts) are
+    /// computed.
+    #[inline(always)]
+    fn associate_with<const FULL: bool>(
+        &mut self,
+        pose: &Pose,
+        slack: f32,
         mut out: Option<&mut Assoc>,
     ) -> Normal {
         let cfg = self.cfg;
@@ -161,6 +179,12 @@ impl<'a> Work<'a> {
             let Some((d2, i, e, w, sign, frac)) = best else {
                 continue;
             };
+            if !FULL {
+                n.lines += 1;
+                n.score +=
+                    (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
+                continue;
+            }
             let length = |ext: Option<([f32; 2], [f32; 2])>| {
                 ext.map_or(0.0, |(s, e)| libm::hypotf(e[0] - s[0], e[1] - s[1]))
             };
@@ -210,6 +234,9 @@ impl<'a> Work<'a> {
             let Some((d2, _, e, w)) = best else { continue };
             n.pts += 1;
             n.score += 1.0 - d2 / gate;
+            if !FULL {
+                continue;
+            }
             n.chi2 += d2;
             let jx = [1.0, 0.0, -st * pk.p[0] - ct * pk.p[1]];
             let jy = [0.0, 1.0, ct * pk.p[0] - st * pk.p[1]];
