@@ -65,12 +65,7 @@ impl<'a> Work<'a> {
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
     /// with `slack` times the configured slack), and the normal equations of those matches.
-    pub(super) fn associate(
-        &mut self,
-        pose: &Pose,
-        slack: f32,
-        out: Option<&mut Assoc>,
-    ) -> Normal {
+    pub(super) fn associate(&mut self, pose: &Pose, slack: f32, out: Option<&mut Assoc>) -> Normal {
         self.associate_with::<true>(pose, slack, out)
     }
 
