@@ -10,6 +10,7 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=../../memory.x");
     println!("cargo:rerun-if-env-changed=PFE_BENCH_SCANS");
+    println!("cargo:rerun-if-env-changed=PFE_BENCH_RESET_AT");
     let scans = match std::env::var_os("PFE_BENCH_SCANS") {
         Some(p) => {
             println!("cargo:rerun-if-changed={}", PathBuf::from(&p).display());

@@ -1,8 +1,9 @@
 //! End to end: the pfe-qemu firmware under QEMU (mps2-an386) initialises the emulated LMS200
-//! over UART0, extracts features from simulated scans and sends them on UART1; the features
-//! must be bit-identical to what `pfe extract --format lms200` gives on the host on the same
-//! B0 telegrams (`host_features`), everything on: the checks for real scans and the 0.5°
-//! scans' two sweeps.
+//! over UART0, extracts features from simulated scans and sends them on UART1 with each scan's
+//! pose; the features must be bit-identical to what `pfe extract --format lms200` gives on the
+//! host on the same B0 telegrams (`host_features`), everything on: the checks for real scans
+//! and the 0.5° scans' two sweeps; and the poses to pfe-pose's odometry on the host (on a
+//! simulated drive around a room, where they also follow the true motion).
 //!
 //! Skipped (with a message) when `qemu-system-arm` or the `thumbv7em-none-eabihf` target is
 //! missing; `cargo xtask test` installs both, so CI runs it.
@@ -65,6 +66,102 @@ fn check(elf: &std::path::Path, scans: u32, config: &str, choice: ConfigChoice, 
         .frames
         .iter()
         .any(|f| f.header == Header::Report(Report::Done { scans })));
+}
+
+/// The bits of every number of a pose block.
+fn pose_bits(b: &pfe_frame::PoseBlock) -> Vec<u32> {
+    let mut v = Vec::new();
+    for c in [b.rel, b.pose] {
+        v.extend([c.x, c.y, c.theta].map(f32::to_bits));
+        v.extend(c.cov.iter().flatten().map(|x| x.to_bits()));
+    }
+    if let pfe_frame::PoseStatus::Degenerate { direction } = b.status {
+        v.extend(direction.map(f32::to_bits));
+    }
+    v
+}
+
+/// The board computes the pose of every scan it receives; with the pose step it takes longer
+/// than a scan period (docs/PERFORMANCE.md, `bench-mcu-pose`), so it misses telegrams: each
+/// scan frame is matched to the telegram whose features it carries, and the host runs the same
+/// odometry over the telegrams the board processed, in order.
+#[test]
+fn firmware_pose_equals_host_odometry_on_a_drive() {
+    use pfe_pose::{FeatureOdometry, Pose};
+    let Some(elf) = firmware_elf() else { return };
+    let scans = 32u32;
+    let s = qemu::session_drive(&elf, scans, "default", 5, Duration::from_secs(400)).unwrap();
+    assert_eq!(
+        s.run.code,
+        Some(0),
+        "firmware exit code; stderr:\n{}",
+        s.run.stderr
+    );
+    assert!(s.bad_frames.is_empty(), "{:?}", s.bad_frames);
+    let board: Vec<_> = s.frames.iter().filter(|f| f.scan().is_some()).collect();
+    assert_eq!(board.len(), scans as usize);
+    // The telegram each scan frame came from (the drive's scans are all distinct).
+    let mut used: Vec<usize> = Vec::new();
+    let mut next = 0usize;
+    assert!(
+        s.emulator.scans.len() <= 4 * scans as usize,
+        "the drive started over: {} telegrams",
+        s.emulator.scans.len()
+    );
+    for (k, b) in board.iter().enumerate() {
+        let j = (next..s.emulator.scans.len())
+            .find(|&j| {
+                let sent = &s.emulator.scans[j];
+                !sent.damaged && {
+                    let h = qemu::host_features(&sent.words, ConfigChoice::Default).unwrap();
+                    h.len() == b.features.len()
+                        && h.iter()
+                            .zip(b.features.iter())
+                            .all(|(x, y)| qemu::ulps_apart(x, y).is_none())
+                }
+            })
+            .unwrap_or_else(|| panic!("scan {k}: its features match no telegram from {next} on"));
+        used.push(j);
+        next = j + 1;
+    }
+    let words: Vec<&[u16]> = used
+        .iter()
+        .map(|&j| &s.emulator.scans[j].words[..])
+        .collect();
+    let host = qemu::host_frames(&words, ConfigChoice::Default).unwrap();
+    // pfe odometry's call on the host's features, independently of the App.
+    let mut odo = Box::new(FeatureOdometry::new_default());
+    let t0 = pfe_eval::scene::drive::pose(used[0]);
+    let truth0 = Pose::new(t0[0] as f32, t0[1] as f32, t0[2] as f32);
+    let mut ok = 0;
+    for (k, (b, h)) in board.iter().zip(&host).enumerate() {
+        assert_eq!(b.scan().unwrap().seq, k as u32);
+        let (bp, hp) = (b.pose.expect("a pose block"), h.pose.expect("a pose block"));
+        assert_eq!(
+            pose_bits(&bp),
+            pose_bits(&hp),
+            "scan {k}: board {bp:?} host {hp:?}"
+        );
+        assert_eq!(bp.status, hp.status, "scan {k}");
+        let step = firmware::app::pose_block(&odo.update_features(&h.features, None));
+        assert_eq!(
+            pose_bits(&bp),
+            pose_bits(&step),
+            "scan {k}: odometry {step:?}"
+        );
+        ok += usize::from(bp.status == pfe_frame::PoseStatus::Ok);
+        let t = pfe_eval::scene::drive::pose(used[k]);
+        let t = truth0
+            .inverse()
+            .compose(&Pose::new(t[0] as f32, t[1] as f32, t[2] as f32));
+        let err = (bp.pose.x - t.x).hypot(bp.pose.y - t.y);
+        assert!(err < 100.0, "scan {k}: {err} mm from the true pose");
+    }
+    assert!(ok >= scans as usize * 9 / 10, "{ok} of {scans} ok");
+    eprintln!(
+        "drive: {ok}/{scans} ok; the board processed telegrams {used:?} of {}",
+        s.emulator.scans.len()
+    );
 }
 
 #[test]

@@ -43,7 +43,8 @@ fn doc_bytes() -> Vec<u8> {
 }
 
 /// The fixed scan of the vector: LMS200 180°/0.5°, a wall 2 m ahead over ±34°, a pillar of
-/// radius 150 mm centred at (1200, 900) mm, nothing else in range.
+/// radius 150 mm centred at (1200, 900) mm, nothing else in range; the frame of the second
+/// time the app sees it (seq 1: its pose block tells that two features cannot be registered).
 fn vector_frame() -> Vec<u8> {
     let g = pfe_core::ScanGeometry::LMS200_180_050;
     let codes: Vec<u16> = (0..361)
@@ -72,6 +73,8 @@ fn vector_frame() -> Vec<u8> {
         bytes_skipped: 17,
         reinits: 1,
     };
+    let mut first = VecWriter(Vec::new());
+    app.process(&scan, Counters::default(), &mut first).unwrap();
     let mut out = VecWriter(Vec::new());
     app.process(&scan, counters, &mut out).unwrap();
     out.0
@@ -221,7 +224,7 @@ mod spec {
             crc32fast::hash(payload)
         );
         let mut r = R(payload);
-        assert_eq!(r.u8(), 3, "version");
+        assert_eq!(r.u8(), 4, "version");
         assert_eq!(r.varint(), 0, "Header::Scan");
         let seq = r.varint();
         let time_ms = r.varint();
@@ -260,13 +263,48 @@ mod spec {
                     "start_angle": start_angle, "end_angle": end_angle})
             });
         }
+        // The pose block: an option (00 none, 01 some), two poses, the status.
+        let odometry = (r.u8() == 1).then(|| {
+            let mut pose = || {
+                let (x, y, theta) = (r.f32(), r.f32(), r.f32());
+                let cov: Vec<Value> = (0..9).map(|_| r.f32()).collect();
+                json!({"x": x, "y": y, "theta": theta, "cov": cov})
+            };
+            let (rel, pose) = (pose(), pose());
+            let mut o = json!({"rel": rel, "pose": pose});
+            match r.varint() {
+                0 => o["status"] = json!("ok"),
+                1 => {
+                    o["status"] = json!("degenerate");
+                    o["direction"] = json!([r.f32(), r.f32(), r.f32()]);
+                }
+                2 => {
+                    o["status"] = json!("none");
+                    let reasons = [
+                        "TooFewFeatures",
+                        "NoHypothesis",
+                        "NoConsensus",
+                        "Ambiguous",
+                        "InvalidPrior",
+                        "Other",
+                    ];
+                    o["reason"] = json!(reasons[r.varint() as usize]);
+                }
+                s => panic!("pose status {s}"),
+            }
+            o
+        });
         assert!(r.0.is_empty(), "trailing bytes");
-        json!({
+        let mut out = json!({
             "scan": seq, "features": features,
             "status": {"error": error, "dropped": dropped},
             "seq": seq, "time_ms": time_ms, "valid": valid, "segments": segments,
             "counters": counters,
-        })
+        });
+        if let Some(o) = odometry {
+            out["odometry"] = o;
+        }
+        out
     }
 }
 

@@ -213,39 +213,10 @@ pub(crate) fn eigen_sym3(a: &Cov3) -> ([f32; 3], [[f32; 3]; 3]) {
         if !(off > 1e-14 * diag) {
             break;
         }
-        for (p, q) in [(0usize, 1usize), (0, 2), (1, 2)] {
-            let apq = m[p][q];
-            if apq == 0.0 {
-                continue;
-            }
-            let theta = (m[q][q] - m[p][p]) / (2.0 * apq);
-            let t = if theta.is_finite() {
-                let sgn = if theta >= 0.0 { 1.0 } else { -1.0 };
-                sgn / (theta.abs() + libm::sqrtf(theta * theta + 1.0))
-            } else {
-                0.0
-            };
-            let c = 1.0 / libm::sqrtf(t * t + 1.0);
-            let s = t * c;
-            for k in 0..3 {
-                let mkp = m[k][p];
-                let mkq = m[k][q];
-                m[k][p] = c * mkp - s * mkq;
-                m[k][q] = s * mkp + c * mkq;
-            }
-            for k in 0..3 {
-                let mpk = m[p][k];
-                let mqk = m[q][k];
-                m[p][k] = c * mpk - s * mqk;
-                m[q][k] = s * mpk + c * mqk;
-            }
-            for row in v.iter_mut() {
-                let vkp = row[p];
-                let vkq = row[q];
-                row[p] = c * vkp - s * vkq;
-                row[q] = s * vkp + c * vkq;
-            }
-        }
+        // The three planes in turn; constant indices, so no bounds check survives.
+        jacobi_rotate::<0, 1>(&mut m, &mut v);
+        jacobi_rotate::<0, 2>(&mut m, &mut v);
+        jacobi_rotate::<1, 2>(&mut m, &mut v);
     }
     let mut vals = [m[0][0], m[1][1], m[2][2]];
     let mut vecs = [
@@ -263,6 +234,42 @@ pub(crate) fn eigen_sym3(a: &Cov3) -> ([f32; 3], [[f32; 3]; 3]) {
         }
     }
     (vals, vecs)
+}
+
+/// One Jacobi rotation of `m` in the plane (`P`, `Q`) zeroing `m[P][Q]`, accumulated in `v`.
+#[inline(always)]
+fn jacobi_rotate<const P: usize, const Q: usize>(m: &mut Cov3, v: &mut Cov3) {
+    let apq = m[P][Q];
+    if apq == 0.0 {
+        return;
+    }
+    let theta = (m[Q][Q] - m[P][P]) / (2.0 * apq);
+    let t = if theta.is_finite() {
+        let sgn = if theta >= 0.0 { 1.0 } else { -1.0 };
+        sgn / (theta.abs() + libm::sqrtf(theta * theta + 1.0))
+    } else {
+        0.0
+    };
+    let c = 1.0 / libm::sqrtf(t * t + 1.0);
+    let s = t * c;
+    for row in m.iter_mut() {
+        let mkp = row[P];
+        let mkq = row[Q];
+        row[P] = c * mkp - s * mkq;
+        row[Q] = s * mkp + c * mkq;
+    }
+    for k in 0..3 {
+        let mpk = m[P][k];
+        let mqk = m[Q][k];
+        m[P][k] = c * mpk - s * mqk;
+        m[Q][k] = s * mpk + c * mqk;
+    }
+    for row in v.iter_mut() {
+        let vkp = row[P];
+        let vkq = row[Q];
+        row[P] = c * vkp - s * vkq;
+        row[Q] = s * vkp + c * vkq;
+    }
 }
 
 /// Inverse of a symmetric positive definite 3×3 matrix (`None` when not positive definite or

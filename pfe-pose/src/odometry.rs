@@ -45,15 +45,17 @@ struct Entry {
     last: u32,
 }
 
+/// An unused map slot (never read: only the first `n` entries are), all zero bytes so that an
+/// [`Odometry`] in a `static` goes to `.bss`.
 const EMPTY: Entry = Entry {
     v: [0.0; 2],
     alpha: 0.0,
     cov: Sym2 {
-        a: 1.0,
+        a: 0.0,
         b: 0.0,
-        c: 1.0,
+        c: 0.0,
     },
-    ext: ([f32::NAN; 2], [f32::NAN; 2]),
+    ext: ([0.0; 2], [0.0; 2]),
     line: false,
     seen: 0,
     last: 0,
@@ -99,7 +101,7 @@ pub struct Step {
 /// ```
 #[derive(Clone, Debug)]
 pub struct Odometry<const MAP: usize> {
-    cfg: Config,
+    cfg: ConfigSlot,
     map: [Entry; MAP],
     n: usize,
     pose: Pose,
@@ -110,9 +112,59 @@ pub struct Odometry<const MAP: usize> {
     last: Set,
 }
 
+/// The settings of an [`Odometry`]: the default ones as a tag only, so that a new odometry
+/// with them is all zero bytes (a `static` of it goes to `.bss`, not copied from flash).
+#[derive(Clone, Copy, Debug)]
+#[repr(u8)]
+enum ConfigSlot {
+    Default = 0,
+    Custom(Config) = 1,
+}
+
+impl ConfigSlot {
+    fn get(&self) -> Config {
+        match self {
+            ConfigSlot::Default => Config::DEFAULT,
+            ConfigSlot::Custom(c) => *c,
+        }
+    }
+}
+
+/// A map of this many features is what `pfe odometry` and the firmware use
+/// ([`FeatureOdometry`]).
+pub const ODOMETRY_MAP: usize = 64;
+
+/// The feature odometry of `pfe odometry` and of the firmware: a local map of
+/// [`ODOMETRY_MAP`] features and the default [`Config`]; feed it with
+/// [`Odometry::update_features`].
+pub type FeatureOdometry = Odometry<ODOMETRY_MAP>;
+
+impl<const MAP: usize> Default for Odometry<MAP> {
+    fn default() -> Self {
+        Self::new_default()
+    }
+}
+
 impl<const MAP: usize> Odometry<MAP> {
     /// An odometry that has seen no scan, with registration settings `cfg`.
     pub const fn new(cfg: Config) -> Self {
+        Self::with_slot(ConfigSlot::Custom(cfg))
+    }
+
+    /// An odometry that has seen no scan, with the default settings ([`Config::DEFAULT`]);
+    /// all zero bytes, so a `static` of it takes no flash.
+    ///
+    /// ```
+    /// use pfe_pose::{FeatureOdometry, Status};
+    /// static ODOMETRY: FeatureOdometry = FeatureOdometry::new_default(); // in .bss
+    /// let mut odo = FeatureOdometry::new_default();
+    /// assert_eq!(odo.update_features(&[], None).status, Status::Ok); // the first scan
+    /// ```
+    pub const fn new_default() -> Self {
+        Self::with_slot(ConfigSlot::Default)
+    }
+
+    const fn with_slot(cfg: ConfigSlot) -> Self {
         Self {
             cfg,
             map: [EMPTY; MAP],
@@ -157,8 +209,38 @@ impl<const MAP: usize> Odometry<MAP> {
     /// of this scan's pose in the previous scan's frame with its covariance (wheel odometry),
     /// or `None` (then the last motion, with the configured bounds as its uncertainty).
     pub fn update(&mut self, obs: &[Observation], motion: Option<(Pose, Cov3)>) -> Step {
-        let cfg = self.cfg;
-        let curr = Set::from_obs(obs, &cfg);
+        let cfg = self.cfg.get();
+        let curr = Set::from_obs(obs.iter().copied(), &cfg);
+        self.update_set(curr, motion, cfg)
+    }
+
+    /// [`Odometry::update`] with the scan's pfe-core features: those
+    /// [`Observation::from_feature`] accepts, in order (no copy of them is made). This is the
+    /// one function `pfe odometry` and the firmware call, so that both give the same pose, bit
+    /// for bit, for the same features.
+    ///
+    /// ```
+    /// use pfe_core::{Feature, LineFeature, Point};
+    /// use pfe_pose::{FeatureOdometry, Status};
+    /// let wall = |rho: f32| Feature::Line(LineFeature::new(
+    ///     0, 99, 100, 0.0, rho, 1e-6, 4.0, 0.0, Point::new(rho, -900.0), Point::new(rho, 900.0),
+    /// ));
+    /// let mut odo = FeatureOdometry::new_default();
+    /// odo.update_features(&[wall(2000.0)], None);
+    /// let step = odo.update_features(&[wall(1900.0)], None);
+    /// assert!(matches!(step.status, Status::None(_))); // one wall cannot place the robot
+    /// ```
+    pub fn update_features(
+        &mut self,
+        features: &[pfe_core::Feature],
+        motion: Option<(Pose, Cov3)>,
+    ) -> Step {
+        let cfg = self.cfg.get();
+        let curr = Set::from_obs(features.iter().filter_map(Observation::from_feature), &cfg);
+        self.update_set(curr, motion, cfg)
+    }
+
+    fn update_set(&mut self, curr: Set, motion: Option<(Pose, Cov3)>, cfg: Config) -> Step {
         let scan = self.scans;
         self.scans = self.scans.saturating_add(1);
         if scan == 0 {

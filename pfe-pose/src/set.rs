@@ -32,25 +32,28 @@ pub(crate) struct Pt {
     pub rank: f32,
 }
 
+/// An unused slot (never read: only the first `nl` are), all zero bytes (a `static`
+/// odometry goes to `.bss`).
 const NO_LINE: Line = Line {
     a: 0.0,
     r: 0.0,
     cov: Sym2 {
-        a: 1.0,
+        a: 0.0,
         b: 0.0,
-        c: 1.0,
+        c: 0.0,
     },
     ext: None,
     reach: 0.0,
     rank: 0.0,
 };
 
+/// An unused slot, all zero bytes (as [`NO_LINE`]).
 const NO_PT: Pt = Pt {
     p: [0.0; 2],
     cov: Sym2 {
-        a: 1.0,
+        a: 0.0,
         b: 0.0,
-        c: 1.0,
+        c: 0.0,
     },
     rank: 0.0,
 };
@@ -93,7 +96,7 @@ impl Set {
     }
 
     /// The valid observations of `obs` with the floor of `cfg` added.
-    pub fn from_obs(obs: &[Observation], cfg: &Config) -> Self {
+    pub fn from_obs(obs: impl IntoIterator<Item = Observation>, cfg: &Config) -> Self {
         let mut s = Self::new();
         for o in obs {
             if !o.is_valid() {

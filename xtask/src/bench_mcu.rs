@@ -8,6 +8,13 @@
 //! the maximum per scan kind beside the algorithmic bound; fails above 1 000 000 instructions
 //! per scan.
 //!
+//! The pose step (also `--pose` alone): `pfe-bench-pose` on consecutive scans of a moving
+//! robot (a simulated drive around a room, and the shared CARMEN csail log's LMS200 scans when
+//! `../shared/data` is there, else skipped loudly), the pose step alone and the whole pipeline
+//! with it, median and worst case per scan; fails when the pose step's median is above 500 000
+//! instructions a scan, the pipeline's worst case above 1 500 000, or static RAM + stack above
+//! 48 KiB (section `bench-mcu-pose` of docs/PERFORMANCE.md).
+//!
 //! Steps: simulated scans → B0 telegrams (`demo_host bench-scans`), built into the
 //! `pfe-bench` firmware (`PFE_BENCH_SCANS`), run under QEMU, timing frames decoded and
 //! tabulated (`demo_host bench`).
@@ -23,7 +30,8 @@ pub fn run(args: &[String]) -> Result<()> {
         [] => "100".to_string(),
         [flag, n] if flag == "--scans" => n.clone(),
         [flag] if flag == "--worst" => return worst(),
-        _ => anyhow::bail!("usage: cargo xtask bench-mcu [--scans N | --worst]"),
+        [flag] if flag == "--pose" => return pose(),
+        _ => anyhow::bail!("usage: cargo xtask bench-mcu [--scans N | --worst | --pose]"),
     };
     util::ensure_target()?;
     util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
@@ -54,7 +62,7 @@ pub fn run(args: &[String]) -> Result<()> {
         &env,
         &base.join("micromath"),
     )?;
-    demo_host(&[
+    let extraction = demo_host(&[
         "bench".as_ref(),
         "--scans".as_ref(),
         scans.as_ref(),
@@ -64,7 +72,83 @@ pub fn run(args: &[String]) -> Result<()> {
         mm.as_os_str(),
         "--md".as_ref(),
         md.as_os_str(),
+    ]);
+    let pose = pose();
+    extraction.and(pose)
+}
+
+/// The pose step: `pfe-bench-pose` on a simulated drive and, when the shared data is there,
+/// the csail log's LMS200 scans; tabulated and held to the budgets (`demo_host pose-bench`).
+fn pose() -> Result<()> {
+    util::ensure_target()?;
+    util::ensure_apt("qemu-system-arm", "qemu-system-arm")?;
+    let base = target_dir().join("bench-mcu");
+    std::fs::create_dir_all(&base).context("creating the bench directory")?;
+    let (scans_file, kinds) = (base.join("pose.bin"), base.join("pose.txt"));
+    let mut args: Vec<std::ffi::OsString> = vec![
+        "pose-scans".into(),
+        "--out".into(),
+        scans_file.clone().into(),
+        "--kinds".into(),
+        kinds.clone().into(),
+    ];
+    // The csail log: an LMS200 at 180°/0.5° in mm (361 beams), as the board would get it.
+    match util::shared_carmen_logs("bench-mcu (pose, real scans)")? {
+        Some(logs) => match logs.iter().find(|l| l.contains("csail")) {
+            Some(log) => {
+                args.push("--carmen".into());
+                args.push(util::root().join(log).into());
+            }
+            None => eprintln!("bench-mcu: SKIPPED the real scans of the pose bench: no csail log"),
+        },
+        None => eprintln!("bench-mcu: the pose bench on the simulated drive only"),
+    }
+    let resets = demo_host_output(&args)?;
+    let resets = resets.trim().to_string();
+    let env = [
+        ("PFE_BENCH_SCANS", scans_file.as_os_str()),
+        ("PFE_BENCH_RESET_AT", resets.as_ref()),
+    ];
+    let elf = build_fw("pfe-bench-pose", &[], &env, &base.join("pose"))?;
+    let tool = util::llvm_tool("llvm-size")?;
+    let (_, static_ram, _, _) = crate::size::sizes(&tool, &elf)?;
+    let md = util::root().join("docs").join("PERFORMANCE.md");
+    let ram = static_ram.to_string();
+    demo_host(&[
+        "pose-bench".as_ref(),
+        "--elf".as_ref(),
+        elf.as_os_str(),
+        "--kinds".as_ref(),
+        kinds.as_os_str(),
+        "--scans".as_ref(),
+        scans_file.as_os_str(),
+        "--static-ram".as_ref(),
+        ram.as_ref(),
+        "--md".as_ref(),
+        md.as_os_str(),
     ])
+}
+
+/// Runs `demo_host` with `args` and returns its stdout.
+fn demo_host_output(args: &[std::ffi::OsString]) -> Result<String> {
+    let mut c = util::cargo();
+    c.args([
+        "run",
+        "--quiet",
+        "-p",
+        "host-tests",
+        "--example",
+        "demo_host",
+        "--",
+    ])
+    .args(args);
+    eprintln!("$ {c:?}");
+    let out = c
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .context("running demo_host")?;
+    anyhow::ensure!(out.status.success(), "demo_host failed: {}", out.status);
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
 
 /// `--worst`: the adversarial scans built into `pfe-bench` (libm), measured and tabulated.

@@ -26,7 +26,7 @@ const RAM_BUDGET: u64 = 48 * 1024;
 const DATA_LIMIT: u64 = 1024;
 
 /// Section sizes of an ELF: (flash, static RAM, .data, a description).
-fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64, String)> {
+pub(crate) fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64, String)> {
     let out = Command::new(tool)
         .arg("-A")
         .arg(elf)

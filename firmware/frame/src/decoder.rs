@@ -5,7 +5,7 @@ use pfe_core::{CircleFeature, Feature, LineFeature, ObjectFeature, Point};
 
 use super::cobs::cobs_decode_in_place;
 use super::crc::crc32;
-use super::wire::{Header, ScanHeader, MAX_FEATURES, OLDER_VERSIONS, WIRE_VERSION};
+use super::wire::{Header, PoseBlock, ScanHeader, MAX_FEATURES, OLDER_VERSIONS, WIRE_VERSION};
 
 /// A decoded frame. `#[non_exhaustive]`: later wire versions may carry more.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,6 +15,9 @@ pub struct Frame {
     pub header: Header,
     /// The features of a scan frame (empty for reports), bit for bit as the firmware had them.
     pub features: Vec<Feature, MAX_FEATURES>,
+    /// The pose block of a scan frame: the firmware's odometry for this scan, bit for bit
+    /// (`None` for reports, for a frame sent without one, and for versions 2 and 3).
+    pub pose: Option<PoseBlock>,
 }
 
 impl Frame {
@@ -189,10 +192,18 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
         return Err(DecodeError::UnknownVersion { version });
     }
     // Version 2 had no small objects (tag 2).
-    let max_tag = if version == WIRE_VERSION { 2 } else { 1 };
+    let max_tag = if version == 2 { 1 } else { 2 };
     let (header, mut rest): (Header, &[u8]) =
         postcard::take_from_bytes(payload).map_err(|_| DecodeError::Payload)?;
+    // Version 3 had no stages from 4 on in its timing reports (the per-step stages and the
+    // pose stages came with version 4).
+    if let Header::Report(crate::Report::Timing { stage, .. }) = header {
+        if version < 4 && stage as u8 >= crate::Stage::Load as u8 {
+            return Err(DecodeError::Payload);
+        }
+    }
     let mut features = Vec::new();
+    let mut pose = None;
     if let Header::Scan(h) = header {
         if usize::from(h.n_features) > MAX_FEATURES {
             return Err(DecodeError::TooManyFeatures { n: h.n_features });
@@ -204,11 +215,22 @@ pub fn decode_frame(buf: &mut [u8]) -> Result<Frame, DecodeError> {
                 .map_err(|_| DecodeError::TooManyFeatures { n: h.n_features })?;
             rest = r;
         }
+        // Version 4: the pose block follows the features.
+        if version >= 4 {
+            let (p, r): (Option<PoseBlock>, &[u8]) =
+                postcard::take_from_bytes(rest).map_err(|_| DecodeError::Payload)?;
+            pose = p;
+            rest = r;
+        }
     }
     if !rest.is_empty() {
         return Err(DecodeError::TrailingBytes);
     }
-    Ok(Frame { header, features })
+    Ok(Frame {
+        header,
+        features,
+        pose,
+    })
 }
 
 /// One feature off the front of `data` (the layout the encoder writes: variant index, first,

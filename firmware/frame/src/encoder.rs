@@ -4,10 +4,13 @@
 use pfe_core::Feature;
 
 use super::cobs::CobsWriter;
-use super::wire::{Header, Report, ScanHeader, ScanStatus, MAX_FEATURE_LEN, WIRE_VERSION};
+use super::wire::{
+    Header, PoseBlock, Report, ScanHeader, ScanStatus, MAX_FEATURE_LEN, MAX_POSE_LEN, WIRE_VERSION,
+};
 
-/// Bytes of features [`write_scan`] encodes at a time.
+/// Bytes of features [`write_scan`] encodes at a time (the pose block fits one).
 const FEATURE_CHUNK: usize = 3 * MAX_FEATURE_LEN;
+const _: () = assert!(MAX_POSE_LEN <= FEATURE_CHUNK);
 
 /// Why a frame could not be written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,12 +134,41 @@ impl Cursor<'_> {
     }
 }
 
-/// Writes one scan frame: `header` (its `n_features` is overwritten with `features.len()`)
-/// then every feature.
+/// Writes one scan frame: `header` (its `n_features` is overwritten with `features.len()`),
+/// every feature, and no pose block (`None`; see [`write_scan_with_pose`]).
 pub fn write_scan<W: embedded_io::Write>(
     w: &mut W,
     header: &ScanHeader,
     features: &[Feature],
+) -> Result<(), EncodeError<W::Error>> {
+    write_scan_with_pose(w, header, features, None)
+}
+
+/// Writes one scan frame: `header` (its `n_features` is overwritten with `features.len()`),
+/// every feature, then the pose block `pose` (the firmware's odometry for this scan).
+///
+/// ```
+/// use pfe_frame::{write_scan_with_pose, Feed, FrameDecoder, PoseBlock, PoseCov, PoseStatus, ScanHeader};
+/// let pose = PoseBlock {
+///     rel: PoseCov { x: 120.0, y: -3.5, theta: 0.02, cov: [[25.0, 0.0, 0.0], [0.0, 25.0, 0.0], [0.0, 0.0, 1e-5]] },
+///     pose: PoseCov { x: 480.0, y: 10.0, theta: 0.1, cov: [[90.0, 1.0, 0.0], [1.0, 80.0, 0.0], [0.0, 0.0, 4e-5]] },
+///     status: PoseStatus::Ok,
+/// };
+/// let mut buf = [0u8; 512];
+/// let mut w = &mut buf[..];
+/// write_scan_with_pose(&mut w, &ScanHeader::default(), &[], Some(&pose))?;
+/// let n = 512 - w.len();
+/// let Feed::Frame { frame, .. } = FrameDecoder::<1024>::new().feed(&buf[..n]) else {
+///     return Err("no frame".into());
+/// };
+/// assert_eq!(frame.pose, Some(pose));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn write_scan_with_pose<W: embedded_io::Write>(
+    w: &mut W,
+    header: &ScanHeader,
+    features: &[Feature],
+    pose: Option<&PoseBlock>,
 ) -> Result<(), EncodeError<W::Error>> {
     let mut h = *header;
     h.n_features = u16::try_from(features.len()).unwrap_or(u16::MAX);
@@ -155,6 +187,16 @@ pub fn write_scan<W: embedded_io::Write>(
             .get_mut(len..)
             .map_or(0, |rest| feature_bytes(f, rest));
     }
+    // The pose block: postcard's `Option<PoseBlock>`.
+    if len + MAX_POSE_LEN > FEATURE_CHUNK {
+        enc.put(chunk.get(..len).unwrap_or(&[]))
+            .map_err(EncodeError::Write)?;
+        len = 0;
+    }
+    let rest = chunk.get_mut(len..).unwrap_or(&mut []);
+    len += postcard::to_slice(&pose, rest)
+        .map_err(|_| EncodeError::Serialize)?
+        .len();
     enc.put(chunk.get(..len).unwrap_or(&[]))
         .map_err(EncodeError::Write)?;
     enc.finish().map_err(EncodeError::Write)

@@ -4,7 +4,8 @@
 //! # Frame format (version [`WIRE_VERSION`]; the specification is `docs/FRAME.md`)
 //!
 //! ```text
-//! COBS( WIRE_VERSION ‖ postcard(Header) ‖ feature × n ‖ CRC-32 (4 bytes, little-endian) ) ‖ 0x00
+//! COBS( WIRE_VERSION ‖ postcard(Header) ‖ feature × n ‖ [postcard(Option<PoseBlock>)]
+//!       ‖ CRC-32 (4 bytes, little-endian) ) ‖ 0x00
 //! ```
 //!
 //! - Every frame ends with a single `0x00`; COBS guarantees there is no other zero in it, so a
@@ -16,8 +17,10 @@
 //!   init and final XOR `0xFFFFFFFF`; `crc32(b"123456789") = 0xCBF43926`) over the payload
 //!   bytes (version included), appended little-endian before COBS encoding.
 //! - The [`Header`] says what follows: [`Header::Scan`] is followed by exactly `n_features`
-//!   pfe-core [`Feature`](pfe_core::Feature)s (points as `[x, y]`); [`Header::Report`] (stack
-//!   high-water mark, timing) by nothing.
+//!   pfe-core [`Feature`](pfe_core::Feature)s (points as `[x, y]`) and the pose block, an
+//!   `Option<`[`PoseBlock`]`>` (the scan's pose from the firmware's feature odometry: relative
+//!   and accumulated pose with covariances, status); [`Header::Report`] (stack high-water mark,
+//!   timing) by nothing. Versions 3 and 2 (still decoded) have no pose block.
 //!
 //! The encoder ([`write_scan`], [`write_report`]) streams to any [`embedded_io::Write`] with a
 //! fixed 255-byte COBS block and a 210-byte chunk for a scan's header and features (written
@@ -61,8 +64,9 @@ mod wire;
 
 pub use crc::crc32;
 pub use decoder::{decode_frame, DecodeError, Feed, Frame, FrameDecoder};
-pub use encoder::{write_report, write_scan, EncodeError};
+pub use encoder::{write_report, write_scan, write_scan_with_pose, EncodeError};
 pub use wire::{
-    max_frame_len, Counters, Header, Report, ScanHeader, ScanStatus, Stage, MAX_FEATURES,
-    MAX_FEATURE_LEN, OLDER_VERSIONS, WIRE_VERSION,
+    max_frame_len, Counters, Header, PoseBlock, PoseCov, PoseFailure, PoseStatus, Report,
+    ScanHeader, ScanStatus, Stage, MAX_FEATURES, MAX_FEATURE_LEN, MAX_POSE_LEN, OLDER_VERSIONS,
+    WIRE_VERSION,
 };

@@ -6,11 +6,12 @@ use serde::{Deserialize, Serialize};
 /// Version of the frame layout described here, the first byte of every frame's payload; bump it
 /// when a wire struct or the feature layout changes. A receiver drops a frame of another version
 /// ([`DecodeError::UnknownVersion`](super::DecodeError::UnknownVersion)).
-pub const WIRE_VERSION: u8 = 3;
+pub const WIRE_VERSION: u8 = 4;
 
-/// The older versions the decoder still reads: version 2, the same layout without small
-/// objects (feature tag 2).
-pub const OLDER_VERSIONS: [u8; 1] = [2];
+/// The older versions the decoder still reads: version 3, the same layout without the pose
+/// block after the features (and without the stages from [`Stage::Load`] on), and version 2,
+/// version 3 without small objects (feature tag 2).
+pub const OLDER_VERSIONS: [u8; 2] = [2, 3];
 
 /// Most features one decoded frame can hold.
 pub const MAX_FEATURES: usize = 64;
@@ -19,10 +20,14 @@ pub const MAX_FEATURES: usize = 64;
 /// its tag, 3 u16 varints and 14 f32 (66 bytes at most); the bound counts 15 f32 (70 bytes).
 pub const MAX_FEATURE_LEN: usize = 1 + 3 * 3 + 15 * 4;
 
-/// Largest frame on the wire for `features` features (header, features, CRC, COBS overhead
-/// and the terminating zero): size a receive buffer with it.
+/// Bound on the encoding of a scan frame's pose block (`Option<PoseBlock>`): its tag, two
+/// poses of 12 f32, the status's variant index and 3 f32 (110 bytes at most).
+pub const MAX_POSE_LEN: usize = 1 + 2 * 12 * 4 + 1 + 3 * 4;
+
+/// Largest frame on the wire for `features` features (header, features, pose block, CRC, COBS
+/// overhead and the terminating zero): size a receive buffer with it.
 pub const fn max_frame_len(features: usize) -> usize {
-    let raw = 64 + features * MAX_FEATURE_LEN + 4;
+    let raw = 64 + features * MAX_FEATURE_LEN + MAX_POSE_LEN + 4;
     raw + raw / 254 + 2
 }
 
@@ -110,6 +115,10 @@ pub enum Stage {
     Encode,
     /// The pfe-core scan built from the codes (`RawScan::to_pfe`: sweeps, grid).
     Scan,
+    /// The pose step alone: registration against the local map and its update (version 4).
+    Pose,
+    /// Telegram bytes to encoded output frame with the pose step, everything (version 4).
+    PipelinePose,
 }
 
 /// Out-of-band reports of the firmware.
@@ -149,4 +158,67 @@ pub enum Header {
     Scan(ScanHeader),
     /// A report; nothing follows.
     Report(Report),
+}
+
+/// A pose (x, y, θ) with its 3×3 covariance: the pose of a scan's frame in another frame
+/// (x forward, y left, θ counter-clockwise; see `docs/FRAME.md`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PoseCov {
+    /// mm.
+    pub x: f32,
+    /// mm.
+    pub y: f32,
+    /// rad.
+    pub theta: f32,
+    /// Covariance of (x mm, y mm, θ rad), row by row (mm², mm·rad, rad²), as computed (the
+    /// off-diagonal pairs may differ in their last bits).
+    pub cov: [[f32; 3]; 3],
+}
+
+/// Why a scan was not registered (pfe-pose's `Failure`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PoseFailure {
+    /// Fewer than two usable features in a scan.
+    TooFewFeatures,
+    /// No hypothesis could be formed.
+    NoHypothesis,
+    /// The best hypothesis was agreed on by too few features.
+    NoConsensus,
+    /// Two distinct solutions agreed nearly as well.
+    Ambiguous,
+    /// The motion prior was not usable.
+    InvalidPrior,
+    /// A reason this version of the frame has no name for.
+    Other,
+}
+
+/// How a scan's registration went.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum PoseStatus {
+    /// Registered; the scene determined every direction.
+    Ok,
+    /// Registered, but the scene cannot tell the pose along `direction` (a corridor).
+    Degenerate {
+        /// Unit vector (x mm, y mm, θ × 1000 mm): the least determined direction.
+        direction: [f32; 3],
+    },
+    /// Not registered: the relative pose is the prediction and the local map restarts.
+    None(PoseFailure),
+}
+
+/// The pose block of a version-4 scan frame: the firmware's feature odometry (pfe-pose) for
+/// this scan.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct PoseBlock {
+    /// This scan's pose in the previous scan's frame (identity, zero covariance, for the
+    /// first scan).
+    pub rel: PoseCov,
+    /// This scan's pose in the first scan's frame.
+    pub pose: PoseCov,
+    /// How the registration went.
+    pub status: PoseStatus,
 }

@@ -9,8 +9,9 @@
 
 use pfe_core::{CircleFeature, Feature, LineFeature, Point};
 use pfe_frame::{
-    crc32, max_frame_len, write_report, write_scan, Counters, DecodeError, Feed, Frame,
-    FrameDecoder, Header, Report, ScanHeader, ScanStatus, Stage, MAX_FEATURES, WIRE_VERSION,
+    crc32, max_frame_len, write_report, write_scan, write_scan_with_pose, Counters, DecodeError,
+    Feed, Frame, FrameDecoder, Header, PoseBlock, PoseCov, PoseFailure, PoseStatus, Report,
+    ScanHeader, ScanStatus, Stage, MAX_FEATURES, WIRE_VERSION,
 };
 
 fn line(i: u16) -> Feature {
@@ -378,7 +379,7 @@ fn version_is_the_first_payload_byte_and_time_travels() {
     let wire = scan_frame(3, &[line(1)]);
     let raw = cobs::decode_vec(&wire[..wire.len() - 1]).unwrap();
     assert_eq!(raw[0], WIRE_VERSION);
-    assert_eq!(WIRE_VERSION, 3);
+    assert_eq!(WIRE_VERSION, 4);
     let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
     assert_eq!(
         got[0].as_ref().unwrap().scan().unwrap().time_ms,
@@ -390,11 +391,11 @@ fn version_is_the_first_payload_byte_and_time_travels() {
 fn an_intact_frame_of_another_version_is_dropped_not_misparsed() {
     let good = scan_frame(1, &mixed());
     let mut stream = Vec::new();
-    for v in [0u8, 1, 4, 0xFF] {
+    for v in [0u8, 1, 5, 0xFF] {
         stream.extend(reframed(&good, |raw| raw[0] = v));
     }
-    // Version 4 with a payload that would also parse as version 3.
-    stream.extend(reframed(&good, |raw| raw[0] = 4));
+    // Version 5 with a payload that would also parse as version 4.
+    stream.extend(reframed(&good, |raw| raw[0] = 5));
     stream.extend_from_slice(&scan_frame(2, &[]));
     let got = decode_chunks(&mut FrameDecoder::new(), [&stream[..]]);
     let errs: Vec<_> = got
@@ -403,7 +404,7 @@ fn an_intact_frame_of_another_version_is_dropped_not_misparsed() {
         .collect();
     assert_eq!(
         errs,
-        [0u8, 1, 4, 0xFF, 4].map(|version| DecodeError::UnknownVersion { version })
+        [0u8, 1, 5, 0xFF, 5].map(|version| DecodeError::UnknownVersion { version })
     );
     assert_eq!(got.last().unwrap().as_ref().unwrap().scan().unwrap().seq, 2);
     // A damaged frame is a CRC error even when the damage is in the version byte.
@@ -467,7 +468,8 @@ fn a_feature_with_an_unknown_variant_or_overlong_varint_is_rejected() {
     let good = scan_frame(1, &[line(1)]);
     let hdr_len = {
         let raw = cobs::decode_vec(&good[..good.len() - 1]).unwrap();
-        raw.len() - 4 - (4 + 9 * 4) // line(1): tag 0, first 1, last 21, points 19: 1 byte each
+        // line(1): tag 0, first 1, last 21, points 19: 1 byte each; then the pose block `None`.
+        raw.len() - 4 - (4 + 9 * 4) - 1
     };
     let tag3 = reframed(&good, |raw| raw[hdr_len] = 3);
     // Tag 2 (a small object) is not in version 2.
@@ -475,6 +477,13 @@ fn a_feature_with_an_unknown_variant_or_overlong_varint_is_rejected() {
         raw[0] = 2;
         raw[hdr_len] = 2;
     });
+    // Tag 2 is fine in version 3 (then no pose block follows).
+    let v3_tag2 = reframed(&good, |raw| {
+        raw[0] = 3;
+        raw.pop();
+    });
+    let got = decode_chunks(&mut FrameDecoder::new(), [&v3_tag2[..]]);
+    assert!(got[0].is_ok(), "{got:?}");
     let long = reframed(&good, |raw| {
         raw[hdr_len + 1] = 0x81;
         raw.insert(hdr_len + 2, 0x80);
@@ -558,4 +567,123 @@ mod props {
             }
         }
     }
+}
+
+/// A pose block with every field distinct, the covariance a little asymmetric (as computed).
+fn pose_block(status: PoseStatus) -> PoseBlock {
+    let cov = |k: f32| {
+        [
+            [25.0 * k, 1.5, -0.01],
+            [1.5000001, 36.0 * k, 0.02],
+            [-0.01, 0.02, 4e-5 * k],
+        ]
+    };
+    PoseBlock {
+        rel: PoseCov {
+            x: 123.25,
+            y: -4.5,
+            theta: 0.0625,
+            cov: cov(1.0),
+        },
+        pose: PoseCov {
+            x: -9876.5,
+            y: 43210.0,
+            theta: -3.0,
+            cov: cov(7.0),
+        },
+        status,
+    }
+}
+
+/// The pose block of a version-4 scan frame round-trips bit for bit, for every status, after
+/// features and with none; a frame written without one decodes with `pose: None`.
+#[test]
+fn the_pose_block_round_trips() {
+    let statuses = [
+        PoseStatus::Ok,
+        PoseStatus::Degenerate {
+            direction: [0.6, -0.8, 1e-3],
+        },
+        PoseStatus::None(PoseFailure::NoConsensus),
+        PoseStatus::None(PoseFailure::Other),
+    ];
+    for (k, status) in statuses.into_iter().enumerate() {
+        let p = pose_block(status);
+        for features in [vec![], mixed()] {
+            let mut w = Vec::new();
+            let h = ScanHeader {
+                seq: k as u32,
+                ..ScanHeader::default()
+            };
+            write_scan_with_pose(&mut Writer(&mut w), &h, &features, Some(&p)).unwrap();
+            assert!(w.len() <= max_frame_len(features.len()));
+            let got = decode_chunks(&mut FrameDecoder::new(), [&w[..]]);
+            let frame = got[0].as_ref().unwrap();
+            assert_eq!(frame.features.len(), features.len());
+            let q = frame.pose.expect("a pose block");
+            let bits = |b: &PoseBlock| {
+                let mut v = Vec::new();
+                for c in [b.rel, b.pose] {
+                    v.extend([c.x, c.y, c.theta].map(f32::to_bits));
+                    v.extend(c.cov.iter().flatten().map(|x| x.to_bits()));
+                }
+                v
+            };
+            assert_eq!(bits(&q), bits(&p));
+            assert_eq!(q.status, p.status);
+        }
+    }
+    let got = decode_chunks(&mut FrameDecoder::new(), [&scan_frame(3, &[line(1)])[..]]);
+    assert_eq!(got[0].as_ref().unwrap().pose, None);
+}
+
+/// A version-4 scan frame without its pose block, or with a broken one, is damage; a
+/// version-3 frame with one has trailing bytes; a version-3 timing report of a pose stage is
+/// damage.
+#[test]
+fn a_missing_or_broken_pose_block_is_rejected() {
+    let mut good = Vec::new();
+    let p = pose_block(PoseStatus::Ok);
+    write_scan_with_pose(
+        &mut Writer(&mut good),
+        &ScanHeader::default(),
+        &[line(1)],
+        Some(&p),
+    )
+    .unwrap();
+    let cut = reframed(&good, |raw| raw.truncate(raw.len() - 12 * 4 - 1));
+    let none = reframed(&scan_frame(1, &[line(1)]), |raw| {
+        raw.pop();
+    });
+    let bad_tag = reframed(&scan_frame(1, &[line(1)]), |raw| {
+        *raw.last_mut().unwrap() = 2;
+    });
+    let bad_status = reframed(&good, |raw| {
+        *raw.last_mut().unwrap() = 9;
+    });
+    for wire in [cut, none, bad_tag, bad_status] {
+        let got = decode_chunks(&mut FrameDecoder::new(), [&wire[..]]);
+        assert_eq!(got, [Err(DecodeError::Payload)]);
+    }
+    let v3 = reframed(&good, |raw| raw[0] = 3);
+    let got = decode_chunks(&mut FrameDecoder::new(), [&v3[..]]);
+    assert_eq!(got, [Err(DecodeError::TrailingBytes)]);
+    let report = |version: u8, stage: Stage| {
+        let mut w = Vec::new();
+        write_report(
+            &mut Writer(&mut w),
+            &Report::Timing {
+                seq: 1,
+                stage,
+                ticks: 5,
+                points: 361,
+            },
+        )
+        .unwrap();
+        let wire = reframed(&w, |raw| raw[0] = version);
+        decode_chunks(&mut FrameDecoder::new(), [&wire[..]])
+    };
+    assert!(report(4, Stage::Pose)[0].is_ok());
+    assert!(report(3, Stage::Pipeline)[0].is_ok());
+    assert_eq!(report(3, Stage::PipelinePose), [Err(DecodeError::Payload)]);
 }

@@ -10,7 +10,7 @@
 use pfe_core::{CircleFeature, Feature, Point};
 use pfe_frame::{
     decode_frame, max_frame_len, write_scan, Counters, DecodeError, EncodeError, Feed,
-    FrameDecoder, Header, ScanHeader, ScanStatus, MAX_FEATURE_LEN, WIRE_VERSION,
+    FrameDecoder, Header, ScanHeader, ScanStatus, MAX_FEATURE_LEN, MAX_POSE_LEN, WIRE_VERSION,
 };
 
 /// `embedded_io::Write` for a `Vec` (the firmware crate has no `std` feature of embedded-io).
@@ -55,13 +55,14 @@ fn with_crc(payload: &[u8]) -> Vec<u8> {
     raw
 }
 
-/// `max_frame_len` covers the worst case of COBS: `raw` bytes (header ≤ 64, features, CRC 4)
+/// `max_frame_len` covers the worst case of COBS: `raw` bytes (header ≤ 64, features, pose
+/// block ≤ 110, CRC 4)
 /// take one code byte per started run of 254, plus the terminating zero; and it adds no more
 /// than one byte of slack beyond that.
 #[test]
 fn max_frame_len_is_the_cobs_worst_case() {
     for n in [0usize, 1, 2, 3, 10, 33, 64] {
-        let raw = 64 + n * MAX_FEATURE_LEN + 4;
+        let raw = 64 + n * MAX_FEATURE_LEN + MAX_POSE_LEN + 4;
         let worst = raw + raw.div_ceil(254) + 1;
         let got = max_frame_len(n);
         assert!(got >= worst, "{n} features: {got} < {worst}");
@@ -154,9 +155,10 @@ fn zero_free_circle(k: u8) -> Feature {
 
 /// The payload of `Header::Scan(h)` followed by circles, built from docs/FRAME.md's tables
 /// alone (version, variant index, the header's integers as LEB128 in table order, status
-/// index; a circle as variant 1, first, last, points, then its 14 f32 little-endian).
+/// index; a circle as variant 1, first, last, points, then its 14 f32 little-endian; then the
+/// pose block `None`, one byte 00).
 fn spec_scan_payload(h: &ScanHeader, circles: &[Feature]) -> Vec<u8> {
-    let mut p = vec![3u8, 0];
+    let mut p = vec![4u8, 0];
     let c = &h.counters;
     for v in [
         h.seq,
@@ -194,6 +196,7 @@ fn spec_scan_payload(h: &ScanHeader, circles: &[Feature]) -> Vec<u8> {
             p.extend(v.to_le_bytes());
         }
     }
+    p.push(0);
     p
 }
 
@@ -231,18 +234,27 @@ fn a_full_cobs_block_followed_by_more_adds_no_zero() {
             }
         }
         let payload = spec_scan_payload(&h, &circles);
-        // The header by hand: 03 (version) 00 (Scan), then 127, 128, 16383, 16384,
+        // The header by hand: 04 (version) 00 (Scan), then 127, 128, 16383, 16384,
         // u32::MAX, 300, 355, 9, 1, 5 as LEB128, then 01 (FeatureCapacity).
         assert_eq!(
             payload[..23],
             [
-                0x03, 0x00, 0x7f, 0x80, 0x01, 0xff, 0x7f, 0x80, 0x80, 0x01, 0xff, 0xff, 0xff, 0xff,
+                0x04, 0x00, 0x7f, 0x80, 0x01, 0xff, 0x7f, 0x80, 0x80, 0x01, 0xff, 0xff, 0xff, 0xff,
                 0x0f, 0xac, 0x02, 0xe3, 0x02, 0x09, 0x01, 0x05, 0x01
             ]
         );
-        assert_eq!(payload.len(), 23 + 5 * 60);
+        assert_eq!(payload.len(), 23 + 5 * 60 + 1);
+        // The last byte is the pose block `None`.
         let zeros: Vec<usize> = (2..payload.len()).filter(|&i| payload[i] == 0).collect();
-        assert_eq!(zeros, if zero_at_256 { vec![256] } else { vec![] });
+        let last = payload.len() - 1;
+        assert_eq!(
+            zeros,
+            if zero_at_256 {
+                vec![256, last]
+            } else {
+                vec![last]
+            }
+        );
 
         let mut wire = Vec::new();
         write_scan(&mut Writer(&mut wire), &h, &circles).unwrap();
@@ -252,7 +264,7 @@ fn a_full_cobs_block_followed_by_more_adds_no_zero() {
             wire, want,
             "the cobs crate's encoding of the spec's payload"
         );
-        assert_eq!(wire[..3], [0x02, 0x03, 0xff]);
+        assert_eq!(wire[..3], [0x02, 0x04, 0xff]);
         assert_eq!(wire[3..257], payload[2..256]);
         if zero_at_256 {
             assert_eq!(
@@ -271,7 +283,7 @@ fn a_full_cobs_block_followed_by_more_adds_no_zero() {
 /// docs/FRAME.md: a frame is dropped as too short only when it has fewer than 5 bytes after
 /// COBS decoding (a version byte and a CRC is the least). So 1 to 4 bytes are `TooShort`
 /// (even 4 zero bytes, the CRC of the empty payload), while exactly 5 bytes with a good
-/// CRC reach the version check (version 4: `UnknownVersion`) or, at version 3, the header
+/// CRC reach the version check (version 5: `UnknownVersion`) or, at version 4, the header
 /// parser (no header: `Payload`).
 #[test]
 fn five_decoded_bytes_are_not_too_short() {
@@ -289,10 +301,10 @@ fn five_decoded_bytes_are_not_too_short() {
             "{raw:?}"
         );
     }
-    let mut body = cobs_body(&with_crc(&[4]));
+    let mut body = cobs_body(&with_crc(&[5]));
     assert_eq!(
         decode_frame(&mut body),
-        Err(DecodeError::UnknownVersion { version: 4 })
+        Err(DecodeError::UnknownVersion { version: 5 })
     );
     let mut body = cobs_body(&with_crc(&[WIRE_VERSION]));
     assert_eq!(decode_frame(&mut body), Err(DecodeError::Payload));
@@ -310,6 +322,32 @@ const SPEC_VECTOR: [u8; 127] = [
     0x84, 0x40, 0x10, 0x7d, 0x7c, 0x40, 0x58, 0x79, 0xd1, 0x40, 0xa0, 0x7c, 0x7c, 0x40, 0x30, 0x69,
     0xb3, 0x40, 0x9f, 0x8b, 0xb0, 0xbf, 0x6c, 0x5f, 0x20, 0x40, 0x30, 0xcb, 0xbf, 0xfb, 0x00,
 ];
+
+/// The test vector of docs/FRAME.md as it was in version 3 (the same frame as
+/// [`SPEC_VECTOR`] with version byte 03 and its CRC): the decoder still reads it, without a
+/// pose block.
+const SPEC_VECTOR_V3: [u8; 127] = [
+    0x02, 0x03, 0x01, 0x0c, 0xc0, 0xc4, 0x07, 0xac, 0x02, 0x02, 0x11, 0x01, 0x9a, 0x01, 0x02, 0x02,
+    0x02, 0x01, 0x0b, 0x70, 0xf2, 0x01, 0x83, 0x01, 0x5c, 0xfd, 0xa3, 0xb7, 0xd9, 0x10, 0xfa, 0x44,
+    0xfd, 0xfc, 0xa5, 0x34, 0x2d, 0xfe, 0x30, 0x3e, 0x69, 0x8d, 0xbc, 0xb7, 0x01, 0x51, 0xfa, 0x44,
+    0xb5, 0x98, 0xa8, 0xc4, 0x99, 0x01, 0xfa, 0x44, 0xa8, 0x32, 0x96, 0x44, 0x01, 0xf3, 0x01, 0x89,
+    0x02, 0x17, 0xac, 0x04, 0x96, 0x44, 0xe1, 0xfb, 0x60, 0x44, 0x1a, 0x0b, 0x16, 0x43, 0xb4, 0x90,
+    0x0a, 0x41, 0x50, 0x42, 0x8e, 0x40, 0xa4, 0x79, 0xd1, 0x40, 0x60, 0x42, 0x8e, 0x40, 0x96, 0x41,
+    0x84, 0x40, 0x10, 0x7d, 0x7c, 0x40, 0x58, 0x79, 0xd1, 0x40, 0xa0, 0x7c, 0x7c, 0x40, 0x30, 0x69,
+    0xb3, 0x40, 0x9f, 0x8b, 0xb0, 0xbf, 0x6c, 0x5f, 0x20, 0x40, 0xf8, 0x37, 0x4d, 0x17, 0x00,
+];
+
+/// Both older forms of the spec's test vector (versions 2 and 3) decode to its values, with
+/// no pose block.
+#[test]
+fn the_version_2_and_3_spec_vectors_still_decode() {
+    for v in [SPEC_VECTOR, SPEC_VECTOR_V3] {
+        let mut body = v[..v.len() - 1].to_vec();
+        let frame = decode_frame(&mut body).unwrap();
+        check_spec_frame(&frame.header, &frame.features);
+        assert_eq!(frame.pose, None);
+    }
+}
 
 /// The frame of docs/FRAME.md's test vector, with the values the page reads from it.
 fn check_spec_frame(header: &Header, features: &[Feature]) {
@@ -384,16 +422,17 @@ fn feeding_the_spec_vector_split_anywhere_leaves_exactly_the_bytes_after_it() {
     }
 }
 
-/// docs/FRAME.md sizes frames with 70 bytes a feature: at most 64 features make a decoded
-/// frame of ≤ 64 + 64·70 + 4 = 4548 bytes and an encoded one of ≤ 4567 bytes with its
-/// terminator (4548 + ⌈4548/254⌉ = 18 code bytes + 1). The largest feature really encoded, a
+/// docs/FRAME.md sizes frames with 70 bytes a feature and 110 for the pose block: at most 64
+/// features make a decoded frame of ≤ 64 + 64·70 + 110 + 4 = 4658 bytes and an encoded one of
+/// ≤ 4678 bytes with its terminator (4658 + ⌈4658/254⌉ = 19 code bytes + 1). The largest feature really encoded, a
 /// circle with 3-byte beam indices (variant 1 byte, 3 × 3 bytes, 14 f32 = 56 bytes: 66),
 /// fits the 70.
 #[test]
 fn max_feature_len_and_max_frame_len_are_the_frame_md_figures() {
     assert_eq!(MAX_FEATURE_LEN, 70);
-    assert_eq!(max_frame_len(64), 4567);
-    assert_eq!(max_frame_len(0), 64 + 4 + 1 + 1);
+    assert_eq!(MAX_POSE_LEN, 110);
+    assert_eq!(max_frame_len(64), 4678);
+    assert_eq!(max_frame_len(0), 64 + 110 + 4 + 1 + 1);
     let big = Feature::Circle(CircleFeature::new(
         u16::MAX,
         u16::MAX,

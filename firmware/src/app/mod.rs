@@ -1,15 +1,18 @@
 //! The application loop, and the only place where LMS scans meet pfe-core: scans from the
 //! driver → pfe-core → framed output.
 //!
-//! [`App`] owns a statically sized [`Extractor`] (put the `App` in a `static`: about
-//! `25·N + 68·M` bytes, 13.2 KiB for `App<401, 48>`) and turns each [`RawScan`] into one
-//! output frame ([`pfe_frame::write_scan`]). Where the scans come from is a [`ScanSource`]:
-//! the LMS200 driver on a board, a test double on the host.
+//! [`App`] owns a statically sized [`Extractor`] and the pose step ([`PoseStep`]: pfe-pose's
+//! odometry with its local map) (put the `App` in a `static`, all zero bytes: `.bss`; about
+//! `25·N + 68·M` bytes + 7.7 KiB for the pose step, 20.9 KiB for `App<401, 48>`) and turns each
+//! [`RawScan`] into one output frame with the scan's pose ([`pfe_frame::write_scan_with_pose`]).
+//! Where the scans come from is a [`ScanSource`]: the LMS200 driver on a board, a test double
+//! on the host.
 //!
 //! - `scan`: [`RawScan`] and [`ScanDataExt`], the driver's scan as pfe-core input (the one
 //!   adapter).
 //! - `source`: [`ScanSource`], implemented by the driver; its counters as the output's
 //!   ([`link_counters`]).
+//! - `pose`: [`PoseStep`], the features' odometry as the frame's pose block.
 //!
 //! ```
 //! use firmware::app::{App, ConfigChoice, RawScan};
@@ -44,9 +47,11 @@ use pfe_core::{Config, ExtractError, Extractor};
 use lms2xx::codec::types::Variant;
 use pfe_frame::{Counters, EncodeError, ScanHeader, ScanStatus};
 
+mod pose;
 mod scan;
 mod source;
 
+pub use pose::{pose_block, PoseStep};
 pub use scan::{RawScan, ScanDataExt};
 pub use source::{link_counters, ScanSource};
 
@@ -113,6 +118,9 @@ pub struct App<const N: usize, const M: usize> {
     extractor: Extractor<N, M>,
     config: ConfigSlot,
     seq: u32,
+    pose: PoseStep,
+    /// The pose step is off (false, all zero, by default).
+    pose_off: bool,
 }
 
 /// The configuration an [`App`] uses. The named ones are tags only, so that a new `App` with
@@ -163,6 +171,8 @@ impl<const N: usize, const M: usize> App<N, M> {
             extractor: Extractor::new(),
             config,
             seq: 0,
+            pose: PoseStep::new(),
+            pose_off: false,
         }
     }
 
@@ -186,18 +196,33 @@ impl<const N: usize, const M: usize> App<N, M> {
         &self.extractor
     }
 
+    /// The pose step (its odometry: map and latest pose).
+    pub fn pose(&self) -> &PoseStep {
+        &self.pose
+    }
+
     /// Scans processed so far (the next scan's sequence number).
     pub fn seq(&self) -> u32 {
         self.seq
     }
 
-    /// Extracts the features of `scan` and writes its frame to `out`; returns the header sent.
+    /// Extracts the features of `scan`, registers them ([`PoseStep::update`]) and writes its
+    /// frame with the pose block to `out`; returns the header sent.
     pub fn process<W: Write>(
         &mut self,
         scan: &RawScan<'_>,
         counters: Counters,
         out: &mut W,
     ) -> Result<ScanHeader, EncodeError<W::Error>> {
+        let header = self.extract(scan, counters);
+        let pose = self.update_pose();
+        self.write_frame(out, &header, pose.as_ref())?;
+        Ok(header)
+    }
+
+    /// The first step of [`App::process`], alone (to measure each): extracts the features of
+    /// `scan` and returns the frame's header (the sequence number advances).
+    pub fn extract(&mut self, scan: &RawScan<'_>, counters: Counters) -> ScanHeader {
         let s = scan.to_pfe();
         let result = self.extractor.extract(&s, self.config.get());
         let stats = self.extractor.stats();
@@ -220,8 +245,36 @@ impl<const N: usize, const M: usize> App<N, M> {
             status,
         };
         self.seq = self.seq.wrapping_add(1);
-        pfe_frame::write_scan(out, &header, features)?;
-        Ok(header)
+        header
+    }
+
+    /// The second step of [`App::process`]: the pose of the features last extracted
+    /// ([`PoseStep::update`]); `None` with the pose step off ([`App::set_pose_step`]).
+    pub fn update_pose(&mut self) -> Option<pfe_frame::PoseBlock> {
+        if self.pose_off {
+            return None;
+        }
+        Some(self.pose.update(self.extractor.features()))
+    }
+
+    /// The last step of [`App::process`]: the frame of the features last extracted, with
+    /// `header` and the pose block `pose`.
+    pub fn write_frame<W: Write>(
+        &self,
+        out: &mut W,
+        header: &ScanHeader,
+        pose: Option<&pfe_frame::PoseBlock>,
+    ) -> Result<(), EncodeError<W::Error>> {
+        pfe_frame::write_scan_with_pose(out, header, self.extractor.features(), pose)
+    }
+
+    /// Switches the pose step on (the default) or off (frames then carry no pose block, and
+    /// the odometry restarts when it is switched on again).
+    pub fn set_pose_step(&mut self, on: bool) {
+        if on && self.pose_off {
+            self.pose.reset();
+        }
+        self.pose_off = !on;
     }
 
     /// Waits for the next scan from `source` and processes it.

@@ -13,10 +13,10 @@ use super::{interrupt, Failure};
 use crate::foxglove::odometry as fox;
 use crate::foxglove::FoxgloveWriter;
 use pfe_formats::{carmen, Format, InputError, Record};
-use pfe_pose::{Cov3, Observation, Odometry, Pose, Status};
+use pfe_pose::{Cov3, FeatureOdometry, Observation, Pose, Status, Step};
 
-/// Features the local map of the odometry holds.
-pub const MAP: usize = 64;
+/// Features the local map of the odometry holds (the firmware's too).
+pub const MAP: usize = pfe_pose::ODOMETRY_MAP;
 
 /// Arguments of `pfe odometry`.
 #[derive(clap::Args, Debug)]
@@ -80,21 +80,22 @@ enum PriorArg {
     Odometry,
 }
 
-/// A pose with its covariance in the output.
-#[derive(Serialize)]
-struct PoseJson {
+/// A pose with its covariance in the output (docs/JSON.md).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseJson {
     /// mm.
-    x: f32,
+    pub x: f32,
     /// mm.
-    y: f32,
+    pub y: f32,
     /// rad.
-    theta: f32,
+    pub theta: f32,
     /// 3×3 row-major, (x mm, y mm, θ rad).
-    cov: [f32; 9],
+    pub cov: [f32; 9],
 }
 
 impl PoseJson {
-    fn new(p: &Pose, c: &Cov3) -> Self {
+    /// The pose `p` with covariance `c`.
+    pub fn new(p: &Pose, c: &Cov3) -> Self {
         let mut cov = [0.0; 9];
         for (i, v) in c.iter().flatten().enumerate() {
             if let Some(slot) = cov.get_mut(i) {
@@ -110,19 +111,48 @@ impl PoseJson {
     }
 }
 
+/// One scan's odometry result as output: `rel`, `pose`, `status`, `direction`, `reason` of
+/// `pfe odometry`'s lines, and `pfe listen`'s `odometry` object (docs/JSON.md).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepJson {
+    /// This scan's pose in the previous scan's frame.
+    pub rel: PoseJson,
+    /// This scan's pose in the first scan's frame.
+    pub pose: PoseJson,
+    /// `"ok"`, `"degenerate"` or `"none"`.
+    pub status: &'static str,
+    /// The direction the scene cannot tell (x mm, y mm, θ × 1000 mm), for "degenerate".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f32; 3]>,
+    /// Why there is no registration, for "none".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
+}
+
+impl StepJson {
+    /// The output of `step`.
+    pub fn new(step: &Step) -> Self {
+        let (status, direction, reason) = match step.status {
+            Status::Ok => ("ok", None, None),
+            Status::Degenerate { direction } => ("degenerate", Some(direction), None),
+            Status::None(f) => ("none", None, Some(format!("{f:?}"))),
+        };
+        StepJson {
+            rel: PoseJson::new(&step.rel, &step.rel_cov),
+            pose: PoseJson::new(&step.pose, &step.cov),
+            status,
+            direction,
+            reason,
+        }
+    }
+}
+
 /// One output line.
 #[derive(Serialize)]
 struct Line {
     scan: u64,
-    rel: PoseJson,
-    pose: PoseJson,
-    status: &'static str,
-    /// The direction the scene cannot tell (x mm, y mm, θ × 1000 mm), for "degenerate".
-    #[serde(skip_serializing_if = "Option::is_none")]
-    direction: Option<[f32; 3]>,
-    /// Why there is no registration, for "none".
-    #[serde(skip_serializing_if = "Option::is_none")]
-    reason: Option<String>,
+    #[serde(flatten)]
+    step: StepJson,
     /// Features of the scan given to the odometry.
     features: usize,
     /// Whether a motion prior was given.
@@ -191,7 +221,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
         Some(path) => Some(OdometryMcap::create(path, a.force)?),
         None => None,
     };
-    let mut odometry = Box::new(Odometry::<MAP>::new(pfe_pose::Config::default()));
+    let mut odometry = Box::new(FeatureOdometry::new_default());
     let mut out = stdout();
     let mut count = [0u64; 3];
     let mut n = 0u64;
@@ -219,11 +249,12 @@ pub fn run(a: Args) -> Result<(), Failure> {
             &record.ranges_mm,
             &context,
         );
-        let obs: Vec<Observation> = ex
+        // What the odometry takes of the features (the firmware's pose step is the same call).
+        let used = ex
             .features
             .iter()
-            .filter_map(Observation::from_feature)
-            .collect();
+            .filter(|f| Observation::from_feature(f).is_some())
+            .count();
         let prior = match (a.prior, last_odometry, odo) {
             (PriorArg::Odometry, Some(p0), Some(p1)) => prior_between(&a, p0, p1),
             _ => None,
@@ -232,17 +263,14 @@ pub fn run(a: Args) -> Result<(), Failure> {
             without_odometry += 1;
         }
         last_odometry = odo;
-        let step = odometry.update(&obs, prior);
+        let step = odometry.update_features(&ex.features, prior);
         n += 1;
         if n % 256 == 0 {
             bar.set_message(format!("{n} scans"));
         }
-        let (status, direction, reason) = match step.status {
-            Status::Ok => ("ok", None, None),
-            Status::Degenerate { direction } => ("degenerate", Some(direction), None),
-            Status::None(f) => ("none", None, Some(format!("{f:?}"))),
-        };
-        count[match status {
+        let raw = step;
+        let step = StepJson::new(&raw);
+        count[match step.status {
             "ok" => 0,
             "degenerate" => 1,
             _ => 2,
@@ -251,19 +279,16 @@ pub fn run(a: Args) -> Result<(), Failure> {
             let stamp = stamp_ns.unwrap_or((n - 1).saturating_mul(SYNTHETIC_PERIOD_NS));
             let frame = frame_id.as_deref().unwrap_or(DEFAULT_FRAME);
             let map: Vec<Observation> = odometry.map().collect();
-            if let Err(e) = f.write(stamp, frame, &record, &ex.features, &step, status, &map) {
+            let status = step.status;
+            if let Err(e) = f.write(stamp, frame, &record, &ex.features, &raw, status, &map) {
                 error = Some(mcap_failure(a.mcap.as_deref(), &e));
                 break;
             }
         }
         let line = Line {
             scan: record.id,
-            rel: PoseJson::new(&step.rel, &step.rel_cov),
-            pose: PoseJson::new(&step.pose, &step.cov),
-            status,
-            direction,
-            reason,
-            features: obs.len(),
+            step,
+            features: used,
             prior: prior.is_some(),
             log_pose: record.pose,
         };

@@ -1,7 +1,8 @@
 //! End to end through the user's tools: the emulated LMS200 on a pty → the QEMU firmware
 //! between two serial lines (`cargo xtask run-qemu`'s `RunQemu`) → `pfe listen` on its output
 //! pty gives, scan for scan, exactly the features `pfe extract --format lms200` (no option:
-//! its defaults) gives on a capture of the telegrams the emulator sent. The board runs the
+//! its defaults) gives on a capture of the telegrams the emulator sent, and exactly the pose
+//! `pfe odometry` gives on the capture of the telegrams the firmware received. The board runs the
 //! host's extraction: the checks for real scans, small objects, and the interleaved sweeps of
 //! 0.5° (2) and 0.25° (4) scans aligned. Scenes: the emulator's room, real 0.5° scans of the
 //! shared CARMEN logs (skipped loudly without `../shared/data`), the synthetic scan of ranges
@@ -182,6 +183,7 @@ fn listen_vs_extract(
     // so no other telegram has them). Telegrams sent before the driver streamed, or cut by
     // a re-initialisation, are no scans to the firmware.
     let mut compared = Vec::new();
+    let mut used = Vec::new();
     let mut next = 0;
     for g in &got {
         let k = (next..want.len())
@@ -198,15 +200,80 @@ fn listen_vs_extract(
         next = k + 1;
         assert_eq!(g["status"], want[k]["status"]);
         compared.push(want[k].clone());
+        used.push(k);
     }
     assert!(
         got.len() >= SCANS as usize && compared.len() == got.len(),
         "every scan received compared"
     );
+    same_pose_as_odometry(tag, &tmp, &report, &got, &used, args);
     let _ = std::fs::remove_dir_all(&tmp);
     Some(Compared {
         extracted: compared,
     })
+}
+
+/// The pose each received scan's frame carries equals `pfe odometry`'s (the same
+/// configuration as the firmware's, `args[0]`) on the telegrams the firmware processed
+/// (`used`: indices into the emulator's `report`), from the firmware's first scan (seq 0,
+/// where its odometry starts).
+fn same_pose_as_odometry(
+    tag: &str,
+    tmp: &std::path::Path,
+    report: &lms200_emulator::EmulatorReport,
+    got: &[Value],
+    used: &[usize],
+    args: &[&str],
+) {
+    let seq0 = got[0]["seq"].as_u64().unwrap();
+    let consecutive = got
+        .iter()
+        .enumerate()
+        .all(|(k, g)| g["seq"].as_u64() == Some(seq0 + k as u64));
+    assert!(consecutive, "{tag}: pfe listen missed a frame");
+    if seq0 != 0 {
+        eprintln!(
+            "SKIPPED (pose part): e2e_listen {tag}: pfe listen joined at seq {seq0}; the odometry before it is unknown"
+        );
+        return;
+    }
+    let mut received = Vec::new();
+    for &j in used {
+        let s = &report.scans[j];
+        received.extend(qemu::b0_telegram(&s.words, s.unit == Unit::Mm).unwrap());
+    }
+    let cap = tmp.join("received.lms");
+    std::fs::write(&cap, &received).unwrap();
+    let odometry = Command::new(env!("CARGO_BIN_EXE_pfe"))
+        .args(["odometry", "--format", "lms200"])
+        .args(args.first().map(|c| ["--config", c]).unwrap_or_default())
+        .arg(&cap)
+        .output()
+        .unwrap();
+    assert!(
+        odometry.status.success(),
+        "pfe odometry: {}",
+        String::from_utf8_lossy(&odometry.stderr)
+    );
+    let poses = json_lines(&odometry.stdout);
+    assert_eq!(poses.len(), got.len());
+    for (g, host) in got.iter().zip(&poses) {
+        let board = &g["odometry"];
+        assert!(
+            board.is_object(),
+            "{tag} scan {}: no pose from pfe listen",
+            g["seq"]
+        );
+        for key in ["rel", "pose", "status", "direction", "reason"] {
+            // Equal JSON numbers: f32 values printed in their shortest form, so equal bits.
+            assert_eq!(
+                board.get(key),
+                host.get(key),
+                "{tag} scan {}: {key}",
+                g["seq"]
+            );
+        }
+    }
 }
 
 /// The features of kind `kind` in one `pfe extract` line.

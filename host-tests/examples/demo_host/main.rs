@@ -7,9 +7,13 @@
 //! demo_host worst-scans --out worst.bin --kinds worst.txt [--iterations 4000] [--seed 20]
 //! demo_host worst --elf pfe-bench --kinds worst.txt [--md docs/PERFORMANCE.md]
 //! demo_host demo --elf pfe-qemu [--scans 10] [--config default|paper] [--svg demo.svg]
+//! demo_host pose-scans --out pose.bin --kinds pose.txt [--scans 256] [--carmen LOG]
+//! demo_host pose-bench --elf pfe-bench-pose --kinds pose.txt --static-ram B [--md docs/PERFORMANCE.md]
 //! ```
 
 use host_tests::qemu;
+
+mod pose;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -21,9 +25,9 @@ use pfe_frame::{Header, Report, Stage};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let (cmd, rest) = args
-        .split_first()
-        .context("usage: demo_host <bench-scans|bench|worst-scans|worst|demo> ...")?;
+    let (cmd, rest) = args.split_first().context(
+        "usage: demo_host <bench-scans|bench|worst-scans|worst|demo|pose-scans|pose-bench> ...",
+    )?;
     let opts = Opts::parse(rest)?;
     match cmd.as_str() {
         "bench-scans" => bench_scans(&opts),
@@ -31,6 +35,8 @@ fn main() -> Result<()> {
         "worst-scans" => worst_scans(&opts),
         "worst" => worst(&opts),
         "demo" => demo(&opts),
+        "pose-scans" => pose::pose_scans(&opts),
+        "pose-bench" => pose::pose_bench(&opts),
         other => bail!("unknown subcommand `{other}`"),
     }
 }
@@ -244,6 +250,8 @@ fn run_bench(elf: &Path) -> Result<BenchRun> {
                     Stage::Reach => "reach",
                     Stage::Sift => "sift",
                     Stage::Encode => "encode",
+                    Stage::Pose => "pose",
+                    Stage::PipelinePose => "pipeline-pose",
                 };
                 // SysTick 25 MHz, 1024 ns per instruction under -icount shift=10.
                 let instr = f64::from(ticks) * 10.0 / 256.0;

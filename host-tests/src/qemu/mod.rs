@@ -70,15 +70,45 @@ pub fn session_with(
     seed: u64,
     timeout: Duration,
 ) -> Result<Session> {
-    use lms200_emulator::serve::{serve_on, Pty};
-    use lms200_emulator::{Emulator, EmulatorConfig, RunLimits};
     use pfe_eval::scene::{Scenario, SceneKind};
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
-
     let sims: Vec<_> = (seed..seed + u64::from(rooms.max(1)))
         .map(|s| Scenario::new(SceneKind::Mixed, s).simulate())
         .collect();
+    session_sims(elf, scans, args, sims, seed, timeout)
+}
+
+/// [`session`] on consecutive scans of a robot driving around a room
+/// ([`pfe_eval::scene::drive::room_drive`] from noise seed `seed`; the emulator's telegram `k`
+/// is the drive's scan `k`, for `4 · scans` telegrams: room for telegrams the firmware misses
+/// before the drive would start over): the firmware's pose step has a motion to find.
+pub fn session_drive(
+    elf: &Path,
+    scans: u32,
+    config: &str,
+    seed: u64,
+    timeout: Duration,
+) -> Result<Session> {
+    let sims = pfe_eval::scene::drive::room_drive(4 * scans.max(1) as usize, seed)
+        .into_iter()
+        .map(|d| d.scan)
+        .collect();
+    session_sims(elf, scans, &[config], sims, seed, timeout)
+}
+
+/// A session serving `sims` in order (cycling).
+fn session_sims(
+    elf: &Path,
+    scans: u32,
+    args: &[&str],
+    sims: Vec<pfe_eval::scene::SimScan>,
+    seed: u64,
+    timeout: Duration,
+) -> Result<Session> {
+    use lms200_emulator::serve::{serve_on, Pty};
+    use lms200_emulator::{Emulator, EmulatorConfig, RunLimits};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
     let source = SimSource {
         ranges: sims.iter().map(|s| s.ranges_mm.clone()).collect(),
         next: 0,

@@ -373,6 +373,37 @@ pub fn host_features_unit(
     Ok(ex.features().to_vec())
 }
 
+/// The firmware's `App` on the host over consecutive scans (the value words the emulator
+/// sent, in order): the frames the firmware should have sent, decoded (features and pose).
+pub fn host_frames(
+    scans: &[&[u16]],
+    choice: firmware::app::ConfigChoice,
+) -> Result<Vec<pfe_frame::Frame>> {
+    use firmware::app::{App, RawScan};
+    use lms2xx::codec::types::Variant;
+    let v = Variant::A180_R050;
+    let mut g = pfe_core::ScanGeometry::lms200(f32::from(v.angle_deg), v.resolution_deg());
+    g.r_max = f32::from(pfe_core::LMS_MAX_VALID_8M);
+    let mut app = Box::new(App::<361, 48>::new(choice));
+    let mut out = Vec::new();
+    for words in scans {
+        let codes: Vec<u16> = words.iter().map(|w| w & 0x1FFF).collect();
+        let mut w = VecWriter(Vec::new());
+        app.process(
+            &RawScan::lms_8m(g, &codes, 1.0),
+            pfe_frame::Counters::default(),
+            &mut w,
+        )
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let (frames, errors) = decode_frames(&w.0);
+        if !errors.is_empty() {
+            bail!("host frame did not decode: {errors:?}");
+        }
+        out.extend(frames);
+    }
+    Ok(out)
+}
+
 /// `embedded_io::Write` into a `Vec`.
 pub struct VecWriter(pub Vec<u8>);
 

@@ -136,7 +136,7 @@ pub(super) fn hypothesise(
         if top.has_near(&pose, 40.0, 0.01) {
             return;
         }
-        let score = w.associate(&pose, 1.0, None).score;
+        let score = w.score(&pose, 1.0);
         top.offer(Hyp { pose, score });
     };
     match prior {

@@ -113,28 +113,37 @@ pub struct Config {
 
 impl Default for Config {
     fn default() -> Self {
-        Self {
-            max_translation: 3000.0,
-            max_rotation: 1.75,
-            line_floor: [0.008, 15.0],
-            point_floor: 15.0,
-            min_pair_angle: 0.17,
-            gate: 9.21,
-            prior_gate: 16.27,
-            slack: [0.05, 100.0, 0.03],
-            overlap_slack: 500.0,
-            degenerate_sigma: 300.0,
-            overlap_weight: 0.5,
-            visibility_weight: 1.0,
-            min_score: 0.0,
-            confirm: true,
-            trusted_length: 1000.0,
-            max_hypotheses: 4096,
-            min_matches: 3,
-            scale_by_residuals: true,
-            ambiguity: 2.0,
-        }
+        Self::DEFAULT
     }
+}
+
+impl Config {
+    /// The default settings, as a constant (`Config::default()`).
+    ///
+    /// ```
+    /// assert_eq!(pfe_pose::Config::DEFAULT, pfe_pose::Config::default());
+    /// ```
+    pub const DEFAULT: Config = Self {
+        max_translation: 3000.0,
+        max_rotation: 1.75,
+        line_floor: [0.008, 15.0],
+        point_floor: 15.0,
+        min_pair_angle: 0.17,
+        gate: 9.21,
+        prior_gate: 16.27,
+        slack: [0.05, 100.0, 0.03],
+        overlap_slack: 500.0,
+        degenerate_sigma: 300.0,
+        overlap_weight: 0.5,
+        visibility_weight: 1.0,
+        min_score: 0.0,
+        confirm: true,
+        trusted_length: 1000.0,
+        max_hypotheses: 4096,
+        min_matches: 3,
+        scale_by_residuals: true,
+        ambiguity: 2.0,
+    };
 }
 
 /// Why there is no registration.
@@ -239,8 +248,8 @@ pub fn register_with(
     prior: Option<(Pose, Cov3)>,
     cfg: &Config,
 ) -> Registration {
-    let p = Set::from_obs(prev, cfg);
-    let c = Set::from_obs(curr, cfg);
+    let p = Set::from_obs(prev.iter().copied(), cfg);
+    let c = Set::from_obs(curr.iter().copied(), cfg);
     let mut assoc = Assoc::new();
     let mut r = register_sets(&p, &c, prior, cfg, &mut assoc);
     r.dropped = p.dropped.saturating_add(c.dropped);

@@ -65,7 +65,20 @@ impl<'a> Work<'a> {
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
     /// with `slack` times the configured slack), and the normal equations of those matches.
-    pub(super) fn associate(
+    pub(super) fn associate(&mut self, pose: &Pose, slack: f32, out: Option<&mut Assoc>) -> Normal {
+        self.associate_with::<true>(pose, slack, out)
+    }
+
+    /// The consensus score of [`Work::associate`] alone (bit for bit the same: the same
+    /// matches, summed in the same order), without the normal equations.
+    pub(super) fn score(&mut self, pose: &Pose, slack: f32) -> f32 {
+        self.associate_with::<false>(pose, slack, None).score
+    }
+
+    /// [`Work::associate`]; with `FULL` false only the score (and the match counts) are
+    /// computed.
+    #[inline(always)]
+    fn associate_with<const FULL: bool>(
         &mut self,
         pose: &Pose,
         slack: f32,
@@ -84,6 +97,8 @@ impl<'a> Work<'a> {
         self.nc = 0;
         let (x, y) = (pose.x, pose.y);
         let (st, ct) = sin_cos(pose.theta);
+        // `pose.transform_point` with its sine and cosine computed once (the same arithmetic).
+        let transform = |p: [f32; 2]| [ct * p[0] - st * p[1] + x, st * p[0] + ct * p[1] + y];
         let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
         for (k, lk) in self.curr.lines().iter().enumerate() {
             let a = lk.a + pose.theta;
@@ -97,11 +112,25 @@ impl<'a> Work<'a> {
                 c: lk.cov.c + 2.0 * h * lk.cov.b + h * h * lk.cov.a,
             };
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
-            let ext = lk
-                .ext
-                .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)));
+            let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             for (i, li) in self.prev.lines().iter().enumerate() {
+                // The gates below, for both orientations at once: a pair that fails them
+                // either way is rejected whatever the sign, without the cosine (the distance
+                // first: it needs no angle wrapped).
+                let var_a = ct_.a + li.cov.a + sa2;
+                let var_r = ct_.c + li.cov.c + sr * sr;
+                let (ga, gr) = (gate * var_a, gate * var_r);
+                let (rp, rm) = (r - li.r, -r - li.r);
+                let fails = |rr: f32, turn: f32| {
+                    rr * rr > gr || {
+                        let e = wrap(a + turn - li.a);
+                        e * e > ga
+                    }
+                };
+                if fails(rp, 0.0) && fails(rm, PI) {
+                    continue;
+                }
                 let dcos = libm::cosf(a - li.a);
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
                 let ea = if sign > 0.0 {
@@ -145,6 +174,12 @@ impl<'a> Work<'a> {
             let Some((d2, i, e, w, sign, frac)) = best else {
                 continue;
             };
+            if !FULL {
+                n.lines += 1;
+                n.score +=
+                    (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
+                continue;
+            }
             let length = |ext: Option<([f32; 2], [f32; 2])>| {
                 ext.map_or(0.0, |(s, e)| libm::hypotf(e[0] - s[0], e[1] - s[1]))
             };
@@ -164,7 +199,7 @@ impl<'a> Work<'a> {
             self.record(hi, trusted);
         }
         for (k, pk) in self.curr.pts().iter().enumerate() {
-            let q = pose.transform_point(pk.p);
+            let q = transform(pk.p);
             let cq = pk.cov.rotate(st, ct);
             let reach = libm::hypotf(pk.p[0], pk.p[1]);
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * reach);
@@ -194,6 +229,9 @@ impl<'a> Work<'a> {
             let Some((d2, _, e, w)) = best else { continue };
             n.pts += 1;
             n.score += 1.0 - d2 / gate;
+            if !FULL {
+                continue;
+            }
             n.chi2 += d2;
             let jx = [1.0, 0.0, -st * pk.p[0] - ct * pk.p[1]];
             let jy = [0.0, 1.0, ct * pk.p[0] - st * pk.p[1]];

@@ -127,6 +127,8 @@ mod fw {
         let (Some(ex), Some(app)) = (rt::take_extractor(), rt::take_app()) else {
             sys::exit(sys::EXIT_USAGE)
         };
+        // The pipeline without the pose step (pfe-bench-pose measures it with).
+        app.set_pose_step(false);
         let mut dec = Decoder::<812>::new();
         let mut codes = [0u16; N];
         let (paper, default) = (ConfigChoice::Paper.config(), ConfigChoice::Default.config());

@@ -30,12 +30,13 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use nix::sys::termios::{self, SetArg};
 use pfe_frame::{
-    max_frame_len, DecodeError, Feed, Frame, FrameDecoder, Header, ScanHeader, ScanStatus,
-    MAX_FEATURES,
+    max_frame_len, DecodeError, Feed, Frame, FrameDecoder, Header, PoseBlock, PoseCov, PoseStatus,
+    ScanHeader, ScanStatus, MAX_FEATURES,
 };
 use serde::Serialize;
 
 use crate::device::tty::baud_rate;
+use crate::odometry::{PoseJson, StepJson};
 
 use pfe_formats::{FeatureJson, ScanJson, StatusJson};
 
@@ -167,9 +168,42 @@ pub struct ListenJson {
     pub segments: u16,
     /// Link counters after this scan.
     pub counters: CountersJson,
+    /// The firmware's pose of this scan (its feature odometry), as `pfe odometry` prints it:
+    /// `rel`, `pose`, `status`, `direction`, `reason` (absent for frames without a pose block:
+    /// versions 2 and 3).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub odometry: Option<StepJson>,
     /// Receive time, Unix seconds (absent in `docs/FRAME.md`'s test vector).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub received: Option<f64>,
+}
+
+/// A frame's pose block as `pfe odometry` prints a scan's result.
+pub fn step_json(p: &PoseBlock) -> StepJson {
+    let pose = |c: &PoseCov| {
+        let mut cov = [0.0; 9];
+        for (slot, v) in cov.iter_mut().zip(c.cov.iter().flatten()) {
+            *slot = *v;
+        }
+        PoseJson {
+            x: c.x,
+            y: c.y,
+            theta: c.theta,
+            cov,
+        }
+    };
+    let (status, direction, reason) = match p.status {
+        PoseStatus::Ok => ("ok", None, None),
+        PoseStatus::Degenerate { direction } => ("degenerate", Some(direction), None),
+        PoseStatus::None(f) => ("none", None, Some(format!("{f:?}"))),
+    };
+    StepJson {
+        rel: pose(&p.rel),
+        pose: pose(&p.pose),
+        status,
+        direction,
+        reason,
+    }
 }
 
 /// The status of a frame as `pfe extract`'s status object.
@@ -215,6 +249,7 @@ impl ListenJson {
                 bytes_skipped: c.bytes_skipped,
                 reinits: c.reinits,
             },
+            odometry: frame.pose.as_ref().map(step_json),
             received,
         }
     }

@@ -25,10 +25,12 @@
 //!
 //! Files by job: `vec2` maths, [`shape`] primitives and ray hits, [`raycast`] ray casting,
 //! [`truth`] ground truth and Cramér–Rao bounds, [`range_model`] the LMS200 range model,
-//! [`motion`] beam times and the moving scanner's pose, [`generate`] scene generators, [`adversarial`] worst-case scans, [`scenario`] the recipe and the simulated scan, [`svg`] a
+//! [`motion`] beam times and the moving scanner's pose, [`generate`] scene generators, [`drive`]
+//! a robot driving through a room (consecutive scans from known poses), [`adversarial`] worst-case scans, [`scenario`] the recipe and the simulated scan, [`svg`] a
 //! picture of it.
 
 pub mod adversarial;
+pub mod drive;
 pub mod generate;
 pub mod motion;
 pub mod range_model;
