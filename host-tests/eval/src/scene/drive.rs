@@ -1,5 +1,7 @@
-//! A robot driving through a simulated room: consecutive scans from known poses, for the pose
-//! step on the board (`cargo xtask bench-mcu`'s pose scans, the end-to-end pose test).
+//! A robot driving through a simulated room or corridor: consecutive scans from known poses,
+//! for the pose step on the board (`cargo xtask bench-mcu`'s pose scans, the end-to-end pose
+//! test) and the pose's tests against exact truth, with wheel odometry that drifts
+//! ([`wheel_odometry`]).
 //!
 //! The room (10 m × 7 m, a chamfered corner, a box in the middle, a shelf and four pillars) is
 //! fixed; the robot drives an ellipse around the box (5 m × 3 m, heading along the path), a
@@ -73,10 +75,17 @@ pub fn pose(k: usize) -> [f64; 3] {
 
 /// `n` consecutive scans of the drive, the noise of scan `k` seeded with `seed + k`.
 pub fn room_drive(n: usize, seed: u64) -> Vec<DriveScan> {
-    let shapes = room();
-    (0..n)
-        .map(|k| {
-            let pose = pose(k);
+    let poses: Vec<[f64; 3]> = (0..n).map(pose).collect();
+    drive(&room(), &poses, seed)
+}
+
+/// The scans taken at `poses` among `shapes` (room coordinates), the noise of scan `k`
+/// seeded with `seed + k`.
+pub fn drive(shapes: &[Shape], poses: &[[f64; 3]], seed: u64) -> Vec<DriveScan> {
+    poses
+        .iter()
+        .enumerate()
+        .map(|(k, &pose)| {
             let scenario = Scenario::new(SceneKind::Office, seed + k as u64);
             let local: Vec<Shape> = shapes.iter().map(|s| s.to_frame(pose)).collect();
             let mut rng = ChaCha8Rng::seed_from_u64(seed.wrapping_mul(1_000_003) + k as u64);
@@ -86,4 +95,71 @@ pub fn room_drive(n: usize, seed: u64) -> Vec<DriveScan> {
             }
         })
         .collect()
+}
+
+/// A corridor 2 m wide and 60 m long along x, its walls at y = ±1000 mm and nothing else:
+/// within the scanner's 8 m every scan sees two parallel walls, so its position along the
+/// corridor cannot be told.
+pub fn corridor() -> Vec<Shape> {
+    vec![
+        Shape::Segment {
+            a: [-30_000.0, -1_000.0],
+            b: [30_000.0, -1_000.0],
+        },
+        Shape::Segment {
+            a: [-30_000.0, 1_000.0],
+            b: [30_000.0, 1_000.0],
+        },
+    ]
+}
+
+/// The pose of scan `k` in the corridor: 150 mm a scan along it from x = −10 m, weaving
+/// (±300 mm across, the heading following the path).
+pub fn corridor_pose(k: usize) -> [f64; 3] {
+    let x = -10_000.0 + 150.0 * k as f64;
+    let w = std::f64::consts::TAU / 40.0;
+    let y = 300.0 * (w * k as f64).sin();
+    let slope = 300.0 * w * (w * k as f64).cos() / 150.0;
+    [x, y, slope.atan()]
+}
+
+/// `n` consecutive scans of the corridor drive ([`corridor_pose`]).
+pub fn corridor_drive(n: usize, seed: u64) -> Vec<DriveScan> {
+    let poses: Vec<[f64; 3]> = (0..n).map(corridor_pose).collect();
+    drive(&corridor(), &poses, seed)
+}
+
+/// The motion from pose `a` to pose `b`, `[x mm, y mm, θ rad]` in `a`'s frame.
+pub fn relative(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    let (s, c) = a[2].sin_cos();
+    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+    let mut dth = (b[2] - a[2]).rem_euclid(std::f64::consts::TAU);
+    if dth > std::f64::consts::PI {
+        dth -= std::f64::consts::TAU;
+    }
+    [c * dx + s * dy, -s * dx + c * dy, dth]
+}
+
+/// Wheel odometry that drifts: the motion from `a` to `b` as a differential-drive robot's
+/// encoders report it, with a 3 % scale error on the distance and a 0.02 rad/m heading bias
+/// (a wheel radius off), plus white noise of σ = 10 mm + 2 % per axis and 0.005 rad + 2 % of
+/// the turn (seeded with `seed`). Returns the motion and the covariance a robot would state
+/// for it: σ = 20 mm + 5 % of the distance per axis, 0.01 rad + 5 % of the turn + 0.03 rad
+/// per metre, which covers the drift.
+pub fn wheel_odometry(a: [f64; 3], b: [f64; 3], seed: u64) -> ([f64; 3], [[f64; 3]; 3]) {
+    use rand_distr::Distribution as _;
+    let t = relative(a, b);
+    let d = t[0].hypot(t[1]);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut n = || -> f64 { rand_distr::StandardNormal.sample(&mut rng) };
+    let sxy = 10.0 + 0.02 * d;
+    let sth = 0.005 + 0.02 * t[2].abs();
+    let m = [
+        1.03 * t[0] + sxy * n(),
+        1.03 * t[1] + sxy * n(),
+        t[2] + 0.02 * d / 1000.0 + sth * n(),
+    ];
+    let cxy = (20.0 + 0.05 * d).powi(2);
+    let cth = (0.01 + 0.05 * t[2].abs() + 0.03 * d / 1000.0).powi(2);
+    (m, [[cxy, 0.0, 0.0], [0.0, cxy, 0.0], [0.0, 0.0, cth]])
 }
