@@ -117,6 +117,10 @@ mod fw {
                 &mut *core::ptr::addr_of_mut!(APP)
             }
         };
+        // The pose step costs far more than a scan period on the M4F for now (docs/POSE.md, "On
+        // the board"): with it the board would send features for a few scans in ten and starve
+        // the watchdog. Every scan's features first; the QEMU firmware runs the pose step.
+        app.set_pose_step(false);
         let mut lms = Driver::new(uart, Delay, Millis, Config::default());
         defmt::info!(
             "pfe-board: LMS200 on USART1, features on USART2 at {} baud; last reset: {}",
