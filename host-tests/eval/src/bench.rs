@@ -29,7 +29,7 @@ use pfe_core::{Feature, Point, ScanGeometry};
 use serde::Serialize;
 
 use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
-use crate::methods::Method;
+use crate::methods::{Extraction, Method, Pfe, ScanContext};
 use crate::methods_for;
 use crate::scene::{Scenario, SceneKind};
 use pfe_formats::Format;
@@ -47,6 +47,19 @@ pub fn budget_lines(report: &BenchReport) -> (Vec<String>, bool) {
     for d in &report.datasets {
         let row = |name: &str| d.methods.iter().find(|m| m.method == name);
         let fits = row(FITS_ONLY).map(|f| f.ns_per_point);
+        if d.dataset == INTERLEAVED {
+            let one = format!("{REFERENCE} --sweeps 1");
+            if let (Some(two), Some(one)) = (row(REFERENCE), row(&one)) {
+                let ratio = two.ns_per_point / one.ns_per_point;
+                let met = ratio <= INTERLEAVED_BUDGET;
+                all &= met;
+                lines.push(format!(
+                    "budget ({INTERLEAVED}): {REFERENCE} with 2 sweeps declared ≤ {INTERLEAVED_BUDGET}× the time with 1: {} ({ratio:.2}×)",
+                    if met { "met" } else { "NOT met" },
+                ));
+            }
+            continue;
+        }
         for (method, least) in BUDGETS {
             // Without a pfe-default row the ratio is NaN: nothing to judge.
             let Some(m) = row(method).filter(|m| m.slowdown_vs_pfe_default.is_finite()) else {
@@ -75,7 +88,75 @@ pub struct BenchScan {
     pub geometry: ScanGeometry,
     /// Ranges, mm (NaN = no return).
     pub ranges_mm: Vec<f32>,
+    /// Interleaved sweeps the scan is declared to be made of (0 or 1: one), as `pfe extract
+    /// --sweeps` declares them.
+    pub sweeps: usize,
 }
+
+impl BenchScan {
+    /// What the methods are told about the scan: its declared sweeps.
+    pub fn context(&self) -> ScanContext {
+        ScanContext {
+            sweeps: self.sweeps,
+            ..ScanContext::default()
+        }
+    }
+}
+
+/// pfe-default told a number of interleaved sweeps whatever the scan declares, as `pfe extract
+/// --sweeps N` does: the interleaved data set times the same scans with 2 and with 1.
+pub struct Declared {
+    name: String,
+    sweeps: usize,
+    inner: Pfe,
+}
+
+impl Declared {
+    /// pfe-default with σ_r `sigma_r`, told `sweeps` sweeps; named `pfe-default` for 2 (what
+    /// `--sweeps auto` declares for 0.5° LMS scans), `pfe-default --sweeps N` otherwise.
+    pub fn new(sigma_r: f32, sweeps: usize) -> Self {
+        let name = match sweeps {
+            2 => REFERENCE.to_string(),
+            n => format!("{REFERENCE} --sweeps {n}"),
+        };
+        let config = pfe_core::Config::default().with_sigma_r(sigma_r);
+        Self {
+            inner: Pfe::new(&name, config),
+            name,
+            sweeps,
+        }
+    }
+}
+
+impl Method for Declared {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
+        self.extract_in(geometry, ranges_mm, &ScanContext::default())
+    }
+
+    fn extract_in(
+        &mut self,
+        geometry: &ScanGeometry,
+        ranges_mm: &[f32],
+        context: &ScanContext,
+    ) -> Extraction {
+        let context = ScanContext {
+            sweeps: self.sweeps,
+            ..*context
+        };
+        self.inner.extract_in(geometry, ranges_mm, &context)
+    }
+}
+
+/// The interleaved data set's budget: `--sweeps 2` at most this many times `--sweeps 1`'s time
+/// on the same scans.
+pub const INTERLEAVED_BUDGET: f64 = 1.25;
+
+/// Name of the interleaved data set.
+pub const INTERLEAVED: &str = "interleaved";
 
 /// Timing of one method on one data set.
 #[derive(Clone, Debug, Serialize)]
@@ -147,7 +228,7 @@ pub fn time_methods(
     for m in methods.iter_mut() {
         let mut count = 0;
         for s in scans {
-            let out = m.extract(&s.geometry, &s.ranges_mm);
+            let out = m.extract_in(&s.geometry, &s.ranges_mm, &s.context());
             count += out.features.len();
             if m.name() == REFERENCE {
                 fit_inputs.push((beam_points(&s.geometry, &s.ranges_mm), out.features));
@@ -164,7 +245,12 @@ pub fn time_methods(
         for (m, times) in methods.iter_mut().zip(passes.iter_mut()) {
             let t = Instant::now();
             for s in scans {
-                std::hint::black_box(m.extract(&s.geometry, std::hint::black_box(&s.ranges_mm)));
+                let context = s.context();
+                std::hint::black_box(m.extract_in(
+                    &s.geometry,
+                    std::hint::black_box(&s.ranges_mm),
+                    &context,
+                ));
             }
             times.push(t.elapsed().as_secs_f64());
         }
@@ -220,6 +306,25 @@ pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
             BenchScan {
                 geometry: s.geometry,
                 ranges_mm: s.ranges_mm,
+                sweeps: 0,
+            }
+        })
+        .collect()
+}
+
+/// `n` simulated LMS200 scans at 0.5° (two interleaved sweeps) taken while moving without
+/// odometry (the evaluation's interleaved condition: [`crate::MOVING_V`],
+/// [`crate::MOVING_OMEGA`]), mixed scenes with seeds `seed, seed + 1, …`; declared 2 sweeps.
+pub fn interleaved_scans(n: usize, seed: u64) -> Vec<BenchScan> {
+    (0..n as u64)
+        .map(|k| {
+            let s = Scenario::new(SceneKind::Mixed, seed.wrapping_add(k))
+                .with_motion(crate::MOVING_V, crate::MOVING_OMEGA)
+                .simulate();
+            BenchScan {
+                geometry: s.geometry,
+                ranges_mm: s.ranges_mm,
+                sweeps: s.sweeps,
             }
         })
         .collect()
@@ -248,6 +353,7 @@ pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>
             out.push(BenchScan {
                 geometry: rec.geometry,
                 ranges_mm: rec.ranges_mm,
+                sweeps: 0,
             });
         }
     }
@@ -268,6 +374,11 @@ pub struct BenchOptions {
     pub per_log: usize,
     /// Timed passes per data set and method; the median is reported.
     pub reps: usize,
+    /// Time only the methods of this name (and pfe-default's fits, when it is one), on the
+    /// data sets named in `datasets`.
+    pub only: Option<String>,
+    /// Data sets to time (empty: simulated, interleaved, and carmen when `carmen` is given).
+    pub datasets: Vec<String>,
 }
 
 /// The CARMEN directory given to [`run`] holds no scan (no log, or only empty ones).
@@ -299,12 +410,32 @@ pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
         }
         None => None,
     };
+    let wanted = |name: &str| args.datasets.is_empty() || args.datasets.iter().any(|d| d == name);
+    let only = |mut methods: Vec<Box<dyn Method>>| {
+        if let Some(only) = &args.only {
+            methods.retain(|m| m.name() == only);
+        }
+        methods
+    };
     let mut datasets = Vec::new();
-    let sim = simulated_scans(args.sim_scans.max(1), args.seed);
-    let mut methods = methods_for(DEFAULT_SIGMA_R);
-    datasets.push(time_methods("simulated", &sim, &mut methods, args.reps));
-    if let Some(real) = real {
-        let mut methods = methods_for(Format::Carmen.sigma_r());
+    if wanted("simulated") {
+        let sim = simulated_scans(args.sim_scans.max(1), args.seed);
+        let mut methods = only(methods_for(DEFAULT_SIGMA_R));
+        datasets.push(time_methods("simulated", &sim, &mut methods, args.reps));
+    }
+    if wanted(INTERLEAVED) {
+        let scans = interleaved_scans(args.sim_scans.max(1), args.seed);
+        let mut methods: Vec<Box<dyn Method>> = vec![
+            Box::new(Declared::new(DEFAULT_SIGMA_R, 2)),
+            Box::new(Declared::new(DEFAULT_SIGMA_R, 1)),
+        ];
+        if let Some(name) = &args.only {
+            methods.retain(|m| m.name() == name);
+        }
+        datasets.push(time_methods(INTERLEAVED, &scans, &mut methods, args.reps));
+    }
+    if let Some(real) = real.filter(|_| wanted("carmen")) {
+        let mut methods = only(methods_for(Format::Carmen.sigma_r()));
         datasets.push(time_methods("carmen", &real, &mut methods, args.reps));
     }
     Ok(BenchReport {
@@ -371,6 +502,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
             BenchScan {
                 geometry: s.geometry,
                 ranges_mm: s.ranges_mm,
+                sweeps: 0,
             }
         })
         .collect();
@@ -383,6 +515,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
                 .map(|s| BenchScan {
                     geometry: s.geometry,
                     ranges_mm: s.ranges_mm.iter().take(beams).copied().collect(),
+                    sweeps: 0,
                 })
                 .collect();
             let d = time_methods("scaling", &cut, &mut methods, reps);
