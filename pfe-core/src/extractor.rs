@@ -311,6 +311,9 @@ fn run(
 struct Marking {
     sigma_r: f32,
     rule: Rule,
+    /// The scatter of the points it took its σ_r from ([`Marking::own`]), for
+    /// [`scrutinised`] to ask the same points no more.
+    scatter: Option<scatter::Scatter>,
 }
 
 impl Marking {
@@ -320,13 +323,15 @@ impl Marking {
         Self {
             sigma_r: config.sigma_r,
             rule,
+            scatter: None,
         }
     }
 
     /// With the σ_r of `points` where they scatter well beyond `config`'s ([`scatter`]),
     /// noted in `stats.scan_sigma_um` (0 where not).
     fn own(points: &[Point], config: &Config, gauge: (f32, f32), stats: &mut Stats) -> Self {
-        let sigma_r = match scatter::sigma(points, config.sigma_r) {
+        let scatter = scatter::Scatter::of(points, config.sigma_r);
+        let sigma_r = match scatter.sigma() {
             Some(sigma) => {
                 stats.scan_sigma_um = (sigma * 1000.0) as u32;
                 sigma
@@ -336,7 +341,10 @@ impl Marking {
                 config.sigma_r
             }
         };
-        Self::of(&config.with_sigma_r(sigma_r), gauge)
+        Self {
+            scatter: Some(scatter),
+            ..Self::of(&config.with_sigma_r(sigma_r), gauge)
+        }
     }
 }
 
@@ -457,7 +465,11 @@ fn scrutinised(
     stats: &mut Stats,
 ) -> Marks {
     let sweeps = usize::from(scan.sweeps.max(1));
-    let apart = scatter::sweeps_apart(points, sweeps, config.sigma_r);
+    // The walk's σ came from these points' scatter at the same σ_r: asked once.
+    let apart = match &walk.scatter {
+        Some(seen) => seen.sweeps_apart(points, sweeps, config.sigma_r),
+        None => scatter::sweeps_apart(points, sweeps, config.sigma_r),
+    };
     let offsets = match apart || sweeps == 2 {
         true => sweeps::Offsets::of(points, sweeps, scan.geometry.angle_step),
         false => sweeps::Offsets::default(),
