@@ -12,7 +12,7 @@ use crate::feature::Feature;
 use crate::flags::{END, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::mark::{self, Neighbours};
-use crate::output::{FeatureSink, Stats};
+use crate::output::{FeatureSink, Stage, StageObserver, Stats, Unobserved};
 use crate::pass::Pass;
 use crate::preprocess::{self, scatter};
 use crate::reach;
@@ -122,6 +122,31 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             config,
             &mut out.stats,
             &mut out.features,
+        )
+    }
+
+    /// [`extract`](Self::extract), telling `observer` when each [`Stage`] ends (for per-stage
+    /// timings or instruction counts; the same features and statistics). A scan refused before
+    /// any stage (`Err` other than `FeatureCapacity`) tells it nothing.
+    pub fn extract_observed(
+        &mut self,
+        scan: &Scan<'_>,
+        config: &Config,
+        observer: &mut dyn StageObserver,
+    ) -> Result<Stats, ExtractError> {
+        self.work.len = 0;
+        self.out.features.clear();
+        self.out.stats = Stats::default();
+        self.work.len = accept(scan, config, N)?;
+        let Self { beams, work, out } = self;
+        let beams = beams.of(scan.geometry);
+        run_observed(
+            beams,
+            work.slots(),
+            scan,
+            config,
+            (&mut out.stats, &mut out.features),
+            observer,
         )
     }
 
@@ -236,17 +261,44 @@ fn accept(scan: &Scan<'_>, config: &Config, capacity: usize) -> Result<usize, Ex
 #[inline(never)]
 fn run(
     beams: Beams<'_>,
-    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
     scan: &Scan<'_>,
     config: &Config,
     stats: &mut Stats,
     out: &mut dyn FeatureSink,
+) -> Result<Stats, ExtractError> {
+    steps(beams, slots, scan, config, (stats, out), &mut Unobserved)
+}
+
+/// [`run`] telling `observer` where each stage ends (its own copy: `run` has no calls).
+#[inline(never)]
+fn run_observed(
+    beams: Beams<'_>,
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
+    scan: &Scan<'_>,
+    config: &Config,
+    out: (&mut Stats, &mut dyn FeatureSink),
+    observer: &mut dyn StageObserver,
+) -> Result<Stats, ExtractError> {
+    steps(beams, slots, scan, config, out, observer)
+}
+
+/// The steps, in order; `observer` is told where each ends.
+#[inline(always)]
+fn steps<O: StageObserver + ?Sized>(
+    beams: Beams<'_>,
+    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    scan: &Scan<'_>,
+    config: &Config,
+    (stats, out): (&mut Stats, &mut dyn FeatureSink),
+    observer: &mut O,
 ) -> Result<Stats, ExtractError> {
     let motion = scan.deskewing();
     let checks = config.scrutinised();
     // §2: readings to points (range correction, de-skew).
     let slots = (&mut *points, &mut *ranges, &mut *flags);
     preprocess::load(slots, &beams, motion, scan, config, stats);
+    observer.ended(Stage::Load);
     // Ours, with the checks for real scans: the readings' rounding joins the systematic error
     // (see `Scan::quantum`), and the walk takes the scan's own σ where it scatters well beyond
     // σ_r ([`scatter`]).
@@ -264,13 +316,16 @@ fn run(
         true => Marking::own(points, config, gauge, stats),
         false => Marking::of(config, gauge),
     };
+    observer.ended(Stage::Scatter);
     // §3.1–3.2, §3.6: mark points by prediction.
     let uneven = motion.is_some_and(|m| m.sweeps_apart());
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
     let noted = mark::mark(&mut pass, &walk.rule, uneven);
+    observer.ended(Stage::Mark);
     // Ours: interleaved sweeps out of place (no odometry) moved onto sweep 0 and marked again.
     let parts = (beams, scan, config);
     let marks = in_place(parts, (points, ranges, flags), walk, noted, stats);
+    observer.ended(Stage::Sweeps);
     let fitted;
     let config = match checks {
         true => {
@@ -285,17 +340,20 @@ fn run(
     if config.check_step {
         check::check(&mut pass, rule, marks.noted.as_deref(), marks.moved);
     }
+    observer.ended(Stage::Check);
     // §3.4–3.5: segments and pairing, merges, the type and fit of each.
     segment::segments(&mut pass, rule, config, out);
     // Ours: the features inherit the error of the offsets that moved the sweeps.
     if classify::honest(config, checks) {
         sweeps::inherit(out.features_mut(), marks.alignment);
     }
+    observer.ended(Stage::Segments);
     // Ours, with the checks for real scans: line ends reach over the beams beside them that
     // lie on them.
     if let (true, Some(noise)) = (checks, rule.noise()) {
         reach::extend(&mut pass, noise, out.features_mut());
     }
+    observer.ended(Stage::Reach);
     // Ours, with the checks for real scans: no line the scanner cannot see; small objects.
     if checks {
         sift::sift(&mut pass, config, out);
@@ -303,6 +361,7 @@ fn run(
             sweeps::inherit_objects(out.features_mut(), marks.alignment);
         }
     }
+    observer.ended(Stage::Sift);
     outcome(pass.stats)
 }
 
