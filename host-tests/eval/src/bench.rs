@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use pfe_core::{Feature, Point, ScanGeometry};
+use pfe_core::{Feature, Point, ScanGeometry, Stage, StageObserver};
 use serde::Serialize;
 
 use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
@@ -188,6 +188,76 @@ pub struct DatasetTiming {
     pub points: usize,
     /// One entry per method.
     pub methods: Vec<MethodTiming>,
+    /// pfe-default by stage ([`stage_times`]), when it is timed.
+    pub stages: Vec<StageTiming>,
+}
+
+/// Median ns a beam of one stage of pfe-default ([`pfe_core::Stage`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct StageTiming {
+    /// Stage name ([`pfe_core::Stage::name`]).
+    pub stage: String,
+    /// Median ns per beam over the passes.
+    pub ns_per_point: f64,
+}
+
+/// Sums the time between one stage's end and the next into per-stage totals.
+struct StageClock {
+    last: Instant,
+    total: [std::time::Duration; Stage::ALL.len()],
+}
+
+impl StageObserver for StageClock {
+    fn ended(&mut self, stage: Stage) {
+        let now = Instant::now();
+        if let Some(t) = self.total.get_mut(stage.index()) {
+            *t += now - self.last;
+        }
+        self.last = now;
+    }
+}
+
+/// pfe-default (σ_r `sigma_r`) by stage on `scans` (with their declared sweeps), through
+/// [`pfe_core::Extractor::extract_observed`]: `reps` passes, the median ns a beam of each
+/// stage. The clock is read 8 times a scan (about 0.5 ns a beam on the host), so the stages
+/// add up to a little more than the method's own row.
+pub fn stage_times(scans: &[BenchScan], sigma_r: f32, reps: usize) -> Vec<StageTiming> {
+    let config = pfe_core::Config::default().with_sigma_r(sigma_r);
+    let mut ex = Box::new(pfe_core::Extractor::<
+        { crate::methods::MAX_BEAMS },
+        { crate::methods::MAX_FEATURES },
+    >::new());
+    let points: usize = scans.iter().map(|s| s.ranges_mm.len()).sum();
+    let mut passes: Vec<Vec<f64>> = vec![Vec::new(); Stage::ALL.len()];
+    for pass in 0..=reps.max(1) {
+        let mut clock = StageClock {
+            last: Instant::now(),
+            total: Default::default(),
+        };
+        for s in scans {
+            let sweeps = u8::try_from(s.sweeps).unwrap_or(u8::MAX);
+            let scan = pfe_core::Scan::from_mm(s.geometry, &s.ranges_mm).with_sweeps(sweeps);
+            clock.last = Instant::now();
+            let _ = std::hint::black_box(ex.extract_observed(&scan, &config, &mut clock));
+        }
+        // The first pass warms up.
+        if pass > 0 {
+            for (times, t) in passes.iter_mut().zip(clock.total) {
+                times.push(t.as_secs_f64() * 1e9 / points.max(1) as f64);
+            }
+        }
+    }
+    Stage::ALL
+        .iter()
+        .zip(passes.iter_mut())
+        .map(|(stage, times)| {
+            times.sort_by(f64::total_cmp);
+            StageTiming {
+                stage: stage.name().to_string(),
+                ns_per_point: times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
+            }
+        })
+        .collect()
 }
 
 /// The whole report (`--json`).
@@ -294,6 +364,7 @@ pub fn time_methods(
         scans: scans.len(),
         points,
         methods: rows,
+        stages: Vec::new(),
     }
 }
 
@@ -421,7 +492,11 @@ pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
     if wanted("simulated") {
         let sim = simulated_scans(args.sim_scans.max(1), args.seed);
         let mut methods = only(methods_for(DEFAULT_SIGMA_R));
-        datasets.push(time_methods("simulated", &sim, &mut methods, args.reps));
+        let mut d = time_methods("simulated", &sim, &mut methods, args.reps);
+        if staged(&d) {
+            d.stages = stage_times(&sim, DEFAULT_SIGMA_R, args.reps);
+        }
+        datasets.push(d);
     }
     if wanted(INTERLEAVED) {
         let scans = interleaved_scans(args.sim_scans.max(1), args.seed);
@@ -432,11 +507,19 @@ pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
         if let Some(name) = &args.only {
             methods.retain(|m| m.name() == name);
         }
-        datasets.push(time_methods(INTERLEAVED, &scans, &mut methods, args.reps));
+        let mut d = time_methods(INTERLEAVED, &scans, &mut methods, args.reps);
+        if staged(&d) {
+            d.stages = stage_times(&scans, DEFAULT_SIGMA_R, args.reps);
+        }
+        datasets.push(d);
     }
     if let Some(real) = real.filter(|_| wanted("carmen")) {
         let mut methods = only(methods_for(Format::Carmen.sigma_r()));
-        datasets.push(time_methods("carmen", &real, &mut methods, args.reps));
+        let mut d = time_methods("carmen", &real, &mut methods, args.reps);
+        if staged(&d) {
+            d.stages = stage_times(&real, Format::Carmen.sigma_r(), args.reps);
+        }
+        datasets.push(d);
     }
     Ok(BenchReport {
         profile: if cfg!(debug_assertions) {
@@ -449,6 +532,21 @@ pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
         threads: 1,
         datasets,
     })
+}
+
+/// Whether a data set's timings include pfe-default's (then its stages are timed too).
+fn staged(d: &DatasetTiming) -> bool {
+    d.methods.iter().any(|m| m.method == REFERENCE)
+}
+
+/// The stages as one line: `load 1.2 · scatter 3.4 · … (sum 20.1)` ns a beam.
+pub fn stage_line(stages: &[StageTiming]) -> String {
+    let sum: f64 = stages.iter().map(|s| s.ns_per_point).sum();
+    let parts: Vec<String> = stages
+        .iter()
+        .map(|s| format!("{} {:.1}", s.stage, s.ns_per_point))
+        .collect();
+    format!("{} (sum {sum:.1})", parts.join(" · "))
 }
 
 /// The report as a text table.
@@ -478,6 +576,13 @@ pub fn table(report: &BenchReport) -> String {
                 m.scans_per_s,
                 m.features_per_scan,
                 m.slowdown_vs_pfe_default
+            );
+        }
+        if !d.stages.is_empty() {
+            let _ = writeln!(
+                s,
+                "{REFERENCE} by stage, ns/beam: {}",
+                stage_line(&d.stages)
             );
         }
     }
@@ -570,6 +675,13 @@ pub fn write_markdown(
                 m.slowdown_vs_pfe_default
             );
         }
+        if !d.stages.is_empty() {
+            let _ = write!(
+                body,
+                "\n{REFERENCE} by stage ([`Extractor::extract_observed`](../pfe-core/src/extractor.rs), ns/beam): {}\n",
+                stage_line(&d.stages)
+            );
+        }
     }
     let _ = write!(body, "\n### Budgets\n\n");
     for b in budgets {
@@ -649,6 +761,7 @@ mod tests {
                     row("acf", acf),
                     row(FITS_ONLY, 4.0),
                 ],
+                stages: Vec::new(),
             }],
         }
     }
