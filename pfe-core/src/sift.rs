@@ -139,7 +139,7 @@ fn undetermined_object(pass: &Pass<'_>, l: &LineFeature) -> bool {
         s -= 1;
     }
     let e = run_end(pass, first);
-    e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e) <= OBJECT_MAX_MM
+    e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e, OBJECT_MAX_MM).is_some()
 }
 
 /// True when the run `s..=e` is made of whole segments: it starts one and the point after it
@@ -194,16 +194,20 @@ fn held(features: &[Feature], s: usize, e: usize) -> bool {
     features.iter().any(|f| f.first() <= e && f.last() >= s)
 }
 
-/// The widest distance from either end of the run `s..=e` to its points, mm (its extent).
-fn extent(pass: &Pass<'_>, s: usize, e: usize) -> f32 {
+/// The widest distance from either end of the run `s..=e` to its points, mm (its extent),
+/// when it is at most `max` mm (`None` from the first point farther: no need to go on).
+fn extent(pass: &Pass<'_>, s: usize, e: usize, max: f32) -> Option<f32> {
     let (a, b) = (pass.point(s), pass.point(e));
-    (s..=e)
-        .filter(|&k| pass.valid(k))
-        .map(|k| {
-            let p = pass.point(k);
-            p.distance(&a).max(p.distance(&b))
-        })
-        .fold(0.0, f32::max)
+    let mut w = 0.0f32;
+    for k in (s..=e).filter(|&k| pass.valid(k)) {
+        let p = pass.point(k);
+        let d = p.distance(&a).max(p.distance(&b));
+        if d > max {
+            return None;
+        }
+        w = w.max(d);
+    }
+    (w <= max).then_some(w)
 }
 
 /// The object of the run `s..=e`, when it is one (at most [`OBJECT_MAX_MM`] across).
@@ -214,10 +218,7 @@ fn extent(pass: &Pass<'_>, s: usize, e: usize) -> f32 {
 /// object as deep as it is wide its surface lies (w²/12: the points show its near side, which
 /// moves against the centre as it is seen from elsewhere).
 fn object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<ObjectFeature> {
-    let w = extent(pass, s, e);
-    if !(w <= OBJECT_MAX_MM) {
-        return None;
-    }
+    let w = extent(pass, s, e, OBJECT_MAX_MM)?;
     let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
     for k in (s..=e).filter(|&k| pass.valid(k)) {
         let p = pass.point(k);
