@@ -47,7 +47,7 @@ pub(crate) trait FeatureSink {
     fn push(&mut self, f: Feature) -> bool;
     /// The features stored, in the order pushed.
     fn features_mut(&mut self) -> &mut [Feature];
-    /// Keeps only the features `keep` says, in order.
+    /// Keeps only the features `keep` says, in order (it asks each once, in order).
     fn retain(&mut self, keep: &mut dyn FnMut(&Feature) -> bool);
 }
 

@@ -39,9 +39,12 @@ const MAX_SIGMA_ALPHA: f32 = 0.1;
 pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
     // Lines not reported: their points freed (flagged as veils until an object takes them).
     let mut freed = 0usize;
-    for f in out.features_mut().iter() {
+    // Which of the first 128 features are such lines, so that they are judged once.
+    let mut gone = 0u128;
+    for (k, f) in out.features_mut().iter().enumerate() {
         if let Feature::Line(l) = f {
             if !seen(l) || undetermined_object(pass, l) {
+                gone |= 1u128.checked_shl(k as u32).unwrap_or(0);
                 for i in usize::from(l.first)..=usize::from(l.last) {
                     if pass.valid(i) {
                         pass.set(i, VEIL);
@@ -56,9 +59,16 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
     }
     if freed > 0 {
         let pass = &*pass;
-        out.retain(&mut |f| match f {
-            Feature::Line(l) => seen(l) && !undetermined_object(pass, l),
-            _ => true,
+        // `retain` asks each feature once, in order: `k` is its index.
+        let mut k = 0usize;
+        out.retain(&mut |f| {
+            let at = k;
+            k += 1;
+            match f {
+                Feature::Line(_) if at < 128 => gone & (1u128 << at) == 0,
+                Feature::Line(l) => seen(l) && !undetermined_object(pass, l),
+                _ => true,
+            }
         });
     }
     // Small objects no feature holds.
