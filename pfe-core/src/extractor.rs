@@ -12,10 +12,9 @@ use crate::feature::Feature;
 use crate::flags::{END, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::mark::{self, Neighbours};
-use crate::output::{FeatureSink, Stats};
+use crate::output::{FeatureSink, Stage, StageObserver, Stats, Unobserved};
 use crate::pass::Pass;
 use crate::preprocess::{self, scatter};
-use crate::probe::{Probe, Step};
 use crate::reach;
 use crate::rule::Rule;
 use crate::scan::Scan;
@@ -106,44 +105,10 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
     }
 
     /// Extracts the features of `scan`. On `Err(FeatureCapacity)` the features that fitted are
-    /// still available from [`features`](Self::features): the first `M` reported ones (a line
-    /// the real-scan checks will not report gives its room up to the next feature), plus small
-    /// objects where room is left.
+    /// still available from [`features`](Self::features): the first `M`, less the lines the
+    /// real-scan checks then found the scanner could not have seen (the capacity they held is
+    /// not refilled), plus small objects where room is left.
     pub fn extract(&mut self, scan: &Scan<'_>, config: &Config) -> Result<Stats, ExtractError> {
-        self.extract_with(scan, config, Probe::none())
-    }
-
-    /// [`extract`](Self::extract), calling `report` at the end of each step (feature `probe`,
-    /// for benchmarks: the firmware's per-stage instruction counts).
-    ///
-    /// ```
-    /// use pfe_core::probe::Step;
-    /// use pfe_core::{Config, Extractor, Scan, ScanGeometry};
-    /// let mut ex = Extractor::<361, 32>::new();
-    /// let mut steps = Vec::new();
-    /// let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, &[2000.0; 361]);
-    /// ex.extract_probed(&scan, &Config::default(), &mut |s| steps.push(s))?;
-    /// assert_eq!(steps.first(), Some(&Step::Load));
-    /// assert_eq!(steps.last(), Some(&Step::Sift));
-    /// # Ok::<(), pfe_core::ExtractError>(())
-    /// ```
-    #[cfg(feature = "probe")]
-    pub fn extract_probed(
-        &mut self,
-        scan: &Scan<'_>,
-        config: &Config,
-        report: &mut dyn FnMut(Step),
-    ) -> Result<Stats, ExtractError> {
-        self.extract_with(scan, config, Probe::to(report))
-    }
-
-    #[inline(always)]
-    fn extract_with(
-        &mut self,
-        scan: &Scan<'_>,
-        config: &Config,
-        mut probe: Probe<'_>,
-    ) -> Result<Stats, ExtractError> {
         self.work.len = 0;
         self.out.features.clear();
         self.out.stats = Stats::default();
@@ -157,7 +122,31 @@ impl<const N: usize, const M: usize> Extractor<N, M> {
             config,
             &mut out.stats,
             &mut out.features,
-            &mut probe,
+        )
+    }
+
+    /// [`extract`](Self::extract), telling `observer` when each [`Stage`] ends (for per-stage
+    /// timings or instruction counts; the same features and statistics). A scan refused before
+    /// any stage (`Err` other than `FeatureCapacity`) tells it nothing.
+    pub fn extract_observed(
+        &mut self,
+        scan: &Scan<'_>,
+        config: &Config,
+        observer: &mut dyn StageObserver,
+    ) -> Result<Stats, ExtractError> {
+        self.work.len = 0;
+        self.out.features.clear();
+        self.out.stats = Stats::default();
+        self.work.len = accept(scan, config, N)?;
+        let Self { beams, work, out } = self;
+        let beams = beams.of(scan.geometry);
+        run_observed(
+            beams,
+            work.slots(),
+            scan,
+            config,
+            (&mut out.stats, &mut out.features),
+            observer,
         )
     }
 
@@ -272,19 +261,44 @@ fn accept(scan: &Scan<'_>, config: &Config, capacity: usize) -> Result<usize, Ex
 #[inline(never)]
 fn run(
     beams: Beams<'_>,
-    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
     scan: &Scan<'_>,
     config: &Config,
     stats: &mut Stats,
     out: &mut dyn FeatureSink,
-    probe: &mut Probe<'_>,
+) -> Result<Stats, ExtractError> {
+    steps(beams, slots, scan, config, (stats, out), &mut Unobserved)
+}
+
+/// [`run`] telling `observer` where each stage ends (its own copy: `run` has no calls).
+#[inline(never)]
+fn run_observed(
+    beams: Beams<'_>,
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
+    scan: &Scan<'_>,
+    config: &Config,
+    out: (&mut Stats, &mut dyn FeatureSink),
+    observer: &mut dyn StageObserver,
+) -> Result<Stats, ExtractError> {
+    steps(beams, slots, scan, config, out, observer)
+}
+
+/// The steps, in order; `observer` is told where each ends.
+#[inline(always)]
+fn steps<O: StageObserver + ?Sized>(
+    beams: Beams<'_>,
+    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
+    scan: &Scan<'_>,
+    config: &Config,
+    (stats, out): (&mut Stats, &mut dyn FeatureSink),
+    observer: &mut O,
 ) -> Result<Stats, ExtractError> {
     let motion = scan.deskewing();
     let checks = config.scrutinised();
     // §2: readings to points (range correction, de-skew).
     let slots = (&mut *points, &mut *ranges, &mut *flags);
     preprocess::load(slots, &beams, motion, scan, config, stats);
-    probe.at(Step::Load);
+    observer.ended(Stage::Load);
     // Ours, with the checks for real scans: the readings' rounding joins the systematic error
     // (see `Scan::quantum`), and the walk takes the scan's own σ where it scatters well beyond
     // σ_r ([`scatter`]).
@@ -302,16 +316,16 @@ fn run(
         true => Marking::own(points, config, gauge, stats),
         false => Marking::of(config, gauge),
     };
-    probe.at(Step::Scatter);
+    observer.ended(Stage::Scatter);
     // §3.1–3.2, §3.6: mark points by prediction.
     let uneven = motion.is_some_and(|m| m.sweeps_apart());
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
     let noted = mark::mark(&mut pass, &walk.rule, uneven);
-    probe.at(Step::Mark);
+    observer.ended(Stage::Mark);
     // Ours: interleaved sweeps out of place (no odometry) moved onto sweep 0 and marked again.
     let parts = (beams, scan, config);
     let marks = in_place(parts, (points, ranges, flags), walk, noted, stats);
-    probe.at(Step::Sweeps);
+    observer.ended(Stage::Sweeps);
     let fitted;
     let config = match checks {
         true => {
@@ -326,20 +340,20 @@ fn run(
     if config.check_step {
         check::check(&mut pass, rule, marks.noted.as_deref(), marks.moved);
     }
-    probe.at(Step::Check);
+    observer.ended(Stage::Check);
     // §3.4–3.5: segments and pairing, merges, the type and fit of each.
     segment::segments(&mut pass, rule, config, out);
     // Ours: the features inherit the error of the offsets that moved the sweeps.
     if classify::honest(config, checks) {
         sweeps::inherit(out.features_mut(), marks.alignment);
     }
-    probe.at(Step::Segments);
+    observer.ended(Stage::Segments);
     // Ours, with the checks for real scans: line ends reach over the beams beside them that
     // lie on them.
     if let (true, Some(noise)) = (checks, rule.noise()) {
         reach::extend(&mut pass, noise, out.features_mut());
     }
-    probe.at(Step::Reach);
+    observer.ended(Stage::Reach);
     // Ours, with the checks for real scans: no line the scanner cannot see; small objects.
     if checks {
         sift::sift(&mut pass, config, out);
@@ -347,7 +361,7 @@ fn run(
             sweeps::inherit_objects(out.features_mut(), marks.alignment);
         }
     }
-    probe.at(Step::Sift);
+    observer.ended(Stage::Sift);
     outcome(pass.stats)
 }
 
@@ -356,6 +370,9 @@ fn run(
 struct Marking {
     sigma_r: f32,
     rule: Rule,
+    /// The scatter of the points it took its σ_r from ([`Marking::own`]), for
+    /// [`scrutinised`] to ask the same points no more.
+    scatter: Option<scatter::Scatter>,
 }
 
 impl Marking {
@@ -365,13 +382,15 @@ impl Marking {
         Self {
             sigma_r: config.sigma_r,
             rule,
+            scatter: None,
         }
     }
 
     /// With the σ_r of `points` where they scatter well beyond `config`'s ([`scatter`]),
     /// noted in `stats.scan_sigma_um` (0 where not).
     fn own(points: &[Point], config: &Config, gauge: (f32, f32), stats: &mut Stats) -> Self {
-        let sigma_r = match scatter::sigma(points, config.sigma_r) {
+        let scatter = scatter::Scatter::of(points, config.sigma_r);
+        let sigma_r = match scatter.sigma() {
             Some(sigma) => {
                 stats.scan_sigma_um = (sigma * 1000.0) as u32;
                 sigma
@@ -381,7 +400,10 @@ impl Marking {
                 config.sigma_r
             }
         };
-        Self::of(&config.with_sigma_r(sigma_r), gauge)
+        Self {
+            scatter: Some(scatter),
+            ..Self::of(&config.with_sigma_r(sigma_r), gauge)
+        }
     }
 }
 
@@ -502,7 +524,11 @@ fn scrutinised(
     stats: &mut Stats,
 ) -> Marks {
     let sweeps = usize::from(scan.sweeps.max(1));
-    let apart = scatter::sweeps_apart(points, sweeps, config.sigma_r);
+    // The walk's σ came from these points' scatter at the same σ_r: asked once.
+    let apart = match &walk.scatter {
+        Some(seen) => seen.sweeps_apart(points, sweeps, config.sigma_r),
+        None => scatter::sweeps_apart(points, sweeps, config.sigma_r),
+    };
     let offsets = match apart || sweeps == 2 {
         true => sweeps::Offsets::of(points, sweeps, scan.geometry.angle_step),
         false => sweeps::Offsets::default(),

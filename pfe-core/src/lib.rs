@@ -62,10 +62,6 @@ pub mod predict;
 pub mod preprocess;
 #[cfg(not(feature = "internals"))]
 mod preprocess;
-#[cfg(feature = "probe")]
-pub mod probe;
-#[cfg(not(feature = "probe"))]
-mod probe;
 mod reach;
 mod rule;
 pub mod scan;
@@ -89,5 +85,5 @@ pub use fit::circle::{
 pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
 pub use motion::{BeamTiming, Motion};
-pub use output::Stats;
+pub use output::{Stage, StageObserver, Stats};
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

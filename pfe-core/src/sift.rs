@@ -45,15 +45,27 @@ const MAX_SIGMA_ALPHA: f32 = 0.1;
 pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
     // Lines not reported: their points freed (flagged as veils until an object takes them).
     let mut freed = 0usize;
-    for f in out.features_mut().iter() {
+    // Which of the first 128 features are such lines, so that they are judged once.
+    let mut gone = 0u128;
+    for (k, f) in out.features_mut().iter().enumerate() {
         if let Some(l) = unreported(pass, f) {
+            gone |= 1u128.checked_shl(k as u32).unwrap_or(0);
             free(pass, &l);
             freed += 1;
         }
     }
     if freed > 0 {
         let pass = &*pass;
-        out.retain(&mut |f| unreported(pass, f).is_none());
+        // `retain` asks each feature once, in order: `k` is its index.
+        let mut k = 0usize;
+        out.retain(&mut |f| {
+            let at = k;
+            k += 1;
+            match at < 128 {
+                true => gone & (1u128 << at) == 0,
+                false => unreported(pass, f).is_none(),
+            }
+        });
     }
     // Small objects no feature holds.
     let len = pass.len();
@@ -168,7 +180,7 @@ fn undetermined_object(pass: &Pass<'_>, l: &LineFeature) -> bool {
             return false;
         }
     }
-    e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e) <= OBJECT_MAX_MM
+    e >= last && e + 1 - s >= OBJECT_MIN_POINTS && extent(pass, s, e, OBJECT_MAX_MM).is_some()
 }
 
 /// The first and last point of the segments that hold the run `s..=e`, when the run can be
@@ -258,16 +270,20 @@ fn held(features: &[Feature], s: usize, e: usize) -> bool {
     features.iter().any(|f| f.first() <= e && f.last() >= s)
 }
 
-/// The widest distance from either end of the run `s..=e` to its points, mm (its extent).
-fn extent(pass: &Pass<'_>, s: usize, e: usize) -> f32 {
+/// The widest distance from either end of the run `s..=e` to its points, mm (its extent),
+/// when it is at most `max` mm (`None` from the first point farther: no need to go on).
+fn extent(pass: &Pass<'_>, s: usize, e: usize, max: f32) -> Option<f32> {
     let (a, b) = (pass.point(s), pass.point(e));
-    (s..=e)
-        .filter(|&k| pass.valid(k))
-        .map(|k| {
-            let p = pass.point(k);
-            p.distance(&a).max(p.distance(&b))
-        })
-        .fold(0.0, f32::max)
+    let mut w = 0.0f32;
+    for k in (s..=e).filter(|&k| pass.valid(k)) {
+        let p = pass.point(k);
+        let d = p.distance(&a).max(p.distance(&b));
+        if d > max {
+            return None;
+        }
+        w = w.max(d);
+    }
+    (w <= max).then_some(w)
 }
 
 /// The object of the run `s..=e`, when it is one (at most [`OBJECT_MAX_MM`] across).
@@ -278,10 +294,7 @@ fn extent(pass: &Pass<'_>, s: usize, e: usize) -> f32 {
 /// object as deep as it is wide its surface lies (w²/12: the points show its near side, which
 /// moves against the centre as it is seen from elsewhere).
 fn object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<ObjectFeature> {
-    let w = extent(pass, s, e);
-    if !(w <= OBJECT_MAX_MM) {
-        return None;
-    }
+    let w = extent(pass, s, e, OBJECT_MAX_MM)?;
     let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
     for k in (s..=e).filter(|&k| pass.valid(k)) {
         let p = pass.point(k);

@@ -63,8 +63,15 @@ impl SweepOffset {
     }
 
     /// Point `p` of the sweep in the frame of sweep 0: rotated by `dtheta`, then translated.
+    // The extractor turns whole sweeps ([`Offsets::apply`]); this is the tests' entry.
+    #[cfg_attr(not(any(test, feature = "internals")), allow(dead_code))]
     pub fn apply(&self, p: Point) -> Point {
-        let (s, c) = math::sin_cos(self.dtheta);
+        self.turned(math::sin_cos(self.dtheta), p)
+    }
+
+    /// [`apply`](Self::apply) with the sine and cosine of `dtheta` given (asked once a sweep).
+    #[inline(always)]
+    fn turned(&self, (s, c): (f32, f32), p: Point) -> Point {
         Point::new(c * p.x - s * p.y + self.dx, s * p.x + c * p.y + self.dy)
     }
 }
@@ -112,7 +119,7 @@ pub fn estimate(
     let first = normal(&rows, None, 0.0)?;
     let cut = 3.0 * first.sigma.max(SIGMA_FLOOR);
     let sol = normal(&rows, Some((&first.x, cut)), first.x[2] / ROT_SCALE)?;
-    Some(offset(&sol, rows.far()))
+    Some(offset(&sol, first.far))
 }
 
 /// Moves the points of every sweep `s ≥ 1` of a scan of `sweeps` interleaved sweeps onto
@@ -190,10 +197,11 @@ impl Offsets {
             let Some(offset) = offset else {
                 continue;
             };
+            let turn = math::sin_cos(offset.dtheta);
             let slots = points.iter_mut().zip(ranges.iter_mut()).zip(flags);
             for ((p, r), f) in slots.skip(s + 1).step_by(self.sweeps.max(1)) {
                 if f & VALID != 0 {
-                    *p = offset.apply(*p);
+                    *p = offset.turned(turn, *p);
                     *r = math::hypot(p.x, p.y);
                 }
             }
@@ -309,13 +317,6 @@ impl Rows<'_> {
             }
         }
     }
-
-    /// The largest range among the rows' beams, mm.
-    fn far(&self) -> f32 {
-        let mut far = 0.0f32;
-        self.each(|_, r| far = far.max(r));
-        far
-    }
 }
 
 /// The row of beam `q` between sweep-0 beams `a` and `b` (and `c` after `b`), when the
@@ -370,13 +371,16 @@ fn offset(sol: &Solution, far: f32) -> SweepOffset {
 }
 
 /// A least-squares solution: the unknowns, the normal matrix and its inverse (upper
-/// triangles, row by row: 00 01 02 11 12 22), the residual standard deviation and the rows.
+/// triangles, row by row: 00 01 02 11 12 22), the residual standard deviation, the rows used
+/// and the farthest beam of all.
 struct Solution {
     x: [f32; 3],
     a: [f32; 6],
     inv: [f32; 6],
     sigma: f32,
     rows: usize,
+    /// The largest range among the rows' beams, mm (all of them, kept or not).
+    far: f32,
 }
 
 /// Residual of `row` at `x` (first order).
@@ -394,7 +398,10 @@ fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option
     let mut a = [0.0f32; 6];
     let mut g = [0.0f32; 3];
     let mut used = 0usize;
-    rows.each(|r, _| {
+    // The largest range among all the rows' beams, kept or not.
+    let mut far = 0.0f32;
+    rows.each(|r, range| {
+        far = far.max(range);
         if !kept(r) {
             return;
         }
@@ -434,6 +441,7 @@ fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option
         inv,
         sigma,
         rows: used,
+        far,
     })
 }
 
@@ -511,6 +519,7 @@ mod tests {
             inv,
             sigma: 2.0,
             rows: 100,
+            far: 5000.0,
         };
         let off = offset(&sol, 5000.0);
         let m = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.25], [0.5, -0.25, 2.0f64]];

@@ -1,7 +1,7 @@
 //! `cargo xtask bench-mcu [--scans N | --worst]`: instruction counts of the firmware pipeline
 //! with everything on (the host's extraction) on QEMU mps2-an386 with `-icount shift=10`
-//! (SysTick-measured; instruction counts, not cycles), stage by stage (pfe-core's `probe`
-//! feature, in the bench firmware only), on three sets of N scans (still at 0.5°, moving at
+//! (SysTick-measured; instruction counts, not cycles), stage by stage (pfe-core's
+//! `Extractor::extract_observed`, in the bench firmware only), on three sets of N scans (still at 0.5°, moving at
 //! 0.5° with the sweeps out of place, moving at 0.25°), for pfe-core with libm and with
 //! micromath; refreshes docs/PERFORMANCE.md and fails when the whole pipeline needs more than
 //! 200 instructions per point (median, in any set). `--worst`: the adversarial scans instead,
@@ -54,14 +54,9 @@ pub fn run(args: &[String]) -> Result<()> {
         &accuracy()?,
     )?;
     let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
-    // With pfe-core's step probe: the per-stage rows.
-    let libm = build_fw("pfe-bench", &["probe"], &env, &base.join("libm"))?;
-    let mm = build_fw(
-        "pfe-bench",
-        &["micromath", "probe"],
-        &env,
-        &base.join("micromath"),
-    )?;
+    // The per-stage rows: pfe-core's stage observer.
+    let libm = build_fw("pfe-bench", &[], &env, &base.join("libm"))?;
+    let mm = build_fw("pfe-bench", &["micromath"], &env, &base.join("micromath"))?;
     let extraction = demo_host(&[
         "bench".as_ref(),
         "--scans".as_ref(),
@@ -167,7 +162,7 @@ fn worst() -> Result<()> {
     ])?;
     let env = [("PFE_BENCH_SCANS", scans_file.as_os_str())];
     // The libm build's directory: only the bench binary rebuilds.
-    let elf = build_fw("pfe-bench", &["probe"], &env, &base.join("libm"))?;
+    let elf = build_fw("pfe-bench", &[], &env, &base.join("libm"))?;
     let md = util::root().join("docs").join("PERFORMANCE.md");
     demo_host(&[
         "worst".as_ref(),

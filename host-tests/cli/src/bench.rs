@@ -23,6 +23,14 @@ pub struct Args {
     /// Timed passes per data set and method; the median is reported.
     #[arg(long, default_value_t = 11)]
     reps: usize,
+    /// Time only this method (`pfe-default`, `pfe-paper`, `acf`, `split-merge`; in the
+    /// interleaved data set `pfe-default` is the one told 2 sweeps): for profiling one method.
+    #[arg(long, value_name = "METHOD")]
+    only: Option<String>,
+    /// Time only these data sets (`simulated`, `interleaved`, `carmen`; repeatable; default
+    /// all, carmen when --carmen is given).
+    #[arg(long = "dataset", value_name = "NAME", value_parser = ["simulated", "interleaved", "carmen"])]
+    datasets: Vec<String>,
     /// Print machine-readable JSON instead of the table.
     #[arg(long)]
     json: bool,
@@ -72,6 +80,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         carmen: args.carmen.clone(),
         per_log: args.per_log,
         reps: args.reps,
+        only: args.only.clone(),
+        datasets: args.datasets.clone(),
     })
     .map_err(|e| match e.downcast::<pfe_eval::bench::NoScans>() {
         Ok(none) => super::Exit::bad_input(none.to_string()).into(),

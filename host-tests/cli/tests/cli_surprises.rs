@@ -119,10 +119,10 @@ fn bench_reads_carmen_logs_only_from_carmen_dir() {
     };
     let out = bench(&[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert_eq!(bench_datasets(&out), ["simulated"]);
+    assert_eq!(bench_datasets(&out), ["simulated", "interleaved"]);
     let out = bench(&["--carmen", arg(&logs)]);
     assert!(out.status.success(), "{}", stderr(&out));
-    assert_eq!(bench_datasets(&out), ["simulated", "carmen"]);
+    assert_eq!(bench_datasets(&out), ["simulated", "interleaved", "carmen"]);
     // A directory with no log, one whose only log is empty, one that is absent: exit 2.
     let none = dir.0.join("none");
     std::fs::create_dir(&none).unwrap();

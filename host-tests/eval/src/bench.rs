@@ -25,11 +25,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context;
-use pfe_core::{Feature, Point, ScanGeometry};
+use pfe_core::{Feature, Point, ScanGeometry, Stage, StageObserver};
 use serde::Serialize;
 
 use crate::methods::baselines::{beam_points, refit, DEFAULT_SIGMA_R};
-use crate::methods::Method;
+use crate::methods::{Extraction, Method, Pfe, ScanContext};
 use crate::methods_for;
 use crate::scene::{Scenario, SceneKind};
 use pfe_formats::Format;
@@ -47,6 +47,19 @@ pub fn budget_lines(report: &BenchReport) -> (Vec<String>, bool) {
     for d in &report.datasets {
         let row = |name: &str| d.methods.iter().find(|m| m.method == name);
         let fits = row(FITS_ONLY).map(|f| f.ns_per_point);
+        if d.dataset == INTERLEAVED {
+            let one = format!("{REFERENCE} --sweeps 1");
+            if let (Some(two), Some(one)) = (row(REFERENCE), row(&one)) {
+                let ratio = two.ns_per_point / one.ns_per_point;
+                let met = ratio <= INTERLEAVED_BUDGET;
+                all &= met;
+                lines.push(format!(
+                    "budget ({INTERLEAVED}): {REFERENCE} with 2 sweeps declared ≤ {INTERLEAVED_BUDGET}× the time with 1: {} ({ratio:.2}×)",
+                    if met { "met" } else { "NOT met" },
+                ));
+            }
+            continue;
+        }
         for (method, least) in BUDGETS {
             // Without a pfe-default row the ratio is NaN: nothing to judge.
             let Some(m) = row(method).filter(|m| m.slowdown_vs_pfe_default.is_finite()) else {
@@ -75,7 +88,75 @@ pub struct BenchScan {
     pub geometry: ScanGeometry,
     /// Ranges, mm (NaN = no return).
     pub ranges_mm: Vec<f32>,
+    /// Interleaved sweeps the scan is declared to be made of (0 or 1: one), as `pfe extract
+    /// --sweeps` declares them.
+    pub sweeps: usize,
 }
+
+impl BenchScan {
+    /// What the methods are told about the scan: its declared sweeps.
+    pub fn context(&self) -> ScanContext {
+        ScanContext {
+            sweeps: self.sweeps,
+            ..ScanContext::default()
+        }
+    }
+}
+
+/// pfe-default told a number of interleaved sweeps whatever the scan declares, as `pfe extract
+/// --sweeps N` does: the interleaved data set times the same scans with 2 and with 1.
+pub struct Declared {
+    name: String,
+    sweeps: usize,
+    inner: Pfe,
+}
+
+impl Declared {
+    /// pfe-default with σ_r `sigma_r`, told `sweeps` sweeps; named `pfe-default` for 2 (what
+    /// `--sweeps auto` declares for 0.5° LMS scans), `pfe-default --sweeps N` otherwise.
+    pub fn new(sigma_r: f32, sweeps: usize) -> Self {
+        let name = match sweeps {
+            2 => REFERENCE.to_string(),
+            n => format!("{REFERENCE} --sweeps {n}"),
+        };
+        let config = pfe_core::Config::default().with_sigma_r(sigma_r);
+        Self {
+            inner: Pfe::new(&name, config),
+            name,
+            sweeps,
+        }
+    }
+}
+
+impl Method for Declared {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn extract(&mut self, geometry: &ScanGeometry, ranges_mm: &[f32]) -> Extraction {
+        self.extract_in(geometry, ranges_mm, &ScanContext::default())
+    }
+
+    fn extract_in(
+        &mut self,
+        geometry: &ScanGeometry,
+        ranges_mm: &[f32],
+        context: &ScanContext,
+    ) -> Extraction {
+        let context = ScanContext {
+            sweeps: self.sweeps,
+            ..*context
+        };
+        self.inner.extract_in(geometry, ranges_mm, &context)
+    }
+}
+
+/// The interleaved data set's budget: `--sweeps 2` at most this many times `--sweeps 1`'s time
+/// on the same scans.
+pub const INTERLEAVED_BUDGET: f64 = 1.25;
+
+/// Name of the interleaved data set.
+pub const INTERLEAVED: &str = "interleaved";
 
 /// Timing of one method on one data set.
 #[derive(Clone, Debug, Serialize)]
@@ -107,6 +188,76 @@ pub struct DatasetTiming {
     pub points: usize,
     /// One entry per method.
     pub methods: Vec<MethodTiming>,
+    /// pfe-default by stage ([`stage_times`]), when it is timed.
+    pub stages: Vec<StageTiming>,
+}
+
+/// Median ns a beam of one stage of pfe-default ([`pfe_core::Stage`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct StageTiming {
+    /// Stage name ([`pfe_core::Stage::name`]).
+    pub stage: String,
+    /// Median ns per beam over the passes.
+    pub ns_per_point: f64,
+}
+
+/// Sums the time between one stage's end and the next into per-stage totals.
+struct StageClock {
+    last: Instant,
+    total: [std::time::Duration; Stage::ALL.len()],
+}
+
+impl StageObserver for StageClock {
+    fn ended(&mut self, stage: Stage) {
+        let now = Instant::now();
+        if let Some(t) = self.total.get_mut(stage.index()) {
+            *t += now - self.last;
+        }
+        self.last = now;
+    }
+}
+
+/// pfe-default (σ_r `sigma_r`) by stage on `scans` (with their declared sweeps), through
+/// [`pfe_core::Extractor::extract_observed`]: `reps` passes, the median ns a beam of each
+/// stage. The clock is read 8 times a scan (about 0.5 ns a beam on the host), so the stages
+/// add up to a little more than the method's own row.
+pub fn stage_times(scans: &[BenchScan], sigma_r: f32, reps: usize) -> Vec<StageTiming> {
+    let config = pfe_core::Config::default().with_sigma_r(sigma_r);
+    let mut ex = Box::new(pfe_core::Extractor::<
+        { crate::methods::MAX_BEAMS },
+        { crate::methods::MAX_FEATURES },
+    >::new());
+    let points: usize = scans.iter().map(|s| s.ranges_mm.len()).sum();
+    let mut passes: Vec<Vec<f64>> = vec![Vec::new(); Stage::ALL.len()];
+    for pass in 0..=reps.max(1) {
+        let mut clock = StageClock {
+            last: Instant::now(),
+            total: Default::default(),
+        };
+        for s in scans {
+            let sweeps = u8::try_from(s.sweeps).unwrap_or(u8::MAX);
+            let scan = pfe_core::Scan::from_mm(s.geometry, &s.ranges_mm).with_sweeps(sweeps);
+            clock.last = Instant::now();
+            let _ = std::hint::black_box(ex.extract_observed(&scan, &config, &mut clock));
+        }
+        // The first pass warms up.
+        if pass > 0 {
+            for (times, t) in passes.iter_mut().zip(clock.total) {
+                times.push(t.as_secs_f64() * 1e9 / points.max(1) as f64);
+            }
+        }
+    }
+    Stage::ALL
+        .iter()
+        .zip(passes.iter_mut())
+        .map(|(stage, times)| {
+            times.sort_by(f64::total_cmp);
+            StageTiming {
+                stage: stage.name().to_string(),
+                ns_per_point: times.get(times.len() / 2).copied().unwrap_or(f64::NAN),
+            }
+        })
+        .collect()
 }
 
 /// The whole report (`--json`).
@@ -147,7 +298,7 @@ pub fn time_methods(
     for m in methods.iter_mut() {
         let mut count = 0;
         for s in scans {
-            let out = m.extract(&s.geometry, &s.ranges_mm);
+            let out = m.extract_in(&s.geometry, &s.ranges_mm, &s.context());
             count += out.features.len();
             if m.name() == REFERENCE {
                 fit_inputs.push((beam_points(&s.geometry, &s.ranges_mm), out.features));
@@ -164,7 +315,12 @@ pub fn time_methods(
         for (m, times) in methods.iter_mut().zip(passes.iter_mut()) {
             let t = Instant::now();
             for s in scans {
-                std::hint::black_box(m.extract(&s.geometry, std::hint::black_box(&s.ranges_mm)));
+                let context = s.context();
+                std::hint::black_box(m.extract_in(
+                    &s.geometry,
+                    std::hint::black_box(&s.ranges_mm),
+                    &context,
+                ));
             }
             times.push(t.elapsed().as_secs_f64());
         }
@@ -208,6 +364,7 @@ pub fn time_methods(
         scans: scans.len(),
         points,
         methods: rows,
+        stages: Vec::new(),
     }
 }
 
@@ -220,6 +377,25 @@ pub fn simulated_scans(n: usize, seed: u64) -> Vec<BenchScan> {
             BenchScan {
                 geometry: s.geometry,
                 ranges_mm: s.ranges_mm,
+                sweeps: 0,
+            }
+        })
+        .collect()
+}
+
+/// `n` simulated LMS200 scans at 0.5° (two interleaved sweeps) taken while moving without
+/// odometry (the evaluation's interleaved condition: [`crate::MOVING_V`],
+/// [`crate::MOVING_OMEGA`]), mixed scenes with seeds `seed, seed + 1, …`; declared 2 sweeps.
+pub fn interleaved_scans(n: usize, seed: u64) -> Vec<BenchScan> {
+    (0..n as u64)
+        .map(|k| {
+            let s = Scenario::new(SceneKind::Mixed, seed.wrapping_add(k))
+                .with_motion(crate::MOVING_V, crate::MOVING_OMEGA)
+                .simulate();
+            BenchScan {
+                geometry: s.geometry,
+                ranges_mm: s.ranges_mm,
+                sweeps: s.sweeps,
             }
         })
         .collect()
@@ -248,6 +424,7 @@ pub fn carmen_scans(dir: &Path, per_log: usize) -> anyhow::Result<Vec<BenchScan>
             out.push(BenchScan {
                 geometry: rec.geometry,
                 ranges_mm: rec.ranges_mm,
+                sweeps: 0,
             });
         }
     }
@@ -268,6 +445,11 @@ pub struct BenchOptions {
     pub per_log: usize,
     /// Timed passes per data set and method; the median is reported.
     pub reps: usize,
+    /// Time only the methods of this name (and pfe-default's fits, when it is one), on the
+    /// data sets named in `datasets`.
+    pub only: Option<String>,
+    /// Data sets to time (empty: simulated, interleaved, and carmen when `carmen` is given).
+    pub datasets: Vec<String>,
 }
 
 /// The CARMEN directory given to [`run`] holds no scan (no log, or only empty ones).
@@ -299,13 +481,45 @@ pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
         }
         None => None,
     };
+    let wanted = |name: &str| args.datasets.is_empty() || args.datasets.iter().any(|d| d == name);
+    let only = |mut methods: Vec<Box<dyn Method>>| {
+        if let Some(only) = &args.only {
+            methods.retain(|m| m.name() == only);
+        }
+        methods
+    };
     let mut datasets = Vec::new();
-    let sim = simulated_scans(args.sim_scans.max(1), args.seed);
-    let mut methods = methods_for(DEFAULT_SIGMA_R);
-    datasets.push(time_methods("simulated", &sim, &mut methods, args.reps));
-    if let Some(real) = real {
-        let mut methods = methods_for(Format::Carmen.sigma_r());
-        datasets.push(time_methods("carmen", &real, &mut methods, args.reps));
+    if wanted("simulated") {
+        let sim = simulated_scans(args.sim_scans.max(1), args.seed);
+        let mut methods = only(methods_for(DEFAULT_SIGMA_R));
+        let mut d = time_methods("simulated", &sim, &mut methods, args.reps);
+        if staged(&d) {
+            d.stages = stage_times(&sim, DEFAULT_SIGMA_R, args.reps);
+        }
+        datasets.push(d);
+    }
+    if wanted(INTERLEAVED) {
+        let scans = interleaved_scans(args.sim_scans.max(1), args.seed);
+        let mut methods: Vec<Box<dyn Method>> = vec![
+            Box::new(Declared::new(DEFAULT_SIGMA_R, 2)),
+            Box::new(Declared::new(DEFAULT_SIGMA_R, 1)),
+        ];
+        if let Some(name) = &args.only {
+            methods.retain(|m| m.name() == name);
+        }
+        let mut d = time_methods(INTERLEAVED, &scans, &mut methods, args.reps);
+        if staged(&d) {
+            d.stages = stage_times(&scans, DEFAULT_SIGMA_R, args.reps);
+        }
+        datasets.push(d);
+    }
+    if let Some(real) = real.filter(|_| wanted("carmen")) {
+        let mut methods = only(methods_for(Format::Carmen.sigma_r()));
+        let mut d = time_methods("carmen", &real, &mut methods, args.reps);
+        if staged(&d) {
+            d.stages = stage_times(&real, Format::Carmen.sigma_r(), args.reps);
+        }
+        datasets.push(d);
     }
     Ok(BenchReport {
         profile: if cfg!(debug_assertions) {
@@ -318,6 +532,21 @@ pub fn run(args: &BenchOptions) -> anyhow::Result<BenchReport> {
         threads: 1,
         datasets,
     })
+}
+
+/// Whether a data set's timings include pfe-default's (then its stages are timed too).
+fn staged(d: &DatasetTiming) -> bool {
+    d.methods.iter().any(|m| m.method == REFERENCE)
+}
+
+/// The stages as one line: `load 1.2 · scatter 3.4 · … (sum 20.1)` ns a beam.
+pub fn stage_line(stages: &[StageTiming]) -> String {
+    let sum: f64 = stages.iter().map(|s| s.ns_per_point).sum();
+    let parts: Vec<String> = stages
+        .iter()
+        .map(|s| format!("{} {:.1}", s.stage, s.ns_per_point))
+        .collect();
+    format!("{} (sum {sum:.1})", parts.join(" · "))
 }
 
 /// The report as a text table.
@@ -349,6 +578,13 @@ pub fn table(report: &BenchReport) -> String {
                 m.slowdown_vs_pfe_default
             );
         }
+        if !d.stages.is_empty() {
+            let _ = writeln!(
+                s,
+                "{REFERENCE} by stage, ns/beam: {}",
+                stage_line(&d.stages)
+            );
+        }
     }
     if report.profile == "debug" {
         s.push_str("\nwarning: debug build; run `cargo run --release --bin pfe -- bench` for real numbers\n");
@@ -371,6 +607,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
             BenchScan {
                 geometry: s.geometry,
                 ranges_mm: s.ranges_mm,
+                sweeps: 0,
             }
         })
         .collect();
@@ -383,6 +620,7 @@ pub fn scaling(n: usize, seed: u64, reps: usize) -> Vec<(usize, Vec<(String, f64
                 .map(|s| BenchScan {
                     geometry: s.geometry,
                     ranges_mm: s.ranges_mm.iter().take(beams).copied().collect(),
+                    sweeps: 0,
                 })
                 .collect();
             let d = time_methods("scaling", &cut, &mut methods, reps);
@@ -435,6 +673,13 @@ pub fn write_markdown(
                 m.scans_per_s,
                 m.features_per_scan,
                 m.slowdown_vs_pfe_default
+            );
+        }
+        if !d.stages.is_empty() {
+            let _ = write!(
+                body,
+                "\n{REFERENCE} by stage ([`Extractor::extract_observed`](../pfe-core/src/extractor.rs), ns/beam): {}\n",
+                stage_line(&d.stages)
             );
         }
     }
@@ -516,6 +761,7 @@ mod tests {
                     row("acf", acf),
                     row(FITS_ONLY, 4.0),
                 ],
+                stages: Vec::new(),
             }],
         }
     }

@@ -315,9 +315,9 @@ fn bench(o: &Opts) -> Result<()> {
          counts, not Cortex-M4 cycles** (no pipeline, wait-state or FPU latency model). The \
          firmware's extraction with everything on, as on the host (`pfe extract --format \
          lms200`: the checks for real scans, small objects, no unseeable lines, the interleaved \
-         sweeps aligned); the rows marked · are its steps (pfe-core's `probe` feature, in the \
-         bench firmware only: `Extractor::extract_probed`), whose sum is the whole extraction \
-         but for the probe's own few instructions a step. {per_set} scans in each set.\n\n"
+         sweeps aligned); the rows marked · are its steps (pfe-core's stage observer, in the \
+         bench firmware only: `Extractor::extract_observed`), whose sum is the whole extraction \
+         but for the observer's own few instructions a step. {per_set} scans in each set.\n\n"
     );
     let mut broken = Vec::new();
     for (k, (set, what)) in SETS.iter().enumerate() {
@@ -527,7 +527,7 @@ fn worst(o: &Opts) -> Result<()> {
         ));
     }
     md.push_str(
-        "\nThe costliest scan of each kind, step by step (instructions; pfe-core's `probe`):\n\n\
+        "\nThe costliest scan of each kind, step by step (instructions; pfe-core's stage observer):\n\n\
          | scan kind | pipeline | decode | scan | load | own σ | mark | sweeps | check | segments | reach | sift | encode |\n\
          |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );

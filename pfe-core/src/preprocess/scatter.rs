@@ -76,12 +76,87 @@ const MIN_SINE: f32 = 0.1;
 /// residuals. `points` are one per beam, [`Point::INVALID`] (or any non-finite point) where a
 /// beam has no return; only triples of valid points count. `sweeps`: the scan's interleaved
 /// sweeps ([`crate::Scan::sweeps`]); the chords span 4 beams either side for 3 or more, else 2.
+// The extractor asks [`Scatter`]; this is the integration tests' and doctests' entry.
+#[cfg_attr(not(feature = "internals"), allow(dead_code))]
 pub fn sigma(points: &[Point], sigma_r: f32) -> Option<f32> {
-    // The scatter at the scale of one beam and of two (the larger: real roughness is
-    // correlated over neighbouring beams; interleaved sweeps' offsets show at one beam only).
-    match (at_span(points, 1, sigma_r), at_span(points, 2, sigma_r)) {
-        (Some(a), Some(b)) => Some(if a > b { a } else { b }),
-        (a, b) => a.or(b),
+    Scatter::of(points, sigma_r).sigma()
+}
+
+/// The scatter of a scan at the scale of one beam and of two ([`at_span`] 1 and 2, from one
+/// pass over the points): what [`sigma`] and [`sweeps_apart`] read, kept so that the
+/// extractor asks the same points once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Scatter {
+    /// At one beam.
+    one: Option<f32>,
+    /// At two beams.
+    two: Option<f32>,
+}
+
+impl Scatter {
+    /// The scatter of `points` (see [`sigma`]) at spans 1 and 2.
+    pub(crate) fn of(points: &[Point], sigma_r: f32) -> Self {
+        let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
+        let (mut n1, mut n2) = (0usize, 0usize);
+        let scale = PER_SIGMA / sigma_r;
+        let valid = |i: usize| points.get(i).copied().filter(Point::is_valid);
+        // Points i − 2 ..= i + 2, each asked for its validity once.
+        let mut w = [None, None, valid(0), valid(1), valid(2)];
+        for i in 0..points.len() {
+            let [w0, w1, w2, w3, w4] = w;
+            if let Some(m) = w2 {
+                // The point's range, shared by both chords (as `chord_residual` computes it).
+                let r = math::sqrt(m.x * m.x + m.y * m.y);
+                if let (Some(a), Some(b)) = (w1, w3) {
+                    if let Some(e) = residual_at(a, m, b, r) {
+                        count(&mut one, &mut n1, e, scale);
+                    }
+                }
+                if let (Some(a), Some(b)) = (w0, w4) {
+                    if let Some(e) = residual_at(a, m, b, r) {
+                        count(&mut two, &mut n2, e, scale);
+                    }
+                }
+            }
+            w = [w1, w2, w3, w4, valid(i + 3)];
+        }
+        Self {
+            one: estimate(&one, n1, sigma_r),
+            two: estimate(&two, n2, sigma_r),
+        }
+    }
+
+    /// [`sigma`]: the larger of the two scales (real roughness is correlated over
+    /// neighbouring beams; interleaved sweeps' offsets show at one beam only).
+    pub(crate) fn sigma(&self) -> Option<f32> {
+        match (self.one, self.two) {
+            (Some(a), Some(b)) => Some(if a > b { a } else { b }),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// [`sweeps_apart`] for the same `points` and `sigma_r` this scatter was taken of.
+    pub(crate) fn sweeps_apart(&self, points: &[Point], sweeps: usize, sigma_r: f32) -> bool {
+        // The largest scatter at spans 1 up to 2, below `sweeps`.
+        let across = match sweeps {
+            0 | 1 => None,
+            2 => self.one,
+            _ => match (self.one, self.two) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            },
+        };
+        let Some(across) = across else {
+            return false;
+        };
+        let within = match sweeps {
+            2 => self.two,
+            s => at_span(points, s, sigma_r),
+        };
+        match within {
+            Some(within) => across > APART * within,
+            None => across > APART * sigma_r,
+        }
     }
 }
 
@@ -105,14 +180,7 @@ pub fn sigma(points: &[Point], sigma_r: f32) -> Option<f32> {
 /// assert!(scatter::sweeps_apart(&points, 2, 5.0));
 /// ```
 pub fn sweeps_apart(points: &[Point], sweeps: usize, sigma_r: f32) -> bool {
-    let across = (1..sweeps.min(3))
-        .filter_map(|span| at_span(points, span, sigma_r))
-        .fold(None, |m: Option<f32>, s| Some(m.map_or(s, |m| m.max(s))));
-    match (across, at_span(points, sweeps, sigma_r)) {
-        (Some(across), Some(within)) => across > APART * within,
-        (Some(across), None) => across > APART * sigma_r,
-        (None, _) => false,
-    }
+    Scatter::of(points, sigma_r).sweeps_apart(points, sweeps, sigma_r)
 }
 
 /// The factor of [`sweeps_apart`].
@@ -131,26 +199,39 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
             continue;
         }
         if let Some(e) = chord_residual(a, m, b) {
-            let bin = (math::abs(e) * scale) as usize;
-            if let Some(h) = hist.get_mut(bin.min(BINS - 1)) {
-                *h = h.saturating_add(1);
-                total += 1;
-            }
+            count(&mut hist, &mut total, e, scale);
         }
     }
+    estimate(&hist, total, sigma_r)
+}
+
+/// Counts residual `e` in `hist` (bins of `1 / scale` mm) and in `total`.
+#[inline(always)]
+fn count(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
+    // As `as usize` would bin it: |e| · scale is never negative, and beyond the last bin (or
+    // beyond i32::MAX) it falls in the last; i32 converts fastest.
+    let bin = ((math::abs(e) * scale) as i32).min(BINS as i32 - 1);
+    if let Some(h) = hist.get_mut(bin as usize) {
+        *h = h.saturating_add(1);
+        *total += 1;
+    }
+}
+
+/// [`at_span`]'s estimate from the histogram of its `total` residuals.
+fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
     if total < MIN_SAMPLES {
         return None;
     }
     // A first σ from the lower quartile of all residuals (too large where edges and clutter
     // add large ones), then twice the median of those within 3 σ of the last.
     let to_mm = sigma_r / PER_SIGMA;
-    let mut s = quantile_bin(&hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
+    let mut s = quantile_bin(hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
     let mut inliers = 0;
     for _ in 0..2 {
         let within = INLIER * RESIDUAL_PER_SIGMA * s / to_mm;
         let bins = (within as usize).clamp(1, BINS - 1);
         inliers = hist.iter().take(bins).map(|&h| usize::from(h)).sum();
-        s = quantile_bin(&hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
+        s = quantile_bin(hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
     }
     // Noise explains the scan only when most residuals are within 3 σ of it (a scan of
     // clutter, edges and posts has a quartile but no noise level).
@@ -161,7 +242,12 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
 
 /// Range residual of `m` from the chord `a`–`b` along `m`'s direction from the origin.
 fn chord_residual(a: Point, m: Point, b: Point) -> Option<f32> {
-    let r = math::sqrt(m.x * m.x + m.y * m.y);
+    residual_at(a, m, b, math::sqrt(m.x * m.x + m.y * m.y))
+}
+
+/// [`chord_residual`] with `m`'s range `r` given.
+#[inline(always)]
+fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
     let (cx, cy) = (b.x - a.x, b.y - a.y);
     let chord = math::sqrt(cx * cx + cy * cy);
     // The sine of the beam's angle to the chord, times r·chord.

@@ -32,7 +32,7 @@ mod fw {
     use lms2xx::codec::frame::{Decoder, Event};
     use lms2xx::codec::reply::{MeasuredValues, ReplyOptions};
     use lms2xx::codec::types::{MeasuringMode, Unit, Variant};
-    use pfe_core::probe::Step;
+    use pfe_core::Stage as Step;
     use pfe_core::{ExtractError, ScanGeometry};
     use pfe_frame::{Counters, Report, ScanHeader, ScanStatus, Stage};
 
@@ -102,6 +102,15 @@ mod fw {
     }
 
     /// The probe's steps in the order they report, as timing stages.
+    /// pfe-core's stage observer as a closure.
+    struct Ticks<F: FnMut(Step)>(F);
+
+    impl<F: FnMut(Step)> pfe_core::StageObserver for Ticks<F> {
+        fn ended(&mut self, stage: Step) {
+            (self.0)(stage)
+        }
+    }
+
     const STEPS: [(Step, Stage); 8] = [
         (Step::Load, Stage::Load),
         (Step::Scatter, Stage::Scatter),
@@ -154,7 +163,7 @@ mod fw {
             let scan = raw.to_pfe();
             let t_scan = time::ticks() - t0;
             let mut last = time::ticks();
-            let r_default = core::hint::black_box(ex.extract_probed(&scan, &default, &mut |s| {
+            let mut observer = Ticks(|s: Step| {
                 let now = time::ticks();
                 if let Some(k) = STEPS.iter().position(|(step, _)| *step == s) {
                     if let Some(t) = steps.get_mut(k) {
@@ -162,7 +171,10 @@ mod fw {
                     }
                 }
                 last = now;
-            }));
+            });
+            let r_default =
+                core::hint::black_box(ex.extract_observed(&scan, &default, &mut observer));
+            drop(observer);
             let t_default = time::ticks() - t0;
             // An extraction refused outright measures nothing (a full feature buffer is fine).
             for r in [&r_paper, &r_default] {
