@@ -174,7 +174,6 @@ mod fw {
             });
             let r_default =
                 core::hint::black_box(ex.extract_observed(&scan, &default, &mut observer));
-            drop(observer);
             let t_default = time::ticks() - t0;
             // An extraction refused outright measures nothing (a full feature buffer is fine).
             for r in [&r_paper, &r_default] {
