@@ -193,6 +193,57 @@ pub(super) fn reg_list_bytes(operands: &str) -> Result<u64> {
     Ok(total)
 }
 
+/// True when `jump` (`mov pc, rN`) ends a jump table of its own function (which ends before
+/// `end`): among the few instructions before it, the last two that write rN are `adr rN, #t`
+/// then `add rN, rN, rM, lsl #2`, and the table `adr` points at starts after the jump, inside
+/// the function.
+pub(super) fn jump_table_within(insns: &[Insn], jump: &Insn, end: u32) -> bool {
+    let Some(reg) = jump
+        .operands
+        .strip_prefix("pc, ")
+        .map(str::trim)
+        .filter(|r| !r.is_empty())
+    else {
+        return false;
+    };
+    if !is_op(&jump.mnemonic, "mov") {
+        return false;
+    }
+    let Some(k) = insns.iter().position(|i| i.addr == jump.addr) else {
+        return false;
+    };
+    let ops = |i: &Insn| -> Vec<String> {
+        i.operands
+            .split(',')
+            .map(|o| o.trim().to_string())
+            .collect()
+    };
+    // The writes of rN before the jump, nearest first (within 6 instructions).
+    let mut writes = insns
+        .get(k.saturating_sub(6)..k)
+        .unwrap_or(&[])
+        .iter()
+        .rev()
+        .filter(|i| ops(i).first().is_some_and(|d| d == reg));
+    let (Some(add), Some(adr)) = (writes.next(), writes.next()) else {
+        return false;
+    };
+    let (add_ops, adr_ops) = (ops(add), ops(adr));
+    let is_add = is_op(&add.mnemonic, "add")
+        && add_ops.len() == 4
+        && add_ops.get(1).is_some_and(|a| a == reg)
+        && add_ops.get(3).is_some_and(|s| s == "lsl #2");
+    if !(is_add && is_op(&adr.mnemonic, "adr") && adr_ops.len() == 2) {
+        return false;
+    }
+    // Thumb: `adr` is relative to the word-aligned pc (the instruction + 4).
+    let table = adr_ops
+        .get(1)
+        .and_then(|o| imm(o))
+        .map(|o| i64::from((adr.addr + 4) & !3) + o);
+    table.is_some_and(|t| t > i64::from(jump.addr) && t < i64::from(end))
+}
+
 /// `pc` written from anything but the stack (a return pops it): `mov pc, rN`,
 /// `ldr pc, [rN]`, `ldm rN, {…, pc}`.
 pub(super) fn loads_pc_indirectly(i: &Insn) -> bool {

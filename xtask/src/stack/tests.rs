@@ -279,3 +279,37 @@ fn bound_adds_the_exception_frames() {
     assert!(b.text().contains("static worst-case stack bound"));
     assert!(b.markdown("test").contains("| **76** |"));
 }
+
+#[test]
+fn a_jump_table_in_its_own_function_is_no_indirect_jump() {
+    use super::parse::{jump_table_within, Insn};
+    let insn = |addr: u32, mnemonic: &str, operands: &str| Insn {
+        addr,
+        bytes: String::new(),
+        mnemonic: mnemonic.into(),
+        operands: operands.into(),
+    };
+    // As rustc laid out a `match` in pfe-qemu's main: the table of branches right after it.
+    let code = [
+        insn(0x20e6, "adr.w", "r6, #12"),
+        insn(0x20ea, "adds", "r0, r3, #0x5"),
+        insn(0x20ec, "add.w", "r6, r6, r1, lsl #2"),
+        insn(0x20f0, "mov", "pc, r6"),
+    ];
+    assert!(jump_table_within(&code, &code[3], 0x3000));
+    let code = [
+        insn(0x20e8, "adr.w", "r6, #8"),
+        insn(0x20ec, "add.w", "r6, r6, r1, lsl #2"),
+        insn(0x20f0, "mov", "pc, r6"),
+    ];
+    let jump = &code[2];
+    assert!(jump_table_within(&code, jump, 0x3000));
+    // The table past the function's end, or another register: still an indirect jump.
+    assert!(!jump_table_within(&code, jump, 0x20f2));
+    let other = [
+        insn(0x20e8, "adr.w", "r5, #8"),
+        insn(0x20ec, "add.w", "r6, r6, r1, lsl #2"),
+        insn(0x20f0, "mov", "pc, r6"),
+    ];
+    assert!(!jump_table_within(&other, &other[2], 0x3000));
+}
