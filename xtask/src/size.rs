@@ -169,7 +169,9 @@ pub fn run(args: &[String]) -> Result<()> {
             (ram + stack) as f64 / 1024.0,
             RAM_BUDGET / 1024
         );
-        if flash > FLASH_BUDGET {
+        // The flash budget is the board binary's (issue 42); pfe-qemu also carries the pose
+        // step, which the board does not run (docs/POSE.md), and QEMU's flash is 4 MiB.
+        if flash > FLASH_BUDGET && name.starts_with("pfe-board") {
             broken.push(format!("{name}: flash {flash} > {FLASH_BUDGET}"));
         }
         if data > DATA_LIMIT {
@@ -220,7 +222,8 @@ pub fn run(args: &[String]) -> Result<()> {
          rustc does not contract f32 mul/add into FMA, so no ulp differences are expected).\n"
     ));
     md.push_str(&format!(
-        "\nBudgets: flash ≤ {FLASH_BUDGET} B, static RAM + stack ≤ {RAM_BUDGET} B, and .data ≤ \
+        "\nBudgets: flash of the board binary ≤ {FLASH_BUDGET} B (pfe-qemu also carries the pose \
+         step, which the board does not run), static RAM + stack ≤ {RAM_BUDGET} B, and .data ≤ \
          {DATA_LIMIT} B (the extractor starts as zeros in .bss, not copied from flash): **{}**.\n",
         if broken.is_empty() { "met" } else { "BROKEN" }
     ));

@@ -117,10 +117,6 @@ mod fw {
                 &mut *core::ptr::addr_of_mut!(APP)
             }
         };
-        // The pose step costs far more than a scan period on the M4F for now (docs/POSE.md, "On
-        // the board"): with it the board would send features for a few scans in ten and starve
-        // the watchdog. Every scan's features first; the QEMU firmware runs the pose step.
-        app.set_pose_step(false);
         let mut lms = Driver::new(uart, Delay, Millis, Config::default());
         defmt::info!(
             "pfe-board: LMS200 on USART1, features on USART2 at {} baud; last reset: {}",
@@ -129,7 +125,10 @@ mod fw {
         );
         loop {
             watchdog::feed();
-            match app.step(&mut lms, &mut out) {
+            // Without the pose step: it costs far more than a scan period on the M4F for now
+            // (docs/POSE.md, "On the board"); every scan's features first. The QEMU firmware
+            // runs it.
+            match app.step_features(&mut lms, &mut out) {
                 Ok(h) => defmt::debug!("scan {}: {} features", h.seq, h.n_features),
                 Err(AppError::Source(e)) => defmt::warn!("scanner: {}", e),
                 Err(_) => defmt::warn!("feature output failed"),

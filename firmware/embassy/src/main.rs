@@ -141,14 +141,13 @@ async fn features(mut out: UartTx<'static, Async>) {
     // it is in .bss and never copied through the stack.
     static APP: ConstStaticCell<LmsApp> = ConstStaticCell::new(LmsApp::new(ConfigChoice::Default));
     let app = APP.take();
-    // The pose step costs far more than a scan period on the M4F for now (docs/POSE.md, "On the
-    // board"): every scan's features first; the QEMU firmware runs the pose step.
-    app.set_pose_step(false);
     let mut frame = [0u8; FRAME_MAX];
     loop {
         let (scan, counters) = SCANS.receive().await;
         let mut w: &mut [u8] = &mut frame;
-        let header = match app.process(&scan.raw(), link_counters(&counters), &mut w) {
+        // Without the pose step: it costs far more than a scan period on the M4F for now
+        // (docs/POSE.md, "On the board"); every scan's features first.
+        let header = match app.process_features(&scan.raw(), link_counters(&counters), &mut w) {
             Ok(h) => h,
             Err(_) => {
                 defmt::warn!("frame larger than its buffer");

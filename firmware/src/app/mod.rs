@@ -277,6 +277,31 @@ impl<const N: usize, const M: usize> App<N, M> {
         self.pose_off = !on;
     }
 
+    /// [`App::process`] without the pose step: the frame carries no pose block. A binary that
+    /// calls only this (the board's: the pose step costs far more than a scan period on the
+    /// M4F, docs/POSE.md) links none of the pose code.
+    pub fn process_features<W: Write>(
+        &mut self,
+        scan: &RawScan<'_>,
+        counters: Counters,
+        out: &mut W,
+    ) -> Result<ScanHeader, EncodeError<W::Error>> {
+        let header = self.extract(scan, counters);
+        self.write_frame(out, &header, None)?;
+        Ok(header)
+    }
+
+    /// [`App::step`] without the pose step ([`App::process_features`]).
+    pub fn step_features<S: ScanSource, W: Write>(
+        &mut self,
+        source: &mut S,
+        out: &mut W,
+    ) -> Result<ScanHeader, AppError<S::Error, W::Error>> {
+        let (scan, counters) = source.next_scan().map_err(AppError::Source)?;
+        self.process_features(&scan, counters, out)
+            .map_err(AppError::Output)
+    }
+
     /// Waits for the next scan from `source` and processes it.
     pub fn step<S: ScanSource, W: Write>(
         &mut self,
