@@ -4,7 +4,9 @@
 //! (`pfe_frame`), defmt logs on semihosting stdout.
 //!
 //! Semihosting arguments: `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every]` (`0` or
-//! none: run forever; baud 9600/19200/38400/500000, default 38400). `slow_ms` makes the
+//! none: run forever; baud 9600/19200/38400/500000, default 38400; `paper-nopose` and
+//! `default-nopose`: the pose step off, frames without a pose block, as fast as the extraction
+//! alone). `slow_ms` makes the
 //! extraction artificially slow: a busy-wait of that many ms after every `slow_every`-th
 //! scan (default every scan), to test the receive ring (`host-tests/tests/rx_slow_qemu.rs`).
 //! At the end it sends `Report::Stack` (painted-stack high-water mark) and `Report::Done`,
@@ -40,11 +42,12 @@ mod fw {
     fn main() -> ! {
         rt::start_clock();
         let scans = sys::arg_u32(0).unwrap_or(0);
-        let choice = if sys::arg_is(1, "paper") {
+        let choice = if sys::arg_is(1, "paper") || sys::arg_is(1, "paper-nopose") {
             ConfigChoice::Paper
         } else {
             ConfigChoice::Default
         };
+        let pose = !(sys::arg_is(1, "paper-nopose") || sys::arg_is(1, "default-nopose"));
         let slow_ms = sys::arg_u32(3).unwrap_or(0);
         let slow_every = sys::arg_u32(4).unwrap_or(1).max(1);
         // Room for every LMS200 variant (up to 401 values) and 48 features.
@@ -52,6 +55,7 @@ mod fw {
             sys::exit(sys::EXIT_USAGE)
         };
         app.set_choice(choice);
+        app.set_pose_step(pose);
         defmt::info!(
             "pfe-qemu: {} scans (0 = forever), config {}, slow {} ms every {} scans",
             scans,
