@@ -69,7 +69,9 @@ fn run(scans: u32, slow_ms: u32, every: u32, seed: u64) -> Option<Outcome> {
     let s: Session = qemu::session_with(
         &elf,
         scans,
-        &["default", "38400", &ms, &ev],
+        // The pose step off: the slowness is the test's own (the pose step alone takes
+        // longer than a scan period, docs/POSE.md).
+        &["default-nopose", "38400", &ms, &ev],
         scans * 4,
         seed,
         Duration::from_secs(180),

@@ -92,7 +92,9 @@ fn run_once(elf: &Path, scans: u32, ranges: Vec<Vec<f32>>, a: &super::Args) -> R
         elf,
         &slave,
         &format!("tcp:127.0.0.1:{p1}"),
-        &[&n, "default", "500000"],
+        // As the board runs: the extraction without the pose step, which costs far more than a
+        // scan period on the M4F (docs/POSE.md) and would overrun the receive ring.
+        &[&n, "default-nopose", "500000"],
         false,
     );
     let run = qemu::run_collect(cmd, l1, timeout)?;

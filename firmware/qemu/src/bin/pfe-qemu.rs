@@ -6,7 +6,8 @@
 //! Semihosting arguments: `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every] [field
 //! resolution]` (`0` or none: run forever; baud 9600/19200/38400/500000, default 38400; the
 //! LMS200 variant as field of view in degrees and resolution in 1/100 degree, `100 25` for
-//! 100° at 0.25°, default 180° at 0.5°). `slow_ms` makes the
+//! 100° at 0.25°, default 180° at 0.5°; `paper-nopose` and `default-nopose`: the pose step off,
+//! frames without a pose block, as fast as the extraction alone). `slow_ms` makes the
 //! extraction artificially slow: a busy-wait of that many ms after every `slow_every`-th
 //! scan (default every scan), to test the receive ring (`host-tests/tests/rx_slow_qemu.rs`).
 //! At the end it sends `Report::Stack` (painted-stack high-water mark) and `Report::Done`,
@@ -42,11 +43,12 @@ mod fw {
     fn main() -> ! {
         rt::start_clock();
         let scans = sys::arg_u32(0).unwrap_or(0);
-        let choice = if sys::arg_is(1, "paper") {
+        let choice = if sys::arg_is(1, "paper") || sys::arg_is(1, "paper-nopose") {
             ConfigChoice::Paper
         } else {
             ConfigChoice::Default
         };
+        let pose = !(sys::arg_is(1, "paper-nopose") || sys::arg_is(1, "default-nopose"));
         let slow_ms = sys::arg_u32(3).unwrap_or(0);
         let slow_every = sys::arg_u32(4).unwrap_or(1).max(1);
         // Room for every LMS200 variant (up to 401 values) and 48 features.
@@ -54,6 +56,7 @@ mod fw {
             sys::exit(sys::EXIT_USAGE)
         };
         app.set_choice(choice);
+        app.set_pose_step(pose);
         defmt::info!(
             "pfe-qemu: {} scans (0 = forever), config {}, slow {} ms every {} scans",
             scans,
