@@ -11,20 +11,7 @@ use pfe_formats::carmen::{AngleConvention, Reader};
 use pfe_formats::{self as formats, Record};
 
 fn data_dir(test: &str) -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if d.join("carmen").is_dir() {
-        Some(d)
-    } else {
-        pfe_testkit::skip::skip(
-            test,
-            &format!(
-                "real data folder {} is absent (it sits beside the repository as shared/data)",
-                d.display()
-            ),
-            pfe_testkit::skip::Need::InCi,
-        );
-        None
-    }
+    pfe_testkit::skip::shared_data(test, &["carmen"])
 }
 
 fn carmen_logs(d: &std::path::Path) -> Vec<PathBuf> {

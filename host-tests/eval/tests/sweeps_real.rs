@@ -12,20 +12,7 @@ use pfe_core::Scan;
 use pfe_formats::Format;
 
 fn data_dir(test: &str) -> Option<PathBuf> {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data");
-    if d.join("carmen").is_dir() && d.join("hokuyo-cylinders").is_dir() {
-        Some(d)
-    } else {
-        pfe_testkit::skip::skip(
-            test,
-            &format!(
-                "real data folder {} is absent (it sits beside the repository as shared/data)",
-                d.display()
-            ),
-            pfe_testkit::skip::Need::InCi,
-        );
-        None
-    }
+    pfe_testkit::skip::shared_data(test, &["carmen", "hokuyo-cylinders"])
 }
 
 /// Scans read from each recording (the test runs in debug builds).

@@ -68,3 +68,24 @@ pub fn listed() -> Vec<String> {
         .map(|s| s.lines().map(str::to_string).collect())
         .unwrap_or_default()
 }
+
+/// The shared real recordings, `shared/data` beside the repository, when it holds every folder
+/// of `needs` (`"carmen"`, `"hokuyo-cylinders"`); else `None` after skipping `test` loudly (a
+/// failure under `CI=true`, [`Need::InCi`]).
+pub fn shared_data(test: &str, needs: &[&str]) -> Option<std::path::PathBuf> {
+    let d = crate::qemu::root().join("../shared/data");
+    if needs.iter().all(|n| d.join(n).is_dir()) {
+        Some(d)
+    } else {
+        skip(
+            test,
+            &format!(
+                "real data folder {} (with {}) is absent (it sits beside the repository as shared/data)",
+                d.display(),
+                needs.join(", ")
+            ),
+            Need::InCi,
+        );
+        None
+    }
+}
