@@ -22,6 +22,7 @@ pub mod frame;
 pub mod refit;
 pub mod report;
 pub mod shared;
+pub mod statics;
 mod svg;
 #[cfg(test)]
 mod tests;
@@ -75,6 +76,8 @@ pub struct Tally {
     pub pairs: PairTally,
     /// Small objects found.
     pub objects: usize,
+    /// Small objects that stay where they are ([`statics`]).
+    pub statics: statics::Statics,
 }
 
 /// One method's figures on one log.
@@ -128,6 +131,12 @@ pub struct Summary {
     pub object_nis: f64,
     /// Median centre NIS of matched small objects after the pose refit of their pair's lines.
     pub object_nis_refit: f64,
+    /// Unambiguous matches of static small objects ([`statics`]).
+    pub static_objects_matched: usize,
+    /// Their median centre NIS.
+    pub static_object_nis: f64,
+    /// Their median centre NIS after the pose refit of their pair's lines.
+    pub static_object_nis_refit: f64,
 }
 
 impl Tally {
@@ -141,6 +150,7 @@ impl Tally {
             }
         };
         let p = &self.pairs;
+        let statics = self.statics.nis();
         Summary {
             method: method.to_string(),
             scans: self.scans,
@@ -170,6 +180,9 @@ impl Tally {
             objects_matched: p.objects_matched,
             object_nis: quantile(&p.object_nis, 0.5),
             object_nis_refit: quantile(&p.object_nis_refit, 0.5),
+            static_objects_matched: statics.len(),
+            static_object_nis: quantile(&statics, 0.5),
+            static_object_nis_refit: quantile(&self.statics.nis_refit(), 0.5),
         }
     }
 }
@@ -314,6 +327,10 @@ pub fn run_records(
                 &ex.features,
             ));
             let seen = pose.map(|p| Seen::new(p, &ex.features));
+            match seen.as_ref() {
+                Some(s) => tally.statics.scan(s),
+                None => tally.statics.gap(),
+            }
             match (prev.as_ref(), seen.as_ref()) {
                 (Some(a), Some(b)) => {
                     tally.pairs.add(a, b);

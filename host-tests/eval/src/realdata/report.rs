@@ -9,13 +9,14 @@ use super::compare::{CONSISTENT_DRAWS, GATE_ALPHA, GATE_CENTER_MM, GATE_RHO_MM, 
 use super::coverage::{MAX_SIGMA_ALPHA, MAX_SIGMA_MID_MM, MIN_SMOOTH_RUN, SMOOTH_STEP_MM};
 use super::refit::{MIN_LINES, MIN_SPREAD};
 use super::shared::Shared;
+use super::statics::{STATIC_MM, STATIC_MOVE_MM, STATIC_SPAN, STATIC_TURN_RAD};
 use super::svg::grouped_bars;
 use super::{LogReport, Summary};
 
 /// Median of a χ²₂ variable (2 ln 2): the line and circle NIS median of consistent covariances.
 pub const CHI2_2_MEDIAN: f64 = 1.386_294_361;
 
-const HEADER: [&str; 20] = [
+const HEADER: [&str; 23] = [
     "method",
     "feat%",
     "bare%",
@@ -36,6 +37,9 @@ const HEADER: [&str; 20] = [
     "obj%",
     "obj NIS",
     "obj NIS refit",
+    "n static obj",
+    "static obj NIS",
+    "static obj NIS refit",
 ];
 
 fn num(v: f64, digits: usize) -> String {
@@ -46,7 +50,7 @@ fn num(v: f64, digits: usize) -> String {
     }
 }
 
-fn row(s: &Summary) -> [String; 20] {
+fn row(s: &Summary) -> [String; 23] {
     [
         s.method.clone(),
         num(s.in_features_pct, 1),
@@ -68,6 +72,9 @@ fn row(s: &Summary) -> [String; 20] {
         num(s.objects_reappear_pct, 1),
         num(s.object_nis, 2),
         num(s.object_nis_refit, 2),
+        s.static_objects_matched.to_string(),
+        num(s.static_object_nis, 2),
+        num(s.static_object_nis_refit, 2),
     ]
 }
 
@@ -119,7 +126,7 @@ fn title(r: &LogReport) -> String {
 
 /// One log's text table.
 pub fn table(r: &LogReport) -> String {
-    let rows: Vec<[String; 20]> = r.methods.iter().map(row).collect();
+    let rows: Vec<[String; 23]> = r.methods.iter().map(row).collect();
     let mut out = format!("{}\n", title(r));
     aligned(&mut out, &HEADER, &rows);
     let _ = writeln!(
@@ -221,7 +228,14 @@ of its normal matrix, is added to the centres' covariance). `cargo run -p host-t
 - **obj/scan**: small objects (pfe's third kind of feature: a run of ≥ 3 returns between \
 range jumps, at most 0.3 m across) per scan; **obj%**: those of scan k whose moved centre \
 lies within {:.1} m of a small object's centre in k+1; **obj NIS** and **obj NIS refit**: as \
-for circles, with the objects' centre covariances (a method without small objects: –).\n\n\
+for circles, with the objects' centre covariances (a method without small objects: –); \
+**n static obj** and **static obj NIS**: the matches that are unambiguous (one candidate each \
+way within the gate) and whose object is static (re-found within {STATIC_MM:.0} mm of the same \
+place in the world in a scan at most {STATIC_SPAN} away, taken {STATIC_MOVE_MM:.0} mm or \
+{STATIC_TURN_RAD} rad from both scans of the pair), and their median NIS: the covariance's \
+measure where people walking with the robot or a railing's posts closer than the gate make \
+the nearest match say nothing about it; **static obj NIS refit**: the same after the pair's \
+pose refit from its lines, as for circles.\n\n\
 Under each log's table, pfe `default`'s lines against each other method's, beam by beam. \
 lines% weighs each method's lines by their own points, so a method that also makes lines \
 where another makes none is not scored on the same beams as it; this table is. A beam of scan \

@@ -403,3 +403,60 @@ fn odometry_from_poses_is_the_motion_between_the_neighbours() {
     }
     assert!(run(super::Told::default()).iter().all(Option::is_none));
 }
+
+/// The static objects' NIS: a post seen from a moving scanner counts, with its noise giving a
+/// NIS near the χ²₂ median; a person keeping pace with the scanner (the same place in its
+/// frame) and two posts closer than the gate (which of them is which cannot be told) do not.
+#[test]
+fn static_objects_are_posts_not_companions_nor_a_railing() {
+    use super::statics::Statics;
+    use super::CircleObs;
+    let sigma = 20.0f64;
+    let obj = |c: [f64; 2]| CircleObs {
+        center: c,
+        cov: [[sigma * sigma, 0.0], [0.0, sigma * sigma]],
+        radius: 30.0,
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(39);
+    let mut gauss = || {
+        let (u, v): (f64, f64) = (rng.gen::<f64>().max(1e-12), rng.gen());
+        sigma * (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    };
+    let (mut post, mut companion, mut railing) =
+        (Statics::default(), Statics::default(), Statics::default());
+    for k in 0..400 {
+        // The scanner drives along x at 0.2 m a scan, turning slowly.
+        let x = 200.0 * f64::from(k % 40);
+        let th = 0.01 * f64::from(k % 40);
+        let pose = [x, 0.0, th];
+        // A world point in the scanner's frame.
+        let local = |w: [f64; 2]| {
+            let (s, c) = th.sin_cos();
+            let d = [w[0] - x, w[1]];
+            [c * d[0] + s * d[1], -s * d[0] + c * d[1]]
+        };
+        let at = local([4000.0, 1500.0]);
+        post.scan(&Seen {
+            pose,
+            objects: vec![obj([at[0] + gauss(), at[1] + gauss()])],
+            ..Seen::default()
+        });
+        companion.scan(&Seen {
+            pose,
+            objects: vec![obj([800.0 + gauss(), -600.0 + gauss()])],
+            ..Seen::default()
+        });
+        let (a, b) = (local([4000.0, 1500.0]), local([4200.0, 1500.0]));
+        railing.scan(&Seen {
+            pose,
+            objects: vec![obj(a), obj(b)],
+            ..Seen::default()
+        });
+    }
+    let nis = post.nis();
+    assert!(nis.len() > 300, "{}", nis.len());
+    let m = quantile(&nis, 0.5);
+    assert!((m - CHI2_2_MEDIAN).abs() < 0.3, "post: median NIS {m}");
+    assert!(companion.nis().is_empty(), "{:?}", companion.nis().len());
+    assert!(railing.nis().is_empty(), "{:?}", railing.nis().len());
+}
