@@ -12,7 +12,7 @@ use heapless::Vec;
 use crate::arc::arc_fit;
 use crate::classify;
 use crate::config::{Config, Typing};
-use crate::feature::Feature;
+use crate::feature::{Feature, LineFeature};
 use crate::fit::line::fit_line;
 use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
@@ -31,6 +31,15 @@ const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
 const CHAIN_MIN: usize = 5;
 /// Most points of a run of short segments tested at once.
 const CHAIN_MAX: usize = 64;
+
+/// cos 0.2 rad: neighbouring lines whose normals differ more are not tested for being one.
+const COS_JOIN: f32 = 0.980_066_6;
+/// 99 % of χ²₂: two lines' parameters further apart than this are two lines.
+const SAME_LINE_CHI2: f32 = 9.21;
+/// Most joins of neighbouring collinear lines a scan.
+const JOINS_MAX: usize = 8;
+/// Most points of a line joined from two.
+const JOIN_MAX_POINTS: usize = 400;
 
 /// Pairs the marks of `pass` into segments and emits the feature of each into `out`.
 #[inline(never)]
@@ -60,6 +69,7 @@ fn segments_with<const SCRUTINY: bool>(
     let mut emitter = Emitter {
         chain: None,
         join: rule.noise().filter(|_| SCRUTINY),
+        joins: JOINS_MAX,
     };
     let len = pass.len();
     let mut pending: Option<(usize, usize)> = None;
@@ -103,6 +113,8 @@ struct Emitter<'r> {
     chain: Option<(usize, usize)>,
     /// The default mode's rule (`None`: nothing is joined).
     join: Option<&'r NoiseRule>,
+    /// Joins of neighbouring collinear lines left for this scan ([`join_collinear`]).
+    joins: usize,
 }
 
 impl Emitter<'_> {
@@ -135,6 +147,9 @@ impl Emitter<'_> {
             self.flush(pass, config, out);
         }
         emit::<SCRUTINY>(pass, s, e, config, out);
+        if let Some(rule) = self.join {
+            join_collinear(pass, rule, config, out, &mut self.joins);
+        }
     }
 
     /// Joins the parts of at least [`CHAIN_MIN`] points of the noted run that lie on one line
@@ -142,7 +157,7 @@ impl Emitter<'_> {
     fn flush(&mut self, pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
         match (self.chain.take(), self.join) {
             (Some((cs, ce)), Some(rule)) if ce + 1 - cs >= CHAIN_MIN => {
-                join_lines(pass, (cs, ce), rule, config, out);
+                join_lines(pass, (cs, ce), rule, config, out, &mut self.joins);
             }
             _ => {}
         }
@@ -157,6 +172,7 @@ fn join_lines(
     rule: &NoiseRule,
     config: &Config,
     out: &mut dyn FeatureSink,
+    joins: &mut usize,
 ) {
     let tol = rule.k_sigma + rule.model.floor;
     let var = rule.sigma_r * rule.sigma_r;
@@ -184,10 +200,99 @@ fn join_lines(
             stats.segments = (stats.segments + redone).saturating_sub(undone);
             stats.short_segments = (stats.short_segments + redone).saturating_sub(undone);
             emit::<true>(pass, a, b, config, out);
+            join_collinear(pass, rule, config, out, joins);
         }
         a += n;
     }
 }
+/// Makes the last two features in `out` one line when they are lines of neighbouring segments
+/// (no beam between) whose points together lie on one line within the noise: a wall whose
+/// far, grazing part the walk cut off (its points grow apart faster than the prediction
+/// allows), or a wall split where its roughness fooled the walk once.
+/// At most [`JOINS_MAX`] joins a scan, each of at most [`JOIN_MAX_POINTS`] points: the work
+/// they take is bounded.
+#[inline(never)]
+fn join_collinear(
+    pass: &mut Pass<'_>,
+    rule: &NoiseRule,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+    joins: &mut usize,
+) {
+    if *joins == 0 {
+        return;
+    }
+    let n = out.features_mut().len();
+    let Some([Feature::Line(a), Feature::Line(b)]) = n
+        .checked_sub(2)
+        .and_then(|k| out.features_mut().get(k..))
+        .and_then(|last| <&[Feature; 2]>::try_from(last).ok())
+        .copied()
+    else {
+        return;
+    };
+    let (s, e) = (usize::from(a.first), usize::from(b.last));
+    // Neighbours, also across a range jump: at grazing incidence a wall's points are far apart.
+    if usize::from(a.last) + 1 != usize::from(b.first) || e + 1 - s > JOIN_MAX_POINTS {
+        return;
+    }
+    // Cheap first: the normals within 0.2 rad of each other (or of the other's opposite: one
+    // line through the scanner's side has ρ near 0 and either normal).
+    let (sa, ca) = math::sin_cos(a.alpha);
+    let (sb, cb) = math::sin_cos(b.alpha);
+    if !(math::abs(ca * cb + sa * sb) > COS_JOIN) {
+        return;
+    }
+    // The same line within both fits' stated uncertainty (99 % of χ²₂), and their points on one
+    // line within the noise.
+    if !(same_line(&a, &b) <= SAME_LINE_CHI2) {
+        return;
+    }
+    let tol = rule.k_sigma + rule.model.floor;
+    let var = rule.sigma_r * rule.sigma_r;
+    if !pass
+        .points
+        .get(s..=e)
+        .is_some_and(|p| on_one_line(p, tol, var))
+    {
+        return;
+    }
+    *joins -= 1;
+    let mut k = 0usize;
+    out.retain(&mut |_| {
+        k += 1;
+        k + 2 <= n
+    });
+    pass.clear(usize::from(a.last), END);
+    pass.clear(usize::from(b.first), START);
+    let stats = &mut *pass.stats;
+    stats.segments = stats.segments.saturating_sub(2);
+    stats.features = stats.features.saturating_sub(2);
+    emit::<true>(pass, s, e, config, out);
+}
+
+/// The NIS of the difference of the lines `a` and `b` (both in the scanner's frame, ρ ≥ 0),
+/// with the sum of their covariances; NaN when it has none.
+fn same_line(a: &LineFeature, b: &LineFeature) -> f32 {
+    let mut da = a.alpha - b.alpha;
+    if da > core::f32::consts::PI {
+        da -= 2.0 * core::f32::consts::PI;
+    } else if da < -core::f32::consts::PI {
+        da += 2.0 * core::f32::consts::PI;
+    }
+    let dr = a.rho - b.rho;
+    let (saa, srr, sar) = (
+        a.var_alpha + b.var_alpha,
+        a.var_rho + b.var_rho,
+        a.cov_alpha_rho + b.cov_alpha_rho,
+    );
+    let det = saa * srr - sar * sar;
+    if !(det > 0.0) {
+        return f32::NAN;
+    }
+    (srr * da * da - 2.0 * sar * da * dr + saa * dr * dr) / det
+}
+
 /// Most pieces waiting while a segment is split at corners the walk left unmarked.
 const PIECES: usize = 8;
 
@@ -557,7 +662,14 @@ mod tests {
             let Some(noise) = rule.noise() else {
                 panic!("the default rule")
             };
-            join_lines(pass, (60, 80), noise, &config, &mut out);
+            join_lines(
+                pass,
+                (60, 80),
+                noise,
+                &config,
+                &mut out,
+                &mut JOINS_MAX.clone(),
+            );
             assert!(
                 matches!(out.as_slice(), [Feature::Line(l)] if (l.first, l.last) == (64, 75)),
                 "{out:?}"
@@ -603,7 +715,14 @@ mod tests {
             pass.stats.short_segments = 17;
             let mut out: Vec<Feature, 8> = Vec::new();
             if let Some(noise) = rule.noise() {
-                join_lines(pass, (0, 16), noise, &config, &mut out);
+                join_lines(
+                    pass,
+                    (0, 16),
+                    noise,
+                    &config,
+                    &mut out,
+                    &mut JOINS_MAX.clone(),
+                );
             }
             assert!(
                 matches!(out.as_slice(), [Feature::Line(l)] if (l.first, l.last) == (0, 11)),
@@ -664,7 +783,7 @@ mod tests {
 
     /// A run of short segments is joined at most `CHAIN_MAX` (64) points at a time (the work
     /// a join may take is bounded): 100 single points of one wall become a line of the first 64
-    /// and one of the other 36.
+    /// and one of the other 36, which, on one line, are then joined into one.
     #[test]
     fn a_long_chain_is_joined_64_points_at_a_time() {
         use crate::extractor::Extractor;
@@ -690,6 +809,7 @@ mod tests {
             out
         });
         let spans: Vec<(usize, usize), 8> = out.iter().map(|f| (f.first(), f.last())).collect();
-        assert_eq!(spans.as_slice(), [(40, 103), (104, 139)], "{out:?}");
+        // Joined 64 points at a time, then the two lines, collinear, made one.
+        assert_eq!(spans.as_slice(), [(40, 139)], "{out:?}");
     }
 }

@@ -142,12 +142,18 @@ fn joined_walls_leave_consistent_marks_and_counts() {
                 inside.is_empty(),
                 "seed {seed}: marks {inside:?} inside {f:?}"
             );
-            // A joined line: its points farther apart than one surface's at ≥ 10° incidence.
-            if let Feature::Line(l) = f {
-                let span = l.start.distance(&l.end);
-                if span > 600.0 * f32::from(l.points) {
-                    sparse += 1;
-                }
+            // A joined line: it holds neighbouring points farther apart than one surface's at
+            // ≥ 10° incidence (alone, the walk leaves each of them a segment of its own).
+            if let Feature::Line(_) = f {
+                let point = |i: usize| {
+                    let (s, c) = (g.start_angle + g.angle_step * i as f32).sin_cos();
+                    (ranges[i] * c, ranges[i] * s)
+                };
+                let apart = (f.first()..f.last()).any(|i| {
+                    let ((x0, y0), (x1, y1)) = (point(i), point(i + 1));
+                    (x1 - x0).hypot(y1 - y0) > 600.0
+                });
+                sparse += usize::from(apart);
             }
         }
         // Segments counted: the marks bound them (a one-point segment is one mark).
