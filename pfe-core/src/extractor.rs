@@ -9,7 +9,7 @@ use crate::classify;
 use crate::config::Config;
 use crate::error::ExtractError;
 use crate::feature::Feature;
-use crate::flags::{END, START, VALID, VEIL};
+use crate::flags::{END, JUMP, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::mark::{self, Neighbours};
 use crate::output::{FeatureSink, Stage, StageObserver, Stats, Unobserved};
@@ -320,11 +320,13 @@ fn steps<O: StageObserver + ?Sized>(
     // §3.1–3.2, §3.6: mark points by prediction.
     let uneven = motion.is_some_and(|m| m.sweeps_apart());
     let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), motion, stats);
+    let before = pass.stats.predictions;
     let noted = mark::mark(&mut pass, &walk.rule, uneven);
+    let walked = (noted, pass.stats.predictions - before);
     observer.ended(Stage::Mark);
     // Ours: interleaved sweeps out of place (no odometry) moved onto sweep 0 and marked again.
     let parts = (beams, scan, config);
-    let marks = in_place(parts, (points, ranges, flags), walk, noted, stats);
+    let marks = in_place(parts, (points, ranges, flags), walk, walked, stats);
     observer.ended(Stage::Sweeps);
     let fitted;
     let config = match checks {
@@ -422,15 +424,15 @@ struct Marks {
 }
 
 /// Interleaved sweeps without odometry (default mode) are moved onto sweep 0 by their offset
-/// estimated from the scan, when the marks of `walk` (which noted `noted`) or, with the checks
-/// for real scans, the scan's scatter show them out of place, and walked again; otherwise the
-/// walk's marks stand.
+/// estimated from the scan, when the marks of `walk` (which noted `noted` and counted
+/// `predictions`) or, with the checks for real scans, the scan's scatter show them out of
+/// place, and walked again; otherwise the walk's marks stand.
 #[inline(always)]
 fn in_place(
     (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
     slots: (&mut [Point], &mut [f32], &mut [u8]),
     walk: Marking,
-    noted: Neighbours,
+    (noted, predictions): (Neighbours, usize),
     stats: &mut Stats,
 ) -> Marks {
     let sweeps = usize::from(scan.sweeps.max(1));
@@ -438,7 +440,13 @@ fn in_place(
         return Marks::standing(walk, noted);
     }
     if config.scrutinised() {
-        return scrutinised((beams, scan, config), slots, walk, noted, stats);
+        return scrutinised(
+            (beams, scan, config),
+            slots,
+            walk,
+            (noted, predictions),
+            stats,
+        );
     }
     let (points, ranges, flags) = slots;
     match suspected(scan, (points, ranges, flags), noted.is_some(), stats) {
@@ -509,8 +517,9 @@ fn suspected(
 /// - two sweeps: with the first walk's σ when their scatter shows them apart, else with the
 ///   moved points' own σ (a turn between the sweeps moves points across the beams, which the
 ///   scatter shows only where beams graze a surface, and there the walk marks them). The new
-///   walk is kept when it leaves fewer marks; otherwise the first walk's marks stand, fitted on
-///   the moved points when the sweeps showed apart and on the points as they were if not;
+///   walk is kept when it leaves fewer marks; otherwise the first walk's marks stand (kept in
+///   [`STASHED`] meanwhile; its `predictions` count again, as when it was walked again), fitted
+///   on the moved points when the sweeps showed apart and on the points as they were if not;
 /// - more sweeps, when apart: with the first walk's σ (its marks on the unmoved points cut
 ///   segments into pieces of one period, four sweeps drifting apart).
 ///
@@ -520,7 +529,7 @@ fn scrutinised(
     (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
     walk: Marking,
-    noted: Neighbours,
+    (noted, predictions): (Neighbours, usize),
     stats: &mut Stats,
 ) -> Marks {
     let sweeps = usize::from(scan.sweeps.max(1));
@@ -545,19 +554,26 @@ fn scrutinised(
         walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
     } else {
         let rule = if apart { &walk.rule } else { &moved.rule };
+        flags.iter_mut().for_each(|f| *f |= (*f & WALKED) << 4);
         walk_again(beams, (points, ranges, flags), rule, true, stats);
         if starts(flags) >= unmoved {
-            // The first walk stands: the points are loaded again (exactly as they were) and
-            // walked again (its flags are not kept), then moved again when apart.
+            // The first walk stands: the points are loaded again (exactly as they were, the
+            // first walk's marks kept), then moved again when apart. The same walk over them
+            // would mark them the same (and count its predictions again).
             let motion = scan.deskewing();
             let slots = (&mut *points, &mut *ranges, &mut *flags);
-            preprocess::load(slots, &beams, motion, scan, config, stats);
-            walk_again(beams, (points, ranges, flags), &walk.rule, false, stats);
+            preprocess::load_keeping::<STASHED>(slots, &beams, motion, scan, config, stats);
+            flags
+                .iter_mut()
+                .for_each(|f| *f = (*f & VALID) | (*f & STASHED) >> 4);
+            stats.predictions += predictions;
             if !apart {
                 stats.scan_sigma_um = walk_sigma_um;
                 return Marks::standing(walk, None);
             }
             offsets.apply(points, ranges, flags);
+        } else {
+            flags.iter_mut().for_each(|f| *f &= !STASHED);
         }
     }
     stats.scan_sigma_um = moved_sigma_um;
@@ -581,10 +597,17 @@ fn walk_again(
     uneven: bool,
     stats: &mut Stats,
 ) -> Neighbours {
-    flags.iter_mut().for_each(|f| *f &= VALID);
+    flags.iter_mut().for_each(|f| *f &= VALID | STASHED);
     let mut pass = Pass::over(beams, (points, ranges, flags), None, stats);
     mark::mark(&mut pass, rule, uneven)
 }
+
+/// The flags a walk sets ([`mark::mark`]).
+const WALKED: u8 = START | JUMP;
+/// Where [`scrutinised`] keeps the first walk's [`WALKED`] flags while it walks again: bits no
+/// step sets (none of [`crate::flags`]).
+const STASHED: u8 = WALKED << 4;
+const _: () = assert!(STASHED >> 4 == WALKED && STASHED & (VALID | WALKED | END | VEIL) == 0);
 
 /// Segment starts among `flags` (the marks of a walk).
 fn starts(flags: &[u8]) -> usize {

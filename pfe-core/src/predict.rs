@@ -155,6 +155,7 @@ impl WindowLine {
     /// point's own step from `prev` instead of the window's mean step. For points not evenly
     /// spaced (interleaved sweeps de-skewed: a short and a long step in turn), where the mean
     /// step tests the point after a long one far more strictly than a fresh window would.
+    #[inline]
     pub(crate) fn accepts_after(
         &self,
         prev: &Point,

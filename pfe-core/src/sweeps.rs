@@ -115,7 +115,8 @@ pub fn estimate(
         sweeps,
         sweep,
         step: angle_step,
-    };
+    }
+    .table();
     let first = normal(&rows, None, 0.0)?;
     let cut = 3.0 * first.sigma.max(SIGMA_FLOOR);
     let sol = normal(&rows, Some((&first.x, cut)), first.x[2] / ROT_SCALE)?;
@@ -283,7 +284,7 @@ const SIGMA_FLOOR: f32 = 0.3;
 const ROT_SCALE: f32 = 1000.0;
 
 /// The equations of sweep `sweep`'s beams on smooth surfaces, evenly subsampled to at most
-/// [`MAX_ROWS`]: made again on every pass over them rather than stored (no stack for them).
+/// [`MAX_ROWS`] ([`Rows::table`]).
 #[derive(Clone, Copy)]
 struct Rows<'a> {
     points: &'a [Point],
@@ -292,8 +293,40 @@ struct Rows<'a> {
     step: f32,
 }
 
+/// The rows of a sweep, made once for the four passes over them (two solutions, each its sums
+/// and its residuals), and the largest range of their beams, mm.
+struct Table {
+    rows: [Row; MAX_ROWS],
+    len: usize,
+    far: f32,
+}
+
+impl Table {
+    /// The rows, in the order they were made.
+    fn rows(&self) -> &[Row] {
+        self.rows.get(..self.len).unwrap_or(&[])
+    }
+}
+
 impl Rows<'_> {
-    /// Calls `f` with every row and the range of its beam, mm.
+    /// Every row, and the largest range of their beams.
+    fn table(&self) -> Table {
+        let mut t = Table {
+            rows: [[0.0; 5]; MAX_ROWS],
+            len: 0,
+            far: 0.0,
+        };
+        self.each(|row, range| {
+            if let Some(slot) = t.rows.get_mut(t.len) {
+                *slot = *row;
+                t.len += 1;
+                t.far = t.far.max(range);
+            }
+        });
+        t
+    }
+
+    /// Calls `f` with every row (at most [`MAX_ROWS`]) and the range of its beam, mm.
     fn each(&self, mut f: impl FnMut(&Row, f32)) {
         let (points, sweeps, s) = (self.points, self.sweeps, self.sweep);
         let pairs = points
@@ -392,18 +425,15 @@ fn residual(row: &Row, x: &[f32; 3]) -> f32 {
 
 /// Solves the normal equations of `rows` (those within `cut` of the solution `x` when given),
 /// with the second-order term `(cos θ − 1)·n·q` of a rotation by about `theta` moved to `e`.
-fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<Solution> {
+fn normal(rows: &Table, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<Solution> {
     let bend = -0.5 * theta * theta;
     let kept = |r: &Row| keep.is_none_or(|(x, cut)| math::abs(residual(r, x)) <= cut);
     let mut a = [0.0f32; 6];
     let mut g = [0.0f32; 3];
     let mut used = 0usize;
-    // The largest range among all the rows' beams, kept or not.
-    let mut far = 0.0f32;
-    rows.each(|r, range| {
-        far = far.max(range);
+    for r in rows.rows() {
         if !kept(r) {
-            return;
+            continue;
         }
         let [j0, j1, j2, e, nq] = *r;
         let e = e + bend * nq;
@@ -417,7 +447,7 @@ fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option
         ];
         g = [g[0] - j0 * e, g[1] - j1 * e, g[2] - j2 * e];
         used += 1;
-    });
+    }
     if used < 6 {
         return None;
     }
@@ -428,12 +458,12 @@ fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option
         inv[2] * g[0] + inv[4] * g[1] + inv[5] * g[2],
     ];
     let mut ss = 0.0f32;
-    rows.each(|r, _| {
+    for r in rows.rows() {
         if kept(r) {
             let res = residual(r, &x) + bend * r[4];
             ss += res * res;
         }
-    });
+    }
     let sigma = math::sqrt(ss / (used - 3) as f32);
     Some(Solution {
         x,
@@ -441,7 +471,7 @@ fn normal(rows: &Rows<'_>, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option
         inv,
         sigma,
         rows: used,
-        far,
+        far: rows.far,
     })
 }
 

@@ -66,15 +66,22 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -> Neigh
         && !uneven
         && floor * floor <= WindowLine::FLOOR2_WITHIN * rule.k_sigma2;
     if fast {
-        walk::<true>(pass, rule, uneven)
+        walk::<true>(pass, rule, uneven, true)
     } else {
-        walk::<false>(pass, rule, uneven)
+        walk::<false>(pass, rule, uneven, true)
     }
 }
 
 /// The walk over every point, with the fast path (`FAST`: the scanner at the origin, points
-/// evenly spaced: the uneven cases' tests compile out) or without.
-fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -> Neighbours {
+/// evenly spaced: the uneven cases' tests compile out) or without; without it, `tight` runs
+/// the stale line's tests of unevenly spaced points without de-skewing in a tight loop
+/// ([`accepted_run_after`]: the same marks and counts as testing each point on its own).
+fn walk<const FAST: bool>(
+    pass: &mut Pass<'_>,
+    rule: &NoiseRule,
+    uneven: bool,
+    tight: bool,
+) -> Neighbours {
     let mut noted = Some(Vec::new());
     // Points and ranges cut to the number of readings once: one bounds check for both.
     let n = pass.len();
@@ -86,6 +93,8 @@ fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -
         ranges,
         uneven,
     };
+    // Unevenly spaced points without de-skewing: the stale line's run has a tight loop too.
+    let steady = tight && uneven && pass.motion.is_none();
     let mut walk = Walk::default();
     let mut k = 0usize;
     while k < n {
@@ -98,6 +107,17 @@ fn walk<const FAST: bool>(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -
             let next = accepted_run(points, ranges, k, stop, line, rule);
             pass.stats.predictions += next - k;
             stale_failed = next < stop;
+            k = next;
+            if k >= n {
+                break;
+            }
+        } else if let (Some((line, until)), true) = (cached, !FAST && steady) {
+            // The same for unevenly spaced points seen from the origin: the slow path's tests
+            // in a tight loop. The point it stops at is tested again by `step` (and counted
+            // there), as the slow path alone would.
+            let stop = walk.next_check(k, until + 1).min(n);
+            let next = accepted_run_after(points, ranges, k, stop, line, rule);
+            pass.stats.predictions += next - k;
             k = next;
             if k >= n {
                 break;
@@ -357,6 +377,52 @@ fn accepted_run(
     }
 }
 
+/// [`accepted_run`] for unevenly spaced points (no de-skewing): the first point from `from`
+/// (up to `to`, exclusive) that the slow path's [`step`] would not accept with `line` as its
+/// stale line: not valid, a jump from its predecessor at their own angle apart
+/// ([`crate::rule::NoiseRule::jump_limit_between`]), or not accepted with the lever of its own
+/// step ([`WindowLine::accepts_after`]); the same arithmetic as [`step`] and [`line_accepts`]
+/// with the scanner at the origin.
+fn accepted_run_after(
+    points: &[Point],
+    ranges: &[f32],
+    from: usize,
+    to: usize,
+    line: &WindowLine,
+    rule: &NoiseRule,
+) -> usize {
+    let (Some(pts), Some(rs)) = (points.get(from..to), ranges.get(from..to)) else {
+        return from;
+    };
+    let Some(before) = from.checked_sub(1) else {
+        return from;
+    };
+    let (Some(mut prev), Some(mut prev_r)) =
+        (points.get(before).copied(), ranges.get(before).copied())
+    else {
+        return from;
+    };
+    let o = Point::new(0.0, 0.0);
+    let seen = line.seen_from(o);
+    let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
+    for (at, (p, &r)) in (from..).zip(pts.iter().zip(rs)) {
+        // An invalid point is NaN (`Point::INVALID`): it fails the jump test.
+        let (sp, sprev) = (
+            Point::new(p.x - o.x, p.y - o.y),
+            Point::new(prev.x - o.x, prev.y - o.y),
+        );
+        let limit = rule.jump_limit_between(sprev, sp, prev_r);
+        let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+        if !(ex * ex + ey * ey <= limit * limit)
+            || !seen.accepts_after(&sprev, (sp.x, sp.y), r, k_sigma2, floor)
+        {
+            return at;
+        }
+        (prev, prev_r) = (*p, r);
+    }
+    to
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -555,8 +621,8 @@ mod tests {
             };
             match how {
                 How::Mark => super::mark(&mut pass, noise, uneven),
-                How::Fast => walk::<true>(&mut pass, noise, uneven),
-                How::Slow => walk::<false>(&mut pass, noise, uneven),
+                How::Fast => walk::<true>(&mut pass, noise, uneven, true),
+                How::Slow => walk::<false>(&mut pass, noise, uneven, false),
             };
             pass.stats.predictions
         });
@@ -610,11 +676,12 @@ mod tests {
             let cloud = (&points[..], &ranges[..]);
             let (slow, slow_n) = walked_counted(cloud, (None, uneven), &config, How::Slow);
             let (fast, fast_n) = walked_counted(cloud, (None, uneven), &config, How::Fast);
-            assert_eq!(
-                walked(cloud, (None, uneven), &config, How::Mark),
-                slow,
-                "room {t}: mark"
-            );
+            let (marked, marked_n) = walked_counted(cloud, (None, uneven), &config, How::Mark);
+            assert_eq!(marked, slow, "room {t}: mark");
+            if uneven {
+                // The slow path's tight loop for unevenly spaced points counts as it does.
+                assert_eq!(marked_n, slow_n, "room {t}: predictions");
+            }
             if uneven || floor > 20.0 {
                 slow_only += 1;
                 fast_differs += usize::from(fast != slow);

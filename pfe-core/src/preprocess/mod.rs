@@ -20,6 +20,19 @@ use crate::scan::{max_code, valid_mm, Ranges, Scan};
 /// Converts the readings of `scan` to points, ranges and flags (one slot per reading), with
 /// the beam directions of `beams` and the scanner's `motion` (when de-skewing).
 pub(crate) fn load(
+    slots: (&mut [Point], &mut [f32], &mut [u8]),
+    beams: &Beams<'_>,
+    motion: Option<Motion>,
+    scan: &Scan<'_>,
+    config: &Config,
+    stats: &mut Stats,
+) {
+    load_keeping::<0>(slots, beams, motion, scan, config, stats);
+}
+
+/// [`load`] keeping the bits `KEEP` of the flags of valid points (which `VALID` must not be
+/// among): the points loaded again with what a step noted in those bits.
+pub(crate) fn load_keeping<const KEEP: u8>(
     (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
     beams: &Beams<'_>,
     motion: Option<Motion>,
@@ -42,13 +55,13 @@ pub(crate) fn load(
             values,
             mm_per_unit,
             max_valid,
-        } => place_codes(
+        } => place_codes::<KEEP>(
             slots,
             values,
             mm_per_unit,
             max_code(mm_per_unit, max_valid, g.r_max),
         ),
-        Ranges::Mm(mm) => place_mm(slots, mm, g.r_max),
+        Ranges::Mm(mm) => place_mm::<KEEP>(slots, mm, g.r_max),
     };
     stats.readings = n;
     stats.valid = n - invalid;
@@ -104,23 +117,32 @@ type Slots<'a> = (&'a mut [Point], &'a mut [f32], &'a mut [u8], &'a [Point]);
 /// [`place`] for LMS range codes: `1 ..= max_code` are returns, in (0, r_max] mm. Not inlined
 /// (nor is [`place_mm`]): the loop then keeps one pointer a slice in registers.
 #[inline(never)]
-fn place_codes(slots: Slots<'_>, codes: &[u16], mm_per_unit: f32, max_code: u16) -> usize {
-    place(slots, codes, |v| {
+fn place_codes<const KEEP: u8>(
+    slots: Slots<'_>,
+    codes: &[u16],
+    mm_per_unit: f32,
+    max_code: u16,
+) -> usize {
+    place::<KEEP, _>(slots, codes, |v| {
         (u32::from(v).wrapping_sub(1) < u32::from(max_code)).then(|| f32::from(v) * mm_per_unit)
     })
 }
 
 /// [`place`] for ranges in mm.
 #[inline(never)]
-fn place_mm(slots: Slots<'_>, mm: &[f32], r_max: f32) -> usize {
-    place(slots, mm, |r| valid_mm(r, r_max))
+fn place_mm<const KEEP: u8>(slots: Slots<'_>, mm: &[f32], r_max: f32) -> usize {
+    place::<KEEP, _>(slots, mm, |r| valid_mm(r, r_max))
 }
 
 /// Points, ranges and flags from `readings` and `range(reading)`, the range in mm of a return
 /// (`None`: no return). Returns the number of invalid readings (counting them keeps the common
 /// path short).
 #[inline(always)]
-fn place<T: Copy>(slots: Slots<'_>, readings: &[T], range: impl Fn(T) -> Option<f32>) -> usize {
+fn place<const KEEP: u8, T: Copy>(
+    slots: Slots<'_>,
+    readings: &[T],
+    range: impl Fn(T) -> Option<f32>,
+) -> usize {
     let (points, ranges, flags, dirs) = slots;
     let mut invalid = 0usize;
     let slots = points
@@ -130,7 +152,7 @@ fn place<T: Copy>(slots: Slots<'_>, readings: &[T], range: impl Fn(T) -> Option<
         .zip(dirs.iter().zip(readings));
     for (((point, slot), flag), (d, &v)) in slots {
         (*point, *slot, *flag) = match range(v) {
-            Some(r) => (Point::new(r * d.x, r * d.y), r, VALID),
+            Some(r) => (Point::new(r * d.x, r * d.y), r, VALID | (*flag & KEEP)),
             None => {
                 invalid += 1;
                 (Point::INVALID, 0.0, 0)

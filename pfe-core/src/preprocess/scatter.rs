@@ -99,26 +99,22 @@ impl Scatter {
         let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
         let (mut n1, mut n2) = (0usize, 0usize);
         let scale = PER_SIGMA / sigma_r;
-        let valid = |i: usize| points.get(i).copied().filter(Point::is_valid);
-        // Points i − 2 ..= i + 2, each asked for its validity once.
-        let mut w = [None, None, valid(0), valid(1), valid(2)];
+        // No validity test: a triple with a point that is not finite (invalid, or beyond the
+        // scan's ends) has no residual anyway ([`residual_at`]).
+        let at = |i: usize| points.get(i).copied().unwrap_or(Point::INVALID);
+        // Points i − 2 ..= i + 2.
+        let mut w = [Point::INVALID, Point::INVALID, at(0), at(1), at(2)];
         for i in 0..points.len() {
-            let [w0, w1, w2, w3, w4] = w;
-            if let Some(m) = w2 {
-                // The point's range, shared by both chords (as `chord_residual` computes it).
-                let r = math::sqrt(m.x * m.x + m.y * m.y);
-                if let (Some(a), Some(b)) = (w1, w3) {
-                    if let Some(e) = residual_at(a, m, b, r) {
-                        count(&mut one, &mut n1, e, scale);
-                    }
-                }
-                if let (Some(a), Some(b)) = (w0, w4) {
-                    if let Some(e) = residual_at(a, m, b, r) {
-                        count(&mut two, &mut n2, e, scale);
-                    }
-                }
+            let [w0, w1, m, w3, w4] = w;
+            // The point's range, shared by both chords (as `chord_residual` computes it).
+            let r = math::sqrt(m.x * m.x + m.y * m.y);
+            if let Some(e) = residual_at(w1, m, w3, r) {
+                count(&mut one, &mut n1, e, scale);
             }
-            w = [w1, w2, w3, w4, valid(i + 3)];
+            if let Some(e) = residual_at(w0, m, w4, r) {
+                count(&mut two, &mut n2, e, scale);
+            }
+            w = [w1, m, w3, w4, at(i + 3)];
         }
         Self {
             one: estimate(&one, n1, sigma_r),
@@ -195,9 +191,7 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
         let (Some(&a), Some(&m), Some(&b)) = (w.first(), w.get(span), w.last()) else {
             continue;
         };
-        if !(a.is_valid() && m.is_valid() && b.is_valid()) {
-            continue;
-        }
+        // A triple with a point that is not finite has no residual ([`residual_at`]).
         if let Some(e) = chord_residual(a, m, b) {
             count(&mut hist, &mut total, e, scale);
         }
@@ -245,7 +239,9 @@ fn chord_residual(a: Point, m: Point, b: Point) -> Option<f32> {
     residual_at(a, m, b, math::sqrt(m.x * m.x + m.y * m.y))
 }
 
-/// [`chord_residual`] with `m`'s range `r` given.
+/// [`chord_residual`] with `m`'s range `r` given. `None` when any of `a`, `m`, `b` is not
+/// finite (NaN or infinite coordinates): the sine test then compares NaN, or an infinite
+/// `|den|` with an infinite or NaN bound, and fails.
 #[inline(always)]
 fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
     let (cx, cy) = (b.x - a.x, b.y - a.y);
@@ -299,6 +295,69 @@ mod tests {
             let (u1, u2) = (u(), u());
             libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(core::f32::consts::TAU * u2)
         }
+    }
+
+    /// The one-pass scatter and [`at_span`] count the residuals of exactly the triples of
+    /// valid points (each point's validity tested): walls with rough noise, points NaN,
+    /// infinite or half infinite in x or y at random, at spans 1, 2 and 4.
+    #[test]
+    fn the_one_pass_scatter_skips_every_triple_with_a_point_not_finite() {
+        let mut n = normals(3);
+        let mut s = 17u32;
+        let mut u = move || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            s >> 8
+        };
+        let bad = [
+            Point::INVALID,
+            Point::new(f32::INFINITY, 100.0),
+            Point::new(-3000.0, f32::NEG_INFINITY),
+            Point::new(f32::NAN, 5.0),
+            Point::new(0.0, f32::INFINITY),
+            Point::new(f32::INFINITY, f32::INFINITY),
+        ];
+        let mut estimated = 0;
+        for t in 0..200u32 {
+            let sigma = [4.0f32, 12.0, 25.0][t as usize % 3];
+            let noise: [f32; 181] = core::array::from_fn(|_| sigma * n());
+            let mut p = wall(2500.0, |i| noise[i]);
+            let every = 3 + t % 20;
+            for q in p.iter_mut() {
+                if u() % every == 0 {
+                    *q = bad[(u() % 6) as usize];
+                }
+            }
+            let got = Scatter::of(&p, 4.0);
+            let want = Scatter {
+                one: valid_only(&p, 1, 4.0),
+                two: valid_only(&p, 2, 4.0),
+            };
+            assert_eq!(got, want, "wall {t}");
+            for span in [1, 2, 4] {
+                assert_eq!(
+                    at_span(&p, span, 4.0),
+                    valid_only(&p, span, 4.0),
+                    "wall {t}"
+                );
+            }
+            estimated += usize::from(got.one.is_some() && got.two.is_some());
+        }
+        assert!(estimated > 60, "{estimated}");
+    }
+
+    /// [`at_span`] over the triples of valid points only, each point's validity tested.
+    fn valid_only(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
+        let mut hist = [0u16; BINS];
+        let mut total = 0usize;
+        for w in points.windows(2 * span + 1) {
+            let (a, m, b) = (w[0], w[span], w[2 * span]);
+            if a.is_valid() && m.is_valid() && b.is_valid() {
+                if let Some(e) = chord_residual(a, m, b) {
+                    count(&mut hist, &mut total, e, PER_SIGMA / sigma_r);
+                }
+            }
+        }
+        estimate(&hist, total, sigma_r)
     }
 
     #[test]
