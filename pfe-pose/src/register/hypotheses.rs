@@ -31,6 +31,11 @@ impl Top {
         }
     }
 
+    /// Every slot (only the first [`Top::n`] are hypotheses).
+    pub(super) fn all(&self) -> &[Hyp; REFINE] {
+        &self.items
+    }
+
     pub(super) fn items(&self) -> &[Hyp] {
         self.items.get(..self.n).unwrap_or(&[])
     }
@@ -100,13 +105,13 @@ fn mod_pi(x: f32) -> f32 {
 
 /// Hypotheses of `curr`'s pose in `prev`'s frame, scored; returns how many were scored.
 pub(super) fn hypothesise(
+    w: &mut Work,
     prev: &Set,
     curr: &Set,
     prior: Option<&Prior>,
     cfg: &Config,
     top: &mut Top,
 ) -> u32 {
-    let mut w = Work::new(prev, curr, cfg, prior);
     let mut count = 0u32;
     let consider = |pose: Pose, w: &mut Work, top: &mut Top, count: &mut u32| {
         if !pose.is_finite() || *count >= cfg.max_hypotheses {
@@ -140,8 +145,8 @@ pub(super) fn hypothesise(
         top.offer(Hyp { pose, score });
     };
     match prior {
-        Some(p) => consider(p.pose, &mut w, top, &mut count),
-        None => consider(Pose::IDENTITY, &mut w, top, &mut count),
+        Some(p) => consider(p.pose, w, top, &mut count),
+        None => consider(Pose::IDENTITY, w, top, &mut count),
     }
     let (pl, cl) = (prev.lines(), curr.lines());
     let (hp, np) = top_k::<12>(pl.iter().map(|l| l.rank));
@@ -179,7 +184,7 @@ pub(super) fn hypothesise(
                         let th = wrap(th);
                         if let Some(t) = solve_two_lines(&li, &lk, &lj, &ll, th) {
                             pair_hyps += 1;
-                            consider(Pose::new(t[0], t[1], th), &mut w, top, &mut count);
+                            consider(Pose::new(t[0], t[1], th), w, top, &mut count);
                         }
                     }
                 }
@@ -223,7 +228,7 @@ pub(super) fn hypothesise(
                     pair_hyps += 1;
                     consider(
                         Pose::new(mid_p[0] - rc[0], mid_p[1] - rc[1], th),
-                        &mut w,
+                        w,
                         top,
                         &mut count,
                     );
@@ -262,7 +267,7 @@ pub(super) fn hypothesise(
                             continue;
                         }
                         pair_hyps += 1;
-                        consider(Pose::new(t[0], t[1], th), &mut w, top, &mut count);
+                        consider(Pose::new(t[0], t[1], th), w, top, &mut count);
                     }
                 }
             }
@@ -288,7 +293,7 @@ pub(super) fn hypothesise(
                     }
                     let d = li.r - sign * lk.r;
                     let t = [d * ca - along * sa, d * sa + along * ca];
-                    consider(Pose::new(t[0], t[1], th), &mut w, top, &mut count);
+                    consider(Pose::new(t[0], t[1], th), w, top, &mut count);
                 }
             }
         }

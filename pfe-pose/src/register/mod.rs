@@ -38,6 +38,7 @@ use crate::obs::Observation;
 use crate::set::{Set, MAX_OBS};
 use hypotheses::{hypothesise, Top};
 use refine::{refine, Refined, Work};
+use visibility::visibility_penalty;
 
 /// Variance given to a direction the scene cannot tell when there is no prior: 10¹² mm² (a
 /// standard deviation of 1000 km) for translation; a rotation's part is in units of 1 m
@@ -352,17 +353,28 @@ pub(crate) fn register_sets(
         return fallback(Failure::TooFewFeatures, prior.as_ref(), 0);
     }
     let mut top = Top::new();
-    let hypotheses = hypothesise(prev, curr, prior.as_ref(), cfg, &mut top);
+    let mut w = Work::new(prev, curr, cfg, prior.as_ref());
+    let hypotheses = hypothesise(&mut w, prev, curr, prior.as_ref(), cfg, &mut top);
     if top.n == 0 {
         return fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses);
     }
     // Refine the best few; keep the best refined and the best distinct runner-up.
     let mut best: Option<Refined> = None;
     let mut second_score = 0.0f32;
-    for h in top.items() {
-        let r = refine(prev, curr, h.pose, prior.as_ref(), cfg);
+    // Best first, so that hopeless ones are found early (see below).
+    let mut order = *top.all();
+    let ranked = order.get_mut(..top.n).unwrap_or(&mut []);
+    ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
+    for h in ranked.iter() {
+        let mut r = refine(&mut w, h.pose, prior.as_ref());
         if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
             continue;
+        }
+        // The visibility check lowers the score: a hypothesis that cannot beat the best even
+        // without it needs none (nor can it then make the result ambiguous).
+        let hopeless = cfg.ambiguity >= 1.0 && best.as_ref().is_some_and(|b| b.score > r.score * 1.01);
+        if cfg.visibility_weight > 0.0 && !hopeless {
+            r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
         }
         match &best {
             Some(b) if !better(&r, b) => {
@@ -394,7 +406,6 @@ pub(crate) fn register_sets(
         return fallback(Failure::Ambiguous, prior.as_ref(), hypotheses);
     }
     // Associations of the best, for the odometry's map.
-    let mut w = Work::new(prev, curr, cfg, None);
     w.associate(&best.pose, 0.0, Some(assoc));
     let status = match best.unobservable {
         Some(direction) => Status::Degenerate { direction },

@@ -3,7 +3,6 @@
 
 use core::f32::consts::PI;
 
-use super::visibility::visibility_penalty;
 use super::{Assoc, Config, Prior, ITERATIONS, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE};
 use crate::geom::{eigen_sym3, inverse_spd3, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::set::{Line, Set, MAX_OBS};
@@ -43,6 +42,15 @@ pub(super) struct Work<'a> {
     /// Whether each match is trusted without confirmation (both segments long).
     trusted: [bool; 2 * MAX_OBS],
     nc: usize,
+    /// Sine and cosine of each current line's α.
+    curr_sc: [[f32; 2]; MAX_OBS],
+    /// Sine and cosine of each previous line's α.
+    prev_sc: [[f32; 2]; MAX_OBS],
+    /// The previous lines' α, increasing, and their indices (the angle index).
+    keys: [f32; MAX_OBS],
+    order: [u8; MAX_OBS],
+    /// The largest variance of α among the previous lines.
+    max_var_a: f32,
 }
 
 impl<'a> Work<'a> {
@@ -52,7 +60,7 @@ impl<'a> Work<'a> {
         cfg: &'a Config,
         prior: Option<&'a Prior>,
     ) -> Self {
-        Self {
+        let mut w = Self {
             prev,
             curr,
             cfg,
@@ -60,7 +68,91 @@ impl<'a> Work<'a> {
             contrib: [ZERO3; 2 * MAX_OBS],
             trusted: [false; 2 * MAX_OBS],
             nc: 0,
+            curr_sc: [[0.0; 2]; MAX_OBS],
+            prev_sc: [[0.0; 2]; MAX_OBS],
+            keys: [0.0; MAX_OBS],
+            order: [0; MAX_OBS],
+            max_var_a: 0.0,
+        };
+        for (sc, l) in w.curr_sc.iter_mut().zip(curr.lines()) {
+            let (s, c) = sin_cos(l.a);
+            *sc = [s, c];
         }
+        for (sc, l) in w.prev_sc.iter_mut().zip(prev.lines()) {
+            let (s, c) = sin_cos(l.a);
+            *sc = [s, c];
+        }
+        // Insertion sort of the previous lines by α (at most MAX_OBS).
+        let mut n = 0usize;
+        for (i, l) in prev.lines().iter().enumerate() {
+            let Ok(iu) = u8::try_from(i) else { break };
+            if n >= MAX_OBS {
+                break;
+            }
+            w.max_var_a = w.max_var_a.max(l.cov.a);
+            let mut pos = n;
+            while pos > 0 && w.keys.get(pos - 1).is_some_and(|&k| k > l.a) {
+                if let (Some(&k), Some(&o)) = (w.keys.get(pos - 1), w.order.get(pos - 1)) {
+                    if let (Some(kd), Some(od)) = (w.keys.get_mut(pos), w.order.get_mut(pos)) {
+                        *kd = k;
+                        *od = o;
+                    }
+                }
+                pos -= 1;
+            }
+            if let (Some(kd), Some(od)) = (w.keys.get_mut(pos), w.order.get_mut(pos)) {
+                *kd = l.a;
+                *od = iu;
+            }
+            n += 1;
+        }
+        w
+    }
+
+    /// The previous lines whose α lies within `half` of `centre` or of `centre + π` (angles
+    /// modulo 2π), into `out`; returns how many. All of them when `half` is not below 1.5.
+    fn candidates(&self, centre: f32, half: f32, out: &mut [u8; MAX_OBS]) -> usize {
+        let nl = self.prev.lines().len().min(MAX_OBS);
+        let mut n = 0usize;
+        if !(half < 1.5) || !centre.is_finite() {
+            for (slot, i) in out.iter_mut().zip(0u8..).take(nl) {
+                *slot = i;
+                n += 1;
+            }
+            return n;
+        }
+        let keys = self.keys.get(..nl).unwrap_or(&[]);
+        let order = self.order.get(..nl).unwrap_or(&[]);
+        // Up to two windows per orientation (a window across ±π is split in two).
+        let mut windows = [(0.0f32, -1.0f32); 4];
+        let mut nw = 0usize;
+        for c in [wrap(centre), wrap(centre + PI)] {
+            let (lo, hi) = (c - half, c + half);
+            let mut add = |w: (f32, f32)| {
+                if let Some(slot) = windows.get_mut(nw) {
+                    *slot = w;
+                    nw += 1;
+                }
+            };
+            add((lo.max(-PI), hi.min(PI)));
+            if lo < -PI {
+                add((lo + 2.0 * PI, PI));
+            }
+            if hi > PI {
+                add((-PI, hi - 2.0 * PI));
+            }
+        }
+        for &(lo, hi) in windows.iter().take(nw) {
+            let a = keys.partition_point(|&k| k < lo);
+            let b = keys.partition_point(|&k| k <= hi);
+            for &i in order.get(a..b).unwrap_or(&[]) {
+                if let Some(slot) = out.get_mut(n) {
+                    *slot = i;
+                    n += 1;
+                }
+            }
+        }
+        n
     }
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
@@ -100,9 +192,13 @@ impl<'a> Work<'a> {
         // `pose.transform_point` with its sine and cosine computed once (the same arithmetic).
         let transform = |p: [f32; 2]| [ct * p[0] - st * p[1] + x, st * p[0] + ct * p[1] + y];
         let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
-        for (k, lk) in self.curr.lines().iter().enumerate() {
+        let mut cand = [0u8; MAX_OBS];
+        let curr = self.curr;
+        for (k, lk) in curr.lines().iter().enumerate() {
+            let sc = self.curr_sc.get(k).copied().unwrap_or([0.0, 1.0]);
             let a = lk.a + pose.theta;
-            let (sa, ca) = sin_cos(a);
+            // sin, cos of α + θ from those of α and θ.
+            let (sa, ca) = (sc[0] * ct + sc[1] * st, sc[1] * ct - sc[0] * st);
             let r = lk.r + x * ca + y * sa;
             let h = -x * sa + y * ca;
             // Covariance of the transformed line.
@@ -114,37 +210,34 @@ impl<'a> Work<'a> {
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
             let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
-            for (i, li) in self.prev.lines().iter().enumerate() {
-                // The gates below, for both orientations at once: a pair that fails them
-                // either way is rejected whatever the sign, without the cosine (the distance
-                // first: it needs no angle wrapped).
+            // Only the previous lines within the angle gate (either orientation) can match.
+            let half = libm::sqrtf(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
+            let nk = self.candidates(a, half, &mut cand);
+            for &iu in cand.iter().take(nk) {
+                let i = usize::from(iu);
+                let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.prev_sc.get(i)) else {
+                    continue;
+                };
                 let var_a = ct_.a + li.cov.a + sa2;
                 let var_r = ct_.c + li.cov.c + sr * sr;
                 let (ga, gr) = (gate * var_a, gate * var_r);
                 let (rp, rm) = (r - li.r, -r - li.r);
-                let fails = |rr: f32, turn: f32| {
-                    rr * rr > gr || {
-                        let e = wrap(a + turn - li.a);
-                        e * e > ga
-                    }
-                };
-                if fails(rp, 0.0) && fails(rm, PI) {
+                if rp * rp > gr && rm * rm > gr {
                     continue;
                 }
-                let dcos = libm::cosf(a - li.a);
+                // cos(a − α_i): the orientation.
+                let dcos = ca * psc[1] + sa * psc[0];
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
                 let ea = if sign > 0.0 {
                     wrap(a - li.a)
                 } else {
                     wrap(a + PI - li.a)
                 };
-                let var_a = ct_.a + li.cov.a + sa2;
-                if ea * ea > gate * var_a {
+                if ea * ea > ga {
                     continue;
                 }
                 let er = sign * r - li.r;
-                let var_r = ct_.c + li.cov.c + sr * sr;
-                if er * er > gate * var_r {
+                if er * er > gr {
                     continue;
                 }
                 let s = Sym2 {
@@ -158,11 +251,11 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
-                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr) else {
+                let Some(frac) = overlap(ext, li, *psc, cfg.overlap_slack + sr) else {
                     continue;
                 };
-                if best.is_none_or(|b| d2 < b.0) {
-                    let Ok(iu) = u8::try_from(i) else { continue };
+                // The nearest; the lowest index among equals (the order of the scan).
+                if best.is_none_or(|b| d2 < b.0 || (d2 == b.0 && iu < b.1)) {
                     best = Some((d2, iu, e, w, sign, frac));
                 }
             }
@@ -303,14 +396,20 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
     hi
 }
 
-/// `None` when the segment `ext` (in the previous frame) and `li`'s segment are farther apart
+/// `None` when the segment `ext` (in the previous frame) and `li`'s segment (`sc`: sine and
+/// cosine of its α) are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
-fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f32> {
+fn overlap(
+    ext: Option<([f32; 2], [f32; 2])>,
+    li: &Line,
+    sc: [f32; 2],
+    slack: f32,
+) -> Option<f32> {
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
         return Some(1.0);
     };
-    let (sa, ca) = sin_cos(li.a);
+    let [sa, ca] = sc;
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
     let (a0, a1) = (along(s), along(e));
     let (b0, b1) = (along(ps), along(pe));
@@ -348,14 +447,8 @@ fn from_scaled_cov(c: &Cov3) -> Cov3 {
 }
 
 /// Gauss–Newton from `start`.
-pub(super) fn refine(
-    prev: &Set,
-    curr: &Set,
-    start: Pose,
-    prior: Option<&Prior>,
-    cfg: &Config,
-) -> Refined {
-    let mut w = Work::new(prev, curr, cfg, prior);
+pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>) -> Refined {
+    let cfg = w.cfg;
     let mut pose = start;
     let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
     let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
@@ -443,16 +536,11 @@ pub(super) fn refine(
         }
         None => cov_scene,
     };
-    let penalty = if cfg.visibility_weight > 0.0 {
-        cfg.visibility_weight * visibility_penalty(prev, curr, &pose)
-    } else {
-        0.0
-    };
     Refined {
         pose,
         cov,
         cov_scene_pinv: cov_scene,
-        score: n.score - penalty,
+        score: n.score,
         chi2: n.chi2,
         matches: (n.lines, n.pts),
         unobservable,
