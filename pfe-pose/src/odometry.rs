@@ -261,7 +261,7 @@ impl<const MAP: usize> Odometry<MAP> {
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new());
+        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
         let (guess, guess_cov) = match motion {
             _ if pair.is_registered() => {
                 let mut c = pair.cov;
@@ -337,6 +337,9 @@ impl<const MAP: usize> Odometry<MAP> {
             Some((Pose::IDENTITY, prior_cov)),
             &cfg,
             &mut assoc,
+            // The pair's registration is a good guess: refine it against the map; search
+            // only without one.
+            !pair.is_registered(),
         );
         let old = self.pose;
         // The map's answer must agree with the pair's (χ²₃ 99.9 %): otherwise a map feature

@@ -37,7 +37,7 @@ use crate::geom::{finite3, inverse_spd3, wrap, Cov3, Pose};
 use crate::obs::Observation;
 use crate::set::{Set, MAX_OBS};
 use hypotheses::{hypothesise, Top};
-use refine::{refine, Refined, Work};
+use refine::{finish, refine, Refined, Scratch, Work};
 use visibility::visibility_penalty;
 
 /// Variance given to a direction the scene cannot tell when there is no prior: 10¹² mm² (a
@@ -103,6 +103,10 @@ pub struct Config {
     /// formed (the longest lines first): bounds the worst case. On the shared CARMEN logs a
     /// scan pair forms 177 (median) and at most 2250.
     pub max_hypotheses: u32,
+    /// Hypotheses scored: the formed ones are clustered by pose (pairs of features that
+    /// agree) and this many clusters, the most supported first, are scored at their mean
+    /// (besides the prior's pose, or no motion).
+    pub scored: u32,
     /// Fewest matched features for a registration.
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
@@ -141,6 +145,7 @@ impl Config {
         confirm: true,
         trusted_length: 1000.0,
         max_hypotheses: 4096,
+        scored: 32,
         min_matches: 3,
         scale_by_residuals: true,
         ambiguity: 2.0,
@@ -252,7 +257,7 @@ pub fn register_with(
     let p = Set::from_obs(prev.iter().copied(), cfg);
     let c = Set::from_obs(curr.iter().copied(), cfg);
     let mut assoc = Assoc::new();
-    let mut r = register_sets(&p, &c, prior, cfg, &mut assoc);
+    let mut r = register_sets(&p, &c, prior, cfg, &mut assoc, true);
     r.dropped = p.dropped.saturating_add(c.dropped);
     r.invalid = p.invalid.saturating_add(c.invalid);
     r
@@ -309,13 +314,17 @@ fn check_prior(prior: Option<(Pose, Cov3)>, cfg: &Config) -> Result<Option<Prior
     }))
 }
 
-/// The registration on prepared sets; `assoc` receives the final matches.
+/// The registration on prepared sets; `assoc` receives the final matches. Without `search`
+/// (and with a prior) the prior's pose is the only hypothesis: the refinement of a good guess.
+/// Not inlined: its frame (a [`Work`] of a few KiB) is shared by every caller's calls.
+#[inline(never)]
 pub(crate) fn register_sets(
     prev: &Set,
     curr: &Set,
     prior: Option<(Pose, Cov3)>,
     cfg: &Config,
     assoc: &mut Assoc,
+    search: bool,
 ) -> Registration {
     let prior = check_prior(prior, cfg);
     let fallback = |failure: Failure, prior: Option<&Prior>, hypotheses: u32| {
@@ -353,12 +362,17 @@ pub(crate) fn register_sets(
         return fallback(Failure::TooFewFeatures, prior.as_ref(), 0);
     }
     let mut top = Top::new();
-    let mut w = Work::new(prev, curr, cfg, prior.as_ref());
-    let hypotheses = hypothesise(&mut w, prev, curr, prior.as_ref(), cfg, &mut top);
+    let mut scratch = Scratch::new();
+    let mut w = Work::new(prev, curr, cfg, prior.as_ref(), &mut scratch);
+    let hypotheses = hypothesise(&mut w, prev, curr, prior.as_ref(), cfg, &mut top, search);
     if top.n == 0 {
         return fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses);
     }
-    // Refine the best few; keep the best refined and the best distinct runner-up.
+    // Refine the best few; keep the best refined and the best distinct runner-up. When the
+    // runner-up cannot make the result ambiguous (a best keeps at least 1/1.01 of the score
+    // of the one it replaced, over at most REFINE of them: below 1.2 of the final best), the
+    // covariance and the visibility check are needed for the winner only.
+    let lazy = cfg.ambiguity >= 1.2;
     let mut best: Option<Refined> = None;
     let mut second_score = 0.0f32;
     // Best first, so that hopeless ones are found early (see below).
@@ -366,25 +380,25 @@ pub(crate) fn register_sets(
     let ranked = order.get_mut(..top.n).unwrap_or(&mut []);
     ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
     for h in ranked.iter() {
-        let mut r = refine(&mut w, h.pose, prior.as_ref());
+        let mut r = refine(&mut w, h.pose, prior.as_ref(), !lazy);
         if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
             continue;
         }
         // The visibility check lowers the score: a hypothesis that cannot beat the best even
-        // without it needs none (nor can it then make the result ambiguous).
-        let hopeless = cfg.ambiguity >= 1.0 && best.as_ref().is_some_and(|b| b.score > r.score * 1.01);
+        // without it needs none.
+        let hopeless = lazy && best.as_ref().is_some_and(|b| b.score > r.score * 1.01);
         if cfg.visibility_weight > 0.0 && !hopeless {
             r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
         }
         match &best {
             Some(b) if !better(&r, b) => {
-                if !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
+                if lazy || !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
                     second_score = second_score.max(r.score);
                 }
             }
             _ => {
                 if let Some(b) = &best {
-                    if !close(&r.pose, &b.pose, &r.cov_scene_pinv) {
+                    if lazy || !close(&r.pose, &b.pose, &r.cov_scene_pinv) {
                         second_score = second_score.max(b.score);
                     }
                 }
@@ -405,8 +419,11 @@ pub(crate) fn register_sets(
     if second_score >= cfg.ambiguity * best.score {
         return fallback(Failure::Ambiguous, prior.as_ref(), hypotheses);
     }
-    // Associations of the best, for the odometry's map.
-    w.associate(&best.pose, 0.0, Some(assoc));
+    // The winner's covariance and status, and its associations (for the odometry's map).
+    let best = Refined {
+        score: best.score,
+        ..finish(&mut w, best.pose, prior.as_ref(), true, Some(assoc))
+    };
     let status = match best.unobservable {
         Some(direction) => Status::Degenerate { direction },
         None => Status::Ok,

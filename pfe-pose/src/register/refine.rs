@@ -30,18 +30,13 @@ pub(super) struct Normal {
     pub(super) pts: u16,
 }
 
-/// The data of one registration.
-pub(super) struct Work<'a> {
-    prev: &'a Set,
-    curr: &'a Set,
-    cfg: &'a Config,
-    #[allow(dead_code)]
-    prior: Option<&'a Prior>,
-    /// Each match's information `Jᵀ W J` in the last association.
-    contrib: [Cov3; 2 * MAX_OBS],
+/// The tables of one registration (a few KiB: kept by the caller, filled in place).
+pub(super) struct Scratch {
+    /// Each match's information `Jᵀ W J` in the last association (its upper triangle, row
+    /// by row).
+    contrib: [[f32; 6]; 2 * MAX_OBS],
     /// Whether each match is trusted without confirmation (both segments long).
     trusted: [bool; 2 * MAX_OBS],
-    nc: usize,
     /// Sine and cosine of each current line's α.
     curr_sc: [[f32; 2]; MAX_OBS],
     /// Sine and cosine of each previous line's α.
@@ -49,8 +44,32 @@ pub(super) struct Work<'a> {
     /// The previous lines' α, increasing, and their indices (the angle index).
     keys: [f32; MAX_OBS],
     order: [u8; MAX_OBS],
+}
+
+impl Scratch {
+    pub(super) const fn new() -> Self {
+        Self {
+            contrib: [[0.0; 6]; 2 * MAX_OBS],
+            trusted: [false; 2 * MAX_OBS],
+            curr_sc: [[0.0; 2]; MAX_OBS],
+            prev_sc: [[0.0; 2]; MAX_OBS],
+            keys: [0.0; MAX_OBS],
+            order: [0; MAX_OBS],
+        }
+    }
+}
+
+/// The data of one registration.
+pub(super) struct Work<'a> {
+    prev: &'a Set,
+    curr: &'a Set,
+    cfg: &'a Config,
+    #[allow(dead_code)]
+    prior: Option<&'a Prior>,
+    nc: usize,
     /// The largest variance of α among the previous lines.
     max_var_a: f32,
+    s: &'a mut Scratch,
 }
 
 impl<'a> Work<'a> {
@@ -59,54 +78,60 @@ impl<'a> Work<'a> {
         curr: &'a Set,
         cfg: &'a Config,
         prior: Option<&'a Prior>,
+        s: &'a mut Scratch,
     ) -> Self {
-        let mut w = Self {
-            prev,
-            curr,
-            cfg,
-            prior,
-            contrib: [ZERO3; 2 * MAX_OBS],
-            trusted: [false; 2 * MAX_OBS],
-            nc: 0,
-            curr_sc: [[0.0; 2]; MAX_OBS],
-            prev_sc: [[0.0; 2]; MAX_OBS],
-            keys: [0.0; MAX_OBS],
-            order: [0; MAX_OBS],
-            max_var_a: 0.0,
-        };
-        for (sc, l) in w.curr_sc.iter_mut().zip(curr.lines()) {
-            let (s, c) = sin_cos(l.a);
-            *sc = [s, c];
+        for (sc, l) in s.curr_sc.iter_mut().zip(curr.lines()) {
+            let (sn, c) = sin_cos(l.a);
+            *sc = [sn, c];
         }
-        for (sc, l) in w.prev_sc.iter_mut().zip(prev.lines()) {
-            let (s, c) = sin_cos(l.a);
-            *sc = [s, c];
+        for (sc, l) in s.prev_sc.iter_mut().zip(prev.lines()) {
+            let (sn, c) = sin_cos(l.a);
+            *sc = [sn, c];
         }
         // Insertion sort of the previous lines by α (at most MAX_OBS).
+        let mut max_var_a = 0.0f32;
         let mut n = 0usize;
         for (i, l) in prev.lines().iter().enumerate() {
             let Ok(iu) = u8::try_from(i) else { break };
             if n >= MAX_OBS {
                 break;
             }
-            w.max_var_a = w.max_var_a.max(l.cov.a);
+            max_var_a = max_var_a.max(l.cov.a);
             let mut pos = n;
-            while pos > 0 && w.keys.get(pos - 1).is_some_and(|&k| k > l.a) {
-                if let (Some(&k), Some(&o)) = (w.keys.get(pos - 1), w.order.get(pos - 1)) {
-                    if let (Some(kd), Some(od)) = (w.keys.get_mut(pos), w.order.get_mut(pos)) {
+            while pos > 0 && s.keys.get(pos - 1).is_some_and(|&k| k > l.a) {
+                if let (Some(&k), Some(&o)) = (s.keys.get(pos - 1), s.order.get(pos - 1)) {
+                    if let (Some(kd), Some(od)) = (s.keys.get_mut(pos), s.order.get_mut(pos)) {
                         *kd = k;
                         *od = o;
                     }
                 }
                 pos -= 1;
             }
-            if let (Some(kd), Some(od)) = (w.keys.get_mut(pos), w.order.get_mut(pos)) {
+            if let (Some(kd), Some(od)) = (s.keys.get_mut(pos), s.order.get_mut(pos)) {
                 *kd = l.a;
                 *od = iu;
             }
             n += 1;
         }
-        w
+        Self {
+            prev,
+            curr,
+            cfg,
+            prior,
+            nc: 0,
+            max_var_a,
+            s,
+        }
+    }
+
+    /// Sine and cosine of previous line `i`'s α.
+    pub(super) fn prev_sc(&self, i: usize) -> [f32; 2] {
+        self.s.prev_sc.get(i).copied().unwrap_or([0.0, 1.0])
+    }
+
+    /// Sine and cosine of current line `k`'s α.
+    pub(super) fn curr_sc(&self, k: usize) -> [f32; 2] {
+        self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0])
     }
 
     /// The previous lines whose α lies within `half` of `centre` or of `centre + π` (angles
@@ -121,8 +146,8 @@ impl<'a> Work<'a> {
             }
             return n;
         }
-        let keys = self.keys.get(..nl).unwrap_or(&[]);
-        let order = self.order.get(..nl).unwrap_or(&[]);
+        let keys = self.s.keys.get(..nl).unwrap_or(&[]);
+        let order = self.s.order.get(..nl).unwrap_or(&[]);
         // Up to two windows per orientation (a window across ±π is split in two).
         let mut windows = [(0.0f32, -1.0f32); 4];
         let mut nw = 0usize;
@@ -170,7 +195,7 @@ impl<'a> Work<'a> {
     /// [`Work::associate`]; with `FULL` false only the score (and the match counts) are
     /// computed.
     #[inline(always)]
-    fn associate_with<const FULL: bool>(
+    pub(super) fn associate_with<const FULL: bool>(
         &mut self,
         pose: &Pose,
         slack: f32,
@@ -195,7 +220,7 @@ impl<'a> Work<'a> {
         let mut cand = [0u8; MAX_OBS];
         let curr = self.curr;
         for (k, lk) in curr.lines().iter().enumerate() {
-            let sc = self.curr_sc.get(k).copied().unwrap_or([0.0, 1.0]);
+            let sc = self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0]);
             let a = lk.a + pose.theta;
             // sin, cos of α + θ from those of α and θ.
             let (sa, ca) = (sc[0] * ct + sc[1] * st, sc[1] * ct - sc[0] * st);
@@ -215,7 +240,8 @@ impl<'a> Work<'a> {
             let nk = self.candidates(a, half, &mut cand);
             for &iu in cand.iter().take(nk) {
                 let i = usize::from(iu);
-                let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.prev_sc.get(i)) else {
+                let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.s.prev_sc.get(i))
+                else {
                     continue;
                 };
                 let var_a = ct_.a + li.cov.a + sa2;
@@ -337,10 +363,11 @@ impl<'a> Work<'a> {
 
 impl Work<'_> {
     fn record(&mut self, hi: Cov3, trusted: bool) {
-        if let (Some(slot), Some(t)) =
-            (self.contrib.get_mut(self.nc), self.trusted.get_mut(self.nc))
-        {
-            *slot = hi;
+        if let (Some(slot), Some(t)) = (
+            self.s.contrib.get_mut(self.nc),
+            self.s.trusted.get_mut(self.nc),
+        ) {
+            *slot = [hi[0][0], hi[0][1], hi[0][2], hi[1][1], hi[1][2], hi[2][2]];
             *t = trusted;
             self.nc += 1;
         }
@@ -353,14 +380,17 @@ impl Work<'_> {
         let mut worst = *h;
         let mut least = f32::INFINITY;
         for (hi, _) in self
+            .s
             .contrib
             .iter()
-            .zip(&self.trusted)
+            .zip(&self.s.trusted)
             .take(self.nc)
             .filter(|(_, &t)| !t)
         {
+            let [a, b, c, d, e, f] = *hi;
+            let hi = [[a, b, c], [b, d, e], [c, e, f]];
             let mut r = *h;
-            for (row, hr) in r.iter_mut().zip(hi) {
+            for (row, hr) in r.iter_mut().zip(&hi) {
                 for (v, x) in row.iter_mut().zip(hr) {
                     *v -= x;
                 }
@@ -400,12 +430,7 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
 /// cosine of its α) are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
-fn overlap(
-    ext: Option<([f32; 2], [f32; 2])>,
-    li: &Line,
-    sc: [f32; 2],
-    slack: f32,
-) -> Option<f32> {
+fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, sc: [f32; 2], slack: f32) -> Option<f32> {
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
         return Some(1.0);
     };
@@ -446,8 +471,8 @@ fn from_scaled_cov(c: &Cov3) -> Cov3 {
     r
 }
 
-/// Gauss–Newton from `start`.
-pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>) -> Refined {
+/// Gauss–Newton from `start`, then [`finish`]ed (fully when `full`).
+pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: bool) -> Refined {
     let cfg = w.cfg;
     let mut pose = start;
     let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
@@ -486,8 +511,34 @@ pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>) -> Refine
             break;
         }
     }
-    // Final association, covariance and status.
-    let mut n = w.associate(&pose, 0.0, None);
+    finish(w, pose, prior, full, None)
+}
+
+/// The final association at `pose` (its matches into `out`) and, when `full`, the
+/// covariance and status; otherwise only the score, the match counts and the pose (the
+/// covariances zero).
+pub(super) fn finish(
+    w: &mut Work,
+    pose: Pose,
+    prior: Option<&Prior>,
+    full: bool,
+    out: Option<&mut Assoc>,
+) -> Refined {
+    let cfg = w.cfg;
+    let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
+    if !full {
+        let n = w.associate_with::<false>(&pose, 0.0, out);
+        return Refined {
+            pose,
+            cov: ZERO3,
+            cov_scene_pinv: ZERO3,
+            score: n.score,
+            chi2: 0.0,
+            matches: (n.lines, n.pts),
+            unobservable: None,
+        };
+    }
+    let mut n = w.associate(&pose, 0.0, out);
     let (vals, vecs) = eigen_sym3(&to_scaled_info(&n.h));
     if cfg.confirm && vals[0] > limit {
         // A direction only one match determines is taken as unobservable.
