@@ -152,6 +152,26 @@ pub fn wrap(a: f32) -> f32 {
 }
 
 /// `(sin x, cos x)`.
+/// Square root to within an ulp or so, in plain `f32` arithmetic (so the same bits on every
+/// target): a first guess from the exponent, three Newton steps. libm's `sqrtf` is a
+/// bit-by-bit software loop on a Cortex-M4F (a few hundred instructions); this is about
+/// twenty. Negative and NaN give NaN, +∞ gives +∞; subnormal inputs go to libm.
+pub(crate) fn sqrt(x: f32) -> f32 {
+    if !(x >= f32::MIN_POSITIVE) || x == f32::INFINITY {
+        return if x == 0.0 { 0.0 } else { libm::sqrtf(x) };
+    }
+    let mut y = f32::from_bits(0x1fbd_1df5 + (x.to_bits() >> 1));
+    for _ in 0..3 {
+        y = 0.5 * (y + x / y);
+    }
+    y
+}
+
+/// `sqrt(x² + y²)` with [`sqrt`] (for lengths in mm: no overflow to fear).
+pub(crate) fn hypot(x: f32, y: f32) -> f32 {
+    sqrt(x * x + y * y)
+}
+
 pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
     (libm::sinf(x), libm::cosf(x))
 }
@@ -246,11 +266,11 @@ fn jacobi_rotate<const P: usize, const Q: usize>(m: &mut Cov3, v: &mut Cov3) {
     let theta = (m[Q][Q] - m[P][P]) / (2.0 * apq);
     let t = if theta.is_finite() {
         let sgn = if theta >= 0.0 { 1.0 } else { -1.0 };
-        sgn / (theta.abs() + libm::sqrtf(theta * theta + 1.0))
+        sgn / (theta.abs() + sqrt(theta * theta + 1.0))
     } else {
         0.0
     };
-    let c = 1.0 / libm::sqrtf(t * t + 1.0);
+    let c = 1.0 / sqrt(t * t + 1.0);
     let s = t * c;
     for row in m.iter_mut() {
         let mkp = row[P];
@@ -280,9 +300,9 @@ pub(crate) fn inverse_spd3(a: &Cov3) -> Option<Cov3> {
         return None;
     }
     let d = [
-        1.0 / libm::sqrtf(a[0][0]),
-        1.0 / libm::sqrtf(a[1][1]),
-        1.0 / libm::sqrtf(a[2][2]),
+        1.0 / sqrt(a[0][0]),
+        1.0 / sqrt(a[1][1]),
+        1.0 / sqrt(a[2][2]),
     ];
     let mut m = ZERO3;
     for i in 0..3 {
@@ -358,6 +378,26 @@ impl Sym2 {
 
     pub fn finite(self) -> bool {
         self.a.is_finite() && self.b.is_finite() && self.c.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod sqrt_tests {
+    #[test]
+    fn sqrt_within_an_ulp_of_libm() {
+        let mut x = 1e-30f32;
+        while x < 1e30 {
+            for k in [1.0f32, 1.3, 2.0, 2.7, 3.9] {
+                let v = x * k;
+                let (a, b) = (super::sqrt(v), libm::sqrtf(v));
+                assert!((a - b).abs() <= 2.0 * f32::EPSILON * b, "{v}: {a} vs {b}");
+            }
+            x *= 7.0;
+        }
+        assert_eq!(super::sqrt(0.0), 0.0);
+        assert!(super::sqrt(-1.0).is_nan() && super::sqrt(f32::NAN).is_nan());
+        assert_eq!(super::sqrt(f32::INFINITY), f32::INFINITY);
+        assert_eq!(super::hypot(3.0, 4.0), 5.0);
     }
 }
 

@@ -304,7 +304,7 @@ impl<const MAP: usize> Odometry<MAP> {
             if e.line {
                 let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
                 let ext = ext.then_some(e.ext);
-                let len = ext.map_or(0.0, |(s, t)| libm::hypotf(t[0] - s[0], t[1] - s[1]));
+                let len = ext.map_or(0.0, |(s, t)| crate::geom::hypot(t[0] - s[0], t[1] - s[1]));
                 let ext =
                     ext.map(|(s, t)| (to_local.transform_point(s), to_local.transform_point(t)));
                 let (a, r, cov) = anchor_to_line(

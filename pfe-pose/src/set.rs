@@ -146,7 +146,7 @@ impl Set {
             None => cov,
         };
         let reach = match ext {
-            Some((s, e)) => libm::hypotf(0.5 * (s[0] + e[0]), 0.5 * (s[1] + e[1])),
+            Some((s, e)) => crate::geom::hypot(0.5 * (s[0] + e[0]), 0.5 * (s[1] + e[1])),
             None => r,
         };
         let Some(slot) = self.lines.get_mut(self.nl) else {

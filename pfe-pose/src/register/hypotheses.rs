@@ -42,7 +42,7 @@ impl Top {
         }
         // Near an existing one: keep the better of the two.
         let near = |a: &Pose, b: &Pose| {
-            libm::hypotf(a.x - b.x, a.y - b.y) < 150.0 && wrap(a.theta - b.theta).abs() < 0.05
+            crate::geom::hypot(a.x - b.x, a.y - b.y) < 150.0 && wrap(a.theta - b.theta).abs() < 0.05
         };
         let n = self.n;
         if let Some(e) = self
@@ -116,7 +116,7 @@ pub(super) fn hypothesise(
             quad3(&p.gate_info, &d) < cfg.prior_gate
         }
         None => {
-            libm::hypotf(pose.x, pose.y) <= cfg.max_translation
+            crate::geom::hypot(pose.x, pose.y) <= cfg.max_translation
                 && pose.theta.abs() <= cfg.max_rotation
         }
     };
@@ -186,7 +186,8 @@ pub(super) fn hypothesise(
                 continue;
             }
             // Every gate below is at most this wide; the angle between a pair is modulo π.
-            let widest = 3.0 * libm::sqrtf(li.cov.a + lj.cov.a + 2.0 * max_var_c) + cfg.slack[0];
+            let widest =
+                3.0 * crate::geom::sqrt(li.cov.a + lj.cov.a + 2.0 * max_var_c) + cfg.slack[0];
             let widest = widest * 1.001 + 1e-5;
             let mut windows = [(0.0f32, -1.0f32); 3];
             windows[0] = (dp - widest, dp + widest);
@@ -206,7 +207,7 @@ pub(super) fn hypothesise(
                         continue;
                     };
                     let var = li.cov.a + lj.cov.a + lk.cov.a + ll.cov.a;
-                    let gate = 3.0 * libm::sqrtf(var) + cfg.slack[0];
+                    let gate = 3.0 * crate::geom::sqrt(var) + cfg.slack[0];
                     if mod_pi(dp - dc).abs() > gate {
                         continue;
                     }
@@ -245,7 +246,7 @@ pub(super) fn hypothesise(
             let Some(pd) = pt(cp, d) else { continue };
             let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
             *v = (
-                libm::hypotf(vc[0], vc[1]),
+                crate::geom::hypot(vc[0], vc[1]),
                 pc.cov.a + pc.cov.c + pd.cov.a + pd.cov.c,
             );
         }
@@ -255,7 +256,7 @@ pub(super) fn hypothesise(
         for &b in qp.get(ai + 1..).unwrap_or(&[]) {
             let Some(pb) = pt(pp, b) else { continue };
             let vp = [pb.p[0] - pa.p[0], pb.p[1] - pa.p[1]];
-            let dp = libm::hypotf(vp[0], vp[1]);
+            let dp = crate::geom::hypot(vp[0], vp[1]);
             if dp < 300.0 {
                 continue;
             }
@@ -268,7 +269,7 @@ pub(super) fn hypothesise(
                     }
                     let Some(pd) = pt(cp, d) else { continue };
                     let var = var_p + var_c;
-                    if (dp - dc).abs() > 3.0 * libm::sqrtf(0.5 * var) + cfg.slack[1] {
+                    if (dp - dc).abs() > 3.0 * crate::geom::sqrt(0.5 * var) + cfg.slack[1] {
                         continue;
                     }
                     let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
@@ -312,7 +313,7 @@ pub(super) fn hypothesise(
                         ];
                         // The line's ρ must agree.
                         let e = li.r - sign * lk.r - (ca * t[0] + sa * t[1]);
-                        let sd = libm::sqrtf(li.cov.c + lk.cov.c + pa.cov.a + pb.cov.a);
+                        let sd = crate::geom::sqrt(li.cov.c + lk.cov.c + pa.cov.a + pb.cov.a);
                         if e.abs() > 3.0 * sd + cfg.slack[1] + cfg.slack[2] * lk.reach {
                             continue;
                         }
@@ -392,12 +393,13 @@ impl Votes {
     fn add(&mut self, pose: Pose) {
         let n = self.n;
         for v in self.items.iter_mut().take(n) {
-            let d = [
-                pose.x - v.mean.x,
-                pose.y - v.mean.y,
-                wrap(pose.theta - v.mean.theta),
-            ];
-            if d[0].abs() < VOTE_DISTANCE && d[1].abs() < VOTE_DISTANCE && d[2].abs() < VOTE_ANGLE {
+            // The cheapest test first: most clusters differ in x.
+            let dx = pose.x - v.mean.x;
+            if !(dx.abs() < VOTE_DISTANCE) {
+                continue;
+            }
+            let d = [dx, pose.y - v.mean.y, wrap(pose.theta - v.mean.theta)];
+            if d[1].abs() < VOTE_DISTANCE && d[2].abs() < VOTE_ANGLE {
                 v.n = v.n.saturating_add(1);
                 let k = 1.0 / f32::from(v.n);
                 v.mean = Pose::new(

@@ -50,6 +50,8 @@ pub const ROTATION_SCALE: f32 = 1000.0;
 
 /// Hypotheses refined (the best by consensus).
 const REFINE: usize = 12;
+/// Hypotheses scoring below this fraction of the best one's are not refined.
+const REFINE_RATIO: f32 = 0.5;
 /// Gauss–Newton steps at most.
 const ITERATIONS: usize = 10;
 
@@ -145,7 +147,7 @@ impl Config {
         confirm: true,
         trusted_length: 1000.0,
         max_hypotheses: 4096,
-        scored: 32,
+        scored: 96,
         min_matches: 3,
         scale_by_residuals: true,
         ambiguity: 2.0,
@@ -379,7 +381,12 @@ pub(crate) fn register_sets(
     let mut order = *top.all();
     let ranked = order.get_mut(..top.n).unwrap_or(&mut []);
     ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
+    let first = ranked.first().map_or(0.0, |h| h.score);
     for h in ranked.iter() {
+        // One that the rest of the scene supports far less than the best is not refined.
+        if h.score < REFINE_RATIO * first {
+            break;
+        }
         let mut r = refine(&mut w, h.pose, prior.as_ref(), !lazy);
         if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
             continue;
@@ -448,14 +455,14 @@ fn better(a: &Refined, b: &Refined) -> bool {
     if b.score > a.score * 1.01 {
         return false;
     }
-    let size = |p: &Pose| libm::hypotf(p.x, p.y) + ROTATION_SCALE * p.theta.abs();
+    let size = |p: &Pose| crate::geom::hypot(p.x, p.y) + ROTATION_SCALE * p.theta.abs();
     size(&a.pose) < size(&b.pose)
 }
 
 /// True when `a` lies within the 99.9 % ellipsoid of `b` (or within 50 mm and 1°).
 fn close(a: &Pose, b: &Pose, cov: &Cov3) -> bool {
     let d = [a.x - b.x, a.y - b.y, wrap(a.theta - b.theta)];
-    if libm::hypotf(d[0], d[1]) < 50.0 && d[2].abs() < 0.0175 {
+    if crate::geom::hypot(d[0], d[1]) < 50.0 && d[2].abs() < 0.0175 {
         return true;
     }
     match inverse_spd3(cov) {

@@ -41,9 +41,21 @@ pub(super) struct Scratch {
     curr_sc: [[f32; 2]; MAX_OBS],
     /// Sine and cosine of each previous line's α.
     prev_sc: [[f32; 2]; MAX_OBS],
-    /// The previous lines' α, increasing, and their indices (the angle index).
-    keys: [f32; MAX_OBS],
-    order: [u8; MAX_OBS],
+    /// The angle index: for each of [`BUCKETS`] equal ranges of α over the circle, the
+    /// previous lines (bit `i`: line `i`) within [`Work::reach`] of it.
+    buckets: [u64; BUCKETS],
+}
+
+/// Ranges of α in the angle index.
+const BUCKETS: usize = 64;
+/// Widest angle gate the index serves, rad (wider gates look at every line).
+const MAX_REACH: f32 = 0.6;
+
+/// The bucket of angle `x` (any finite value).
+fn bucket(x: f32) -> usize {
+    let u = (wrap(x) + PI) * (BUCKETS as f32 / (2.0 * PI));
+    // `as` saturates (NaN to 0); the last bucket takes α = π.
+    (u as usize).min(BUCKETS - 1)
 }
 
 impl Scratch {
@@ -53,8 +65,7 @@ impl Scratch {
             trusted: [false; 2 * MAX_OBS],
             curr_sc: [[0.0; 2]; MAX_OBS],
             prev_sc: [[0.0; 2]; MAX_OBS],
-            keys: [0.0; MAX_OBS],
-            order: [0; MAX_OBS],
+            buckets: [0; BUCKETS],
         }
     }
 }
@@ -67,6 +78,9 @@ pub(super) struct Work<'a> {
     #[allow(dead_code)]
     prior: Option<&'a Prior>,
     nc: usize,
+    /// The angle gate the index serves, rad: every previous line within it of a bucket's
+    /// range is in the bucket.
+    reach: f32,
     /// The largest variance of α among the previous lines.
     max_var_a: f32,
     s: &'a mut Scratch,
@@ -88,30 +102,26 @@ impl<'a> Work<'a> {
             let (sn, c) = sin_cos(l.a);
             *sc = [sn, c];
         }
-        // Insertion sort of the previous lines by α (at most MAX_OBS).
-        let mut max_var_a = 0.0f32;
-        let mut n = 0usize;
-        for (i, l) in prev.lines().iter().enumerate() {
-            let Ok(iu) = u8::try_from(i) else { break };
-            if n >= MAX_OBS {
-                break;
+        // The angle index, for the widest gate of any pair (slack at most 1).
+        let var = |l: &[crate::set::Line]| l.iter().fold(0.0f32, |m, l| m.max(l.cov.a));
+        let max_var_a = var(prev.lines());
+        let widest = cfg.gate * (max_var_a + var(curr.lines()) + cfg.slack[0] * cfg.slack[0]);
+        let reach = (crate::geom::sqrt(widest) * 1.001 + 1e-4).min(MAX_REACH);
+        s.buckets = [0; BUCKETS];
+        let width = 2.0 * PI / BUCKETS as f32;
+        for (i, l) in prev.lines().iter().enumerate().take(64) {
+            let bit = 1u64 << i;
+            let from = libm::floorf((l.a - reach + PI) / width);
+            let to = libm::floorf((l.a + reach + PI) / width);
+            if !(from.is_finite() && to.is_finite()) {
+                continue;
             }
-            max_var_a = max_var_a.max(l.cov.a);
-            let mut pos = n;
-            while pos > 0 && s.keys.get(pos - 1).is_some_and(|&k| k > l.a) {
-                if let (Some(&k), Some(&o)) = (s.keys.get(pos - 1), s.order.get(pos - 1)) {
-                    if let (Some(kd), Some(od)) = (s.keys.get_mut(pos), s.order.get_mut(pos)) {
-                        *kd = k;
-                        *od = o;
-                    }
+            let (from, to) = (from as i32, to as i32);
+            for b in from..=to.min(from + BUCKETS as i32) {
+                if let Some(m) = s.buckets.get_mut(b.rem_euclid(BUCKETS as i32) as usize) {
+                    *m |= bit;
                 }
-                pos -= 1;
             }
-            if let (Some(kd), Some(od)) = (s.keys.get_mut(pos), s.order.get_mut(pos)) {
-                *kd = l.a;
-                *od = iu;
-            }
-            n += 1;
         }
         Self {
             prev,
@@ -119,6 +129,7 @@ impl<'a> Work<'a> {
             cfg,
             prior,
             nc: 0,
+            reach,
             max_var_a,
             s,
         }
@@ -134,50 +145,17 @@ impl<'a> Work<'a> {
         self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0])
     }
 
-    /// The previous lines whose α lies within `half` of `centre` or of `centre + π` (angles
-    /// modulo 2π), into `out`; returns how many. All of them when `half` is not below 1.5.
-    fn candidates(&self, centre: f32, half: f32, out: &mut [u8; MAX_OBS]) -> usize {
-        let nl = self.prev.lines().len().min(MAX_OBS);
-        let mut n = 0usize;
-        if !(half < 1.5) || !centre.is_finite() {
-            for (slot, i) in out.iter_mut().zip(0u8..).take(nl) {
-                *slot = i;
-                n += 1;
-            }
-            return n;
+    /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
+    /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
+    /// the index serves.
+    fn candidates(&self, centre: f32, half: f32) -> u64 {
+        let nl = self.prev.lines().len().min(64);
+        let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
+        if !(half <= self.reach) || !centre.is_finite() {
+            return all;
         }
-        let keys = self.s.keys.get(..nl).unwrap_or(&[]);
-        let order = self.s.order.get(..nl).unwrap_or(&[]);
-        // Up to two windows per orientation (a window across ±π is split in two).
-        let mut windows = [(0.0f32, -1.0f32); 4];
-        let mut nw = 0usize;
-        for c in [wrap(centre), wrap(centre + PI)] {
-            let (lo, hi) = (c - half, c + half);
-            let mut add = |w: (f32, f32)| {
-                if let Some(slot) = windows.get_mut(nw) {
-                    *slot = w;
-                    nw += 1;
-                }
-            };
-            add((lo.max(-PI), hi.min(PI)));
-            if lo < -PI {
-                add((lo + 2.0 * PI, PI));
-            }
-            if hi > PI {
-                add((-PI, hi - 2.0 * PI));
-            }
-        }
-        for &(lo, hi) in windows.iter().take(nw) {
-            let a = keys.partition_point(|&k| k < lo);
-            let b = keys.partition_point(|&k| k <= hi);
-            for &i in order.get(a..b).unwrap_or(&[]) {
-                if let Some(slot) = out.get_mut(n) {
-                    *slot = i;
-                    n += 1;
-                }
-            }
-        }
-        n
+        let at = |x: f32| self.s.buckets.get(bucket(x)).copied().unwrap_or(u64::MAX);
+        (at(centre) | at(centre + PI)) & all
     }
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
@@ -217,7 +195,6 @@ impl<'a> Work<'a> {
         // `pose.transform_point` with its sine and cosine computed once (the same arithmetic).
         let transform = |p: [f32; 2]| [ct * p[0] - st * p[1] + x, st * p[0] + ct * p[1] + y];
         let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
-        let mut cand = [0u8; MAX_OBS];
         let curr = self.curr;
         for (k, lk) in curr.lines().iter().enumerate() {
             let sc = self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0]);
@@ -236,10 +213,12 @@ impl<'a> Work<'a> {
             let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             // Only the previous lines within the angle gate (either orientation) can match.
-            let half = libm::sqrtf(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
-            let nk = self.candidates(a, half, &mut cand);
-            for &iu in cand.iter().take(nk) {
-                let i = usize::from(iu);
+            let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
+            let mut bits = self.candidates(a, half);
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let Ok(iu) = u8::try_from(i) else { break };
                 let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.s.prev_sc.get(i))
                 else {
                     continue;
@@ -300,7 +279,10 @@ impl<'a> Work<'a> {
                 continue;
             }
             let length = |ext: Option<([f32; 2], [f32; 2])>| {
-                ext.map_or(0.0, |(s, e)| libm::hypotf(e[0] - s[0], e[1] - s[1]))
+                ext.map_or(0.0, |(s, e)| {
+                    let d = [e[0] - s[0], e[1] - s[1]];
+                    crate::geom::sqrt(d[0] * d[0] + d[1] * d[1])
+                })
             };
             let prev_len = self
                 .prev
@@ -320,7 +302,7 @@ impl<'a> Work<'a> {
         for (k, pk) in self.curr.pts().iter().enumerate() {
             let q = transform(pk.p);
             let cq = pk.cov.rotate(st, ct);
-            let reach = libm::hypotf(pk.p[0], pk.p[1]);
+            let reach = crate::geom::sqrt(pk.p[0] * pk.p[0] + pk.p[1] * pk.p[1]);
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * reach);
             let mut best: Option<(f32, u8, [f32; 2], Sym2)> = None;
             for (i, pi) in self.prev.pts().iter().enumerate() {
@@ -506,7 +488,7 @@ pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: boo
             break;
         }
         pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
-        let small = libm::hypotf(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
+        let small = crate::geom::hypot(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
         if small && slack == 0.0 {
             break;
         }

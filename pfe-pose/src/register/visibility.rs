@@ -67,7 +67,7 @@ fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f
     let mut total = 0.0;
     for (s, e) in front {
         let d = [e[0] - s[0], e[1] - s[1]];
-        let len = libm::hypotf(d[0], d[1]);
+        let len = crate::geom::sqrt(d[0] * d[0] + d[1] * d[1]);
         if !(len > 2.0 * END + 100.0) {
             continue;
         }
@@ -75,7 +75,7 @@ fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f
         for k in 0..SAMPLES {
             let u = (END + (len - 2.0 * END) * k as f32 / (SAMPLES - 1) as f32) / len;
             let q = [s[0] + d[0] * u, s[1] + d[1] * u];
-            let rq = libm::hypotf(q[0], q[1]);
+            let rq = crate::geom::sqrt(q[0] * q[0] + q[1] * q[1]);
             if !(rq > 1.0) {
                 continue;
             }
@@ -84,7 +84,7 @@ fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f
                 // Ray origin + λ dir meets ps + μ (pe − ps).
                 let w = [pe[0] - ps[0], pe[1] - ps[1]];
                 let den = dir[0] * w[1] - dir[1] * w[0];
-                if !(den.abs() > 1e-6 * libm::hypotf(w[0], w[1])) {
+                if !(den * den > 1e-12 * (w[0] * w[0] + w[1] * w[1])) {
                     return false;
                 }
                 let lambda = (ps[0] * w[1] - ps[1] * w[0]) / den;
