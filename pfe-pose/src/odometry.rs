@@ -258,6 +258,38 @@ impl<const MAP: usize> Odometry<MAP> {
         }
         let motion =
             motion.filter(|(m, c)| m.is_finite() && c.iter().flatten().all(|v| v.is_finite()));
+        // Tracking: the motion prior (or the last motion again) refined against the map alone,
+        // taken when the map confirms it; otherwise the search below.
+        let mut map = Set::new();
+        let (mut line_of, mut pt_of) = ([NONE; MAX_OBS], [NONE; MAX_OBS]);
+        let mut assoc = Assoc::new();
+        if self.n > 0 {
+            let (t, r) = TRACK_SIGMA;
+            let (guess, guess_cov) = motion.unwrap_or((
+                self.last_rel,
+                [[t * t, 0.0, 0.0], [0.0, t * t, 0.0], [0.0, 0.0, r * r]],
+            ));
+            let predicted = self.pose.compose(&guess);
+            let (s, c) = sin_cos(-guess.theta);
+            let prior_cov =
+                crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
+            self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
+            let reg = register_sets(
+                &map,
+                &curr,
+                Some((Pose::IDENTITY, prior_cov)),
+                &cfg,
+                &mut assoc,
+                false,
+            );
+            if tracked(&reg, &curr, &cfg) {
+                self.last = curr.clone();
+                return self.accept(
+                    &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
+                );
+            }
+            assoc = Assoc::new();
+        }
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
@@ -290,47 +322,8 @@ impl<const MAP: usize> Odometry<MAP> {
         let (s, c) = sin_cos(-guess.theta);
         let prior_cov =
             crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
-        let to_local = predicted.inverse();
-        let (ls, lc) = sin_cos(-predicted.theta);
-        // The map, in the predicted pose's frame, as the "previous scan"; recently seen
-        // features first for hypotheses.
-        let mut map = Set::new();
-        let mut line_of = [NONE; MAX_OBS];
-        let mut pt_of = [NONE; MAX_OBS];
-        let (mut nl, mut np) = (0usize, 0usize);
-        for (i, e) in self.map.iter().take(self.n).enumerate() {
-            let Ok(iu) = u8::try_from(i) else { break };
-            let age = scan.saturating_sub(e.last) as f32;
-            if e.line {
-                let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
-                let ext = ext.then_some(e.ext);
-                let len = ext.map_or(0.0, |(s, t)| crate::geom::hypot(t[0] - s[0], t[1] - s[1]));
-                let ext =
-                    ext.map(|(s, t)| (to_local.transform_point(s), to_local.transform_point(t)));
-                let (a, r, cov) = anchor_to_line(
-                    e.alpha - predicted.theta,
-                    to_local.transform_point(e.v),
-                    e.cov,
-                );
-                if map.push_line(a, r, cov, ext, len / (1.0 + age), None) {
-                    if let Some(s) = line_of.get_mut(nl) {
-                        *s = iu;
-                    }
-                    nl += 1;
-                }
-            } else if map.push_pt(
-                to_local.transform_point(e.v),
-                e.cov.rotate(ls, lc),
-                1.0 / (1.0 + age),
-                None,
-            ) {
-                if let Some(s) = pt_of.get_mut(np) {
-                    *s = iu;
-                }
-                np += 1;
-            }
-        }
-        let mut assoc = Assoc::new();
+        // The map, in the predicted pose's frame, as the "previous scan".
+        self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
         let reg = register_sets(
             &map,
             &curr,
@@ -384,6 +377,27 @@ impl<const MAP: usize> Odometry<MAP> {
                 status,
             };
         }
+        self.accept(
+            &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
+        )
+    }
+
+    /// Takes the registration `reg` of `curr` against the map (in the frame of `predicted`,
+    /// `guess` after the last pose; `assoc` its matches, `line_of` and `pt_of` the map index
+    /// of each of the map set's features) and updates the map.
+    #[allow(clippy::too_many_arguments)]
+    fn accept(
+        &mut self,
+        curr: &Set,
+        predicted: &Pose,
+        guess: &Pose,
+        reg: &crate::Registration,
+        assoc: &Assoc,
+        line_of: &[u8; MAX_OBS],
+        pt_of: &[u8; MAX_OBS],
+        scan: u32,
+    ) -> Step {
+        let old = self.pose;
         let new = predicted.compose(&reg.rel);
         let rel = old.inverse().compose(&new);
         // The registration's covariance is in the predicted pose's axes: turn it into the
@@ -402,7 +416,7 @@ impl<const MAP: usize> Odometry<MAP> {
         for (slot, m) in ids.pts.iter_mut().zip(&assoc.pts) {
             *slot = pt_of.get(usize::from(*m)).copied().unwrap_or(NONE);
         }
-        self.insert_all(&curr, &ids, &new, scan);
+        self.insert_all(curr, &ids, &new, scan);
         Step {
             scan,
             rel,
@@ -410,6 +424,53 @@ impl<const MAP: usize> Odometry<MAP> {
             pose: new,
             cov: self.cov,
             status: reg.status,
+        }
+    }
+
+    /// The map in the frame of `predicted`, as the "previous scan" of a registration, with the
+    /// map index of each of its lines and points.
+    fn map_in(
+        &self,
+        predicted: &Pose,
+        scan: u32,
+        map: &mut Set,
+        line_of: &mut [u8; MAX_OBS],
+        pt_of: &mut [u8; MAX_OBS],
+    ) {
+        let to_local = predicted.inverse();
+        let (ls, lc) = sin_cos(-predicted.theta);
+        // `to_local.transform_point` with its sine and cosine once.
+        let local = |p: [f32; 2]| {
+            [
+                lc * p[0] - ls * p[1] + to_local.x,
+                ls * p[0] + lc * p[1] + to_local.y,
+            ]
+        };
+        map.clear();
+        *line_of = [NONE; MAX_OBS];
+        *pt_of = [NONE; MAX_OBS];
+        let (mut nl, mut np) = (0usize, 0usize);
+        for (i, e) in self.map.iter().take(self.n).enumerate() {
+            let Ok(iu) = u8::try_from(i) else { break };
+            let age = scan.saturating_sub(e.last) as f32;
+            if e.line {
+                let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
+                let ext = ext.then_some(e.ext);
+                let len = ext.map_or(0.0, |(s, t)| crate::geom::hypot(t[0] - s[0], t[1] - s[1]));
+                let ext = ext.map(|(s, t)| (local(s), local(t)));
+                let (a, r, cov) = anchor_to_line(e.alpha - predicted.theta, local(e.v), e.cov);
+                if map.push_line(a, r, cov, ext, len / (1.0 + age), None) {
+                    if let Some(s) = line_of.get_mut(nl) {
+                        *s = iu;
+                    }
+                    nl += 1;
+                }
+            } else if map.push_pt(local(e.v), e.cov.rotate(ls, lc), 1.0 / (1.0 + age), None) {
+                if let Some(s) = pt_of.get_mut(np) {
+                    *s = iu;
+                }
+                np += 1;
+            }
         }
     }
 
@@ -485,6 +546,18 @@ impl<const MAP: usize> Odometry<MAP> {
             *victim = e;
         }
     }
+}
+
+/// Standard deviation of the last motion as a guess of the next (mm, rad) when tracking
+/// without a motion prior: the refinement's reach (its first gates are about three times
+/// its slack), not a statement about the robot.
+const TRACK_SIGMA: (f32, f32) = (250.0, 0.1);
+
+/// A tracking registration is taken when every direction is determined and at least half
+/// of the scan's features (and the configured least number) agree with the map.
+fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
+    let matched = usize::from(reg.matches.0) + usize::from(reg.matches.1);
+    matches!(reg.status, Status::Ok) && matched >= cfg.min_matches && 2 * matched >= curr.len()
 }
 
 /// The line through `anchor` with normal angle `alpha` and covariance `cov` of (α, d) as

@@ -83,6 +83,14 @@ impl Set {
         }
     }
 
+    /// Empties the set (its slots are overwritten as observations are pushed).
+    pub fn clear(&mut self) {
+        self.nl = 0;
+        self.np = 0;
+        self.dropped = 0;
+        self.invalid = 0;
+    }
+
     pub fn lines(&self) -> &[Line] {
         self.lines.get(..self.nl).unwrap_or(&[])
     }
