@@ -477,6 +477,7 @@ impl<const MAP: usize> Odometry<MAP> {
     /// Fuses the matched features of `curr` (seen from `pose`) into their map entries and adds
     /// the others.
     fn insert_all(&mut self, curr: &Set, ids: &Assoc, pose: &Pose, scan: u32) {
+        let at = pose.transformer();
         for (k, l) in curr.lines().iter().enumerate() {
             let (sa, ca) = sin_cos(l.a);
             // Anchor at the segment's middle (the foot of the normal without extent).
@@ -491,12 +492,12 @@ impl<const MAP: usize> Odometry<MAP> {
                 c: l.cov.c - 2.0 * mid * l.cov.b + mid * mid * l.cov.a,
             };
             let ext = match l.ext {
-                Some((s, e)) => (pose.transform_point(s), pose.transform_point(e)),
+                Some((s, e)) => (at(s), at(e)),
                 None => ([f32::NAN; 2], [f32::NAN; 2]),
             };
             let id = ids.lines.get(k).copied().unwrap_or(NONE);
             let new = Entry {
-                v: pose.transform_point(anchor),
+                v: at(anchor),
                 alpha: wrap(l.a + pose.theta),
                 cov,
                 ext,
@@ -512,7 +513,7 @@ impl<const MAP: usize> Odometry<MAP> {
         for (k, p) in curr.pts().iter().enumerate() {
             let (s, c) = sin_cos(pose.theta);
             let new = Entry {
-                v: pose.transform_point(p.p),
+                v: at(p.p),
                 alpha: 0.0,
                 cov: p.cov.rotate(s, c),
                 ext: ([f32::NAN; 2], [f32::NAN; 2]),
@@ -590,7 +591,7 @@ fn anchor_to_line(alpha: f32, anchor: [f32; 2], cov: Sym2) -> (f32, f32, Sym2) {
 /// Fuses the observation `o` of a line into the map entry `e` (same line), both anchored.
 fn fuse_line(e: &mut Entry, o: &Entry) {
     let mut o = *o;
-    if libm::cosf(o.alpha - e.alpha) < 0.0 {
+    if crate::geom::sin_cos(o.alpha - e.alpha).1 < 0.0 {
         // The same line with the opposite normal: d and cov(α, d) change sign.
         o.alpha = wrap(o.alpha + PI);
         o.cov.b = -o.cov.b;

@@ -298,7 +298,7 @@ pub(super) fn hypothesise(
                 let th = wrap(th);
                 let (s, c) = sin_cos(th);
                 let [sa, ca] = w.prev_sc(usize::from(i));
-                let sign = if libm::cosf(lk.a + th - li.a) >= 0.0 {
+                let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
                     1.0
                 } else {
                     -1.0
@@ -332,7 +332,7 @@ pub(super) fn hypothesise(
                 let Some(lk) = line(cl, k) else { continue };
                 for th in [li.a - lk.a, li.a - lk.a + PI] {
                     let th = wrap(th);
-                    let sign = if libm::cosf(lk.a + th - li.a) >= 0.0 {
+                    let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
                         1.0
                     } else {
                         -1.0

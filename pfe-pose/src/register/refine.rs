@@ -459,8 +459,9 @@ pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: boo
     let mut pose = start;
     let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
     let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
-    for it in 0..ITERATIONS {
-        let slack = slacks.get(it).copied().unwrap_or(0.0);
+    let mut stage = 0usize;
+    for _ in 0..ITERATIONS {
+        let slack = slacks.get(stage).copied().unwrap_or(0.0);
         let mut n = w.associate(&pose, slack, None);
         if let Some(p) = prior {
             add_prior(&mut n, &pose, p);
@@ -492,6 +493,9 @@ pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: boo
         if small && slack == 0.0 {
             break;
         }
+        // Settled while the gates are still wide: straight to the narrowest.
+        let settled = crate::geom::hypot(step[0], step[1]) < 1.0 && step_theta.abs() < 2e-4;
+        stage = if settled { slacks.len() - 1 } else { stage + 1 };
     }
     finish(w, pose, prior, full, None)
 }

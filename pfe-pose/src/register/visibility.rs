@@ -10,18 +10,19 @@ use crate::set::{Line, Set};
 /// walls in front of what was seen.
 pub(super) fn visibility_penalty(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
     let inv = pose.inverse();
+    let (fwd, back) = (pose.transformer(), inv.transformer());
     let a = hidden(
         curr.lines()
             .iter()
             .filter_map(|l| l.ext)
-            .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e))),
+            .map(|(s, e)| (fwd(s), fwd(e))),
         prev.lines(),
     );
     let b = hidden(
         prev.lines()
             .iter()
             .filter_map(|l| l.ext)
-            .map(|(s, e)| (inv.transform_point(s), inv.transform_point(e))),
+            .map(|(s, e)| (back(s), back(e))),
         curr.lines(),
     );
     a + b + 2.0 * crossings(prev, curr, pose)
@@ -31,6 +32,7 @@ pub(super) fn visibility_penalty(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
 /// through (in the middle 90 % of the segment): a robot does not pass through walls.
 fn crossings(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
     let to = [pose.x, pose.y];
+    let fwd = pose.transformer();
     let through = |(s, e): ([f32; 2], [f32; 2])| -> bool {
         // Path 0 + u·to, u in (0, 1); segment s + μ (e − s), μ in [0.05, 0.95].
         let w = [e[0] - s[0], e[1] - s[1]];
@@ -52,7 +54,7 @@ fn crossings(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
         .lines()
         .iter()
         .filter_map(|l| l.ext)
-        .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)))
+        .map(|(s, e)| (fwd(s), fwd(e)))
         .filter(|&x| through(x))
         .count();
     (a + b) as f32
