@@ -375,6 +375,7 @@ pub(crate) fn register_sets(
     // of the one it replaced, over at most REFINE of them: below 1.2 of the final best), the
     // covariance and the visibility check are needed for the winner only.
     let lazy = cfg.ambiguity >= 1.2;
+    let corridor = is_corridor(prev, cfg) && is_corridor(curr, cfg);
     let mut best: Option<Refined> = None;
     let mut second_score = 0.0f32;
     // Best first, so that hopeless ones are found early (see below).
@@ -389,7 +390,16 @@ pub(crate) fn register_sets(
         }
         let mut r = refine(&mut w, h.pose, prior.as_ref(), !lazy);
         if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
-            continue;
+            // Fewer matches than asked for: in a corridor, enough for what its parallel walls
+            // tell (the heading and the offset across it), registered as degenerate.
+            if r.matches.0 < 2 || !corridor {
+                continue;
+            }
+            let full = finish(&mut w, r.pose, prior.as_ref(), true, None);
+            if !full.scene_degenerate {
+                continue;
+            }
+            r = full;
         }
         // The visibility check lowers the score: a hypothesis that cannot beat the best even
         // without it needs none.
@@ -417,7 +427,7 @@ pub(crate) fn register_sets(
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     };
     let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
-    if matched < cfg.min_matches {
+    if matched < cfg.min_matches && !(corridor && best.scene_degenerate && best.matches.0 >= 2) {
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     }
     if !(best.score > cfg.min_score) {
@@ -445,6 +455,18 @@ pub(crate) fn register_sets(
         invalid: 0,
         chi2: best.chi2,
     }
+}
+
+/// A corridor: lines only, all parallel (within [`Config::min_pair_angle`]).
+fn is_corridor(set: &Set, cfg: &Config) -> bool {
+    let lines = set.lines();
+    set.pts().is_empty()
+        && lines.iter().all(|l| {
+            lines.first().is_some_and(|f| {
+                let d = wrap(l.a - f.a).abs();
+                d.min(core::f32::consts::PI - d) < cfg.min_pair_angle
+            })
+        })
 }
 
 /// True when `a` should be preferred to `b`: a higher score, or (within 1 %) a smaller motion.

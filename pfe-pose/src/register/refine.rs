@@ -18,6 +18,9 @@ pub(super) struct Refined {
     pub(super) chi2: f32,
     pub(super) matches: (u16, u16),
     pub(super) unobservable: Option<[f32; 3]>,
+    /// The matches themselves leave a direction undetermined (before the confirmation rule):
+    /// parallel lines only, say.
+    pub(super) scene_degenerate: bool,
 }
 
 /// Normal equations of one association.
@@ -522,10 +525,12 @@ pub(super) fn finish(
             chi2: 0.0,
             matches: (n.lines, n.pts),
             unobservable: None,
+            scene_degenerate: false,
         };
     }
     let mut n = w.associate(&pose, 0.0, out);
     let (vals, vecs) = eigen_sym3(&to_scaled_info(&n.h));
+    let scene_degenerate = !(vals[0] > limit);
     if cfg.confirm && vals[0] > limit {
         // A direction only one match determines is taken as unobservable.
         let robust = w.without_critical(&n.h);
@@ -581,6 +586,7 @@ pub(super) fn finish(
         chi2: n.chi2,
         matches: (n.lines, n.pts),
         unobservable,
+        scene_degenerate,
     }
 }
 
