@@ -496,9 +496,7 @@ pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: boo
         if small && slack == 0.0 {
             break;
         }
-        // Settled while the gates are still wide: straight to the narrowest.
-        let settled = crate::geom::hypot(step[0], step[1]) < 1.0 && step_theta.abs() < 2e-4;
-        stage = if settled { slacks.len() - 1 } else { stage + 1 };
+        stage += 1;
     }
     finish(w, pose, prior, full, None)
 }
