@@ -1,10 +1,14 @@
 //! Feature odometry: every scan's pose in the frame of the first, registered against a small
 //! local map of features rather than only against the previous scan.
 //!
-//! Each scan is first registered against the previous scan ([`crate::register`], gated by the
-//! motion prior when one is given). That result, widened to three standard deviations, gates
-//! and starts the registration against the map: at most `MAP` features (lines and points) in
-//! the odometry frame, taken into the predicted pose's frame for the registration. Matched
+//! Each scan is first **tracked**: the motion prior (or, without one, the last motion again)
+//! predicts its pose, and Gauss–Newton refines that against the map alone (no search). The
+//! result is taken when every direction is determined and at least half of the scan's
+//! features agree with the map. Otherwise the scan is registered against the previous scan
+//! ([`crate::register`], gated by the motion prior when one is given), and that result,
+//! widened to three standard deviations, starts the refinement against the map. The map: at
+//! most `MAP` features (lines and points) in the odometry frame, taken into the predicted
+//! pose's frame for the registration. Matched
 //! features are fused into their map feature (information-weighted, the segment's extent the
 //! union), unmatched ones are added, and when the map is full the one seen least recently
 //! (then least often) is replaced. When the map cannot register the scan, or its answer

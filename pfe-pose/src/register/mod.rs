@@ -8,13 +8,21 @@
 //!    (a corridor), single lines give the rotation and the translation across them, with none
 //!    along them. With a prior, the prior's pose is a hypothesis too and every hypothesis must
 //!    lie within its covariance (χ²₃ < [`Config::prior_gate`]); without one, the motion bounds
-//!    [`Config::max_translation`] and [`Config::max_rotation`] apply.
+//!    [`Config::max_translation`] and [`Config::max_rotation`] apply. Pairs of lines are
+//!    matched through the angle between them (the current scan's pairs sorted by it, each
+//!    previous pair looked up within its gate). The hypotheses formed are **voted** into
+//!    clusters of nearby poses (the right pose comes from many pairs of features); the
+//!    [`Config::scored`] best-supported clusters are scored at their mean, besides the prior's
+//!    pose (or no motion).
 //! 2. **Consensus**: each hypothesis is scored by the features of the current scan that then
 //!    agree with one of the previous scan's (Mahalanobis distance with both covariances plus a
 //!    slack for the hypothesis's own error, truncated-quadratic score, weighted by how much
 //!    the two segments overlap): features seen in one scan only, and moving objects, simply do
 //!    not agree.
-//! 3. **Refinement**: the best few hypotheses are refined by Gauss–Newton over the gated
+//!    Association looks only at the previous lines whose angle lies within the gate (an
+//!    index of them by α).
+//! 3. **Refinement**: the best few hypotheses (at least half the best one's score) are
+//!    refined by Gauss–Newton over the gated
 //!    matches (re-associated each step while the slack shrinks to zero), weighted by the
 //!    features' covariances; the prior enters as one more measurement. The best refined one
 //!    wins, after a visibility check: a pose under which one scan's segments
@@ -27,7 +35,9 @@
 //!    match alone determines (an association no other feature confirms), unless both of its
 //!    segments are at least [`Config::trusted_length`] long: the status is then
 //!    [`Status::Degenerate`], the estimate does not move along them, and their variance is the
-//!    prior's or [`UNOBSERVABLE_VARIANCE`].
+//!    prior's or [`UNOBSERVABLE_VARIANCE`]. In a corridor (both scans nothing but parallel
+//!    lines), two line matches suffice for a [`Status::Degenerate`] registration (the heading
+//!    and the offset across it), fewer than [`Config::min_matches`].
 
 mod hypotheses;
 mod refine;
@@ -105,11 +115,12 @@ pub struct Config {
     /// formed (the longest lines first): bounds the worst case. On the shared CARMEN logs a
     /// scan pair forms 177 (median) and at most 2250.
     pub max_hypotheses: u32,
-    /// Hypotheses scored: the formed ones are clustered by pose (pairs of features that
-    /// agree) and this many clusters, the most supported first, are scored at their mean
-    /// (besides the prior's pose, or no motion).
+    /// Hypotheses scored at most: the formed ones are clustered by pose (pairs of features
+    /// that agree; at most 96 clusters) and this many clusters, the most supported first, are
+    /// scored at their mean (besides the prior's pose, or no motion).
     pub scored: u32,
-    /// Fewest matched features for a registration.
+    /// Fewest matched features for a registration (two parallel line matches suffice in a
+    /// corridor, as a degenerate one).
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
     pub scale_by_residuals: bool,
@@ -198,7 +209,8 @@ pub struct Registration {
     pub status: Status,
     /// Features of the current scan matched (lines, points).
     pub matches: (u16, u16),
-    /// Hypotheses scored.
+    /// Hypotheses formed within the bounds or the prior's gate (voted into clusters before
+    /// scoring, see [`Config::scored`]).
     pub hypotheses: u32,
     /// Valid features left out for want of room (see [`crate::MAX_OBS`]).
     pub dropped: u16,
