@@ -79,6 +79,13 @@ impl Pose {
         [c * p[0] - s * p[1] + self.x, s * p[0] + c * p[1] + self.y]
     }
 
+    /// [`Pose::transform_point`] with the sine and cosine computed once, for many points.
+    pub(crate) fn transformer(&self) -> impl Fn([f32; 2]) -> [f32; 2] + Copy {
+        let (s, c) = sin_cos(self.theta);
+        let (x, y) = (self.x, self.y);
+        move |p: [f32; 2]| [c * p[0] - s * p[1] + x, s * p[0] + c * p[1] + y]
+    }
+
     /// The line `x cos α + y sin α = ρ` of B, in A, with ρ ≥ 0 (α turned by π when needed):
     /// `(α + θ, ρ + x cos(α + θ) + y sin(α + θ))`.
     ///
@@ -152,8 +159,62 @@ pub fn wrap(a: f32) -> f32 {
 }
 
 /// `(sin x, cos x)`.
+/// Square root to within an ulp or so, in plain `f32` arithmetic (so the same bits on every
+/// target): a first guess from the exponent, three Newton steps. libm's `sqrtf` is a
+/// bit-by-bit software loop on a Cortex-M4F (a few hundred instructions); this is about
+/// twenty. Negative and NaN give NaN, +∞ gives +∞; subnormal inputs go to libm.
+pub(crate) fn sqrt(x: f32) -> f32 {
+    if !(x >= f32::MIN_POSITIVE) || x == f32::INFINITY {
+        return if x == 0.0 { 0.0 } else { libm::sqrtf(x) };
+    }
+    let mut y = f32::from_bits(0x1fbd_1df5 + (x.to_bits() >> 1));
+    for _ in 0..3 {
+        y = 0.5 * (y + x / y);
+    }
+    y
+}
+
+/// `sqrt(x² + y²)` with [`sqrt`] (for lengths in mm: no overflow to fear).
+pub(crate) fn hypot(x: f32, y: f32) -> f32 {
+    sqrt(x * x + y * y)
+}
+
+/// `(sin x, cos x)`: in f32 arithmetic for |x| ≤ 10⁴ (within 2·10⁻⁷ of the exact values),
+/// libm beyond (and for NaN, ±∞). libm's `sinf`/`cosf` evaluate in f64, which the Cortex-M4F
+/// does in software (about 700 instructions a call); this is about 40. Cody–Waite reduction
+/// by π/2 in three parts, then the minimax polynomials of musl's `__sindf`/`__cosdf` on
+/// |r| ≤ π/4 (pfe-core's kernel).
+#[allow(clippy::excessive_precision)] // the coefficients as published
 pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
-    (libm::sinf(x), libm::cosf(x))
+    const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
+    const P1: f32 = 1.570_312_5; // 8 significant bits
+    const P2: f32 = 4.837_512_969_970_703e-4; // 11 significant bits
+    const P3: f32 = 7.549_789_954_891_882e-8;
+    const S1: f32 = -0.166_666_666_416_265_24;
+    const S2: f32 = 0.008_333_329_385_889_463;
+    const S3: f32 = -0.000_198_393_348_360_966_32;
+    const S4: f32 = 0.000_002_718_311_493_989_822;
+    const C0: f32 = -0.499_999_997_251_031;
+    const C1: f32 = 0.041_666_623_323_739_06;
+    const C2: f32 = -0.001_388_676_377_460_993;
+    const C3: f32 = 0.000_024_390_448_796_277_41;
+    if !(x.abs() <= 1.0e4) {
+        return (libm::sinf(x), libm::cosf(x));
+    }
+    let half = if x < 0.0 { -0.5 } else { 0.5 };
+    let k = (x * FRAC_2_PI + half) as i32; // round half away from zero; |k| ≤ 6367
+    let kf = k as f32;
+    let r = ((x - kf * P1) - kf * P2) - kf * P3;
+    let z = r * r;
+    let s = r + r * z * (S1 + z * (S2 + z * (S3 + z * S4)));
+    let w = z * z;
+    let c = ((1.0 + z * C0) + w * C1) + (w * z) * (C2 + z * C3);
+    match k & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
 }
 
 /// `J C Jᵀ` for 3×3 matrices.
@@ -246,11 +307,11 @@ fn jacobi_rotate<const P: usize, const Q: usize>(m: &mut Cov3, v: &mut Cov3) {
     let theta = (m[Q][Q] - m[P][P]) / (2.0 * apq);
     let t = if theta.is_finite() {
         let sgn = if theta >= 0.0 { 1.0 } else { -1.0 };
-        sgn / (theta.abs() + libm::sqrtf(theta * theta + 1.0))
+        sgn / (theta.abs() + sqrt(theta * theta + 1.0))
     } else {
         0.0
     };
-    let c = 1.0 / libm::sqrtf(t * t + 1.0);
+    let c = 1.0 / sqrt(t * t + 1.0);
     let s = t * c;
     for row in m.iter_mut() {
         let mkp = row[P];
@@ -280,9 +341,9 @@ pub(crate) fn inverse_spd3(a: &Cov3) -> Option<Cov3> {
         return None;
     }
     let d = [
-        1.0 / libm::sqrtf(a[0][0]),
-        1.0 / libm::sqrtf(a[1][1]),
-        1.0 / libm::sqrtf(a[2][2]),
+        1.0 / sqrt(a[0][0]),
+        1.0 / sqrt(a[1][1]),
+        1.0 / sqrt(a[2][2]),
     ];
     let mut m = ZERO3;
     for i in 0..3 {
@@ -358,6 +419,40 @@ impl Sym2 {
 
     pub fn finite(self) -> bool {
         self.a.is_finite() && self.b.is_finite() && self.c.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod sqrt_tests {
+    #[test]
+    fn sqrt_within_an_ulp_of_libm() {
+        let mut x = 1e-30f32;
+        while x < 1e30 {
+            for k in [1.0f32, 1.3, 2.0, 2.7, 3.9] {
+                let v = x * k;
+                let (a, b) = (super::sqrt(v), libm::sqrtf(v));
+                assert!((a - b).abs() <= 2.0 * f32::EPSILON * b, "{v}: {a} vs {b}");
+            }
+            x *= 7.0;
+        }
+        assert_eq!(super::sqrt(0.0), 0.0);
+        assert!(super::sqrt(-1.0).is_nan() && super::sqrt(f32::NAN).is_nan());
+        assert_eq!(super::sqrt(f32::INFINITY), f32::INFINITY);
+        assert_eq!(super::hypot(3.0, 4.0), 5.0);
+    }
+
+    #[test]
+    fn sin_cos_close_to_libm() {
+        let mut x = -20.0f32;
+        while x < 20.0 {
+            let (s, c) = super::sin_cos(x);
+            assert!(
+                (s - libm::sinf(x)).abs() < 3e-7 && (c - libm::cosf(x)).abs() < 3e-7,
+                "{x}"
+            );
+            x += 0.0137;
+        }
+        assert!(super::sin_cos(f32::NAN).0.is_nan());
     }
 }
 

@@ -52,7 +52,7 @@ impl LineObs {
     /// Length of the segment seen, mm (0 without extent).
     pub fn length(&self) -> f32 {
         if self.has_extent() {
-            libm::hypotf(self.end[0] - self.start[0], self.end[1] - self.start[1])
+            crate::geom::hypot(self.end[0] - self.start[0], self.end[1] - self.start[1])
         } else {
             0.0
         }
@@ -66,7 +66,7 @@ impl LineObs {
             && self.rho.is_finite()
             && self.rho >= 0.0
             && [a, b, b2, c].iter().all(|v| v.is_finite())
-            && (b - b2).abs() <= 1e-3 * libm::sqrtf((a * c).abs()) + f32::MIN_POSITIVE
+            && (b - b2).abs() <= 1e-3 * crate::geom::sqrt((a * c).abs()) + f32::MIN_POSITIVE
             && a > 0.0
             && c > 0.0
             && a * c - b * b > 0.0
@@ -103,7 +103,7 @@ impl PointObs {
         self.x.is_finite()
             && self.y.is_finite()
             && [a, b, b2, c].iter().all(|v| v.is_finite())
-            && (b - b2).abs() <= 1e-3 * libm::sqrtf((a * c).abs()) + f32::MIN_POSITIVE
+            && (b - b2).abs() <= 1e-3 * crate::geom::sqrt((a * c).abs()) + f32::MIN_POSITIVE
             && a > 0.0
             && c > 0.0
             && a * c - b * b > 0.0

@@ -1,10 +1,14 @@
 //! Feature odometry: every scan's pose in the frame of the first, registered against a small
 //! local map of features rather than only against the previous scan.
 //!
-//! Each scan is first registered against the previous scan ([`crate::register`], gated by the
-//! motion prior when one is given). That result, widened to three standard deviations, gates
-//! and starts the registration against the map: at most `MAP` features (lines and points) in
-//! the odometry frame, taken into the predicted pose's frame for the registration. Matched
+//! Each scan is first **tracked**: the motion prior (or, without one, the last motion again)
+//! predicts its pose, and Gauss–Newton refines that against the map alone (no search). The
+//! result is taken when every direction is determined and at least half of the scan's
+//! features agree with the map. Otherwise the scan is registered against the previous scan
+//! ([`crate::register`], gated by the motion prior when one is given), and that result,
+//! widened to three standard deviations, starts the refinement against the map. The map: at
+//! most `MAP` features (lines and points) in the odometry frame, taken into the predicted
+//! pose's frame for the registration. Matched
 //! features are fused into their map feature (information-weighted, the segment's extent the
 //! union), unmatched ones are added, and when the map is full the one seen least recently
 //! (then least often) is replaced. When the map cannot register the scan, or its answer
@@ -258,10 +262,42 @@ impl<const MAP: usize> Odometry<MAP> {
         }
         let motion =
             motion.filter(|(m, c)| m.is_finite() && c.iter().flatten().all(|v| v.is_finite()));
+        // Tracking: the motion prior (or the last motion again) refined against the map alone,
+        // taken when the map confirms it; otherwise the search below.
+        let mut map = Set::new();
+        let (mut line_of, mut pt_of) = ([NONE; MAX_OBS], [NONE; MAX_OBS]);
+        let mut assoc = Assoc::new();
+        if self.n > 0 {
+            let (t, r) = TRACK_SIGMA;
+            let (guess, guess_cov) = motion.unwrap_or((
+                self.last_rel,
+                [[t * t, 0.0, 0.0], [0.0, t * t, 0.0], [0.0, 0.0, r * r]],
+            ));
+            let predicted = self.pose.compose(&guess);
+            let (s, c) = sin_cos(-guess.theta);
+            let prior_cov =
+                crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
+            self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
+            let reg = register_sets(
+                &map,
+                &curr,
+                Some((Pose::IDENTITY, prior_cov)),
+                &cfg,
+                &mut assoc,
+                false,
+            );
+            if tracked(&reg, &curr, &cfg) {
+                self.last = curr.clone();
+                return self.accept(
+                    &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
+                );
+            }
+            assoc = Assoc::new();
+        }
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new());
+        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
         let (guess, guess_cov) = match motion {
             _ if pair.is_registered() => {
                 let mut c = pair.cov;
@@ -290,53 +326,17 @@ impl<const MAP: usize> Odometry<MAP> {
         let (s, c) = sin_cos(-guess.theta);
         let prior_cov =
             crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
-        let to_local = predicted.inverse();
-        let (ls, lc) = sin_cos(-predicted.theta);
-        // The map, in the predicted pose's frame, as the "previous scan"; recently seen
-        // features first for hypotheses.
-        let mut map = Set::new();
-        let mut line_of = [NONE; MAX_OBS];
-        let mut pt_of = [NONE; MAX_OBS];
-        let (mut nl, mut np) = (0usize, 0usize);
-        for (i, e) in self.map.iter().take(self.n).enumerate() {
-            let Ok(iu) = u8::try_from(i) else { break };
-            let age = scan.saturating_sub(e.last) as f32;
-            if e.line {
-                let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
-                let ext = ext.then_some(e.ext);
-                let len = ext.map_or(0.0, |(s, t)| libm::hypotf(t[0] - s[0], t[1] - s[1]));
-                let ext =
-                    ext.map(|(s, t)| (to_local.transform_point(s), to_local.transform_point(t)));
-                let (a, r, cov) = anchor_to_line(
-                    e.alpha - predicted.theta,
-                    to_local.transform_point(e.v),
-                    e.cov,
-                );
-                if map.push_line(a, r, cov, ext, len / (1.0 + age), None) {
-                    if let Some(s) = line_of.get_mut(nl) {
-                        *s = iu;
-                    }
-                    nl += 1;
-                }
-            } else if map.push_pt(
-                to_local.transform_point(e.v),
-                e.cov.rotate(ls, lc),
-                1.0 / (1.0 + age),
-                None,
-            ) {
-                if let Some(s) = pt_of.get_mut(np) {
-                    *s = iu;
-                }
-                np += 1;
-            }
-        }
-        let mut assoc = Assoc::new();
+        // The map, in the predicted pose's frame, as the "previous scan".
+        self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
         let reg = register_sets(
             &map,
             &curr,
             Some((Pose::IDENTITY, prior_cov)),
             &cfg,
             &mut assoc,
+            // The pair's registration is a good guess: refine it against the map; search
+            // only without one.
+            !pair.is_registered(),
         );
         let old = self.pose;
         // The map's answer must agree with the pair's (χ²₃ 99.9 %): otherwise a map feature
@@ -381,6 +381,27 @@ impl<const MAP: usize> Odometry<MAP> {
                 status,
             };
         }
+        self.accept(
+            &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
+        )
+    }
+
+    /// Takes the registration `reg` of `curr` against the map (in the frame of `predicted`,
+    /// `guess` after the last pose; `assoc` its matches, `line_of` and `pt_of` the map index
+    /// of each of the map set's features) and updates the map.
+    #[allow(clippy::too_many_arguments)]
+    fn accept(
+        &mut self,
+        curr: &Set,
+        predicted: &Pose,
+        guess: &Pose,
+        reg: &crate::Registration,
+        assoc: &Assoc,
+        line_of: &[u8; MAX_OBS],
+        pt_of: &[u8; MAX_OBS],
+        scan: u32,
+    ) -> Step {
+        let old = self.pose;
         let new = predicted.compose(&reg.rel);
         let rel = old.inverse().compose(&new);
         // The registration's covariance is in the predicted pose's axes: turn it into the
@@ -399,7 +420,7 @@ impl<const MAP: usize> Odometry<MAP> {
         for (slot, m) in ids.pts.iter_mut().zip(&assoc.pts) {
             *slot = pt_of.get(usize::from(*m)).copied().unwrap_or(NONE);
         }
-        self.insert_all(&curr, &ids, &new, scan);
+        self.insert_all(curr, &ids, &new, scan);
         Step {
             scan,
             rel,
@@ -410,9 +431,57 @@ impl<const MAP: usize> Odometry<MAP> {
         }
     }
 
+    /// The map in the frame of `predicted`, as the "previous scan" of a registration, with the
+    /// map index of each of its lines and points.
+    fn map_in(
+        &self,
+        predicted: &Pose,
+        scan: u32,
+        map: &mut Set,
+        line_of: &mut [u8; MAX_OBS],
+        pt_of: &mut [u8; MAX_OBS],
+    ) {
+        let to_local = predicted.inverse();
+        let (ls, lc) = sin_cos(-predicted.theta);
+        // `to_local.transform_point` with its sine and cosine once.
+        let local = |p: [f32; 2]| {
+            [
+                lc * p[0] - ls * p[1] + to_local.x,
+                ls * p[0] + lc * p[1] + to_local.y,
+            ]
+        };
+        map.clear();
+        *line_of = [NONE; MAX_OBS];
+        *pt_of = [NONE; MAX_OBS];
+        let (mut nl, mut np) = (0usize, 0usize);
+        for (i, e) in self.map.iter().take(self.n).enumerate() {
+            let Ok(iu) = u8::try_from(i) else { break };
+            let age = scan.saturating_sub(e.last) as f32;
+            if e.line {
+                let ext = e.ext.0.iter().chain(&e.ext.1).all(|v| v.is_finite());
+                let ext = ext.then_some(e.ext);
+                let len = ext.map_or(0.0, |(s, t)| crate::geom::hypot(t[0] - s[0], t[1] - s[1]));
+                let ext = ext.map(|(s, t)| (local(s), local(t)));
+                let (a, r, cov) = anchor_to_line(e.alpha - predicted.theta, local(e.v), e.cov);
+                if map.push_line(a, r, cov, ext, len / (1.0 + age), None) {
+                    if let Some(s) = line_of.get_mut(nl) {
+                        *s = iu;
+                    }
+                    nl += 1;
+                }
+            } else if map.push_pt(local(e.v), e.cov.rotate(ls, lc), 1.0 / (1.0 + age), None) {
+                if let Some(s) = pt_of.get_mut(np) {
+                    *s = iu;
+                }
+                np += 1;
+            }
+        }
+    }
+
     /// Fuses the matched features of `curr` (seen from `pose`) into their map entries and adds
     /// the others.
     fn insert_all(&mut self, curr: &Set, ids: &Assoc, pose: &Pose, scan: u32) {
+        let at = pose.transformer();
         for (k, l) in curr.lines().iter().enumerate() {
             let (sa, ca) = sin_cos(l.a);
             // Anchor at the segment's middle (the foot of the normal without extent).
@@ -427,12 +496,12 @@ impl<const MAP: usize> Odometry<MAP> {
                 c: l.cov.c - 2.0 * mid * l.cov.b + mid * mid * l.cov.a,
             };
             let ext = match l.ext {
-                Some((s, e)) => (pose.transform_point(s), pose.transform_point(e)),
+                Some((s, e)) => (at(s), at(e)),
                 None => ([f32::NAN; 2], [f32::NAN; 2]),
             };
             let id = ids.lines.get(k).copied().unwrap_or(NONE);
             let new = Entry {
-                v: pose.transform_point(anchor),
+                v: at(anchor),
                 alpha: wrap(l.a + pose.theta),
                 cov,
                 ext,
@@ -448,7 +517,7 @@ impl<const MAP: usize> Odometry<MAP> {
         for (k, p) in curr.pts().iter().enumerate() {
             let (s, c) = sin_cos(pose.theta);
             let new = Entry {
-                v: pose.transform_point(p.p),
+                v: at(p.p),
                 alpha: 0.0,
                 cov: p.cov.rotate(s, c),
                 ext: ([f32::NAN; 2], [f32::NAN; 2]),
@@ -484,6 +553,18 @@ impl<const MAP: usize> Odometry<MAP> {
     }
 }
 
+/// Standard deviation of the last motion as a guess of the next (mm, rad) when tracking
+/// without a motion prior: the refinement's reach (its first gates are about three times
+/// its slack), not a statement about the robot.
+const TRACK_SIGMA: (f32, f32) = (250.0, 0.1);
+
+/// A tracking registration is taken when every direction is determined and at least half
+/// of the scan's features (and the configured least number) agree with the map.
+fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
+    let matched = usize::from(reg.matches.0) + usize::from(reg.matches.1);
+    matches!(reg.status, Status::Ok) && matched >= cfg.min_matches && 2 * matched >= curr.len()
+}
+
 /// The line through `anchor` with normal angle `alpha` and covariance `cov` of (α, d) as
 /// (α, ρ) with ρ ≥ 0 and the covariance of (α, ρ), in the frame the anchor is given in.
 fn anchor_to_line(alpha: f32, anchor: [f32; 2], cov: Sym2) -> (f32, f32, Sym2) {
@@ -514,7 +595,7 @@ fn anchor_to_line(alpha: f32, anchor: [f32; 2], cov: Sym2) -> (f32, f32, Sym2) {
 /// Fuses the observation `o` of a line into the map entry `e` (same line), both anchored.
 fn fuse_line(e: &mut Entry, o: &Entry) {
     let mut o = *o;
-    if libm::cosf(o.alpha - e.alpha) < 0.0 {
+    if crate::geom::sin_cos(o.alpha - e.alpha).1 < 0.0 {
         // The same line with the opposite normal: d and cov(α, d) change sign.
         o.alpha = wrap(o.alpha + PI);
         o.cov.b = -o.cov.b;

@@ -83,6 +83,14 @@ impl Set {
         }
     }
 
+    /// Empties the set (its slots are overwritten as observations are pushed).
+    pub fn clear(&mut self) {
+        self.nl = 0;
+        self.np = 0;
+        self.dropped = 0;
+        self.invalid = 0;
+    }
+
     pub fn lines(&self) -> &[Line] {
         self.lines.get(..self.nl).unwrap_or(&[])
     }
@@ -146,7 +154,7 @@ impl Set {
             None => cov,
         };
         let reach = match ext {
-            Some((s, e)) => libm::hypotf(0.5 * (s[0] + e[0]), 0.5 * (s[1] + e[1])),
+            Some((s, e)) => crate::geom::hypot(0.5 * (s[0] + e[0]), 0.5 * (s[1] + e[1])),
             None => r,
         };
         let Some(slot) = self.lines.get_mut(self.nl) else {

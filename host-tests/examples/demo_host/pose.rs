@@ -18,10 +18,11 @@ const POSE_MEDIAN_BUDGET: f64 = 500_000.0;
 const PIPELINE_WORST_BUDGET: f64 = 1_500_000.0;
 /// Static RAM + stack, bytes (issue 42).
 const RAM_BUDGET: u64 = 48 * 1024;
-/// What CI holds while the pose budgets are not met: the pose step's median measured over
-/// every source (docs/PERFORMANCE.md: 32.4 M instructions a scan) with 10 % of room, so that
-/// it cannot grow unnoticed; the RAM budget is enforced as it is.
-const POSE_MEDIAN_CEILING: f64 = 36_000_000.0;
+/// What CI holds while the pose budgets are not all met: the pose step's median measured over
+/// every source (docs/PERFORMANCE.md: 261 573 instructions a scan, after the tracking and the
+/// voted hypotheses; 32.4 M before) with 10 % of room, so that it cannot grow unnoticed; the
+/// RAM budget is enforced as it is.
+const POSE_MEDIAN_CEILING: f64 = 288_000.0;
 
 /// Largest count a timing report can carry: `u32::MAX` SysTick ticks × 10 / 256.
 const SATURATED: f64 = u32::MAX as f64 * 10.0 / 256.0;

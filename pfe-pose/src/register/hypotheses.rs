@@ -31,16 +31,9 @@ impl Top {
         }
     }
 
-    pub(super) fn items(&self) -> &[Hyp] {
-        self.items.get(..self.n).unwrap_or(&[])
-    }
-
-    /// True when a kept hypothesis lies within `dist` mm and `angle` rad of `pose`.
-    fn has_near(&self, pose: &Pose, dist: f32, angle: f32) -> bool {
-        self.items().iter().any(|e| {
-            libm::hypotf(e.pose.x - pose.x, e.pose.y - pose.y) < dist
-                && wrap(e.pose.theta - pose.theta).abs() < angle
-        })
+    /// Every slot (only the first [`Top::n`] are hypotheses).
+    pub(super) fn all(&self) -> &[Hyp; REFINE] {
+        &self.items
     }
 
     fn offer(&mut self, h: Hyp) {
@@ -49,7 +42,7 @@ impl Top {
         }
         // Near an existing one: keep the better of the two.
         let near = |a: &Pose, b: &Pose| {
-            libm::hypotf(a.x - b.x, a.y - b.y) < 150.0 && wrap(a.theta - b.theta).abs() < 0.05
+            crate::geom::hypot(a.x - b.x, a.y - b.y) < 150.0 && wrap(a.theta - b.theta).abs() < 0.05
         };
         let n = self.n;
         if let Some(e) = self
@@ -98,50 +91,53 @@ fn mod_pi(x: f32) -> f32 {
     x - PI * libm::roundf(x / PI)
 }
 
-/// Hypotheses of `curr`'s pose in `prev`'s frame, scored; returns how many were scored.
+/// Hypotheses of `curr`'s pose in `prev`'s frame, scored; returns how many were scored. Without
+/// `search` (and with a prior), the prior's pose alone. Not inlined: its tables are not
+/// on the stack during the refinement.
+#[inline(never)]
 pub(super) fn hypothesise(
+    w: &mut Work,
     prev: &Set,
     curr: &Set,
     prior: Option<&Prior>,
     cfg: &Config,
     top: &mut Top,
+    search: bool,
 ) -> u32 {
-    let mut w = Work::new(prev, curr, cfg, prior);
     let mut count = 0u32;
-    let consider = |pose: Pose, w: &mut Work, top: &mut Top, count: &mut u32| {
-        if !pose.is_finite() || *count >= cfg.max_hypotheses {
-            return;
+    let mut votes = Votes::new();
+    let within = |pose: &Pose| match prior {
+        Some(p) => {
+            let d = [
+                pose.x - p.pose.x,
+                pose.y - p.pose.y,
+                wrap(pose.theta - p.pose.theta),
+            ];
+            quad3(&p.gate_info, &d) < cfg.prior_gate
         }
-        match prior {
-            Some(p) => {
-                let d = [
-                    pose.x - p.pose.x,
-                    pose.y - p.pose.y,
-                    wrap(pose.theta - p.pose.theta),
-                ];
-                if !(quad3(&p.gate_info, &d) < cfg.prior_gate) {
-                    return;
-                }
-            }
-            None => {
-                if !(libm::hypotf(pose.x, pose.y) <= cfg.max_translation)
-                    || !(pose.theta.abs() <= cfg.max_rotation)
-                {
-                    return;
-                }
-            }
+        None => {
+            crate::geom::hypot(pose.x, pose.y) <= cfg.max_translation
+                && pose.theta.abs() <= cfg.max_rotation
+        }
+    };
+    // A hypothesis formed: a vote for its pose (the right pose comes from many pairs; each
+    // cluster of votes is scored once, below).
+    let consider = |pose: Pose, votes: &mut Votes, count: &mut u32| {
+        if !pose.is_finite() || *count >= cfg.max_hypotheses || !within(&pose) {
+            return;
         }
         *count = count.saturating_add(1);
-        // A kept hypothesis is already this one (the right pose comes from many pairs).
-        if top.has_near(&pose, 40.0, 0.01) {
-            return;
-        }
-        let score = w.score(&pose, 1.0);
-        top.offer(Hyp { pose, score });
+        votes.add(pose);
     };
-    match prior {
-        Some(p) => consider(p.pose, &mut w, top, &mut count),
-        None => consider(Pose::IDENTITY, &mut w, top, &mut count),
+    // The prior's pose (or no motion) is always scored.
+    let start = prior.map_or(Pose::IDENTITY, |p| p.pose);
+    if start.is_finite() && within(&start) {
+        count = count.saturating_add(1);
+        let score = w.score(&start, 1.0);
+        top.offer(Hyp { pose: start, score });
+    }
+    if !search && prior.is_some() {
+        return count;
     }
     let (pl, cl) = (prev.lines(), curr.lines());
     let (hp, np) = top_k::<12>(pl.iter().map(|l| l.rank));
@@ -150,7 +146,37 @@ pub(super) fn hypothesise(
     let hc = hc.get(..nc).unwrap_or(&[]);
     let line = |s: &[Line], i: u8| s.get(usize::from(i)).copied();
     let mut pair_hyps = 0u32;
-    // Pairs of non-parallel lines.
+    // Pairs of non-parallel lines: the current scan's ordered pairs sorted by the angle between
+    // them, each pair of the previous scan looked up in it within its gate.
+    let mut cpairs = [(0.0f32, 0u8, 0u8); 12 * 11];
+    let mut ncp = 0usize;
+    let mut max_var_c = 0.0f32;
+    for &k in hc {
+        let Some(lk) = line(cl, k) else { continue };
+        max_var_c = max_var_c.max(lk.cov.a);
+        for &l in hc {
+            if l == k {
+                continue;
+            }
+            let Some(ll) = line(cl, l) else { continue };
+            let dc = undirected(lk.a, ll.a);
+            // Insertion into the sorted prefix.
+            let mut pos = ncp;
+            while pos > 0 && cpairs.get(pos - 1).is_some_and(|p| p.0 > dc) {
+                if let Some(&prev) = cpairs.get(pos - 1) {
+                    if let Some(slot) = cpairs.get_mut(pos) {
+                        *slot = prev;
+                    }
+                }
+                pos -= 1;
+            }
+            if let Some(slot) = cpairs.get_mut(pos) {
+                *slot = (dc, k, l);
+                ncp += 1;
+            }
+        }
+    }
+    let cpairs = cpairs.get(..ncp).unwrap_or(&[]);
     for (ii, &i) in hp.iter().enumerate() {
         let Some(li) = line(pl, i) else { continue };
         for &j in hp.get(ii + 1..).unwrap_or(&[]) {
@@ -159,27 +185,46 @@ pub(super) fn hypothesise(
             if dp.min(PI - dp) < cfg.min_pair_angle {
                 continue;
             }
-            for &k in hc {
-                let Some(lk) = line(cl, k) else { continue };
-                for &l in hc {
-                    if l == k {
+            // Every gate below is at most this wide; the angle between a pair is modulo π.
+            let widest =
+                3.0 * crate::geom::sqrt(li.cov.a + lj.cov.a + 2.0 * max_var_c) + cfg.slack[0];
+            let widest = widest * 1.001 + 1e-5;
+            let mut windows = [(0.0f32, -1.0f32); 3];
+            windows[0] = (dp - widest, dp + widest);
+            if !(widest < 0.5 * PI) {
+                windows[0] = (f32::NEG_INFINITY, f32::INFINITY);
+            } else if dp - widest < 0.0 {
+                windows[1] = (dp - widest + PI, PI);
+            }
+            if dp + widest > PI {
+                windows[2] = (0.0, dp + widest - PI);
+            }
+            for (lo, hi) in windows {
+                let from = cpairs.partition_point(|p| p.0 < lo);
+                let to = cpairs.partition_point(|p| p.0 <= hi);
+                for &(dc, k, l) in cpairs.get(from..to).unwrap_or(&[]) {
+                    let (Some(lk), Some(ll)) = (line(cl, k), line(cl, l)) else {
                         continue;
-                    }
-                    let Some(ll) = line(cl, l) else { continue };
-                    let dc = undirected(lk.a, ll.a);
+                    };
                     let var = li.cov.a + lj.cov.a + lk.cov.a + ll.cov.a;
-                    let gate = 3.0 * libm::sqrtf(var) + cfg.slack[0];
+                    let gate = 3.0 * crate::geom::sqrt(var) + cfg.slack[0];
                     if mod_pi(dp - dc).abs() > gate {
                         continue;
                     }
                     let t0 = li.a - lk.a;
                     let t1 = t0 + mod_pi(lj.a - ll.a - t0);
-                    let theta = 0.5 * (t0 + t1);
-                    for th in [theta, theta + PI] {
-                        let th = wrap(th);
-                        if let Some(t) = solve_two_lines(&li, &lk, &lj, &ll, th) {
+                    let theta = wrap(0.5 * (t0 + t1));
+                    let (sth, cth) = sin_cos(theta);
+                    let scs = [
+                        w.prev_sc(usize::from(i)),
+                        w.curr_sc(usize::from(k)),
+                        w.prev_sc(usize::from(j)),
+                        w.curr_sc(usize::from(l)),
+                    ];
+                    for (th, s, c) in [(theta, sth, cth), (wrap(theta + PI), -sth, -cth)] {
+                        if let Some(t) = solve_two_lines(&li, &lk, &lj, &ll, scs, [s, c]) {
                             pair_hyps += 1;
-                            consider(Pose::new(t[0], t[1], th), &mut w, top, &mut count);
+                            consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
                         }
                     }
                 }
@@ -193,29 +238,41 @@ pub(super) fn hypothesise(
     let qp = qp.get(..nqp).unwrap_or(&[]);
     let qc = qc.get(..nqc).unwrap_or(&[]);
     let pt = |s: &[Pt], i: u8| s.get(usize::from(i)).copied();
+    // The current scan's ordered pairs of points: their distance and its variance.
+    let mut cdist = [[(0.0f32, 0.0f32); 8]; 8];
+    for (row, &c) in cdist.iter_mut().zip(qc) {
+        let Some(pc) = pt(cp, c) else { continue };
+        for (v, &d) in row.iter_mut().zip(qc) {
+            let Some(pd) = pt(cp, d) else { continue };
+            let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
+            *v = (
+                crate::geom::hypot(vc[0], vc[1]),
+                pc.cov.a + pc.cov.c + pd.cov.a + pd.cov.c,
+            );
+        }
+    }
     for (ai, &a) in qp.iter().enumerate() {
         let Some(pa) = pt(pp, a) else { continue };
         for &b in qp.get(ai + 1..).unwrap_or(&[]) {
             let Some(pb) = pt(pp, b) else { continue };
             let vp = [pb.p[0] - pa.p[0], pb.p[1] - pa.p[1]];
-            let dp = libm::hypotf(vp[0], vp[1]);
+            let dp = crate::geom::hypot(vp[0], vp[1]);
             if dp < 300.0 {
                 continue;
             }
-            for &c in qc {
+            let var_p = pa.cov.a + pa.cov.c + pb.cov.a + pb.cov.c;
+            for (&c, row) in qc.iter().zip(&cdist) {
                 let Some(pc) = pt(cp, c) else { continue };
-                for &d in qc {
+                for (&d, &(dc, var_c)) in qc.iter().zip(row) {
                     if d == c {
                         continue;
                     }
                     let Some(pd) = pt(cp, d) else { continue };
-                    let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
-                    let dc = libm::hypotf(vc[0], vc[1]);
-                    let var = pa.cov.a + pa.cov.c + pb.cov.a + pb.cov.c;
-                    let var = var + pc.cov.a + pc.cov.c + pd.cov.a + pd.cov.c;
-                    if (dp - dc).abs() > 3.0 * libm::sqrtf(0.5 * var) + cfg.slack[1] {
+                    let var = var_p + var_c;
+                    if (dp - dc).abs() > 3.0 * crate::geom::sqrt(0.5 * var) + cfg.slack[1] {
                         continue;
                     }
+                    let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
                     let th = wrap(libm::atan2f(vp[1], vp[0]) - libm::atan2f(vc[1], vc[0]));
                     let mid_p = [0.5 * (pa.p[0] + pb.p[0]), 0.5 * (pa.p[1] + pb.p[1])];
                     let mid_c = [0.5 * (pc.p[0] + pd.p[0]), 0.5 * (pc.p[1] + pd.p[1])];
@@ -223,8 +280,7 @@ pub(super) fn hypothesise(
                     pair_hyps += 1;
                     consider(
                         Pose::new(mid_p[0] - rc[0], mid_p[1] - rc[1], th),
-                        &mut w,
-                        top,
+                        &mut votes,
                         &mut count,
                     );
                 }
@@ -241,6 +297,12 @@ pub(super) fn hypothesise(
             for th in [li.a - lk.a, li.a - lk.a + PI] {
                 let th = wrap(th);
                 let (s, c) = sin_cos(th);
+                let [sa, ca] = w.prev_sc(usize::from(i));
+                let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
+                    1.0
+                } else {
+                    -1.0
+                };
                 for &a in qp4 {
                     let Some(pa) = pt(pp, a) else { continue };
                     for &b in qc4 {
@@ -250,19 +312,13 @@ pub(super) fn hypothesise(
                             pa.p[1] - (s * pb.p[0] + c * pb.p[1]),
                         ];
                         // The line's ρ must agree.
-                        let (sa, ca) = sin_cos(li.a);
-                        let sign = if libm::cosf(lk.a + th - li.a) >= 0.0 {
-                            1.0
-                        } else {
-                            -1.0
-                        };
                         let e = li.r - sign * lk.r - (ca * t[0] + sa * t[1]);
-                        let sd = libm::sqrtf(li.cov.c + lk.cov.c + pa.cov.a + pb.cov.a);
+                        let sd = crate::geom::sqrt(li.cov.c + lk.cov.c + pa.cov.a + pb.cov.a);
                         if e.abs() > 3.0 * sd + cfg.slack[1] + cfg.slack[2] * lk.reach {
                             continue;
                         }
                         pair_hyps += 1;
-                        consider(Pose::new(t[0], t[1], th), &mut w, top, &mut count);
+                        consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
                     }
                 }
             }
@@ -276,7 +332,7 @@ pub(super) fn hypothesise(
                 let Some(lk) = line(cl, k) else { continue };
                 for th in [li.a - lk.a, li.a - lk.a + PI] {
                     let th = wrap(th);
-                    let sign = if libm::cosf(lk.a + th - li.a) >= 0.0 {
+                    let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
                         1.0
                     } else {
                         -1.0
@@ -288,32 +344,124 @@ pub(super) fn hypothesise(
                     }
                     let d = li.r - sign * lk.r;
                     let t = [d * ca - along * sa, d * sa + along * ca];
-                    consider(Pose::new(t[0], t[1], th), &mut w, top, &mut count);
+                    consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
                 }
             }
         }
     }
+    // Score the best-supported clusters only, each at the mean of its votes.
+    for _ in 0..cfg.scored {
+        let Some(v) = votes.take_best() else { break };
+        let score = w.score(&v, 1.0);
+        top.offer(Hyp { pose: v, score });
+    }
     count
 }
 
+/// Clusters of hypotheses within this of each other (mm, rad) are one.
+const VOTE_DISTANCE: f32 = 150.0;
+const VOTE_ANGLE: f32 = 0.035;
+/// Clusters kept.
+const VOTES: usize = 96;
+
+#[derive(Clone, Copy)]
+struct Vote {
+    /// The mean of the votes.
+    mean: Pose,
+    n: u16,
+}
+
+/// The hypotheses formed, clustered: how many pairs of features agree on each pose.
+struct Votes {
+    items: [Vote; VOTES],
+    n: usize,
+}
+
+impl Votes {
+    fn new() -> Self {
+        Self {
+            items: [Vote {
+                mean: Pose::IDENTITY,
+                n: 0,
+            }; VOTES],
+            n: 0,
+        }
+    }
+
+    /// A vote for `pose`: into the first cluster whose mean it is near, else a new one (when
+    /// full, in place of a cluster of one vote).
+    fn add(&mut self, pose: Pose) {
+        let n = self.n;
+        for v in self.items.iter_mut().take(n) {
+            // The cheapest test first: most clusters differ in x.
+            let dx = pose.x - v.mean.x;
+            if !(dx.abs() < VOTE_DISTANCE) {
+                continue;
+            }
+            let d = [dx, pose.y - v.mean.y, wrap(pose.theta - v.mean.theta)];
+            if d[1].abs() < VOTE_DISTANCE && d[2].abs() < VOTE_ANGLE {
+                v.n = v.n.saturating_add(1);
+                let k = 1.0 / f32::from(v.n);
+                v.mean = Pose::new(
+                    v.mean.x + d[0] * k,
+                    v.mean.y + d[1] * k,
+                    v.mean.theta + d[2] * k,
+                );
+                return;
+            }
+        }
+        let new = Vote { mean: pose, n: 1 };
+        if let Some(slot) = self.items.get_mut(n) {
+            *slot = new;
+            self.n += 1;
+        } else if let Some(slot) = self.items.iter_mut().find(|v| v.n <= 1) {
+            *slot = new;
+        }
+    }
+
+    /// The mean pose of the cluster with the most votes (the first formed among equals),
+    /// removed.
+    fn take_best(&mut self) -> Option<Pose> {
+        let n = self.n;
+        let mut best: Option<&mut Vote> = None;
+        for v in self.items.iter_mut().take(n) {
+            if v.n > 0 && best.as_ref().is_none_or(|b| v.n > b.n) {
+                best = Some(v);
+            }
+        }
+        let v = best?;
+        v.n = 0;
+        v.mean.is_finite().then_some(v.mean)
+    }
+}
+
 /// The translation that maps lines `k`, `l` of the current scan onto `i`, `j` of the previous
-/// one under rotation `th`.
-fn solve_two_lines(li: &Line, lk: &Line, lj: &Line, ll: &Line, th: f32) -> Option<[f32; 2]> {
-    let rhs = |p: &Line, c: &Line| {
-        let sign = if libm::cosf(c.a + th - p.a) >= 0.0 {
-            1.0
-        } else {
-            -1.0
-        };
+/// one under the rotation of sine and cosine `th`; `sc`: sine and cosine of the α of `i`, `k`,
+/// `j`, `l`.
+fn solve_two_lines(
+    li: &Line,
+    lk: &Line,
+    lj: &Line,
+    ll: &Line,
+    sc: [[f32; 2]; 4],
+    th: [f32; 2],
+) -> Option<[f32; 2]> {
+    let [[si, ci], [sk, ck], [sj, cj], [sl, cl]] = sc;
+    let [st, ct] = th;
+    // cos(α_c + θ − α_p): the current line's normal turned, against the previous one's.
+    let rhs = |p: &Line, c: &Line, (sp, cp): (f32, f32), (sc, cc): (f32, f32)| {
+        let (s, co) = (sc * ct + cc * st, cc * ct - sc * st);
+        let sign = if co * cp + s * sp >= 0.0 { 1.0 } else { -1.0 };
         p.r - sign * c.r
     };
-    let (si, ci) = sin_cos(li.a);
-    let (sj, cj) = sin_cos(lj.a);
     let det = ci * sj - si * cj;
     if !(det.abs() > 0.05) {
         return None;
     }
-    let (bi, bj) = (rhs(li, lk), rhs(lj, ll));
+    let (bi, bj) = (
+        rhs(li, lk, (si, ci), (sk, ck)),
+        rhs(lj, ll, (sj, cj), (sl, cl)),
+    );
     let x = (bi * sj - bj * si) / det;
     let y = (ci * bj - cj * bi) / det;
     (x.is_finite() && y.is_finite()).then_some([x, y])

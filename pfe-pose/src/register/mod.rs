@@ -8,13 +8,21 @@
 //!    (a corridor), single lines give the rotation and the translation across them, with none
 //!    along them. With a prior, the prior's pose is a hypothesis too and every hypothesis must
 //!    lie within its covariance (χ²₃ < [`Config::prior_gate`]); without one, the motion bounds
-//!    [`Config::max_translation`] and [`Config::max_rotation`] apply.
+//!    [`Config::max_translation`] and [`Config::max_rotation`] apply. Pairs of lines are
+//!    matched through the angle between them (the current scan's pairs sorted by it, each
+//!    previous pair looked up within its gate). The hypotheses formed are **voted** into
+//!    clusters of nearby poses (the right pose comes from many pairs of features); the
+//!    [`Config::scored`] best-supported clusters are scored at their mean, besides the prior's
+//!    pose (or no motion).
 //! 2. **Consensus**: each hypothesis is scored by the features of the current scan that then
 //!    agree with one of the previous scan's (Mahalanobis distance with both covariances plus a
 //!    slack for the hypothesis's own error, truncated-quadratic score, weighted by how much
 //!    the two segments overlap): features seen in one scan only, and moving objects, simply do
 //!    not agree.
-//! 3. **Refinement**: the best few hypotheses are refined by Gauss–Newton over the gated
+//!    Association looks only at the previous lines whose angle lies within the gate (an
+//!    index of them by α).
+//! 3. **Refinement**: the best few hypotheses (at least half the best one's score) are
+//!    refined by Gauss–Newton over the gated
 //!    matches (re-associated each step while the slack shrinks to zero), weighted by the
 //!    features' covariances; the prior enters as one more measurement. The best refined one
 //!    wins, after a visibility check: a pose under which one scan's segments
@@ -27,7 +35,9 @@
 //!    match alone determines (an association no other feature confirms), unless both of its
 //!    segments are at least [`Config::trusted_length`] long: the status is then
 //!    [`Status::Degenerate`], the estimate does not move along them, and their variance is the
-//!    prior's or [`UNOBSERVABLE_VARIANCE`].
+//!    prior's or [`UNOBSERVABLE_VARIANCE`]. In a corridor (both scans nothing but parallel
+//!    lines), two line matches suffice for a [`Status::Degenerate`] registration (the heading
+//!    and the offset across it), fewer than [`Config::min_matches`].
 
 mod hypotheses;
 mod refine;
@@ -37,7 +47,8 @@ use crate::geom::{finite3, inverse_spd3, wrap, Cov3, Pose};
 use crate::obs::Observation;
 use crate::set::{Set, MAX_OBS};
 use hypotheses::{hypothesise, Top};
-use refine::{refine, Refined, Work};
+use refine::{finish, refine, Refined, Scratch, Work};
+use visibility::visibility_penalty;
 
 /// Variance given to a direction the scene cannot tell when there is no prior: 10¹² mm² (a
 /// standard deviation of 1000 km) for translation; a rotation's part is in units of 1 m
@@ -49,6 +60,8 @@ pub const ROTATION_SCALE: f32 = 1000.0;
 
 /// Hypotheses refined (the best by consensus).
 const REFINE: usize = 12;
+/// Hypotheses scoring below this fraction of the best one's are not refined.
+const REFINE_RATIO: f32 = 0.5;
 /// Gauss–Newton steps at most.
 const ITERATIONS: usize = 10;
 
@@ -102,7 +115,12 @@ pub struct Config {
     /// formed (the longest lines first): bounds the worst case. On the shared CARMEN logs a
     /// scan pair forms 177 (median) and at most 2250.
     pub max_hypotheses: u32,
-    /// Fewest matched features for a registration.
+    /// Hypotheses scored at most: the formed ones are clustered by pose (pairs of features
+    /// that agree; at most 96 clusters) and this many clusters, the most supported first, are
+    /// scored at their mean (besides the prior's pose, or no motion).
+    pub scored: u32,
+    /// Fewest matched features for a registration (two parallel line matches suffice in a
+    /// corridor, as a degenerate one).
     pub min_matches: usize,
     /// Scale the covariance by the residuals' χ² per degree of freedom when above 1.
     pub scale_by_residuals: bool,
@@ -140,6 +158,7 @@ impl Config {
         confirm: true,
         trusted_length: 1000.0,
         max_hypotheses: 4096,
+        scored: 96,
         min_matches: 3,
         scale_by_residuals: true,
         ambiguity: 2.0,
@@ -190,7 +209,8 @@ pub struct Registration {
     pub status: Status,
     /// Features of the current scan matched (lines, points).
     pub matches: (u16, u16),
-    /// Hypotheses scored.
+    /// Hypotheses formed within the bounds or the prior's gate (voted into clusters before
+    /// scoring, see [`Config::scored`]).
     pub hypotheses: u32,
     /// Valid features left out for want of room (see [`crate::MAX_OBS`]).
     pub dropped: u16,
@@ -251,7 +271,7 @@ pub fn register_with(
     let p = Set::from_obs(prev.iter().copied(), cfg);
     let c = Set::from_obs(curr.iter().copied(), cfg);
     let mut assoc = Assoc::new();
-    let mut r = register_sets(&p, &c, prior, cfg, &mut assoc);
+    let mut r = register_sets(&p, &c, prior, cfg, &mut assoc, true);
     r.dropped = p.dropped.saturating_add(c.dropped);
     r.invalid = p.invalid.saturating_add(c.invalid);
     r
@@ -308,13 +328,17 @@ fn check_prior(prior: Option<(Pose, Cov3)>, cfg: &Config) -> Result<Option<Prior
     }))
 }
 
-/// The registration on prepared sets; `assoc` receives the final matches.
+/// The registration on prepared sets; `assoc` receives the final matches. Without `search`
+/// (and with a prior) the prior's pose is the only hypothesis: the refinement of a good guess.
+/// Not inlined: its frame (a [`Work`] of a few KiB) is shared by every caller's calls.
+#[inline(never)]
 pub(crate) fn register_sets(
     prev: &Set,
     curr: &Set,
     prior: Option<(Pose, Cov3)>,
     cfg: &Config,
     assoc: &mut Assoc,
+    search: bool,
 ) -> Registration {
     let prior = check_prior(prior, cfg);
     let fallback = |failure: Failure, prior: Option<&Prior>, hypotheses: u32| {
@@ -352,27 +376,58 @@ pub(crate) fn register_sets(
         return fallback(Failure::TooFewFeatures, prior.as_ref(), 0);
     }
     let mut top = Top::new();
-    let hypotheses = hypothesise(prev, curr, prior.as_ref(), cfg, &mut top);
+    let mut scratch = Scratch::new();
+    let mut w = Work::new(prev, curr, cfg, prior.as_ref(), &mut scratch);
+    let hypotheses = hypothesise(&mut w, prev, curr, prior.as_ref(), cfg, &mut top, search);
     if top.n == 0 {
         return fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses);
     }
-    // Refine the best few; keep the best refined and the best distinct runner-up.
+    // Refine the best few; keep the best refined and the best distinct runner-up. When the
+    // runner-up cannot make the result ambiguous (a best keeps at least 1/1.01 of the score
+    // of the one it replaced, over at most REFINE of them: below 1.2 of the final best), the
+    // covariance and the visibility check are needed for the winner only.
+    let lazy = cfg.ambiguity >= 1.2;
+    let corridor = is_corridor(prev, cfg) && is_corridor(curr, cfg);
     let mut best: Option<Refined> = None;
     let mut second_score = 0.0f32;
-    for h in top.items() {
-        let r = refine(prev, curr, h.pose, prior.as_ref(), cfg);
+    // Best first, so that hopeless ones are found early (see below).
+    let mut order = *top.all();
+    let ranked = order.get_mut(..top.n).unwrap_or(&mut []);
+    ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
+    let first = ranked.first().map_or(0.0, |h| h.score);
+    for h in ranked.iter() {
+        // One that the rest of the scene supports far less than the best is not refined.
+        if h.score < REFINE_RATIO * first {
+            break;
+        }
+        let mut r = refine(&mut w, h.pose, prior.as_ref(), !lazy);
         if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
-            continue;
+            // Fewer matches than asked for: in a corridor, enough for what its parallel walls
+            // tell (the heading and the offset across it), registered as degenerate.
+            if r.matches.0 < 2 || !corridor {
+                continue;
+            }
+            let full = finish(&mut w, r.pose, prior.as_ref(), true, None);
+            if !full.scene_degenerate {
+                continue;
+            }
+            r = full;
+        }
+        // The visibility check lowers the score: a hypothesis that cannot beat the best even
+        // without it needs none.
+        let hopeless = lazy && best.as_ref().is_some_and(|b| b.score > r.score * 1.01);
+        if cfg.visibility_weight > 0.0 && !hopeless {
+            r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
         }
         match &best {
             Some(b) if !better(&r, b) => {
-                if !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
+                if lazy || !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
                     second_score = second_score.max(r.score);
                 }
             }
             _ => {
                 if let Some(b) = &best {
-                    if !close(&r.pose, &b.pose, &r.cov_scene_pinv) {
+                    if lazy || !close(&r.pose, &b.pose, &r.cov_scene_pinv) {
                         second_score = second_score.max(b.score);
                     }
                 }
@@ -384,7 +439,7 @@ pub(crate) fn register_sets(
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     };
     let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
-    if matched < cfg.min_matches {
+    if matched < cfg.min_matches && !(corridor && best.scene_degenerate && best.matches.0 >= 2) {
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     }
     if !(best.score > cfg.min_score) {
@@ -393,9 +448,11 @@ pub(crate) fn register_sets(
     if second_score >= cfg.ambiguity * best.score {
         return fallback(Failure::Ambiguous, prior.as_ref(), hypotheses);
     }
-    // Associations of the best, for the odometry's map.
-    let mut w = Work::new(prev, curr, cfg, None);
-    w.associate(&best.pose, 0.0, Some(assoc));
+    // The winner's covariance and status, and its associations (for the odometry's map).
+    let best = Refined {
+        score: best.score,
+        ..finish(&mut w, best.pose, prior.as_ref(), true, Some(assoc))
+    };
     let status = match best.unobservable {
         Some(direction) => Status::Degenerate { direction },
         None => Status::Ok,
@@ -412,6 +469,18 @@ pub(crate) fn register_sets(
     }
 }
 
+/// A corridor: lines only, all parallel (within [`Config::min_pair_angle`]).
+fn is_corridor(set: &Set, cfg: &Config) -> bool {
+    let lines = set.lines();
+    set.pts().is_empty()
+        && lines.iter().all(|l| {
+            lines.first().is_some_and(|f| {
+                let d = wrap(l.a - f.a).abs();
+                d.min(core::f32::consts::PI - d) < cfg.min_pair_angle
+            })
+        })
+}
+
 /// True when `a` should be preferred to `b`: a higher score, or (within 1 %) a smaller motion.
 fn better(a: &Refined, b: &Refined) -> bool {
     if a.score > b.score * 1.01 {
@@ -420,14 +489,14 @@ fn better(a: &Refined, b: &Refined) -> bool {
     if b.score > a.score * 1.01 {
         return false;
     }
-    let size = |p: &Pose| libm::hypotf(p.x, p.y) + ROTATION_SCALE * p.theta.abs();
+    let size = |p: &Pose| crate::geom::hypot(p.x, p.y) + ROTATION_SCALE * p.theta.abs();
     size(&a.pose) < size(&b.pose)
 }
 
 /// True when `a` lies within the 99.9 % ellipsoid of `b` (or within 50 mm and 1°).
 fn close(a: &Pose, b: &Pose, cov: &Cov3) -> bool {
     let d = [a.x - b.x, a.y - b.y, wrap(a.theta - b.theta)];
-    if libm::hypotf(d[0], d[1]) < 50.0 && d[2].abs() < 0.0175 {
+    if crate::geom::hypot(d[0], d[1]) < 50.0 && d[2].abs() < 0.0175 {
         return true;
     }
     match inverse_spd3(cov) {

@@ -3,7 +3,6 @@
 
 use core::f32::consts::PI;
 
-use super::visibility::visibility_penalty;
 use super::{Assoc, Config, Prior, ITERATIONS, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE};
 use crate::geom::{eigen_sym3, inverse_spd3, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::set::{Line, Set, MAX_OBS};
@@ -19,6 +18,9 @@ pub(super) struct Refined {
     pub(super) chi2: f32,
     pub(super) matches: (u16, u16),
     pub(super) unobservable: Option<[f32; 3]>,
+    /// The matches themselves leave a direction undetermined (before the confirmation rule):
+    /// parallel lines only, say.
+    pub(super) scene_degenerate: bool,
 }
 
 /// Normal equations of one association.
@@ -31,6 +33,46 @@ pub(super) struct Normal {
     pub(super) pts: u16,
 }
 
+/// The tables of one registration (a few KiB: kept by the caller, filled in place).
+pub(super) struct Scratch {
+    /// Each match's information `Jᵀ W J` in the last association (its upper triangle, row
+    /// by row).
+    contrib: [[f32; 6]; 2 * MAX_OBS],
+    /// Whether each match is trusted without confirmation (both segments long).
+    trusted: [bool; 2 * MAX_OBS],
+    /// Sine and cosine of each current line's α.
+    curr_sc: [[f32; 2]; MAX_OBS],
+    /// Sine and cosine of each previous line's α.
+    prev_sc: [[f32; 2]; MAX_OBS],
+    /// The angle index: for each of [`BUCKETS`] equal ranges of α over the circle, the
+    /// previous lines (bit `i`: line `i`) within [`Work::reach`] of it.
+    buckets: [u64; BUCKETS],
+}
+
+/// Ranges of α in the angle index.
+const BUCKETS: usize = 64;
+/// Widest angle gate the index serves, rad (wider gates look at every line).
+const MAX_REACH: f32 = 0.6;
+
+/// The bucket of angle `x` (any finite value).
+fn bucket(x: f32) -> usize {
+    let u = (wrap(x) + PI) * (BUCKETS as f32 / (2.0 * PI));
+    // `as` saturates (NaN to 0); the last bucket takes α = π.
+    (u as usize).min(BUCKETS - 1)
+}
+
+impl Scratch {
+    pub(super) const fn new() -> Self {
+        Self {
+            contrib: [[0.0; 6]; 2 * MAX_OBS],
+            trusted: [false; 2 * MAX_OBS],
+            curr_sc: [[0.0; 2]; MAX_OBS],
+            prev_sc: [[0.0; 2]; MAX_OBS],
+            buckets: [0; BUCKETS],
+        }
+    }
+}
+
 /// The data of one registration.
 pub(super) struct Work<'a> {
     prev: &'a Set,
@@ -38,11 +80,13 @@ pub(super) struct Work<'a> {
     cfg: &'a Config,
     #[allow(dead_code)]
     prior: Option<&'a Prior>,
-    /// Each match's information `Jᵀ W J` in the last association.
-    contrib: [Cov3; 2 * MAX_OBS],
-    /// Whether each match is trusted without confirmation (both segments long).
-    trusted: [bool; 2 * MAX_OBS],
     nc: usize,
+    /// The angle gate the index serves, rad: every previous line within it of a bucket's
+    /// range is in the bucket.
+    reach: f32,
+    /// The largest variance of α among the previous lines.
+    max_var_a: f32,
+    s: &'a mut Scratch,
 }
 
 impl<'a> Work<'a> {
@@ -51,16 +95,70 @@ impl<'a> Work<'a> {
         curr: &'a Set,
         cfg: &'a Config,
         prior: Option<&'a Prior>,
+        s: &'a mut Scratch,
     ) -> Self {
+        for (sc, l) in s.curr_sc.iter_mut().zip(curr.lines()) {
+            let (sn, c) = sin_cos(l.a);
+            *sc = [sn, c];
+        }
+        for (sc, l) in s.prev_sc.iter_mut().zip(prev.lines()) {
+            let (sn, c) = sin_cos(l.a);
+            *sc = [sn, c];
+        }
+        // The angle index, for the widest gate of any pair (slack at most 1).
+        let var = |l: &[crate::set::Line]| l.iter().fold(0.0f32, |m, l| m.max(l.cov.a));
+        let max_var_a = var(prev.lines());
+        let widest = cfg.gate * (max_var_a + var(curr.lines()) + cfg.slack[0] * cfg.slack[0]);
+        let reach = (crate::geom::sqrt(widest) * 1.001 + 1e-4).min(MAX_REACH);
+        s.buckets = [0; BUCKETS];
+        let width = 2.0 * PI / BUCKETS as f32;
+        for (i, l) in prev.lines().iter().enumerate().take(64) {
+            let bit = 1u64 << i;
+            let from = libm::floorf((l.a - reach + PI) / width);
+            let to = libm::floorf((l.a + reach + PI) / width);
+            if !(from.is_finite() && to.is_finite()) {
+                continue;
+            }
+            let (from, to) = (from as i32, to as i32);
+            for b in from..=to.min(from + BUCKETS as i32) {
+                if let Some(m) = s.buckets.get_mut(b.rem_euclid(BUCKETS as i32) as usize) {
+                    *m |= bit;
+                }
+            }
+        }
         Self {
             prev,
             curr,
             cfg,
             prior,
-            contrib: [ZERO3; 2 * MAX_OBS],
-            trusted: [false; 2 * MAX_OBS],
             nc: 0,
+            reach,
+            max_var_a,
+            s,
         }
+    }
+
+    /// Sine and cosine of previous line `i`'s α.
+    pub(super) fn prev_sc(&self, i: usize) -> [f32; 2] {
+        self.s.prev_sc.get(i).copied().unwrap_or([0.0, 1.0])
+    }
+
+    /// Sine and cosine of current line `k`'s α.
+    pub(super) fn curr_sc(&self, k: usize) -> [f32; 2] {
+        self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0])
+    }
+
+    /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
+    /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
+    /// the index serves.
+    fn candidates(&self, centre: f32, half: f32) -> u64 {
+        let nl = self.prev.lines().len().min(64);
+        let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
+        if !(half <= self.reach) || !centre.is_finite() {
+            return all;
+        }
+        let at = |x: f32| self.s.buckets.get(bucket(x)).copied().unwrap_or(u64::MAX);
+        (at(centre) | at(centre + PI)) & all
     }
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
@@ -78,7 +176,7 @@ impl<'a> Work<'a> {
     /// [`Work::associate`]; with `FULL` false only the score (and the match counts) are
     /// computed.
     #[inline(always)]
-    fn associate_with<const FULL: bool>(
+    pub(super) fn associate_with<const FULL: bool>(
         &mut self,
         pose: &Pose,
         slack: f32,
@@ -100,9 +198,12 @@ impl<'a> Work<'a> {
         // `pose.transform_point` with its sine and cosine computed once (the same arithmetic).
         let transform = |p: [f32; 2]| [ct * p[0] - st * p[1] + x, st * p[0] + ct * p[1] + y];
         let sa2 = (slack * cfg.slack[0]) * (slack * cfg.slack[0]);
-        for (k, lk) in self.curr.lines().iter().enumerate() {
+        let curr = self.curr;
+        for (k, lk) in curr.lines().iter().enumerate() {
+            let sc = self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0]);
             let a = lk.a + pose.theta;
-            let (sa, ca) = sin_cos(a);
+            // sin, cos of α + θ from those of α and θ.
+            let (sa, ca) = (sc[0] * ct + sc[1] * st, sc[1] * ct - sc[0] * st);
             let r = lk.r + x * ca + y * sa;
             let h = -x * sa + y * ca;
             // Covariance of the transformed line.
@@ -114,37 +215,37 @@ impl<'a> Work<'a> {
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
             let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
-            for (i, li) in self.prev.lines().iter().enumerate() {
-                // The gates below, for both orientations at once: a pair that fails them
-                // either way is rejected whatever the sign, without the cosine (the distance
-                // first: it needs no angle wrapped).
+            // Only the previous lines within the angle gate (either orientation) can match.
+            let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
+            let mut bits = self.candidates(a, half);
+            while bits != 0 {
+                let i = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                let Ok(iu) = u8::try_from(i) else { break };
+                let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.s.prev_sc.get(i))
+                else {
+                    continue;
+                };
                 let var_a = ct_.a + li.cov.a + sa2;
                 let var_r = ct_.c + li.cov.c + sr * sr;
                 let (ga, gr) = (gate * var_a, gate * var_r);
                 let (rp, rm) = (r - li.r, -r - li.r);
-                let fails = |rr: f32, turn: f32| {
-                    rr * rr > gr || {
-                        let e = wrap(a + turn - li.a);
-                        e * e > ga
-                    }
-                };
-                if fails(rp, 0.0) && fails(rm, PI) {
+                if rp * rp > gr && rm * rm > gr {
                     continue;
                 }
-                let dcos = libm::cosf(a - li.a);
+                // cos(a − α_i): the orientation.
+                let dcos = ca * psc[1] + sa * psc[0];
                 let sign = if dcos >= 0.0 { 1.0 } else { -1.0 };
                 let ea = if sign > 0.0 {
                     wrap(a - li.a)
                 } else {
                     wrap(a + PI - li.a)
                 };
-                let var_a = ct_.a + li.cov.a + sa2;
-                if ea * ea > gate * var_a {
+                if ea * ea > ga {
                     continue;
                 }
                 let er = sign * r - li.r;
-                let var_r = ct_.c + li.cov.c + sr * sr;
-                if er * er > gate * var_r {
+                if er * er > gr {
                     continue;
                 }
                 let s = Sym2 {
@@ -158,11 +259,11 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
-                let Some(frac) = overlap(ext, li, cfg.overlap_slack + sr) else {
+                let Some(frac) = overlap(ext, li, *psc, cfg.overlap_slack + sr) else {
                     continue;
                 };
-                if best.is_none_or(|b| d2 < b.0) {
-                    let Ok(iu) = u8::try_from(i) else { continue };
+                // The nearest; the lowest index among equals (the order of the scan).
+                if best.is_none_or(|b| d2 < b.0 || (d2 == b.0 && iu < b.1)) {
                     best = Some((d2, iu, e, w, sign, frac));
                 }
             }
@@ -181,7 +282,10 @@ impl<'a> Work<'a> {
                 continue;
             }
             let length = |ext: Option<([f32; 2], [f32; 2])>| {
-                ext.map_or(0.0, |(s, e)| libm::hypotf(e[0] - s[0], e[1] - s[1]))
+                ext.map_or(0.0, |(s, e)| {
+                    let d = [e[0] - s[0], e[1] - s[1]];
+                    crate::geom::sqrt(d[0] * d[0] + d[1] * d[1])
+                })
             };
             let prev_len = self
                 .prev
@@ -201,7 +305,7 @@ impl<'a> Work<'a> {
         for (k, pk) in self.curr.pts().iter().enumerate() {
             let q = transform(pk.p);
             let cq = pk.cov.rotate(st, ct);
-            let reach = libm::hypotf(pk.p[0], pk.p[1]);
+            let reach = crate::geom::sqrt(pk.p[0] * pk.p[0] + pk.p[1] * pk.p[1]);
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * reach);
             let mut best: Option<(f32, u8, [f32; 2], Sym2)> = None;
             for (i, pi) in self.prev.pts().iter().enumerate() {
@@ -244,10 +348,11 @@ impl<'a> Work<'a> {
 
 impl Work<'_> {
     fn record(&mut self, hi: Cov3, trusted: bool) {
-        if let (Some(slot), Some(t)) =
-            (self.contrib.get_mut(self.nc), self.trusted.get_mut(self.nc))
-        {
-            *slot = hi;
+        if let (Some(slot), Some(t)) = (
+            self.s.contrib.get_mut(self.nc),
+            self.s.trusted.get_mut(self.nc),
+        ) {
+            *slot = [hi[0][0], hi[0][1], hi[0][2], hi[1][1], hi[1][2], hi[2][2]];
             *t = trusted;
             self.nc += 1;
         }
@@ -260,14 +365,17 @@ impl Work<'_> {
         let mut worst = *h;
         let mut least = f32::INFINITY;
         for (hi, _) in self
+            .s
             .contrib
             .iter()
-            .zip(&self.trusted)
+            .zip(&self.s.trusted)
             .take(self.nc)
             .filter(|(_, &t)| !t)
         {
+            let [a, b, c, d, e, f] = *hi;
+            let hi = [[a, b, c], [b, d, e], [c, e, f]];
             let mut r = *h;
-            for (row, hr) in r.iter_mut().zip(hi) {
+            for (row, hr) in r.iter_mut().zip(&hi) {
                 for (v, x) in row.iter_mut().zip(hr) {
                     *v -= x;
                 }
@@ -303,14 +411,15 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
     hi
 }
 
-/// `None` when the segment `ext` (in the previous frame) and `li`'s segment are farther apart
+/// `None` when the segment `ext` (in the previous frame) and `li`'s segment (`sc`: sine and
+/// cosine of its α) are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
-fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, slack: f32) -> Option<f32> {
+fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, sc: [f32; 2], slack: f32) -> Option<f32> {
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
         return Some(1.0);
     };
-    let (sa, ca) = sin_cos(li.a);
+    let [sa, ca] = sc;
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
     let (a0, a1) = (along(s), along(e));
     let (b0, b1) = (along(ps), along(pe));
@@ -347,20 +456,15 @@ fn from_scaled_cov(c: &Cov3) -> Cov3 {
     r
 }
 
-/// Gauss–Newton from `start`.
-pub(super) fn refine(
-    prev: &Set,
-    curr: &Set,
-    start: Pose,
-    prior: Option<&Prior>,
-    cfg: &Config,
-) -> Refined {
-    let mut w = Work::new(prev, curr, cfg, prior);
+/// Gauss–Newton from `start`, then [`finish`]ed (fully when `full`).
+pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: bool) -> Refined {
+    let cfg = w.cfg;
     let mut pose = start;
     let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
     let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
-    for it in 0..ITERATIONS {
-        let slack = slacks.get(it).copied().unwrap_or(0.0);
+    let mut stage = 0usize;
+    for _ in 0..ITERATIONS {
+        let slack = slacks.get(stage).copied().unwrap_or(0.0);
         let mut n = w.associate(&pose, slack, None);
         if let Some(p) = prior {
             add_prior(&mut n, &pose, p);
@@ -388,14 +492,43 @@ pub(super) fn refine(
             break;
         }
         pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
-        let small = libm::hypotf(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
+        let small = crate::geom::hypot(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
         if small && slack == 0.0 {
             break;
         }
+        stage += 1;
     }
-    // Final association, covariance and status.
-    let mut n = w.associate(&pose, 0.0, None);
+    finish(w, pose, prior, full, None)
+}
+
+/// The final association at `pose` (its matches into `out`) and, when `full`, the
+/// covariance and status; otherwise only the score, the match counts and the pose (the
+/// covariances zero).
+pub(super) fn finish(
+    w: &mut Work,
+    pose: Pose,
+    prior: Option<&Prior>,
+    full: bool,
+    out: Option<&mut Assoc>,
+) -> Refined {
+    let cfg = w.cfg;
+    let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
+    if !full {
+        let n = w.associate_with::<false>(&pose, 0.0, out);
+        return Refined {
+            pose,
+            cov: ZERO3,
+            cov_scene_pinv: ZERO3,
+            score: n.score,
+            chi2: 0.0,
+            matches: (n.lines, n.pts),
+            unobservable: None,
+            scene_degenerate: false,
+        };
+    }
+    let mut n = w.associate(&pose, 0.0, out);
     let (vals, vecs) = eigen_sym3(&to_scaled_info(&n.h));
+    let scene_degenerate = !(vals[0] > limit);
     if cfg.confirm && vals[0] > limit {
         // A direction only one match determines is taken as unobservable.
         let robust = w.without_critical(&n.h);
@@ -443,19 +576,15 @@ pub(super) fn refine(
         }
         None => cov_scene,
     };
-    let penalty = if cfg.visibility_weight > 0.0 {
-        cfg.visibility_weight * visibility_penalty(prev, curr, &pose)
-    } else {
-        0.0
-    };
     Refined {
         pose,
         cov,
         cov_scene_pinv: cov_scene,
-        score: n.score - penalty,
+        score: n.score,
         chi2: n.chi2,
         matches: (n.lines, n.pts),
         unobservable,
+        scene_degenerate,
     }
 }
 

@@ -10,18 +10,19 @@ use crate::set::{Line, Set};
 /// walls in front of what was seen.
 pub(super) fn visibility_penalty(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
     let inv = pose.inverse();
+    let (fwd, back) = (pose.transformer(), inv.transformer());
     let a = hidden(
         curr.lines()
             .iter()
             .filter_map(|l| l.ext)
-            .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e))),
+            .map(|(s, e)| (fwd(s), fwd(e))),
         prev.lines(),
     );
     let b = hidden(
         prev.lines()
             .iter()
             .filter_map(|l| l.ext)
-            .map(|(s, e)| (inv.transform_point(s), inv.transform_point(e))),
+            .map(|(s, e)| (back(s), back(e))),
         curr.lines(),
     );
     a + b + 2.0 * crossings(prev, curr, pose)
@@ -31,6 +32,7 @@ pub(super) fn visibility_penalty(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
 /// through (in the middle 90 % of the segment): a robot does not pass through walls.
 fn crossings(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
     let to = [pose.x, pose.y];
+    let fwd = pose.transformer();
     let through = |(s, e): ([f32; 2], [f32; 2])| -> bool {
         // Path 0 + u·to, u in (0, 1); segment s + μ (e − s), μ in [0.05, 0.95].
         let w = [e[0] - s[0], e[1] - s[1]];
@@ -52,7 +54,7 @@ fn crossings(prev: &Set, curr: &Set, pose: &Pose) -> f32 {
         .lines()
         .iter()
         .filter_map(|l| l.ext)
-        .map(|(s, e)| (pose.transform_point(s), pose.transform_point(e)))
+        .map(|(s, e)| (fwd(s), fwd(e)))
         .filter(|&x| through(x))
         .count();
     (a + b) as f32
@@ -67,7 +69,7 @@ fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f
     let mut total = 0.0;
     for (s, e) in front {
         let d = [e[0] - s[0], e[1] - s[1]];
-        let len = libm::hypotf(d[0], d[1]);
+        let len = crate::geom::sqrt(d[0] * d[0] + d[1] * d[1]);
         if !(len > 2.0 * END + 100.0) {
             continue;
         }
@@ -75,7 +77,7 @@ fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f
         for k in 0..SAMPLES {
             let u = (END + (len - 2.0 * END) * k as f32 / (SAMPLES - 1) as f32) / len;
             let q = [s[0] + d[0] * u, s[1] + d[1] * u];
-            let rq = libm::hypotf(q[0], q[1]);
+            let rq = crate::geom::sqrt(q[0] * q[0] + q[1] * q[1]);
             if !(rq > 1.0) {
                 continue;
             }
@@ -84,7 +86,7 @@ fn hidden(front: impl Iterator<Item = ([f32; 2], [f32; 2])>, seen: &[Line]) -> f
                 // Ray origin + λ dir meets ps + μ (pe − ps).
                 let w = [pe[0] - ps[0], pe[1] - ps[1]];
                 let den = dir[0] * w[1] - dir[1] * w[0];
-                if !(den.abs() > 1e-6 * libm::hypotf(w[0], w[1])) {
+                if !(den * den > 1e-12 * (w[0] * w[0] + w[1] * w[1])) {
                     return false;
                 }
                 let lambda = (ps[0] * w[1] - ps[1] * w[0]) / den;
