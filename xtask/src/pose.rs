@@ -1,6 +1,7 @@
 //! `cargo xtask pose`: the pose benchmark (`pfe posebench`, issue 40) on the shared CARMEN
 //! logs (every CARMEN log in `../shared/data/carmen`); writes docs/POSE.md's generated
-//! section, pfe-pose beside the PL-ICP baseline (`--baseline`). `--quick` is CI's short run (the first 100 pairs of each log, printed, no
+//! section, pfe-pose beside the PL-ICP baseline (`--baseline`), and its pictures
+//! (docs/pose-intel.svg, -fhw.svg, -freiburg-campus.svg: `pfe plot --world --odometry`). `--quick` is CI's short run (the first 100 pairs of each log, printed, no
 //! document); other arguments (`--odometry`, `--force`) pass through. Skips loudly, exit 0,
 //! when the shared data is absent.
 
@@ -18,9 +19,34 @@ pub fn run(args: &[String]) -> Result<()> {
     cmd.arg("posebench").arg("--baseline").args(&logs);
     if args.iter().any(|a| a == "--quick") {
         cmd.args(args);
-    } else {
-        cmd.args(["--md", "docs/POSE.md", "--command", &named])
-            .args(args);
+        return util::run(&mut cmd);
     }
-    util::run(&mut cmd)
+    cmd.args(["--md", "docs/POSE.md", "--command", &named])
+        .args(args);
+    util::run(&mut cmd)?;
+    pictures(&logs, args)
+}
+
+/// Logs drawn in docs/POSE.md (`docs/pose-LOG.svg`): a building's loops (intel), a crowded
+/// hall (fhw), an outdoor campus (freiburg-campus).
+const PICTURED: [&str; 3] = ["intel", "fhw", "freiburg-campus"];
+
+/// `pfe plot --world --odometry` of the [`PICTURED`] logs: the feature odometry's trajectory
+/// and map beside the log's corrected poses.
+fn pictures(logs: &[String], args: &[String]) -> Result<()> {
+    for name in PICTURED {
+        let Some(log) = logs.iter().find(|l| {
+            l.rsplit('/').next().is_some_and(|f| {
+                f.starts_with(&format!("{name}-")) || f.starts_with(&format!("{name}."))
+            })
+        }) else {
+            continue;
+        };
+        let mut cmd = util::pfe();
+        cmd.args(["plot", "--format", "carmen", log, "--odometry", "--world"])
+            .arg(format!("docs/pose-{name}.svg"))
+            .args(args.iter().filter(|a| *a == "--force"));
+        util::run(&mut cmd)?;
+    }
+    Ok(())
 }
