@@ -178,7 +178,10 @@ fn corridor_drive_is_flagged_along_the_corridor() {
             "{across_inside} of {flagged} degenerate pairs with (y, θ) inside their 99.9 % ellipse"
         );
         if !with_prior {
-            assert_eq!(unbounded, flagged, "a bounded variance along the corridor without a prior");
+            assert_eq!(
+                unbounded, flagged,
+                "a bounded variance along the corridor without a prior"
+            );
         }
         assert_eq!(
             along, flagged,
