@@ -119,8 +119,11 @@ impl<'a> Work<'a> {
             if !(from.is_finite() && to.is_finite()) {
                 continue;
             }
+            // Within a turn either side (α is in (−π, π], but the index must not overflow).
+            let turn = BUCKETS as f32;
+            let (from, to) = (from.clamp(-turn, 2.0 * turn), to.clamp(-turn, 2.0 * turn));
             let (from, to) = (from as i32, to as i32);
-            for b in from..=to.min(from + BUCKETS as i32) {
+            for b in from..=to.min(from.saturating_add(BUCKETS as i32)) {
                 if let Some(m) = s.buckets.get_mut(b.rem_euclid(BUCKETS as i32) as usize) {
                     *m |= bit;
                 }
