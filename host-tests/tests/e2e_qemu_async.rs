@@ -155,6 +155,24 @@ fn async_firmware_frames_equal_blocking_firmware() {
     let Some((blocking, asynch)) = firmwares() else {
         return;
     };
-    check(&blocking, &asynch, 8, "default", ConfigChoice::Default, 300);
-    check(&blocking, &asynch, 4, "paper", ConfigChoice::Paper, 400);
+    // Without the pose step, as the embassy firmware runs: with it, the async firmware's
+    // executor on top of the pose step's stack outgrows the 48 KiB RAM budget (QEMU exits 1
+    // at the overflow; the blocking firmware's high-water mark is 25.3 of 25.7 KB with it,
+    // 7.6 KB without). The pose step on the blocking path is checked by e2e_qemu.
+    check(
+        &blocking,
+        &asynch,
+        8,
+        "default-nopose",
+        ConfigChoice::Default,
+        300,
+    );
+    check(
+        &blocking,
+        &asynch,
+        4,
+        "paper-nopose",
+        ConfigChoice::Paper,
+        400,
+    );
 }

@@ -6,8 +6,9 @@
 //! per scan on UART1, defmt logs on semihosting stdout.
 //!
 //! Semihosting arguments, reports, stderr account and exit codes as `pfe-qemu`'s:
-//! `pfe <scans> [paper|default] [baud] [slow_ms] [slow_every]` (`slow_ms`: an awaited delay
-//! after every `slow_every`-th scan); the end sends `Report::Stack` and `Report::Done`, writes
+//! `pfe <scans> [paper|default|paper-nopose|default-nopose] [baud] [slow_ms] [slow_every]`
+//! (`slow_ms`: an awaited delay after every `slow_every`-th scan; `*-nopose`: the pose step off,
+//! as the embassy firmware runs); the end sends `Report::Stack` and `Report::Done`, writes
 //! `rx: …` to stderr and exits 0; 3 = scanner link failed, 4 = output failed, 101 = panic,
 //! 102 = fault. `host-tests/tests/e2e_qemu_async.rs` checks its frames against `pfe-qemu`'s.
 #![cfg_attr(target_os = "none", no_std, no_main)]
@@ -47,11 +48,12 @@ mod fw {
     fn main() -> ! {
         rt::start_clock();
         let scans = sys::arg_u32(0).unwrap_or(0);
-        let choice = if sys::arg_is(1, "paper") {
+        let choice = if sys::arg_is(1, "paper") || sys::arg_is(1, "paper-nopose") {
             ConfigChoice::Paper
         } else {
             ConfigChoice::Default
         };
+        let pose = !(sys::arg_is(1, "paper-nopose") || sys::arg_is(1, "default-nopose"));
         let args = Args {
             scans,
             slow_ms: sys::arg_u32(3).unwrap_or(0),
@@ -61,6 +63,7 @@ mod fw {
             sys::exit(sys::EXIT_USAGE)
         };
         app.set_choice(choice);
+        app.set_pose_step(pose);
         defmt::info!(
             "pfe-qemu-async: {} scans (0 = forever), config {}, slow {} ms every {} scans",
             args.scans,
