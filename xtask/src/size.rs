@@ -134,24 +134,32 @@ pub fn run(args: &[String]) -> Result<()> {
         .join("thumbv7em-none-eabihf")
         .join("release")
         .join("pfe-board");
-    // Stack high-water mark from a 20-scan run against the emulator.
-    let summary = base.join("stack.txt");
-    demo_host(&[
-        "demo".as_ref(),
-        "--elf".as_ref(),
-        qemu.as_os_str(),
-        "--scans".as_ref(),
-        "20".as_ref(),
-        "--summary".as_ref(),
-        summary.as_os_str(),
-    ])?;
-    let text = std::fs::read_to_string(&summary).context("reading the run summary")?;
-    let stack = text
-        .lines()
-        .find_map(|l| l.strip_prefix("stack_used="))
-        .and_then(|v| v.trim().parse::<u64>().ok())
-        .filter(|v| *v > 0)
-        .context("no stack high-water mark in the run summary")?;
+    // Stack high-water marks from 20-scan runs against the emulator: with the pose step (what
+    // pfe-qemu runs) and without it (what the board runs: its binary has no pose step).
+    let painted = |config: &str, file: &str| -> Result<(u64, String)> {
+        let summary = base.join(file);
+        demo_host(&[
+            "demo".as_ref(),
+            "--elf".as_ref(),
+            qemu.as_os_str(),
+            "--scans".as_ref(),
+            "20".as_ref(),
+            "--config".as_ref(),
+            config.as_ref(),
+            "--summary".as_ref(),
+            summary.as_os_str(),
+        ])?;
+        let text = std::fs::read_to_string(&summary).context("reading the run summary")?;
+        let stack = text
+            .lines()
+            .find_map(|l| l.strip_prefix("stack_used="))
+            .and_then(|v| v.trim().parse::<u64>().ok())
+            .filter(|v| *v > 0)
+            .context("no stack high-water mark in the run summary")?;
+        Ok((stack, text))
+    };
+    let (stack, text) = painted("default", "stack.txt")?;
+    let (board_stack, _) = painted("default-nopose", "stack-nopose.txt")?;
 
     let field = |k: &str| {
         text.lines()
@@ -178,13 +186,14 @@ pub fn run(args: &[String]) -> Result<()> {
          `App<401, 48>` (extractor for every LMS200 variant) in a static, all zeros at start (.bss). Flash = vector table + text + rodata + data; \
          static RAM = data + bss + uninit. Stack: painted-stack high-water mark after 20 scans \
          under QEMU against the emulated LMS200 (same driver, app and extractor code on the \
-         board; the board's HAL glue differs).\n\n\
+         board; the board's HAL glue differs): pfe-qemu's with the pose step, the board's \
+         without it (`default-nopose`: the board binary has no pose step).\n\n\
          | binary | flash (bytes) | static RAM (bytes) | stack high-water (bytes) | RAM + stack | sections |\n\
          |---|---:|---:|---:|---:|---|\n"
     );
-    for (name, elf) in [
-        ("pfe-qemu (mps2-an386)", &qemu),
-        ("pfe-board (STM32F411)", &board),
+    for (name, elf, stack) in [
+        ("pfe-qemu (mps2-an386)", &qemu, stack),
+        ("pfe-board (STM32F411)", &board, board_stack),
     ] {
         let (flash, ram, data, detail) = sizes(&tool, elf)?;
         md.push_str(&format!(

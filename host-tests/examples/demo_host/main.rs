@@ -6,7 +6,7 @@
 //! demo_host bench --elf pfe-bench --scans 100 [--elf-micromath pfe-bench-mm] [--md docs/PERFORMANCE.md]
 //! demo_host worst-scans --out worst.bin --kinds worst.txt [--iterations 4000] [--seed 20]
 //! demo_host worst --elf pfe-bench --kinds worst.txt [--md docs/PERFORMANCE.md]
-//! demo_host demo --elf pfe-qemu [--scans 10] [--config default|paper] [--svg demo.svg]
+//! demo_host demo --elf pfe-qemu [--scans 10] [--config default|paper|default-nopose|paper-nopose] [--svg demo.svg]
 //! demo_host pose-scans --out pose.bin --kinds pose.txt [--scans 256] [--carmen LOG]
 //! demo_host pose-bench --elf pfe-bench-pose --kinds pose.txt --static-ram B [--md docs/PERFORMANCE.md]
 //! ```
@@ -583,9 +583,9 @@ fn demo(o: &Opts) -> Result<()> {
     let scans = u32::try_from(o.num("scans", 10)?).context("--scans too large")?;
     let config = o.get("config").unwrap_or("default");
     let choice = match config {
-        "default" => ConfigChoice::Default,
-        "paper" => ConfigChoice::Paper,
-        other => bail!("--config {other}: paper or default"),
+        "default" | "default-nopose" => ConfigChoice::Default,
+        "paper" | "paper-nopose" => ConfigChoice::Paper,
+        other => bail!("--config {other}: paper, default, paper-nopose or default-nopose"),
     };
     let seed = o.num("seed", 1)?;
     let timeout = Duration::from_secs(o.num("timeout", 300)?);
