@@ -194,17 +194,28 @@ impl Offsets {
     /// Moves each sweep's valid points by its offset and sets their `ranges` to their new
     /// distance from the origin.
     pub(crate) fn apply(&self, points: &mut [Point], ranges: &mut [f32], flags: &[u8]) {
+        // One slice of each, cut to one length: the loops index them without checks.
+        let n = points.len().min(ranges.len()).min(flags.len());
+        let (Some(points), Some(ranges), Some(flags)) =
+            (points.get_mut(..n), ranges.get_mut(..n), flags.get(..n))
+        else {
+            return;
+        };
+        let step = self.sweeps.max(1);
         for (s, offset) in self.of.iter().enumerate() {
             let Some(offset) = offset else {
                 continue;
             };
             let turn = math::sin_cos(offset.dtheta);
-            let slots = points.iter_mut().zip(ranges.iter_mut()).zip(flags);
-            for ((p, r), f) in slots.skip(s + 1).step_by(self.sweeps.max(1)) {
+            let mut i = s + 1;
+            while let (Some(p), Some(r), Some(f)) =
+                (points.get_mut(i), ranges.get_mut(i), flags.get(i))
+            {
                 if f & VALID != 0 {
                     *p = offset.turned(turn, *p);
                     *r = math::hypot(p.x, p.y);
                 }
+                i += step;
             }
         }
     }
