@@ -84,6 +84,7 @@ pub use fit::circle::{
 };
 pub use fit::line::{fit_line, LineCovariance, LineFit};
 pub use geometry::Point;
+pub use math::sin_cos_f32;
 pub use motion::{BeamTiming, Motion};
 pub use output::{Stage, StageObserver, Stats};
 pub use scan::{Ranges, Scan, ScanGeometry, LMS_MAX_VALID_8M};

@@ -38,13 +38,20 @@ pub(crate) fn sin(x: f32) -> f32 {
 }
 
 /// `(sin x, cos x)` for |x| ≤ 10⁴ in f32 arithmetic only, within 2·10⁻⁷ of the exact values
-/// (`None` beyond, and for NaN or ±inf). libm's `sinf`/`cosf` evaluate in f64, which the
-/// Cortex-M4F does in software (about 700 instructions a call; de-skewing calls two per
-/// point): this is about 40. Cody–Waite reduction by π/2 in three parts (exact products for
-/// |k| < 2¹³), then the minimax polynomials of musl's `__sindf`/`__cosdf` on |r| ≤ π/4.
+/// (`None` beyond, and for NaN or ±inf), bit-identical on every target. libm's `sinf`/`cosf`
+/// evaluate in f64, which the Cortex-M4F does in software (about 700 instructions a call;
+/// de-skewing calls two per point): this is about 40. Cody–Waite reduction by π/2 in three
+/// parts (exact products for |k| < 2¹³), then the minimax polynomials of musl's
+/// `__sindf`/`__cosdf` on |r| ≤ π/4. pfe-core's sine and cosine (without `micromath`) and
+/// pfe-pose's use it.
+///
+/// ```
+/// let (s, c) = pfe_core::sin_cos_f32(core::f32::consts::FRAC_PI_6).unwrap();
+/// assert!((s - 0.5).abs() < 1e-6 && (c - 0.866_025_4).abs() < 1e-6);
+/// assert_eq!(pfe_core::sin_cos_f32(f32::NAN), None);
+/// ```
 #[allow(clippy::excessive_precision)] // the coefficients as published
-#[cfg_attr(feature = "micromath", allow(dead_code))]
-fn sin_cos_f32(x: f32) -> Option<(f32, f32)> {
+pub fn sin_cos_f32(x: f32) -> Option<(f32, f32)> {
     const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
     const P1: f32 = 1.570_312_5; // 8 significant bits
     const P2: f32 = 4.837_512_969_970_703e-4; // 11 significant bits

@@ -179,42 +179,12 @@ pub(crate) fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)
 }
 
-/// `(sin x, cos x)`: in f32 arithmetic for |x| ≤ 10⁴ (within 2·10⁻⁷ of the exact values),
+/// `(sin x, cos x)`: pfe-core's f32 kernel ([`pfe_core::sin_cos_f32`]) for |x| ≤ 10⁴,
 /// libm beyond (and for NaN, ±∞). libm's `sinf`/`cosf` evaluate in f64, which the Cortex-M4F
-/// does in software (about 700 instructions a call); this is about 40. Cody–Waite reduction
-/// by π/2 in three parts, then the minimax polynomials of musl's `__sindf`/`__cosdf` on
-/// |r| ≤ π/4 (pfe-core's kernel).
-#[allow(clippy::excessive_precision)] // the coefficients as published
+/// does in software (about 700 instructions a call); the kernel is about 40, and the same bits
+/// on the host and the board.
 pub(crate) fn sin_cos(x: f32) -> (f32, f32) {
-    const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
-    const P1: f32 = 1.570_312_5; // 8 significant bits
-    const P2: f32 = 4.837_512_969_970_703e-4; // 11 significant bits
-    const P3: f32 = 7.549_789_954_891_882e-8;
-    const S1: f32 = -0.166_666_666_416_265_24;
-    const S2: f32 = 0.008_333_329_385_889_463;
-    const S3: f32 = -0.000_198_393_348_360_966_32;
-    const S4: f32 = 0.000_002_718_311_493_989_822;
-    const C0: f32 = -0.499_999_997_251_031;
-    const C1: f32 = 0.041_666_623_323_739_06;
-    const C2: f32 = -0.001_388_676_377_460_993;
-    const C3: f32 = 0.000_024_390_448_796_277_41;
-    if !(x.abs() <= 1.0e4) {
-        return (libm::sinf(x), libm::cosf(x));
-    }
-    let half = if x < 0.0 { -0.5 } else { 0.5 };
-    let k = (x * FRAC_2_PI + half) as i32; // round half away from zero; |k| ≤ 6367
-    let kf = k as f32;
-    let r = ((x - kf * P1) - kf * P2) - kf * P3;
-    let z = r * r;
-    let s = r + r * z * (S1 + z * (S2 + z * (S3 + z * S4)));
-    let w = z * z;
-    let c = ((1.0 + z * C0) + w * C1) + (w * z) * (C2 + z * C3);
-    match k & 3 {
-        0 => (s, c),
-        1 => (c, -s),
-        2 => (-s, -c),
-        _ => (-c, s),
-    }
+    pfe_core::sin_cos_f32(x).unwrap_or_else(|| (libm::sinf(x), libm::cosf(x)))
 }
 
 /// `J C Jᵀ` for 3×3 matrices.
