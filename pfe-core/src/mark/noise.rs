@@ -325,6 +325,24 @@ fn spans(first: &Point, last: &Point, rule: &NoiseRule) -> bool {
     dx * dx + dy * dy >= span * span
 }
 
+/// The points and ranges of `from..to` and the point and range before `from`, the run the
+/// tight loops below walk (`None` when they are not all there).
+#[inline(always)]
+fn run_from<'a>(
+    points: &'a [Point],
+    ranges: &'a [f32],
+    from: usize,
+    to: usize,
+) -> Option<(&'a [Point], &'a [f32], Point, f32)> {
+    let before = from.checked_sub(1)?;
+    Some((
+        points.get(from..to)?,
+        ranges.get(from..to)?,
+        *points.get(before)?,
+        *ranges.get(before)?,
+    ))
+}
+
 /// The first point from `from` (up to `to`, exclusive) that is not valid, jumps from its
 /// predecessor, or is not accepted by `line`: the walk's test for most points, as a tight loop
 /// (no de-skewing: the scanner is at the origin).
@@ -336,15 +354,7 @@ fn accepted_run(
     line: &WindowLine,
     rule: &NoiseRule,
 ) -> usize {
-    let (Some(pts), Some(rs)) = (points.get(from..to), ranges.get(from..to)) else {
-        return from;
-    };
-    let Some(before) = from.checked_sub(1) else {
-        return from;
-    };
-    let (Some(mut prev), Some(mut prev_r)) =
-        (points.get(before).copied(), ranges.get(before).copied())
-    else {
+    let Some((pts, rs, mut prev, mut prev_r)) = run_from(points, ranges, from, to) else {
         return from;
     };
     let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
@@ -391,15 +401,7 @@ fn accepted_run_after(
     line: &WindowLine,
     rule: &NoiseRule,
 ) -> usize {
-    let (Some(pts), Some(rs)) = (points.get(from..to), ranges.get(from..to)) else {
-        return from;
-    };
-    let Some(before) = from.checked_sub(1) else {
-        return from;
-    };
-    let (Some(mut prev), Some(mut prev_r)) =
-        (points.get(before).copied(), ranges.get(before).copied())
-    else {
+    let Some((pts, rs, mut prev, mut prev_r)) = run_from(points, ranges, from, to) else {
         return from;
     };
     let o = Point::new(0.0, 0.0);
