@@ -86,6 +86,12 @@ pub struct CircleObs {
     pub radius: f64,
 }
 
+/// The corrected poses' own scatter between two scans, per axis, mm (a SLAM solution's few
+/// cm; the pose benchmark adds the same).
+pub const REFERENCE_SIGMA_MM: f64 = 15.0;
+/// …and in heading, rad (0.4°).
+pub const REFERENCE_SIGMA_RAD: f64 = 0.4 * std::f64::consts::PI / 180.0;
+
 /// The rigid motion taking frame k's coordinates into frame k+1's: `p' = R(rot) p + shift`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrameChange {

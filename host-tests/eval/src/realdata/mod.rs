@@ -135,6 +135,8 @@ pub struct Summary {
     pub static_objects_matched: usize,
     /// Their median centre NIS.
     pub static_object_nis: f64,
+    /// Their median centre NIS with the reference poses' own scatter added.
+    pub static_object_nis_reference: f64,
     /// Their median centre NIS after the pose refit of their pair's lines.
     pub static_object_nis_refit: f64,
 }
@@ -182,6 +184,7 @@ impl Tally {
             object_nis_refit: quantile(&p.object_nis_refit, 0.5),
             static_objects_matched: statics.len(),
             static_object_nis: quantile(&statics, 0.5),
+            static_object_nis_reference: quantile(&self.statics.nis_reference(), 0.5),
             static_object_nis_refit: quantile(&self.statics.nis_refit(), 0.5),
         }
     }

@@ -16,6 +16,11 @@
 //! The other scan's sighting decides which matches count, not their error: it is within
 //! 150 mm, several times the objects' stated σ, so the selection hardly narrows the NIS.
 //!
+//! The NIS through the corrected poses charges their error to the objects. Two columns remove
+//! it: [`Statics::nis_reference`] adds the reference's own scatter between two scans
+//! ([`REFERENCE_SIGMA_MM`] per axis, [`REFERENCE_SIGMA_RAD`], as the pose benchmark does) to
+//! the pair's covariance; [`Statics::nis_refit`] first corrects the pair's motion from its lines.
+//!
 //! ```
 //! use pfe_eval::realdata::compare::Seen;
 //! use pfe_eval::realdata::statics::Statics;
@@ -33,7 +38,7 @@
 //! ```
 
 use super::compare::{matched_lines, refit_centre, Seen, GATE_CENTER_MM};
-use super::frame::{add, nis, FrameChange, Pose};
+use super::frame::{add, nis, FrameChange, Pose, REFERENCE_SIGMA_MM, REFERENCE_SIGMA_RAD};
 use super::refit::{correction, correction_covariance};
 use super::CircleObs;
 
@@ -51,9 +56,8 @@ pub const STATIC_TURN_RAD: f64 = 0.5;
 pub struct Statics {
     /// Scanner pose and its objects' centres in the world, per scan.
     scans: Vec<(Pose, Vec<[f64; 2]>)>,
-    /// Scan k of each match, its object's centre in the world, the match's NIS and its NIS
-    /// after the pair's pose refit from its lines (when there is one).
-    matches: Vec<(usize, [f64; 2], f64, Option<f64>)>,
+    /// The unambiguous matches.
+    matches: Vec<Match>,
     /// The scan before, in its own frame.
     last: Option<Seen>,
 }
@@ -99,31 +103,44 @@ impl Statics {
                 continue;
             }
             let d = [m.center[0] - c.center[0], m.center[1] - c.center[1]];
-            if let Some(v) = nis(d, &add(&m.cov, &c.cov)) {
+            let both = add(&m.cov, &c.cov);
+            if let Some(v) = nis(d, &both) {
                 let refit = delta.as_ref().and_then(|delta| {
                     let (r, s) = refit_centre(m, c, delta);
                     nis(r, &s)
                 });
-                self.matches.push((k, to_world(a.pose, o.center), v, refit));
+                let reference = nis(d, &add(&both, &reference_scatter(&change, m.center)));
+                self.matches.push(Match {
+                    k,
+                    at: to_world(a.pose, o.center),
+                    nis: v,
+                    reference,
+                    refit,
+                });
             }
         }
     }
 
     /// The NIS of the matches whose object is static (module docs).
     pub fn nis(&self) -> Vec<f64> {
-        self.statics().map(|m| m.2).collect()
+        self.statics().map(|m| m.nis).collect()
+    }
+
+    /// [`Self::nis`] with the reference's own scatter between the two scans added.
+    pub fn nis_reference(&self) -> Vec<f64> {
+        self.statics().filter_map(|m| m.reference).collect()
     }
 
     /// [`Self::nis`] after each pair's pose refit from its lines (pairs with a refit only).
     pub fn nis_refit(&self) -> Vec<f64> {
-        self.statics().filter_map(|m| m.3).collect()
+        self.statics().filter_map(|m| m.refit).collect()
     }
 
     /// The matches whose object is static.
-    fn statics(&self) -> impl Iterator<Item = &(usize, [f64; 2], f64, Option<f64>)> {
+    fn statics(&self) -> impl Iterator<Item = &Match> {
         self.matches
             .iter()
-            .filter(|(k, at, _, _)| self.seen_elsewhere(*k, *at))
+            .filter(|m| self.seen_elsewhere(m.k, m.at))
     }
 
     /// True when a scan other than `k` and `k + 1`, within [`STATIC_SPAN`] and taken from
@@ -144,6 +161,36 @@ impl Statics {
                     .any(|o| (o[0] - at[0]).hypot(o[1] - at[1]) <= STATIC_MM)
             })
     }
+}
+
+/// One unambiguous match of a pair.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Match {
+    /// The pair's first scan.
+    k: usize,
+    /// The object's centre in the world, mm.
+    at: [f64; 2],
+    /// Its NIS through the reference poses.
+    nis: f64,
+    /// The same with the reference's scatter added.
+    reference: Option<f64>,
+    /// After the pair's pose refit from its lines (when there is one).
+    refit: Option<f64>,
+}
+
+/// The covariance, in frame k+1, that the reference's scatter between the two scans gives a
+/// point `p` of frame k moved there by `change`: σ² per axis, and the turn's σ² along the
+/// perpendicular of the point's offset from scanner k.
+fn reference_scatter(change: &FrameChange, p: [f64; 2]) -> [[f64; 2]; 2] {
+    let r = [p[0] - change.shift[0], p[1] - change.shift[1]];
+    let (t, s) = (
+        REFERENCE_SIGMA_MM * REFERENCE_SIGMA_MM,
+        REFERENCE_SIGMA_RAD * REFERENCE_SIGMA_RAD,
+    );
+    [
+        [t + s * r[1] * r[1], -s * r[0] * r[1]],
+        [-s * r[0] * r[1], t + s * r[0] * r[0]],
+    ]
 }
 
 /// The index of the only one of `objects` within [`GATE_CENTER_MM`] of `p`.
@@ -168,4 +215,24 @@ fn elsewhere(p: Pose, q: Pose) -> bool {
 fn to_world(pose: Pose, p: [f64; 2]) -> [f64; 2] {
     let (s, c) = pose[2].sin_cos();
     [c * p[0] - s * p[1] + pose[0], s * p[0] + c * p[1] + pose[1]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A point 1 m ahead of scanner k, which moved 1 m back and turned: the reference's turn
+    /// error moves it across its offset from scanner k, by 1 m × σ_θ.
+    #[test]
+    fn reference_scatter_grows_across_the_offset_from_the_first_scanner() {
+        let change = FrameChange::between([0.0, 0.0, 0.0], [-1000.0, 0.0, 0.0]);
+        let p = change.point([1000.0, 0.0]);
+        assert!((p[0] - 2000.0).abs() < 1e-9);
+        let c = reference_scatter(&change, p);
+        let t = REFERENCE_SIGMA_MM * REFERENCE_SIGMA_MM;
+        let across = 1000.0 * REFERENCE_SIGMA_RAD;
+        assert!((c[0][0] - t).abs() < 1e-9, "{c:?}");
+        assert!((c[1][1] - (t + across * across)).abs() < 1e-6, "{c:?}");
+        assert!(c[0][1].abs() < 1e-9 && c[1][0].abs() < 1e-9, "{c:?}");
+    }
 }
