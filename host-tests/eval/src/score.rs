@@ -14,9 +14,10 @@
 //!   have no type to judge). A small object (`Feature::Object`) matched to a truth circle (a
 //!   small pillar) is found and of the right kind (it has no radius to score).
 //! - **missed** = truth features without a match, **spurious** = predicted features without a
-//!   match, both reported as fractions of the number of truth features. A small object over
-//!   fewer beams than a truth feature (`truth::MIN_RUN`) is outside what the truth lists: not
-//!   spurious when it matches nothing.
+//!   match, both reported as fractions of the number of truth features. A small object that
+//!   holds fewer beams of every truth feature than a truth feature has (`truth::MIN_RUN`: e.g.
+//!   the two short faces of a box's corner seen between range jumps, 3 + 1 beams) is outside
+//!   what the truth lists: not spurious when it matches nothing.
 //! - **Parameter errors** of matched features of the right type: line |Δρ| (mm) and |Δα| (rad,
 //!   wrapped; (α, ρ) and (α + π, −ρ) are the same line), circle centre distance and |ΔR| (mm),
 //!   each with the Cramér–Rao bound of its truth feature.
@@ -283,15 +284,19 @@ pub fn score(ex: &Extraction, gt: &GroundTruth) -> Score {
     let matches = match_features(&gt.features, &ex.features);
     s.matched = matches.len();
     s.missed = gt.features.len() - matches.len();
-    // A small object over fewer beams than a truth feature has (`MIN_RUN`) is outside what
-    // the truth can score: not spurious (before objects, such runs gave no feature).
+    // A small object that holds fewer beams of every truth feature than a truth feature has
+    // (`MIN_RUN`) is outside what the truth can score: not spurious (before objects, such
+    // runs gave no feature).
     let unscorable = ex
         .features
         .iter()
         .enumerate()
         .filter(|(pi, f)| {
             f.is_object()
-                && f.last() + 1 - f.first() < crate::scene::truth::MIN_RUN
+                && gt.features.iter().all(|t| {
+                    let (lo, hi) = (t.first.max(f.first()), t.last.min(f.last()));
+                    hi < lo || hi + 1 - lo < crate::scene::truth::MIN_RUN
+                })
                 && !matches.iter().any(|m| m.1 == *pi)
         })
         .count();
