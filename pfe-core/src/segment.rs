@@ -332,6 +332,10 @@ fn emit<const SCRUTINY: bool>(
                 continue;
             }
         }
+        let feature = match feature {
+            Some(Some(Feature::Line(_))) => curved_object(pass, s, e, config).or(feature),
+            _ => feature,
+        };
         match visible_part(pass, s, e, feature.as_ref(), config) {
             Some((a, b, line)) => place_visible(pass, s, e, (a, b), line, config, out),
             None => place(pass, s, e, feature, out),
@@ -408,6 +412,22 @@ fn place_visible(
     };
     place(pass, first.0, first.1, first.2, out);
     place(pass, second.0, second.1, second.2, out);
+}
+
+/// The small object of the segment `s..=e` typed a line, when its points are curved
+/// ([`classify::curved`]) and it is one as the sift step defines them (at most
+/// `sift::OBJECT_MAX_MM` across, a range jump or no return on both sides): a pillar or a leg
+/// seen over too few beams for a circle is no line.
+fn curved_object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<Option<Feature>> {
+    let pts = pass.points.get(s..=e)?;
+    let (a, b) = (pts.first()?, pts.last()?);
+    if !(a.distance(b) <= sift::OBJECT_MAX_MM)
+        || !sift::isolated(pass, s, e)
+        || !classify::curved(pts, config)
+    {
+        return None;
+    }
+    sift::object(pass, s, e, config).map(|o| Some(Feature::Object(o)))
 }
 
 /// The feature of the segment `s..=e`: `None` when it is short, `Some(None)` when its fit
@@ -735,6 +755,44 @@ mod tests {
                 (17 - 12 + 1, 17 - 12)
             );
         });
+    }
+
+    /// 7 beams (0.5° apart) of a post of 250 mm radius whose centre is 4 m ahead, nothing
+    /// else in the scan: its points bend by 17 σ_r² from their line (σ_r 5 mm), too little
+    /// for the typing's circle (25 σ_r²) but far beyond the noise for a line. It is reported
+    /// as a small object; a flat plate seen over the same beams stays a line.
+    #[test]
+    fn a_short_curved_run_between_jumps_is_an_object_not_a_line() {
+        use crate::extractor::Extractor;
+        use crate::geometry::ray_circle_intersection;
+        use crate::scan::{Scan, ScanGeometry};
+        let g = ScanGeometry::LMS200_180_050;
+        let config = Config::default();
+        let run = |range: &dyn Fn(f32, f32) -> Option<f32>| {
+            let ranges: [f32; 361] = core::array::from_fn(|i| {
+                let (s, c) = crate::math::sin_cos(g.bearing(i));
+                (177..=183)
+                    .contains(&i)
+                    .then(|| range(c, s))
+                    .flatten()
+                    .unwrap_or(0.0)
+            });
+            let mut ex = Extractor::<361, 16>::new();
+            assert!(ex.extract(&Scan::from_mm(g, &ranges), &config).is_ok());
+            ex.features().to_vec()
+        };
+        let post = run(&|c, s| {
+            ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(4000.0, 0.0), 250.0)
+        });
+        assert!(
+            matches!(post.as_slice(), [Feature::Object(o)] if o.points == 7),
+            "{post:?}"
+        );
+        let plate = run(&|c, _| Some(3750.0 / c));
+        assert!(
+            matches!(plate.as_slice(), [Feature::Line(l)] if l.points == 7),
+            "{plate:?}"
+        );
     }
 
     /// Two neighbouring segments that are one arc together (a pillar 3 m ahead cut in two by a

@@ -256,6 +256,14 @@ fn jump(pass: &Pass<'_>, i: usize) -> bool {
     !(math::abs(pass.range(i + 1) - pass.range(i)) < OBJECT_JUMP_MM)
 }
 
+/// Whether the run `s..=e` has a range jump (or no return, or the scan's end) on both sides,
+/// as a small object has.
+pub(crate) fn isolated(pass: &Pass<'_>, s: usize, e: usize) -> bool {
+    let before = s == 0 || !pass.valid(s - 1) || jump(pass, s - 1);
+    let after = e + 1 >= pass.len() || !pass.valid(e + 1) || jump(pass, e);
+    before && after
+}
+
 /// The last point of the run of returns from the valid point `s` without a jump.
 fn run_end(pass: &Pass<'_>, s: usize) -> usize {
     let mut e = s;
@@ -293,7 +301,12 @@ fn extent(pass: &Pass<'_>, s: usize, e: usize, max: f32) -> Option<f32> {
 /// the systematic σ_sys², shared by them); and, along that beam, the variance of where on an
 /// object as deep as it is wide its surface lies (w²/12: the points show its near side, which
 /// moves against the centre as it is seen from elsewhere).
-fn object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<ObjectFeature> {
+pub(crate) fn object(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> Option<ObjectFeature> {
     let w = extent(pass, s, e, OBJECT_MAX_MM)?;
     let (mut n, mut sx, mut sy) = (0usize, 0.0f32, 0.0f32);
     for k in (s..=e).filter(|&k| pass.valid(k)) {

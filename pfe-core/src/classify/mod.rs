@@ -24,6 +24,43 @@ const CIRCLE_MIN_POINTS: usize = 6;
 /// bent piece is not an arc.
 const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
 
+/// Drop of the residual sum a circle must give over the line, in units of σ_r², for a short
+/// run's points to be curved (99 % of χ²₁: the circle's one more parameter).
+const CURVED_CHI2: f32 = 6.63;
+/// Largest reduced residual sum (in σ_r²) of the circle that shows a run curved.
+const CURVED_FIT: f32 = 1.5;
+/// Largest radius of the circle that shows a run curved, mm.
+const CURVED_MAX_RADIUS: f32 = 1000.0;
+
+/// Whether the points `pts` of a segment typed a line are curved instead (in the default
+/// mode): a circle of at most [`CURVED_MAX_RADIUS`] explains them to the noise and
+/// significantly better than the line, though not by as much as the typing asks of a circle
+/// (too few points or too short an arc for one): a pillar seen over a few beams. The caller
+/// reports such a run, when it is small, as an object rather than a line.
+pub(crate) fn curved(pts: &[Point], config: &Config) -> bool {
+    if !matches!(config.typing, Typing::CompareFits { .. }) || pts.len() < 4 {
+        return false;
+    }
+    let var = config.sigma_r * config.sigma_r;
+    let Ok(line) = fit_line(pts) else {
+        return false;
+    };
+    let sse_l = line.sse();
+    if !(sse_l > CURVED_CHI2 * var) {
+        return false;
+    }
+    let Some((c, sse_c)) = fit_circle(pts, config.circle_method)
+        .ok()
+        .and_then(|c| refine_from(pts, c, NormalEquations::at(pts, &c), config.circle_refine).ok())
+    else {
+        return false;
+    };
+    let dof = pts.len().saturating_sub(3).max(1) as f32;
+    c.radius <= CURVED_MAX_RADIUS
+        && sse_l - sse_c > CURVED_CHI2 * var
+        && sse_c <= CURVED_FIT * var * dof
+}
+
 /// Whether the features' covariance is made honest ([`covariance`]): with the checks for real
 /// scans (`scrutiny`), when the typing compares the fits.
 pub(crate) fn honest(config: &Config, scrutiny: bool) -> bool {
