@@ -24,8 +24,9 @@ use crate::rule::{NoiseRule, Rule};
 use crate::sift;
 
 /// Sizes of the union of two neighbouring segments tested for being one arc (fewer points do
-/// not show an arc above the noise).
-const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=64;
+/// not show an arc above the noise; a pillar of 0.3 m radius 0.8 m away covers 63 beams at
+/// 0.5°, 127 at 0.25°).
+const MERGE_SIZES: core::ops::RangeInclusive<usize> = 6..=128;
 
 /// Fewest points of a run of short segments joined into one line.
 const CHAIN_MIN: usize = 5;
@@ -795,25 +796,34 @@ mod tests {
         );
     }
 
-    /// Two neighbouring segments that are one arc together (a pillar 3 m ahead cut in two by a
-    /// start the walk set inside it) are merged into one circle; with a jump between them, or
-    /// an invalid reading, they stay two.
+    /// Two neighbouring segments that are one arc together (a pillar cut in two by a start the
+    /// walk set inside it) are merged into one circle; with a jump between them, or an invalid
+    /// reading, they stay two. A pillar 3 m ahead (39 beams at 0.5°), and one of 0.3 m radius
+    /// 0.8 m ahead at 0.25° (127 beams).
     #[test]
     fn neighbouring_segments_of_one_arc_are_merged() {
+        use crate::scan::ScanGeometry;
+        merged_arc::<361>(ScanGeometry::LMS200_180_050, 3000.0, 500.0, 39);
+        merged_arc::<401>(ScanGeometry::lms200(100.0, 0.25), 1100.0, 300.0, 127);
+    }
+
+    /// [`neighbouring_segments_of_one_arc_are_merged`] with a pillar of radius `r` whose
+    /// centre is `d` ahead, seen over `beams` beams of `g`.
+    fn merged_arc<const N: usize>(g: crate::scan::ScanGeometry, d: f32, r: f32, beams: usize) {
         use crate::extractor::Extractor;
         use crate::flags::{JUMP, START};
         use crate::geometry::ray_circle_intersection;
-        use crate::scan::{Scan, ScanGeometry};
-        let g = ScanGeometry::LMS200_180_050;
-        let exact: [f32; 361] = core::array::from_fn(|i| {
+        use crate::scan::Scan;
+        let exact: [f32; N] = core::array::from_fn(|i| {
             let (s, c) = crate::math::sin_cos(g.bearing(i));
-            ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(3000.0, 0.0), 500.0)
+            ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(d, 0.0), r)
                 .unwrap_or(f32::NAN)
         });
         let (first, last) = (
             exact.iter().position(|r| r.is_finite()).unwrap_or(0),
             exact.iter().rposition(|r| r.is_finite()).unwrap_or(0),
         );
+        assert_eq!(last + 1 - first, beams);
         let cut = (first + last) / 2;
         let config = Config::default();
         let run = |flag_cut: u8, gap: bool| {
@@ -821,7 +831,7 @@ mod tests {
             if gap {
                 ranges[cut - 1] = f32::NAN;
             }
-            let mut ex = Extractor::<361, 8>::new();
+            let mut ex = Extractor::<N, 8>::new();
             ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
                 pass.set(first, START);
                 pass.set(cut, START | flag_cut);
