@@ -27,7 +27,7 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
-use crate::register::{register_sets, Assoc, Config, Status, NONE};
+use crate::register::{register_sets, Assoc, Config, Status, NONE, ROTATION_SCALE};
 use crate::set::{Set, MAX_OBS};
 
 /// One feature of the map, in the odometry frame. A line is kept as its normal angle α and an
@@ -297,7 +297,15 @@ impl<const MAP: usize> Odometry<MAP> {
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
+        let mut pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
+        if motion.is_none() {
+            // What the scene cannot tell (a corridor's length) is the last motion again, not
+            // no motion: the pair's estimate does not move along that direction from its
+            // starting guess.
+            if let Status::Degenerate { direction } = pair.status {
+                pair.rel = along_last(&pair.rel, &self.last_rel, &direction);
+            }
+        }
         let (guess, guess_cov) = match motion {
             _ if pair.is_registered() => {
                 let mut c = pair.cov;
@@ -359,19 +367,27 @@ impl<const MAP: usize> Odometry<MAP> {
                 None => false,
             }
         };
-        if !reg.is_registered() || disagree {
+        // Found by a search against the map alone (the pair failed): taken only when the map
+        // determines every direction, a degenerate one from such a wide search is a guess.
+        let map_only_degenerate =
+            !pair.is_registered() && matches!(reg.status, Status::Degenerate { .. });
+        if !reg.is_registered() || disagree || map_only_degenerate {
             // Not against the map: take the pair's registration (or the prediction) and
             // restart the map from this scan.
             let (rel, rel_cov, status) = if pair.is_registered() {
                 (pair.rel, pair.cov, pair.status)
+            } else if map_only_degenerate {
+                (guess, guess_cov, Status::None(crate::Failure::NoConsensus))
             } else {
                 (guess, guess_cov, reg.status)
             };
             self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
             self.pose = old.compose(&rel);
             self.last_rel = rel;
-            self.n = 0;
-            self.insert_all(&curr, &Assoc::new(), &self.pose.clone(), scan);
+            if pair.is_registered() {
+                self.n = 0;
+                self.insert_all(&curr, &Assoc::new(), &self.pose.clone(), scan);
+            }
             return Step {
                 scan,
                 rel,
@@ -562,7 +578,30 @@ const TRACK_SIGMA: (f32, f32) = (250.0, 0.1);
 /// of the scan's features (and the configured least number) agree with the map.
 fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
     let matched = usize::from(reg.matches.0) + usize::from(reg.matches.1);
-    matches!(reg.status, Status::Ok) && matched >= cfg.min_matches && 2 * matched >= curr.len()
+    matches!(reg.status, Status::Ok | Status::Degenerate { .. })
+        && matched >= cfg.min_matches
+        && 2 * matched >= curr.len()
+}
+
+/// `pose` moved along the unit `direction` (x mm, y mm, θ·[`ROTATION_SCALE`]) to where
+/// `last` lies along it.
+fn along_last(pose: &Pose, last: &Pose, direction: &[f32; 3]) -> Pose {
+    let d = [
+        last.x - pose.x,
+        last.y - pose.y,
+        wrap(last.theta - pose.theta) * ROTATION_SCALE,
+    ];
+    let c = d[0] * direction[0] + d[1] * direction[1] + d[2] * direction[2];
+    let moved = Pose::new(
+        pose.x + c * direction[0],
+        pose.y + c * direction[1],
+        pose.theta + c * direction[2] / ROTATION_SCALE,
+    );
+    if moved.is_finite() {
+        moved
+    } else {
+        *pose
+    }
 }
 
 /// The line through `anchor` with normal angle `alpha` and covariance `cov` of (α, d) as
