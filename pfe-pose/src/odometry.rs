@@ -3,17 +3,24 @@
 //!
 //! Each scan is first **tracked**: the motion prior (or, without one, the last motion again)
 //! predicts its pose, and Gauss–Newton refines that against the map alone (no search). The
-//! result is taken when every direction is determined and at least half of the scan's
-//! features agree with the map. Otherwise the scan is registered against the previous scan
-//! ([`crate::register`], gated by the motion prior when one is given), and that result,
-//! widened to three standard deviations, starts the refinement against the map. The map: at
+//! result is taken when at least half of the scan's features agree with the map; a direction
+//! the map cannot tell (a corridor's length) then keeps the prediction, with the tracking's
+//! standard deviation (250 mm, 0.1 rad) or the prior's. Otherwise the scan is registered
+//! against the previous scan ([`crate::register`], gated by the motion prior when one is
+//! given); without a prior, a direction that pair cannot tell takes the last motion's value
+//! (not "no motion"). That result, widened to three standard deviations, starts the
+//! refinement against the map. The map: at
 //! most `MAP` features (lines and points) in the odometry frame, taken into the predicted
 //! pose's frame for the registration. Matched
 //! features are fused into their map feature (information-weighted, the segment's extent the
 //! union), unmatched ones are added, and when the map is full the one seen least recently
 //! (then least often) is replaced. When the map cannot register the scan, or its answer
 //! disagrees with the pair's beyond both covariances (χ²₃ 99.9 %: a wrong map match), the
-//! pair's result is taken and the map restarts from this scan.
+//! pair's result is taken and the map restarts from this scan. When the pair did not register
+//! either, the map is searched from the last motion; an answer that leaves a direction
+//! undetermined is refused (from so wide a search it is a guess), and then the scan is not
+//! registered ([`Status::None`]): its pose is the prediction (the last motion again) and the
+//! map is **kept**, so that the next scan re-localises against it.
 //!
 //! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
 //! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would
@@ -79,7 +86,8 @@ pub struct Step {
     /// Its covariance.
     pub cov: Cov3,
     /// How the registration went ([`Status::Ok`] for the first scan). For
-    /// [`Status::None`] the pose is the prediction and the map restarts from this scan.
+    /// [`Status::None`] the pose is the prediction and the map is kept (the next scan
+    /// re-localises against it).
     pub status: Status,
 }
 
@@ -574,8 +582,9 @@ impl<const MAP: usize> Odometry<MAP> {
 /// its slack), not a statement about the robot.
 const TRACK_SIGMA: (f32, f32) = (250.0, 0.1);
 
-/// A tracking registration is taken when every direction is determined and at least half
-/// of the scan's features (and the configured least number) agree with the map.
+/// A tracking registration is taken when it registered (a degenerate one keeps the
+/// prediction along what it cannot tell) and at least half of the scan's features (and the
+/// configured least number) agree with the map.
 fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
     let matched = usize::from(reg.matches.0) + usize::from(reg.matches.1);
     matches!(reg.status, Status::Ok | Status::Degenerate { .. })
