@@ -723,3 +723,100 @@ fn fuse_2(e: &mut Entry, o: &Entry) {
     e.seen = e.seen.saturating_add(1);
     e.last = e.last.max(o.last);
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const COV: [[f32; 2]; 2] = [[1e-6, 0.0], [0.0, 25.0]];
+
+    /// The lines (α, ρ) of the odometry frame as seen from `pose`.
+    fn seen_from<const N: usize>(walls: &[(f32, f32); N], pose: Pose) -> [Observation; N] {
+        let inv = pose.inverse();
+        walls.map(|(a, r)| {
+            let (a, r) = inv.transform_line(a, r);
+            Observation::Line(LineObs::new(a, r, COV))
+        })
+    }
+
+    /// A scan that nothing registers (no features) keeps the map: the next scan re-localises
+    /// against it (the map used to restart from the empty scan, and the next scan had nothing
+    /// to register against).
+    #[test]
+    fn map_kept_through_a_scan_without_features() {
+        let walls = [
+            (0.0f32, 3000.0f32),
+            (core::f32::consts::FRAC_PI_2, 2000.0),
+            (core::f32::consts::PI, 1500.0),
+            (-core::f32::consts::FRAC_PI_2, 2500.0),
+        ];
+        let mut odo = Odometry::<32>::new(Config::default());
+        odo.update(&seen_from(&walls, Pose::IDENTITY), None);
+        odo.update(&seen_from(&walls, Pose::new(200.0, 0.0, 0.05)), None);
+        let lost = odo.update(&[], None);
+        assert!(matches!(lost.status, Status::None(_)), "{:?}", lost.status);
+        let truth = Pose::new(600.0, 0.0, 0.15);
+        let step = odo.update(&seen_from(&walls, truth), None);
+        assert_eq!(step.status, Status::Ok);
+        let e = crate::geom::hypot(step.pose.x - truth.x, step.pose.y - truth.y);
+        assert!(e < 5.0, "{:?}", step.pose);
+        assert!(
+            (step.pose.theta - truth.theta).abs() < 1e-3,
+            "{:?}",
+            step.pose
+        );
+    }
+
+    /// Down a corridor whose end wall has gone out of sight, the scene tells nothing along it:
+    /// the odometry keeps the last motion along it (it used to take "no motion") and says
+    /// degenerate, with the unobservable variance along the corridor.
+    #[test]
+    fn corridor_keeps_the_last_motion_along_it() {
+        let side = [
+            (core::f32::consts::FRAC_PI_2, 1500.0f32),
+            (-core::f32::consts::FRAC_PI_2, 1500.0),
+        ];
+        // The end wall and a pillar near it fix the position along the corridor (two
+        // features: the direction is confirmed).
+        let with_end = |pose: Pose| {
+            let [a, b] = seen_from(&side, pose);
+            let [end] = seen_from(&[(0.0, 6000.0)], pose);
+            let p = pose.inverse().transform_point([5000.0, 1000.0]);
+            let pillar = Observation::Point(PointObs::new(p[0], p[1], [[25.0, 0.0], [0.0, 25.0]]));
+            [a, b, end, pillar]
+        };
+        let mut odo = Odometry::<32>::new(Config::default());
+        for k in 0..3 {
+            let step = odo.update(&with_end(Pose::new(300.0 * k as f32, 0.0, 0.0)), None);
+            assert_eq!(step.status, Status::Ok, "scan {k}");
+        }
+        for k in 3..8 {
+            let truth = Pose::new(300.0 * k as f32, 0.0, 0.0);
+            let step = odo.update(&seen_from(&side, truth), None);
+            // Scan 3, the first without the end, is not registered (its two walls against the
+            // previous scan's four features: too few matches, and not a corridor on both
+            // sides): the prediction, the last motion again.
+            let expected = match step.status {
+                Status::Degenerate { direction } => k > 3 && direction[0].abs() > 0.99,
+                Status::None(_) => k == 3,
+                Status::Ok => false,
+            };
+            assert!(expected, "scan {k}: {:?}", step.status);
+            assert!((step.rel.x - 300.0).abs() < 1.0, "scan {k}: {:?}", step.rel);
+            assert!(
+                (step.pose.x - truth.x).abs() < 5.0,
+                "scan {k}: {:?}",
+                step.pose
+            );
+            assert!(
+                step.pose.y.abs() < 5.0 && step.pose.theta.abs() < 1e-3,
+                "{:?}",
+                step.pose
+            );
+            // Unobservable along the corridor (the last motion is a guess, not a measurement);
+            // the scan without any registration has the motion bounds as its covariance.
+            let along = if k > 3 { 1e11 } else { 1e6 };
+            assert!(step.rel_cov[0][0] >= along, "scan {k}: {:?}", step.rel_cov);
+        }
+    }
+}
