@@ -19,8 +19,9 @@
 //! pair's result is taken and the map restarts from this scan. When the pair did not register
 //! either, the map is searched from the last motion; an answer that leaves a direction
 //! undetermined is refused (from so wide a search it is a guess), and then the scan is not
-//! registered ([`Status::None`]): its pose is the prediction (the last motion again) and the
-//! map is **kept**, so that the next scan re-localises against it.
+//! registered ([`Status::None`]): its pose is the prediction (the last motion again, turned by
+//! the heading the directions of its lines and the map's agree on, when at least two do) and
+//! the map is **kept**, so that the next scan re-localises against it.
 //!
 //! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
 //! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would
@@ -86,8 +87,9 @@ pub struct Step {
     /// Its covariance.
     pub cov: Cov3,
     /// How the registration went ([`Status::Ok`] for the first scan). For
-    /// [`Status::None`] the pose is the prediction and the map is kept (the next scan
-    /// re-localises against it).
+    /// [`Status::None`] the pose is the prediction (its heading corrected by the lines when
+    /// they agree, see [`Odometry`]'s module) and the map is kept (the next scan re-localises
+    /// against it).
     pub status: Status,
 }
 
@@ -382,13 +384,26 @@ impl<const MAP: usize> Odometry<MAP> {
         if !reg.is_registered() || disagree || map_only_degenerate {
             // Not against the map: take the pair's registration (or the prediction) and
             // restart the map from this scan.
-            let (rel, rel_cov, status) = if pair.is_registered() {
+            let (mut rel, mut rel_cov, status) = if pair.is_registered() {
                 (pair.rel, pair.cov, pair.status)
             } else if map_only_degenerate {
                 (guess, guess_cov, Status::None(crate::Failure::NoConsensus))
             } else {
                 (guess, guess_cov, reg.status)
             };
+            if !pair.is_registered() && motion.is_none() {
+                // Not registered: the last motion again, its heading corrected by the
+                // directions of the lines, which the map (in the predicted pose's frame)
+                // and the scan share.
+                if let Some((d, var)) = heading(&map, &curr) {
+                    rel = guess.compose(&Pose::new(0.0, 0.0, d));
+                    rel_cov[2][2] = var;
+                    for i in 0..2 {
+                        rel_cov[i][2] = 0.0;
+                        rel_cov[2][i] = 0.0;
+                    }
+                }
+            }
             self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
             self.pose = old.compose(&rel);
             self.last_rel = rel;
@@ -592,6 +607,80 @@ fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
         && 2 * matched >= curr.len()
 }
 
+/// Widest heading correction [`heading`] looks for, rad.
+const HEADING_GATE: f32 = 0.6;
+/// Lines whose heading corrections differ by less than this agree, rad.
+const HEADING_AGREE: f32 = 0.026;
+
+/// The rotation that turns the lines of `curr` onto those of `prev` (two scans or a scan and
+/// the map, near the same pose; rotation about the scanner) and its variance, rad and rad²:
+/// each of the longest 32 lines of `curr` votes for the angle to the line of `prev` nearest in
+/// direction (within [`HEADING_GATE`]), weighted by its length; the vote most lines agree with
+/// (within [`HEADING_AGREE`]) wins. `None` unless two lines agree. Ranges are not compared:
+/// the translation may be far off.
+#[inline(never)]
+fn heading(prev: &Set, curr: &Set) -> Option<(f32, f32)> {
+    let (top, n) = crate::set::top_k::<32>(curr.lines().iter().map(|l| l.rank));
+    // (correction, weight, variance)
+    let mut votes = [(0.0f32, 0.0f32, 0.0f32); 32];
+    let mut nv = 0usize;
+    for &k in top.iter().take(n) {
+        let Some(lk) = curr.lines().get(usize::from(k)) else {
+            continue;
+        };
+        let mut nearest: Option<(f32, f32)> = None;
+        for li in prev.lines() {
+            let d = wrap(li.a - lk.a);
+            if d.abs() < HEADING_GATE && nearest.is_none_or(|(b, _)| d.abs() < b.abs()) {
+                nearest = Some((d, li.cov.a + lk.cov.a));
+            }
+        }
+        if let (Some((d, v)), Some(slot)) = (nearest, votes.get_mut(nv)) {
+            *slot = (d, lk.rank.max(1.0), v);
+            nv += 1;
+        }
+    }
+    let votes = votes.get(..nv).unwrap_or(&[]);
+    let support = |c: f32| -> (f32, usize) {
+        votes
+            .iter()
+            .filter(|v| (v.0 - c).abs() < HEADING_AGREE)
+            .fold((0.0, 0), |(w, n), v| (w + v.1, n + 1))
+    };
+    let mut best: Option<(f32, f32)> = None;
+    for v in votes {
+        let (w, _) = support(v.0);
+        if best.is_none_or(|(_, bw)| w > bw) {
+            best = Some((v.0, w));
+        }
+    }
+    let (centre, _) = best?;
+    let (count, _) = (support(centre).1, ());
+    if count < 2 {
+        return None;
+    }
+    // Information-weighted mean of the agreeing votes; the variance also covers their scatter.
+    let (mut sw, mut swd) = (0.0f32, 0.0f32);
+    for v in votes
+        .iter()
+        .filter(|v| (v.0 - centre).abs() < HEADING_AGREE)
+    {
+        let w = 1.0 / v.2.max(1e-8);
+        sw += w;
+        swd += w * v.0;
+    }
+    let d = swd / sw;
+    let mut spread = 0.0f32;
+    for v in votes
+        .iter()
+        .filter(|v| (v.0 - centre).abs() < HEADING_AGREE)
+    {
+        spread += (v.0 - d) * (v.0 - d);
+    }
+    let var = (1.0 / sw + spread / count as f32).max(HEADING_AGREE * HEADING_AGREE / 4.0);
+    (d.is_finite() && var.is_finite()).then_some((d, var))
+}
+
 /// `pose` moved along the unit `direction` (x mm, y mm, θ·[`ROTATION_SCALE`]) to where
 /// `last` lies along it.
 fn along_last(pose: &Pose, last: &Pose, direction: &[f32; 3]) -> Pose {
@@ -765,6 +854,33 @@ mod tests {
             "{:?}",
             step.pose
         );
+    }
+
+    /// A scan that cannot be registered (two parallel walls after a room's four) still tells
+    /// the heading: the last motion again, turned by what its lines say, with the heading's
+    /// variance measured and the translation's the motion bounds.
+    #[test]
+    fn heading_from_the_lines_of_an_unregistered_scan() {
+        let walls = [
+            (0.0f32, 3000.0f32),
+            (core::f32::consts::FRAC_PI_2, 2000.0),
+            (core::f32::consts::PI, 1500.0),
+            (-core::f32::consts::FRAC_PI_2, 2500.0),
+        ];
+        let mut odo = Odometry::<32>::new(Config::default());
+        odo.update(&seen_from(&walls, Pose::IDENTITY), None);
+        odo.update(&seen_from(&walls, Pose::new(200.0, 0.0, 0.0)), None);
+        let truth = Pose::new(400.0, 0.0, 0.15);
+        let [_, left, _, right] = seen_from(&walls, truth);
+        let step = odo.update(&[left, right], None);
+        assert!(matches!(step.status, Status::None(_)), "{:?}", step.status);
+        assert!(
+            (step.pose.theta - truth.theta).abs() < 0.005,
+            "{:?}",
+            step.pose
+        );
+        assert!(step.rel_cov[2][2] < 0.02 * 0.02, "{:?}", step.rel_cov);
+        assert!(step.rel_cov[0][0] >= 1e6, "{:?}", step.rel_cov);
     }
 
     /// Down a corridor whose end wall has gone out of sight, the scene tells nothing along it:
