@@ -4,8 +4,9 @@
 //! Each scan is first **tracked**: the motion prior (or, without one, the last motion again)
 //! predicts its pose, and Gauss–Newton refines that against the map alone (no search). The
 //! result is taken when at least half of the scan's features agree with the map; a direction
-//! the map cannot tell (a corridor's length) then keeps the prediction, with the tracking's
-//! standard deviation (250 mm, 0.1 rad) or the prior's. Otherwise the scan is registered
+//! the map cannot tell (a corridor's length) then keeps the prediction, with the prior's
+//! variance along it, or without a prior [`crate::UNOBSERVABLE_VARIANCE`] (the last motion
+//! again is a guess, not a measurement). Otherwise the scan is registered
 //! against the previous scan ([`crate::register`], gated by the motion prior when one is
 //! given); without a prior, a direction that pair cannot tell takes the last motion's value
 //! (not "no motion"). That result, widened to three standard deviations, starts the
@@ -35,7 +36,9 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
-use crate::register::{register_sets, Assoc, Config, Status, NONE, ROTATION_SCALE};
+use crate::register::{
+    register_sets, Assoc, Config, Status, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
+};
 use crate::set::{Set, MAX_OBS};
 
 /// One feature of the map, in the odometry frame. A line is kept as its normal angle α and an
@@ -288,7 +291,7 @@ impl<const MAP: usize> Odometry<MAP> {
             let prior_cov =
                 crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
             self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
-            let reg = register_sets(
+            let mut reg = register_sets(
                 &map,
                 &curr,
                 Some((Pose::IDENTITY, prior_cov)),
@@ -296,6 +299,11 @@ impl<const MAP: usize> Odometry<MAP> {
                 &mut assoc,
                 false,
             );
+            if let (Status::Degenerate { direction }, None) = (reg.status, motion) {
+                // Along what the map cannot tell the pose is the last motion again, a guess
+                // (the tracking's reach is no statement about the robot): unobservable.
+                reg.cov = widen_along(&reg.cov, &direction);
+            }
             if tracked(&reg, &curr, &cfg) {
                 self.last = curr.clone();
                 return self.accept(
@@ -607,6 +615,23 @@ fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
         && 2 * matched >= curr.len()
 }
 
+/// `cov` (x mm, y mm, θ rad) with [`UNOBSERVABLE_VARIANCE`] added along the unit `direction`
+/// (x mm, y mm, θ·[`ROTATION_SCALE`]).
+fn widen_along(cov: &Cov3, direction: &[f32; 3]) -> Cov3 {
+    let d = [direction[0], direction[1], direction[2] / ROTATION_SCALE];
+    let mut c = *cov;
+    for (row, di) in c.iter_mut().zip(&d) {
+        for (v, dj) in row.iter_mut().zip(&d) {
+            *v += UNOBSERVABLE_VARIANCE * di * dj;
+        }
+    }
+    if c.iter().flatten().all(|v| v.is_finite()) {
+        c
+    } else {
+        *cov
+    }
+}
+
 /// Widest heading correction [`heading`] looks for, rad.
 const HEADING_GATE: f32 = 0.6;
 /// Lines whose heading corrections differ by less than this agree, rad.
@@ -885,39 +910,52 @@ mod tests {
 
     /// Down a corridor whose end wall has gone out of sight, the scene tells nothing along it:
     /// the odometry keeps the last motion along it (it used to take "no motion") and says
-    /// degenerate, with the unobservable variance along the corridor.
+    /// degenerate, with the unobservable variance along the corridor: with two walls through
+    /// the pair's registration (the first scan without the end is not registered), with three
+    /// through the tracking against the map.
     #[test]
     fn corridor_keeps_the_last_motion_along_it() {
-        let side = [
-            (core::f32::consts::FRAC_PI_2, 1500.0f32),
-            (-core::f32::consts::FRAC_PI_2, 1500.0),
-        ];
-        // The end wall and a pillar near it fix the position along the corridor (two
-        // features: the direction is confirmed).
-        let with_end = |pose: Pose| {
-            let [a, b] = seen_from(&side, pose);
+        use core::f32::consts::FRAC_PI_2;
+        corridor([(FRAC_PI_2, 1500.0), (-FRAC_PI_2, 1500.0)], false);
+        corridor(
+            [
+                (FRAC_PI_2, 1500.0),
+                (-FRAC_PI_2, 1500.0),
+                (FRAC_PI_2, 3000.0),
+            ],
+            true,
+        );
+    }
+
+    fn corridor<const N: usize>(side: [(f32, f32); N], tracked: bool) {
+        let mut odo = Odometry::<32>::new(Config::default());
+        for k in 0..3 {
+            // The end wall and a pillar near it fix the position along the corridor (two
+            // features: the direction is confirmed).
+            let pose = Pose::new(300.0 * k as f32, 0.0, 0.0);
             let [end] = seen_from(&[(0.0, 6000.0)], pose);
             let p = pose.inverse().transform_point([5000.0, 1000.0]);
             let pillar = Observation::Point(PointObs::new(p[0], p[1], [[25.0, 0.0], [0.0, 25.0]]));
-            [a, b, end, pillar]
-        };
-        let mut odo = Odometry::<32>::new(Config::default());
-        for k in 0..3 {
-            let step = odo.update(&with_end(Pose::new(300.0 * k as f32, 0.0, 0.0)), None);
-            assert_eq!(step.status, Status::Ok, "scan {k}");
+            let walls = seen_from(&side, pose);
+            let mut obs = [end; 8];
+            for (o, s) in obs.iter_mut().zip(walls.iter().chain([&end, &pillar])) {
+                *o = *s;
+            }
+            let step = odo.update(obs.get(..N + 2).unwrap_or(&[]), None);
+            assert_eq!(step.status, Status::Ok, "{N} walls, scan {k}");
         }
         for k in 3..8 {
             let truth = Pose::new(300.0 * k as f32, 0.0, 0.0);
             let step = odo.update(&seen_from(&side, truth), None);
-            // Scan 3, the first without the end, is not registered (its two walls against the
-            // previous scan's four features: too few matches, and not a corridor on both
-            // sides): the prediction, the last motion again.
+            // With two walls, scan 3, the first without the end, is not registered (its two
+            // walls against the previous scan's four features: too few matches, and not a
+            // corridor on both sides): the prediction, the last motion again.
             let expected = match step.status {
-                Status::Degenerate { direction } => k > 3 && direction[0].abs() > 0.99,
-                Status::None(_) => k == 3,
+                Status::Degenerate { direction } => (tracked || k > 3) && direction[0].abs() > 0.99,
+                Status::None(_) => !tracked && k == 3,
                 Status::Ok => false,
             };
-            assert!(expected, "scan {k}: {:?}", step.status);
+            assert!(expected, "{N} walls, scan {k}: {:?}", step.status);
             assert!((step.rel.x - 300.0).abs() < 1.0, "scan {k}: {:?}", step.rel);
             assert!(
                 (step.pose.x - truth.x).abs() < 5.0,
@@ -931,8 +969,16 @@ mod tests {
             );
             // Unobservable along the corridor (the last motion is a guess, not a measurement);
             // the scan without any registration has the motion bounds as its covariance.
-            let along = if k > 3 { 1e11 } else { 1e6 };
-            assert!(step.rel_cov[0][0] >= along, "scan {k}: {:?}", step.rel_cov);
+            let along = if matches!(step.status, Status::None(_)) {
+                1e6
+            } else {
+                1e11
+            };
+            assert!(
+                step.rel_cov[0][0] >= along,
+                "{N} walls, scan {k}: {:?}",
+                step.rel_cov
+            );
         }
     }
 }
