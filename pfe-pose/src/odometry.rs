@@ -3,17 +3,26 @@
 //!
 //! Each scan is first **tracked**: the motion prior (or, without one, the last motion again)
 //! predicts its pose, and Gauss–Newton refines that against the map alone (no search). The
-//! result is taken when every direction is determined and at least half of the scan's
-//! features agree with the map. Otherwise the scan is registered against the previous scan
-//! ([`crate::register`], gated by the motion prior when one is given), and that result,
-//! widened to three standard deviations, starts the refinement against the map. The map: at
+//! result is taken when at least half of the scan's features agree with the map; a direction
+//! the map cannot tell (a corridor's length) then keeps the prediction, with the prior's
+//! variance along it, or without a prior [`crate::UNOBSERVABLE_VARIANCE`] (the last motion
+//! again is a guess, not a measurement). Otherwise the scan is registered
+//! against the previous scan ([`crate::register`], gated by the motion prior when one is
+//! given); without a prior, a direction that pair cannot tell takes the last motion's value
+//! (not "no motion"). That result, widened to three standard deviations, starts the
+//! refinement against the map. The map: at
 //! most `MAP` features (lines and points) in the odometry frame, taken into the predicted
 //! pose's frame for the registration. Matched
 //! features are fused into their map feature (information-weighted, the segment's extent the
 //! union), unmatched ones are added, and when the map is full the one seen least recently
 //! (then least often) is replaced. When the map cannot register the scan, or its answer
 //! disagrees with the pair's beyond both covariances (χ²₃ 99.9 %: a wrong map match), the
-//! pair's result is taken and the map restarts from this scan.
+//! pair's result is taken and the map restarts from this scan. When the pair did not register
+//! either, the map is searched from the last motion; an answer that leaves a direction
+//! undetermined is refused (from so wide a search it is a guess), and then the scan is not
+//! registered ([`Status::None`]): its pose is the prediction (the last motion again, turned by
+//! the heading the directions of its lines and the map's agree on, when at least two do) and
+//! the map is **kept**, so that the next scan re-localises against it.
 //!
 //! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
 //! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would
@@ -27,7 +36,9 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
-use crate::register::{register_sets, Assoc, Config, Status, NONE};
+use crate::register::{
+    register_sets, Assoc, Config, Status, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
+};
 use crate::set::{Set, MAX_OBS};
 
 /// One feature of the map, in the odometry frame. A line is kept as its normal angle α and an
@@ -79,7 +90,9 @@ pub struct Step {
     /// Its covariance.
     pub cov: Cov3,
     /// How the registration went ([`Status::Ok`] for the first scan). For
-    /// [`Status::None`] the pose is the prediction and the map restarts from this scan.
+    /// [`Status::None`] the pose is the prediction (its heading corrected by the lines when
+    /// they agree, see [`Odometry`]'s module) and the map is kept (the next scan re-localises
+    /// against it).
     pub status: Status,
 }
 
@@ -278,7 +291,7 @@ impl<const MAP: usize> Odometry<MAP> {
             let prior_cov =
                 crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
             self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
-            let reg = register_sets(
+            let mut reg = register_sets(
                 &map,
                 &curr,
                 Some((Pose::IDENTITY, prior_cov)),
@@ -286,6 +299,11 @@ impl<const MAP: usize> Odometry<MAP> {
                 &mut assoc,
                 false,
             );
+            if let (Status::Degenerate { direction }, None) = (reg.status, motion) {
+                // Along what the map cannot tell the pose is the last motion again, a guess
+                // (the tracking's reach is no statement about the robot): unobservable.
+                reg.cov = widen_along(&reg.cov, &direction);
+            }
             if tracked(&reg, &curr, &cfg) {
                 self.last = curr.clone();
                 return self.accept(
@@ -297,7 +315,15 @@ impl<const MAP: usize> Odometry<MAP> {
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
+        let mut pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
+        if motion.is_none() {
+            // What the scene cannot tell (a corridor's length) is the last motion again, not
+            // no motion: the pair's estimate does not move along that direction from its
+            // starting guess.
+            if let Status::Degenerate { direction } = pair.status {
+                pair.rel = along_last(&pair.rel, &self.last_rel, &direction);
+            }
+        }
         let (guess, guess_cov) = match motion {
             _ if pair.is_registered() => {
                 let mut c = pair.cov;
@@ -359,19 +385,40 @@ impl<const MAP: usize> Odometry<MAP> {
                 None => false,
             }
         };
-        if !reg.is_registered() || disagree {
+        // Found by a search against the map alone (the pair failed): taken only when the map
+        // determines every direction, a degenerate one from such a wide search is a guess.
+        let map_only_degenerate =
+            !pair.is_registered() && matches!(reg.status, Status::Degenerate { .. });
+        if !reg.is_registered() || disagree || map_only_degenerate {
             // Not against the map: take the pair's registration (or the prediction) and
             // restart the map from this scan.
-            let (rel, rel_cov, status) = if pair.is_registered() {
+            let (mut rel, mut rel_cov, status) = if pair.is_registered() {
                 (pair.rel, pair.cov, pair.status)
+            } else if map_only_degenerate {
+                (guess, guess_cov, Status::None(crate::Failure::NoConsensus))
             } else {
                 (guess, guess_cov, reg.status)
             };
+            if !pair.is_registered() && motion.is_none() {
+                // Not registered: the last motion again, its heading corrected by the
+                // directions of the lines, which the map (in the predicted pose's frame)
+                // and the scan share.
+                if let Some((d, var)) = heading(&map, &curr) {
+                    rel = guess.compose(&Pose::new(0.0, 0.0, d));
+                    rel_cov[2][2] = var;
+                    for i in 0..2 {
+                        rel_cov[i][2] = 0.0;
+                        rel_cov[2][i] = 0.0;
+                    }
+                }
+            }
             self.cov = compose_covariance(&old, &self.cov, &rel, &rel_cov);
             self.pose = old.compose(&rel);
             self.last_rel = rel;
-            self.n = 0;
-            self.insert_all(&curr, &Assoc::new(), &self.pose.clone(), scan);
+            if pair.is_registered() {
+                self.n = 0;
+                self.insert_all(&curr, &Assoc::new(), &self.pose.clone(), scan);
+            }
             return Step {
                 scan,
                 rel,
@@ -558,11 +605,126 @@ impl<const MAP: usize> Odometry<MAP> {
 /// its slack), not a statement about the robot.
 const TRACK_SIGMA: (f32, f32) = (250.0, 0.1);
 
-/// A tracking registration is taken when every direction is determined and at least half
-/// of the scan's features (and the configured least number) agree with the map.
+/// A tracking registration is taken when it registered (a degenerate one keeps the
+/// prediction along what it cannot tell) and at least half of the scan's features (and the
+/// configured least number) agree with the map.
 fn tracked(reg: &crate::Registration, curr: &Set, cfg: &Config) -> bool {
     let matched = usize::from(reg.matches.0) + usize::from(reg.matches.1);
-    matches!(reg.status, Status::Ok) && matched >= cfg.min_matches && 2 * matched >= curr.len()
+    matches!(reg.status, Status::Ok | Status::Degenerate { .. })
+        && matched >= cfg.min_matches
+        && 2 * matched >= curr.len()
+}
+
+/// `cov` (x mm, y mm, θ rad) with [`UNOBSERVABLE_VARIANCE`] added along the unit `direction`
+/// (x mm, y mm, θ·[`ROTATION_SCALE`]).
+fn widen_along(cov: &Cov3, direction: &[f32; 3]) -> Cov3 {
+    let d = [direction[0], direction[1], direction[2] / ROTATION_SCALE];
+    let mut c = *cov;
+    for (row, di) in c.iter_mut().zip(&d) {
+        for (v, dj) in row.iter_mut().zip(&d) {
+            *v += UNOBSERVABLE_VARIANCE * di * dj;
+        }
+    }
+    if c.iter().flatten().all(|v| v.is_finite()) {
+        c
+    } else {
+        *cov
+    }
+}
+
+/// Widest heading correction [`heading`] looks for, rad.
+const HEADING_GATE: f32 = 0.6;
+/// Lines whose heading corrections differ by less than this agree, rad.
+const HEADING_AGREE: f32 = 0.026;
+
+/// The rotation that turns the lines of `curr` onto those of `prev` (two scans or a scan and
+/// the map, near the same pose; rotation about the scanner) and its variance, rad and rad²:
+/// each of the longest 32 lines of `curr` votes for the angle to the line of `prev` nearest in
+/// direction (within [`HEADING_GATE`]), weighted by its length; the vote most lines agree with
+/// (within [`HEADING_AGREE`]) wins. `None` unless two lines agree. Ranges are not compared:
+/// the translation may be far off.
+#[inline(never)]
+fn heading(prev: &Set, curr: &Set) -> Option<(f32, f32)> {
+    let (top, n) = crate::set::top_k::<32>(curr.lines().iter().map(|l| l.rank));
+    // (correction, weight, variance)
+    let mut votes = [(0.0f32, 0.0f32, 0.0f32); 32];
+    let mut nv = 0usize;
+    for &k in top.iter().take(n) {
+        let Some(lk) = curr.lines().get(usize::from(k)) else {
+            continue;
+        };
+        let mut nearest: Option<(f32, f32)> = None;
+        for li in prev.lines() {
+            let d = wrap(li.a - lk.a);
+            if d.abs() < HEADING_GATE && nearest.is_none_or(|(b, _)| d.abs() < b.abs()) {
+                nearest = Some((d, li.cov.a + lk.cov.a));
+            }
+        }
+        if let (Some((d, v)), Some(slot)) = (nearest, votes.get_mut(nv)) {
+            *slot = (d, lk.rank.max(1.0), v);
+            nv += 1;
+        }
+    }
+    let votes = votes.get(..nv).unwrap_or(&[]);
+    let support = |c: f32| -> (f32, usize) {
+        votes
+            .iter()
+            .filter(|v| (v.0 - c).abs() < HEADING_AGREE)
+            .fold((0.0, 0), |(w, n), v| (w + v.1, n + 1))
+    };
+    let mut best: Option<(f32, f32)> = None;
+    for v in votes {
+        let (w, _) = support(v.0);
+        if best.is_none_or(|(_, bw)| w > bw) {
+            best = Some((v.0, w));
+        }
+    }
+    let (centre, _) = best?;
+    let (count, _) = (support(centre).1, ());
+    if count < 2 {
+        return None;
+    }
+    // Information-weighted mean of the agreeing votes; the variance also covers their scatter.
+    let (mut sw, mut swd) = (0.0f32, 0.0f32);
+    for v in votes
+        .iter()
+        .filter(|v| (v.0 - centre).abs() < HEADING_AGREE)
+    {
+        let w = 1.0 / v.2.max(1e-8);
+        sw += w;
+        swd += w * v.0;
+    }
+    let d = swd / sw;
+    let mut spread = 0.0f32;
+    for v in votes
+        .iter()
+        .filter(|v| (v.0 - centre).abs() < HEADING_AGREE)
+    {
+        spread += (v.0 - d) * (v.0 - d);
+    }
+    let var = (1.0 / sw + spread / count as f32).max(HEADING_AGREE * HEADING_AGREE / 4.0);
+    (d.is_finite() && var.is_finite()).then_some((d, var))
+}
+
+/// `pose` moved along the unit `direction` (x mm, y mm, θ·[`ROTATION_SCALE`]) to where
+/// `last` lies along it.
+fn along_last(pose: &Pose, last: &Pose, direction: &[f32; 3]) -> Pose {
+    let d = [
+        last.x - pose.x,
+        last.y - pose.y,
+        wrap(last.theta - pose.theta) * ROTATION_SCALE,
+    ];
+    let c = d[0] * direction[0] + d[1] * direction[1] + d[2] * direction[2];
+    let moved = Pose::new(
+        pose.x + c * direction[0],
+        pose.y + c * direction[1],
+        pose.theta + c * direction[2] / ROTATION_SCALE,
+    );
+    if moved.is_finite() {
+        moved
+    } else {
+        *pose
+    }
 }
 
 /// The line through `anchor` with normal angle `alpha` and covariance `cov` of (α, d) as
@@ -674,4 +836,149 @@ fn fuse_2(e: &mut Entry, o: &Entry) {
     }
     e.seen = e.seen.saturating_add(1);
     e.last = e.last.max(o.last);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const COV: [[f32; 2]; 2] = [[1e-6, 0.0], [0.0, 25.0]];
+
+    /// The lines (α, ρ) of the odometry frame as seen from `pose`.
+    fn seen_from<const N: usize>(walls: &[(f32, f32); N], pose: Pose) -> [Observation; N] {
+        let inv = pose.inverse();
+        walls.map(|(a, r)| {
+            let (a, r) = inv.transform_line(a, r);
+            Observation::Line(LineObs::new(a, r, COV))
+        })
+    }
+
+    /// A scan that nothing registers (no features) keeps the map: the next scan re-localises
+    /// against it (the map used to restart from the empty scan, and the next scan had nothing
+    /// to register against).
+    #[test]
+    fn map_kept_through_a_scan_without_features() {
+        let walls = [
+            (0.0f32, 3000.0f32),
+            (core::f32::consts::FRAC_PI_2, 2000.0),
+            (core::f32::consts::PI, 1500.0),
+            (-core::f32::consts::FRAC_PI_2, 2500.0),
+        ];
+        let mut odo = Odometry::<32>::new(Config::default());
+        odo.update(&seen_from(&walls, Pose::IDENTITY), None);
+        odo.update(&seen_from(&walls, Pose::new(200.0, 0.0, 0.05)), None);
+        let lost = odo.update(&[], None);
+        assert!(matches!(lost.status, Status::None(_)), "{:?}", lost.status);
+        let truth = Pose::new(600.0, 0.0, 0.15);
+        let step = odo.update(&seen_from(&walls, truth), None);
+        assert_eq!(step.status, Status::Ok);
+        let e = crate::geom::hypot(step.pose.x - truth.x, step.pose.y - truth.y);
+        assert!(e < 5.0, "{:?}", step.pose);
+        assert!(
+            (step.pose.theta - truth.theta).abs() < 1e-3,
+            "{:?}",
+            step.pose
+        );
+    }
+
+    /// A scan that cannot be registered (two parallel walls after a room's four) still tells
+    /// the heading: the last motion again, turned by what its lines say, with the heading's
+    /// variance measured and the translation's the motion bounds.
+    #[test]
+    fn heading_from_the_lines_of_an_unregistered_scan() {
+        let walls = [
+            (0.0f32, 3000.0f32),
+            (core::f32::consts::FRAC_PI_2, 2000.0),
+            (core::f32::consts::PI, 1500.0),
+            (-core::f32::consts::FRAC_PI_2, 2500.0),
+        ];
+        let mut odo = Odometry::<32>::new(Config::default());
+        odo.update(&seen_from(&walls, Pose::IDENTITY), None);
+        odo.update(&seen_from(&walls, Pose::new(200.0, 0.0, 0.0)), None);
+        let truth = Pose::new(400.0, 0.0, 0.15);
+        let [_, left, _, right] = seen_from(&walls, truth);
+        let step = odo.update(&[left, right], None);
+        assert!(matches!(step.status, Status::None(_)), "{:?}", step.status);
+        assert!(
+            (step.pose.theta - truth.theta).abs() < 0.005,
+            "{:?}",
+            step.pose
+        );
+        assert!(step.rel_cov[2][2] < 0.02 * 0.02, "{:?}", step.rel_cov);
+        assert!(step.rel_cov[0][0] >= 1e6, "{:?}", step.rel_cov);
+    }
+
+    /// Down a corridor whose end wall has gone out of sight, the scene tells nothing along it:
+    /// the odometry keeps the last motion along it (it used to take "no motion") and says
+    /// degenerate, with the unobservable variance along the corridor: with two walls through
+    /// the pair's registration (the first scan without the end is not registered), with three
+    /// through the tracking against the map.
+    #[test]
+    fn corridor_keeps_the_last_motion_along_it() {
+        use core::f32::consts::FRAC_PI_2;
+        corridor([(FRAC_PI_2, 1500.0), (-FRAC_PI_2, 1500.0)], false);
+        corridor(
+            [
+                (FRAC_PI_2, 1500.0),
+                (-FRAC_PI_2, 1500.0),
+                (FRAC_PI_2, 3000.0),
+            ],
+            true,
+        );
+    }
+
+    fn corridor<const N: usize>(side: [(f32, f32); N], tracked: bool) {
+        let mut odo = Odometry::<32>::new(Config::default());
+        for k in 0..3 {
+            // The end wall and a pillar near it fix the position along the corridor (two
+            // features: the direction is confirmed).
+            let pose = Pose::new(300.0 * k as f32, 0.0, 0.0);
+            let [end] = seen_from(&[(0.0, 6000.0)], pose);
+            let p = pose.inverse().transform_point([5000.0, 1000.0]);
+            let pillar = Observation::Point(PointObs::new(p[0], p[1], [[25.0, 0.0], [0.0, 25.0]]));
+            let walls = seen_from(&side, pose);
+            let mut obs = [end; 8];
+            for (o, s) in obs.iter_mut().zip(walls.iter().chain([&end, &pillar])) {
+                *o = *s;
+            }
+            let step = odo.update(obs.get(..N + 2).unwrap_or(&[]), None);
+            assert_eq!(step.status, Status::Ok, "{N} walls, scan {k}");
+        }
+        for k in 3..8 {
+            let truth = Pose::new(300.0 * k as f32, 0.0, 0.0);
+            let step = odo.update(&seen_from(&side, truth), None);
+            // With two walls, scan 3, the first without the end, is not registered (its two
+            // walls against the previous scan's four features: too few matches, and not a
+            // corridor on both sides): the prediction, the last motion again.
+            let expected = match step.status {
+                Status::Degenerate { direction } => (tracked || k > 3) && direction[0].abs() > 0.99,
+                Status::None(_) => !tracked && k == 3,
+                Status::Ok => false,
+            };
+            assert!(expected, "{N} walls, scan {k}: {:?}", step.status);
+            assert!((step.rel.x - 300.0).abs() < 1.0, "scan {k}: {:?}", step.rel);
+            assert!(
+                (step.pose.x - truth.x).abs() < 5.0,
+                "scan {k}: {:?}",
+                step.pose
+            );
+            assert!(
+                step.pose.y.abs() < 5.0 && step.pose.theta.abs() < 1e-3,
+                "{:?}",
+                step.pose
+            );
+            // Unobservable along the corridor (the last motion is a guess, not a measurement);
+            // the scan without any registration has the motion bounds as its covariance.
+            let along = if matches!(step.status, Status::None(_)) {
+                1e6
+            } else {
+                1e11
+            };
+            assert!(
+                step.rel_cov[0][0] >= along,
+                "{N} walls, scan {k}: {:?}",
+                step.rel_cov
+            );
+        }
+    }
 }
