@@ -137,10 +137,10 @@ impl Scatter {
         }
     }
 
-    /// [`Self::of`] by blocks of [`BLOCK`] points: their residuals first, branch-free
-    /// ([`residuals`]: the loop vectorises, square roots and divisions included), then counted.
-    /// The same residuals (the same arithmetic, point by point) in the same histograms: the
-    /// counts do not depend on the order.
+    /// [`Self::of`] by blocks of [`BLOCK`] points: their residuals' bins first, branch-free
+    /// ([`residual_bins`]: the loop vectorises, square roots and divisions included), then
+    /// counted. The same residuals (the same arithmetic, point by point) in the same
+    /// histograms: the counts do not depend on the order.
     #[cfg_attr(not(feature = "std"), allow(dead_code))]
     fn of_blocks(points: &[Point], sigma_r: f32) -> Self {
         let n = points.len();
