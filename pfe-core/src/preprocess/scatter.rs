@@ -114,23 +114,11 @@ impl Scatter {
     #[cfg_attr(feature = "std", allow(dead_code))]
     fn of_windows(points: &[Point], sigma_r: f32) -> Self {
         let n = points.len();
-        if n < 5 {
-            return Self::of_stream(points, sigma_r);
-        }
         let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
         let (mut n1, mut n2) = (0usize, 0usize);
         let scale = PER_SIGMA / sigma_r;
-        // As in `of_blocks`: the one-beam residuals of the second and the last but one point,
-        // then the middle of every window of five.
-        for i in [1, n - 2] {
-            if let (Some(&a), Some(&m), Some(&b)) =
-                (points.get(i - 1), points.get(i), points.get(i + 1))
-            {
-                if let Some(e) = chord_residual(a, m, b) {
-                    count(&mut one, &mut n1, e, scale);
-                }
-            }
-        }
+        // The middle of every window of five, then the one-beam residuals of the second and
+        // the last but one point (one point when they are the same, none below three points).
         for w in points.windows(5) {
             let &[a, b, m, c, d] = w else {
                 continue;
@@ -143,6 +131,19 @@ impl Scatter {
                 count(&mut two, &mut n2, e, scale);
             }
         }
+        let mut edge = |i: usize| {
+            if let (Some(&a), Some(&m), Some(&b)) =
+                (points.get(i - 1), points.get(i), points.get(i + 1))
+            {
+                if let Some(e) = chord_residual(a, m, b) {
+                    count(&mut one, &mut n1, e, scale);
+                }
+            }
+        };
+        edge(1);
+        if n >= 4 {
+            edge(n - 2);
+        }
         Self {
             one: estimate(&one, n1, sigma_r),
             two: estimate(&two, n2, sigma_r),
@@ -150,7 +151,8 @@ impl Scatter {
     }
 
     /// [`Self::of`] in one pass, a sliding window of five points in registers (for fewer than
-    /// five points, and the reference the tests hold the others to).
+    /// five points on the host, and the reference the tests hold the others to).
+    #[cfg_attr(not(any(test, feature = "std")), allow(dead_code))]
     fn of_stream(points: &[Point], sigma_r: f32) -> Self {
         let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
         let (mut n1, mut n2) = (0usize, 0usize);
