@@ -39,6 +39,11 @@
 // `!(x > 0.0)` is deliberate throughout: it is true for NaN, which must be rejected too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+// Only for the square root of the loops meant to vectorise (`math::sqrt_lanes`), with the
+// `std` feature.
+#[cfg(feature = "std")]
+extern crate std;
+
 mod arc;
 mod beams;
 mod check;

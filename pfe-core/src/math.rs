@@ -100,6 +100,22 @@ pub(crate) fn sqrt(x: f32) -> f32 {
     }
 }
 
+/// [`sqrt`] for loops meant to vectorise: with the `std` feature, std's (LLVM's square root,
+/// which it can compute a few lanes at once; libm's is an opaque `sqrtss`), else [`sqrt`]. Both
+/// round correctly: the same results. Only there: LLVM also moves its own square roots out of
+/// branches, which slowed the walk.
+#[inline(always)]
+pub(crate) fn sqrt_lanes(x: f32) -> f32 {
+    #[cfg(feature = "std")]
+    {
+        x.sqrt()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        sqrt(x)
+    }
+}
+
 /// `vsqrt.f32` as a two-instruction function. Stable Rust cannot name an FPU register in
 /// inline assembly on thumbv7em (rust-lang/rust#159976: the register classes ask for `vfp2`,
 /// which the single-precision FPU lacks) and `core::f32::math::sqrt` is unstable, so the

@@ -173,6 +173,26 @@ impl WindowLine {
         .accepts(x, y, r, k_sigma2, floor)
     }
 
+    /// [`Self::accepts_after`] without a branch (its tests joined by `&` and `|`): the same
+    /// answer, for loops meant to vectorise.
+    #[inline(always)]
+    pub(crate) fn accepts_after_lanes(
+        &self,
+        prev: &Point,
+        (x, y): (f32, f32),
+        r: f32,
+        k_sigma2: f32,
+        floor: f32,
+    ) -> bool {
+        let u_next = self.tail + (x - prev.x) * self.tx + (y - prev.y) * self.ty;
+        let lever_sin2 = (self.inv_n + u_next * u_next * self.inv_t2suu) * self.t2_sin2_last;
+        // `test::<true>` with that lever.
+        let q = self.tx * y - self.ty * x;
+        let e = math::abs(r * (q - self.cn)) - floor * math::abs(q);
+        let within = e * e <= k_sigma2 * (q * q + lever_sin2 * (r * r));
+        (self.cn * q > 0.0) & ((e <= 0.0) | within)
+    }
+
     /// The same line in the frame of a scanner at `origin` (the frame of the scanner at (0, 0)
     /// moved by `origin`, not turned): [`Self::accepts`] then tests a point given relative to
     /// `origin`, as a de-skewed beam's point is seen from its own pose.
