@@ -758,6 +758,25 @@ mod tests {
         });
     }
 
+    /// The NIS of two lines' difference with the sum of their covariances, cross terms
+    /// included (worked by hand: 0.5; without the cross terms it would be 0.625), the angle
+    /// difference wrapped across ±π.
+    #[test]
+    fn same_line_is_the_nis_of_the_difference_with_both_covariances() {
+        let p = Point::new(0.0, 0.0);
+        let line =
+            |alpha: f32, rho: f32| LineFeature::new(0, 9, 10, alpha, rho, 1e-4, 4.0, 0.01, p, p);
+        let nis = same_line(&line(0.10, 1000.0), &line(0.11, 1001.0));
+        assert!((nis - 0.5).abs() < 1e-3, "{nis}");
+        let pi = core::f32::consts::PI;
+        for (a, b) in [(pi - 0.005, -pi + 0.005), (-pi + 0.005, pi - 0.005)] {
+            let nis = same_line(&line(a, 1000.0), &line(b, 1001.0));
+            // Δα = ∓0.01 once wrapped: the same 0.5, or 0.5 with the sign of Δα·Δρ flipped.
+            assert!(nis < 2.0, "{a} {b}: {nis}");
+        }
+        assert!(same_line(&line(0.10, 1000.0), &line(0.10 + 0.5, 1000.0)) > 100.0);
+    }
+
     /// 7 beams (0.5° apart) of a post of 250 mm radius whose centre is 4 m ahead, nothing
     /// else in the scan: its points bend by 17 σ_r² from their line (σ_r 5 mm), too little
     /// for the typing's circle (25 σ_r²) but far beyond the noise for a line. It is reported
