@@ -41,6 +41,9 @@ const COS_JOIN: f32 = 0.980_066_6;
 const SAME_LINE_CHI2: f32 = 9.21;
 /// Most joins of neighbouring collinear lines a scan.
 const JOINS_MAX: usize = 8;
+/// Points of segments searched for a pillar inside a line ([`bump`]) a scan, in scans' lengths:
+/// the work it takes is bounded.
+const PILLAR_SCANS: usize = 2;
 /// Most points of a line joined from two.
 const JOIN_MAX_POINTS: usize = 400;
 
@@ -73,6 +76,7 @@ fn segments_with<const SCRUTINY: bool>(
         chain: None,
         join: rule.noise().filter(|_| SCRUTINY),
         joins: JOINS_MAX,
+        pillars: PILLAR_SCANS * pass.len(),
     };
     let len = pass.len();
     let mut pending: Option<(usize, usize)> = None;
@@ -118,6 +122,8 @@ struct Emitter<'r> {
     join: Option<&'r NoiseRule>,
     /// Joins of neighbouring collinear lines left for this scan ([`join_collinear`]).
     joins: usize,
+    /// Points left for this scan to search for a pillar inside a line ([`bump`]).
+    pillars: usize,
 }
 
 impl<'r> Emitter<'r> {
@@ -155,9 +161,12 @@ impl<'r> Emitter<'r> {
         }
     }
 
-    /// The rule of the arc test that finds a pillar inside a segment typed a line.
-    fn arc(&self) -> Option<&'r NoiseRule> {
-        self.join.and_then(arc_rule)
+    /// The rule of the arc test that finds a pillar inside a segment typed a line, and the
+    /// points left for this scan to search.
+    fn arc(&mut self) -> Option<(&'r NoiseRule, &mut usize)> {
+        self.join
+            .and_then(arc_rule)
+            .map(|rule| (rule, &mut self.pillars))
     }
 
     /// Joins the parts of at least [`CHAIN_MIN`] points of the noted run that lie on one line
@@ -212,7 +221,7 @@ fn join_lines(
             let stats = &mut *pass.stats;
             stats.segments = (stats.segments + redone).saturating_sub(undone);
             stats.short_segments = (stats.short_segments + redone).saturating_sub(undone);
-            emit::<true>(pass, a, b, arc_rule(rule), config, out);
+            emit::<true>(pass, a, b, None, config, out);
             join_collinear(pass, rule, config, out, joins);
         }
         a += n;
@@ -281,7 +290,7 @@ fn join_collinear(
     let stats = &mut *pass.stats;
     stats.segments = stats.segments.saturating_sub(2);
     stats.features = stats.features.saturating_sub(2);
-    emit::<true>(pass, s, e, arc_rule(rule), config, out);
+    emit::<true>(pass, s, e, None, config, out);
 }
 
 /// The NIS of the difference of the lines `a` and `b` (both in the scanner's frame, ρ ≥ 0),
@@ -316,7 +325,7 @@ fn emit<const SCRUTINY: bool>(
     pass: &mut Pass<'_>,
     s: usize,
     e: usize,
-    arc: Option<&NoiseRule>,
+    mut arc: Option<(&NoiseRule, &mut usize)>,
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
@@ -336,17 +345,31 @@ fn emit<const SCRUTINY: bool>(
     }
     let mut todo: Vec<(usize, usize), PIECES> = Vec::new();
     let _ = todo.push((s, e));
+    // The arc piece of a split around a pillar, typed already.
+    let mut known: Option<(usize, usize, Option<Option<Feature>>)> = None;
     while let Some((s, e)) = todo.pop() {
-        let feature = typed::<true>(pass, s, e, config);
-        if todo.len() + 3 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
-            if let Some((i, j)) = arc
-                .and_then(|rule| bump(pass.points.get(s..=e)?, rule, config))
-                .filter(|&(i, j)| {
-                    matches!(
-                        typed::<true>(pass, s + i, s + j, config),
-                        Some(Some(Feature::Circle(_)))
-                    )
-                })
+        let feature = match known.take() {
+            Some((ks, ke, f)) if (ks, ke) == (s, e) => f,
+            other => {
+                known = other;
+                typed::<true>(pass, s, e, config)
+            }
+        };
+        let n = e + 1 - s;
+        if todo.len() + 3 <= PIECES
+            && matches!(feature, Some(Some(Feature::Line(_))))
+            && n > *MERGE_SIZES.start()
+            && arc.as_ref().is_some_and(|a| *a.1 >= n)
+        {
+            if let Some(a) = arc.as_mut() {
+                *a.1 -= n;
+            }
+            let pillar = arc
+                .as_ref()
+                .and_then(|a| bump(pass.points.get(s..=e)?, a.0, config))
+                .map(|(i, j)| (i, j, typed::<true>(pass, s + i, s + j, config)));
+            if let Some((i, j, f)) =
+                pillar.filter(|p| matches!(p.2, Some(Some(Feature::Circle(_)))))
             {
                 // The line's pieces either side of the arc (when any), last first.
                 if s + j < e {
@@ -356,6 +379,7 @@ fn emit<const SCRUTINY: bool>(
                 if i > 0 {
                     let _ = todo.push((s, s + i - 1));
                 }
+                known = Some((s + i, s + j, f));
                 continue;
             }
         }
@@ -562,16 +586,24 @@ const BUMP_GROW_SIGMAS: f32 = 3.0;
 /// the best two-line split, grown while the next point lies on its circle, and must face the
 /// scanner ([`facing`]).
 fn bump(pts: &[Point], rule: &NoiseRule, config: &Config) -> Option<(usize, usize)> {
+    let n = pts.len();
+    // The arc of at least `MERGE_SIZES.start()` points and some line beside it.
+    if n <= *MERGE_SIZES.start() {
+        return None;
+    }
     let line = fit_line(pts).ok()?;
     let var = config.sigma_r * config.sigma_r;
-    let n = pts.len();
     if !(line.sse() > var * (n as f32 - 2.0) && line.sse() > rule.model.arc_chi2 * var) {
         return None;
     }
     let arc_of = |(i, j): (usize, usize)| arc_fit(pts.get(i..=j)?, rule).map(|c| (i, j, c));
-    // An arc at an end of the segment that the peak misses is one side of its best two-line
-    // split.
-    let (mut i, mut j, circle) = peak(pts, line, config).and_then(arc_of).or_else(|| {
+    let peak = peak(pts, line, config)?;
+    let (mut i, mut j, circle) = arc_of(peak).or_else(|| {
+        // An arc at an end of the segment that the peak misses is one side of its best
+        // two-line split.
+        if peak.0 > 0 && peak.1 + 1 < n {
+            return None;
+        }
         let (k, _) = corner_split(pts)?;
         arc_of((0, k.checked_sub(1)?)).or_else(|| arc_of((k, n - 1)))
     })?;
