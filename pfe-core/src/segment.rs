@@ -5,7 +5,8 @@
 //! seen over a few beams at growing incidence, can fail the line prediction every few points
 //! before an arc window has formed. Runs of consecutive short segments (a distant wall at
 //! grazing incidence, its points too far apart to predict one another) that together lie on
-//! one line within the noise are joined into one segment.
+//! one line within the noise are joined into one segment. A segment typed a line that is a
+//! pillar against a wall (no jump at its edges) is split around the pillar's arc.
 
 use heapless::Vec;
 
@@ -13,7 +14,8 @@ use crate::arc::arc_fit;
 use crate::classify;
 use crate::config::{Config, Typing};
 use crate::feature::{Feature, LineFeature};
-use crate::fit::line::fit_line;
+use crate::fit::circle::Circle;
+use crate::fit::line::{fit_line, LineFit};
 use crate::fit::run::{corner_split, line_prefix, on_one_line};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::geometry::Point;
@@ -39,6 +41,9 @@ const COS_JOIN: f32 = 0.980_066_6;
 const SAME_LINE_CHI2: f32 = 9.21;
 /// Most joins of neighbouring collinear lines a scan.
 const JOINS_MAX: usize = 8;
+/// Points of segments searched for a pillar inside a line ([`bump`]) a scan, in scans' lengths:
+/// the work it takes is bounded.
+const PILLAR_SCANS: usize = 2;
 /// Most points of a line joined from two.
 const JOIN_MAX_POINTS: usize = 400;
 
@@ -71,6 +76,7 @@ fn segments_with<const SCRUTINY: bool>(
         chain: None,
         join: rule.noise().filter(|_| SCRUTINY),
         joins: JOINS_MAX,
+        pillars: PILLAR_SCANS * pass.len(),
     };
     let len = pass.len();
     let mut pending: Option<(usize, usize)> = None;
@@ -116,9 +122,11 @@ struct Emitter<'r> {
     join: Option<&'r NoiseRule>,
     /// Joins of neighbouring collinear lines left for this scan ([`join_collinear`]).
     joins: usize,
+    /// Points left for this scan to search for a pillar inside a line ([`bump`]).
+    pillars: usize,
 }
 
-impl Emitter<'_> {
+impl<'r> Emitter<'r> {
     /// Emits the segment `s..=e`, after joining the run of short segments before it when it is
     /// long.
     fn emit<const SCRUTINY: bool>(
@@ -131,7 +139,7 @@ impl Emitter<'_> {
     ) {
         if !SCRUTINY || self.join.is_none() {
             // Nothing is joined: the plain path.
-            emit::<SCRUTINY>(pass, s, e, config, out);
+            emit::<SCRUTINY>(pass, s, e, self.arc(), config, out);
             return;
         }
         if e + 1 - s < config.min_points {
@@ -147,10 +155,18 @@ impl Emitter<'_> {
         } else {
             self.flush(pass, config, out);
         }
-        emit::<SCRUTINY>(pass, s, e, config, out);
+        emit::<SCRUTINY>(pass, s, e, self.arc(), config, out);
         if let Some(rule) = self.join {
             join_collinear(pass, rule, config, out, &mut self.joins);
         }
+    }
+
+    /// The rule of the arc test that finds a pillar inside a segment typed a line, and the
+    /// points left for this scan to search.
+    fn arc(&mut self) -> Option<(&'r NoiseRule, &mut usize)> {
+        self.join
+            .and_then(arc_rule)
+            .map(|rule| (rule, &mut self.pillars))
     }
 
     /// Joins the parts of at least [`CHAIN_MIN`] points of the noted run that lie on one line
@@ -163,6 +179,11 @@ impl Emitter<'_> {
             _ => {}
         }
     }
+}
+
+/// `rule` when its arc window lets it test arcs (the default mode's).
+fn arc_rule(rule: &NoiseRule) -> Option<&NoiseRule> {
+    (rule.model.arc_window >= 5).then_some(rule)
 }
 
 /// Joins the parts of the run `cs..=ce` of short segments that lie on one line.
@@ -200,7 +221,7 @@ fn join_lines(
             let stats = &mut *pass.stats;
             stats.segments = (stats.segments + redone).saturating_sub(undone);
             stats.short_segments = (stats.short_segments + redone).saturating_sub(undone);
-            emit::<true>(pass, a, b, config, out);
+            emit::<true>(pass, a, b, None, config, out);
             join_collinear(pass, rule, config, out, joins);
         }
         a += n;
@@ -269,7 +290,7 @@ fn join_collinear(
     let stats = &mut *pass.stats;
     stats.segments = stats.segments.saturating_sub(2);
     stats.features = stats.features.saturating_sub(2);
-    emit::<true>(pass, s, e, config, out);
+    emit::<true>(pass, s, e, None, config, out);
 }
 
 /// The NIS of the difference of the lines `a` and `b` (both in the scanner's frame, ρ ≥ 0),
@@ -304,6 +325,7 @@ fn emit<const SCRUTINY: bool>(
     pass: &mut Pass<'_>,
     s: usize,
     e: usize,
+    mut arc: Option<(&NoiseRule, &mut usize)>,
     config: &Config,
     out: &mut dyn FeatureSink,
 ) {
@@ -323,8 +345,44 @@ fn emit<const SCRUTINY: bool>(
     }
     let mut todo: Vec<(usize, usize), PIECES> = Vec::new();
     let _ = todo.push((s, e));
+    // The arc piece of a split around a pillar, typed already.
+    let mut known: Option<(usize, usize, Option<Option<Feature>>)> = None;
     while let Some((s, e)) = todo.pop() {
-        let feature = typed::<true>(pass, s, e, config);
+        let feature = match known.take() {
+            Some((ks, ke, f)) if (ks, ke) == (s, e) => f,
+            other => {
+                known = other;
+                typed::<true>(pass, s, e, config)
+            }
+        };
+        let n = e + 1 - s;
+        if todo.len() + 3 <= PIECES
+            && matches!(feature, Some(Some(Feature::Line(_))))
+            && n > *MERGE_SIZES.start()
+            && arc.as_ref().is_some_and(|a| *a.1 >= n)
+        {
+            if let Some(a) = arc.as_mut() {
+                *a.1 -= n;
+            }
+            let pillar = arc
+                .as_ref()
+                .and_then(|a| bump(pass.points.get(s..=e)?, a.0, config))
+                .map(|(i, j)| (i, j, typed::<true>(pass, s + i, s + j, config)));
+            if let Some((i, j, f)) =
+                pillar.filter(|p| matches!(p.2, Some(Some(Feature::Circle(_)))))
+            {
+                // The line's pieces either side of the arc (when any), last first.
+                if s + j < e {
+                    let _ = todo.push((s + j + 1, e));
+                }
+                let _ = todo.push((s + i, s + j));
+                if i > 0 {
+                    let _ = todo.push((s, s + i - 1));
+                }
+                known = Some((s + i, s + j, f));
+                continue;
+            }
+        }
         if todo.len() + 2 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
             if let Some(k) = pass.points.get(s..=e).and_then(|pts| corner(pts, config)) {
                 // Second piece first: the first is emitted first.
@@ -512,6 +570,106 @@ fn corner(pts: &[Point], config: &Config) -> Option<usize> {
     let (k, sse_2) = corner_split(pts)?;
     let long = k >= config.min_points && pts.len() - k >= config.min_points;
     (long && sse_l - sse_2 > chi2 * var && sse_2 < ratio * sse_l).then_some(k)
+}
+
+/// Residual (in σ_r) a point must exceed to start the bump an arc makes on a line's fit.
+const BUMP_SIGMAS: f32 = 2.0;
+/// Times the line under a bump is fitted again without it.
+const BUMP_ROUNDS: usize = 3;
+/// Residual (in σ_r) to the bump's circle within which neighbouring points join the arc.
+const BUMP_GROW_SIGMAS: f32 = 3.0;
+
+/// An arc inside the segment `pts` typed a line whose fit is far beyond the noise (a pillar
+/// against a wall, its edges meeting the wall without a range jump, that the walk followed
+/// and no single corner explains): its first and last index in `pts`, a strict part of them.
+/// The arc is the run of same-side residuals around the largest one ([`peak`]) or a side of
+/// the best two-line split, grown while the next point lies on its circle, and must face the
+/// scanner ([`facing`]).
+fn bump(pts: &[Point], rule: &NoiseRule, config: &Config) -> Option<(usize, usize)> {
+    let n = pts.len();
+    // The arc of at least `MERGE_SIZES.start()` points and some line beside it.
+    if n <= *MERGE_SIZES.start() {
+        return None;
+    }
+    let line = fit_line(pts).ok()?;
+    let var = config.sigma_r * config.sigma_r;
+    if !(line.sse() > var * (n as f32 - 2.0) && line.sse() > rule.model.arc_chi2 * var) {
+        return None;
+    }
+    let arc_of = |(i, j): (usize, usize)| arc_fit(pts.get(i..=j)?, rule).map(|c| (i, j, c));
+    let peak = peak(pts, line, config)?;
+    let (mut i, mut j, circle) = arc_of(peak).or_else(|| {
+        // An arc at an end of the segment that the peak misses is one side of its best
+        // two-line split.
+        if peak.0 > 0 && peak.1 + 1 < n {
+            return None;
+        }
+        let (k, _) = corner_split(pts)?;
+        arc_of((0, k.checked_sub(1)?)).or_else(|| arc_of((k, n - 1)))
+    })?;
+    let on = |k: usize| {
+        pts.get(k).is_some_and(|p| {
+            math::abs(p.distance(&circle.center) - circle.radius)
+                <= BUMP_GROW_SIGMAS * config.sigma_r
+        })
+    };
+    while i > 0 && on(i - 1) {
+        i -= 1;
+    }
+    while j + 1 < n && on(j + 1) {
+        j += 1;
+    }
+    (j + 1 - i >= *MERGE_SIZES.start()
+        && (i > 0 || j + 1 < n)
+        && arc_fit(pts.get(i..=j)?, rule)
+            .is_some_and(|c| facing(pts.get(i..=j).unwrap_or(&[]), &c)))
+    .then_some((i, j))
+}
+
+/// Whether the arc of `pts` on `circle` faces the scanner (its centre beyond the points, as a
+/// pillar's): the inside of a rounded corner is no pillar.
+fn facing(pts: &[Point], circle: &Circle) -> bool {
+    pts.get(pts.len() / 2)
+        .is_some_and(|m| math::hypot(circle.center.x, circle.center.y) > math::hypot(m.x, m.y))
+}
+
+/// The run of same-side residuals beyond [`BUMP_SIGMAS`] σ_r around the largest residual of
+/// `pts` from `line`, the line fitted again without it from the far half of its longer side
+/// (the wall a pillar stands against).
+fn peak(pts: &[Point], mut line: LineFit, config: &Config) -> Option<(usize, usize)> {
+    let n = pts.len();
+    let (mut i, mut j) = (0usize, 0usize);
+    for _ in 0..BUMP_ROUNDS {
+        let d = |k: usize| pts.get(k).map_or(0.0, |p| line.signed_distance(p));
+        let (mut m, mut dm) = (0usize, 0.0f32);
+        for k in 0..n {
+            if math::abs(d(k)) > math::abs(dm) {
+                (m, dm) = (k, d(k));
+            }
+        }
+        let far = |k: usize| d(k) * dm > 0.0 && math::abs(d(k)) > BUMP_SIGMAS * config.sigma_r;
+        if !far(m) {
+            return None;
+        }
+        (i, j) = (m, m);
+        while i > 0 && far(i - 1) {
+            i -= 1;
+        }
+        while j + 1 < n && far(j + 1) {
+            j += 1;
+        }
+        // The far half of the longer side: clear of the rest of a pillar at an end.
+        let rest = if i >= n - 1 - j {
+            pts.get(..i / 2)
+        } else {
+            pts.get((j + 1 + n) / 2..)
+        };
+        match rest.filter(|r| r.len() >= config.min_points).map(fit_line) {
+            Some(Ok(l)) => line = l,
+            _ => break,
+        }
+    }
+    Some((i, j))
 }
 
 // The f64 references need libm (the default feature).
@@ -813,6 +971,55 @@ mod tests {
             matches!(plate.as_slice(), [Feature::Line(l)] if l.points == 7),
             "{plate:?}"
         );
+    }
+
+    /// A pillar standing against a wall (a pilaster: its edges meet the wall without a range
+    /// jump, so the walk follows wall, pillar and wall as one run) is found as a circle between
+    /// two pieces of the wall, not hidden in a line or cut into lines: a wall 700 mm ahead and
+    /// a pillar of 170 mm radius centred 760 mm ahead, without noise and with σ_r = 5 mm.
+    #[test]
+    fn a_pillar_against_a_wall_is_a_circle_between_two_lines() {
+        use crate::extractor::Extractor;
+        use crate::geometry::ray_circle_intersection;
+        use crate::scan::{Scan, ScanGeometry};
+        let g = ScanGeometry::LMS200_180_050;
+        let (centre, radius, wall) = (760.0f32, 170.0f32, 700.0f32);
+        for noise in [0.0f32, 5.0] {
+            let mut seed = 12_345u32;
+            let mut uniform = || {
+                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (seed >> 8) as f32 / 16_777_216.0
+            };
+            let ranges: [f32; 361] = core::array::from_fn(|i| {
+                let (s, c) = crate::math::sin_cos(g.bearing(i));
+                let (u1, u2) = (uniform().max(1e-7), uniform());
+                let n = noise * libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(6.283_185_5 * u2);
+                if c < 0.5 {
+                    return 0.0;
+                }
+                let pillar = ray_circle_intersection(
+                    Point::new(0.0, 0.0),
+                    c,
+                    s,
+                    Point::new(centre, 0.0),
+                    radius,
+                )
+                .unwrap_or(f32::INFINITY);
+                (wall / c).min(pillar) + n
+            });
+            let mut ex = Extractor::<361, 16>::new();
+            assert!(ex
+                .extract(&Scan::from_mm(g, &ranges), &Config::default())
+                .is_ok());
+            let f = ex.features();
+            assert!(
+                matches!(f, [Feature::Line(a), Feature::Circle(c), Feature::Line(b)]
+                    if (a.rho - wall).abs() < 5.0 && (b.rho - wall).abs() < 5.0
+                        && (c.center.x - centre).abs() < 15.0 && c.center.y.abs() < 15.0
+                        && (c.radius - radius).abs() < 15.0),
+                "noise {noise}: {f:?}"
+            );
+        }
     }
 
     /// Two neighbouring segments that are one arc together (a pillar cut in two by a start the
