@@ -55,6 +55,7 @@
 mod geom;
 mod obs;
 mod odometry;
+pub mod points;
 pub mod register;
 mod set;
 
