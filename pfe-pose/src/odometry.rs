@@ -36,8 +36,10 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
+use crate::points::{agreement, complete, RangeScan, SCAN_BEAMS};
 use crate::register::{
-    register_sets, Assoc, Config, Status, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
+    register_sets, register_sets_verified, Assoc, Config, Status, NONE, ROTATION_SCALE,
+    UNOBSERVABLE_VARIANCE,
 };
 use crate::set::{Set, MAX_OBS};
 
@@ -127,6 +129,8 @@ pub struct Odometry<const MAP: usize> {
     scans: u32,
     /// The previous scan's features.
     last: Set,
+    /// The previous scan's ranges (empty when it came without: [`Odometry::update_scan`]).
+    pts: RangeScan<SCAN_BEAMS>,
 }
 
 /// The settings of an [`Odometry`]: the default ones as a tag only, so that a new odometry
@@ -191,6 +195,7 @@ impl<const MAP: usize> Odometry<MAP> {
             last_rel: Pose::IDENTITY,
             scans: 0,
             last: Set::new(),
+            pts: RangeScan::new(),
         }
     }
 
@@ -201,6 +206,7 @@ impl<const MAP: usize> Odometry<MAP> {
         self.cov = ZERO3;
         self.last_rel = Pose::IDENTITY;
         self.scans = 0;
+        self.pts.clear();
     }
 
     /// The latest pose in the first scan's frame and its covariance.
@@ -228,7 +234,7 @@ impl<const MAP: usize> Odometry<MAP> {
     pub fn update(&mut self, obs: &[Observation], motion: Option<(Pose, Cov3)>) -> Step {
         let cfg = self.cfg.get();
         let curr = Set::from_obs(obs.iter().copied(), &cfg);
-        self.update_set(curr, motion, cfg)
+        self.update_set(curr, None, motion, cfg)
     }
 
     /// [`Odometry::update`] with the scan's pfe-core features: those
@@ -254,12 +260,80 @@ impl<const MAP: usize> Odometry<MAP> {
     ) -> Step {
         let cfg = self.cfg.get();
         let curr = Set::from_obs(features.iter().filter_map(Observation::from_feature), &cfg);
-        self.update_set(curr, motion, cfg)
+        self.update_set(curr, None, motion, cfg)
     }
 
-    fn update_set(&mut self, curr: Set, motion: Option<(Pose, Cov3)>, cfg: Config) -> Step {
+    /// [`Odometry::update_features`] with the scan's ranges too (mm, NaN: no return; beam `i`
+    /// at bearing `geometry.bearing(i)`): the scans' own points then verify the registration
+    /// and, when the features cannot register a scan, a point-to-line ICP against the
+    /// previous scan takes over ([`crate::points`]). The previous scan's ranges are kept (at
+    /// most [`SCAN_BEAMS`], u16 mm).
+    ///
+    /// ```
+    /// use pfe_core::ScanGeometry;
+    /// use pfe_pose::{FeatureOdometry, Status};
+    /// // A room's corner; no features given: the points alone register the 0.2 m step.
+    /// let g = ScanGeometry::LMS200_180_050;
+    /// let room = |dx: f32| -> Vec<f32> {
+    ///     (0..361).map(|i| {
+    ///         let (s, c) = g.bearing(i).sin_cos();
+    ///         let mut r = f32::INFINITY;
+    ///         if c > 1e-6 { r = r.min((3000.0 - dx) / c); }
+    ///         if s > 1e-6 { r = r.min(2000.0 / s); }
+    ///         if s < -1e-6 { r = r.min(2500.0 / -s); }
+    ///         r
+    ///     }).collect()
+    /// };
+    /// let mut odo = FeatureOdometry::new_default();
+    /// odo.update_scan(&[], &g, &room(0.0), None);
+    /// let step = odo.update_scan(&[], &g, &room(200.0), None);
+    /// assert_eq!(step.status, Status::Ok);
+    /// assert!((step.pose.x - 200.0).abs() < 5.0);
+    /// ```
+    pub fn update_scan(
+        &mut self,
+        features: &[pfe_core::Feature],
+        geometry: &pfe_core::ScanGeometry,
+        ranges_mm: &[f32],
+        motion: Option<(Pose, Cov3)>,
+    ) -> Step {
+        let cfg = self.cfg.get();
+        let curr = Set::from_obs(features.iter().filter_map(Observation::from_feature), &cfg);
+        let mut pts = RangeScan::new();
+        pts.set(geometry.start_angle, geometry.angle_step, ranges_mm);
+        self.update_set(curr, Some(&pts), motion, cfg)
+    }
+
+    /// [`Odometry::update`] with the scan's ranges `pts` (see [`Odometry::update_scan`]).
+    pub fn update_with_points(
+        &mut self,
+        obs: &[Observation],
+        pts: &RangeScan<SCAN_BEAMS>,
+        motion: Option<(Pose, Cov3)>,
+    ) -> Step {
+        let cfg = self.cfg.get();
+        let curr = Set::from_obs(obs.iter().copied(), &cfg);
+        self.update_set(curr, Some(pts), motion, cfg)
+    }
+
+    fn update_set(
+        &mut self,
+        curr: Set,
+        curr_pts: Option<&RangeScan<SCAN_BEAMS>>,
+        motion: Option<(Pose, Cov3)>,
+        cfg: Config,
+    ) -> Step {
         let scan = self.scans;
         self.scans = self.scans.saturating_add(1);
+        // The previous scan's ranges and this one's, when both are there.
+        let prev_pts = core::mem::take(&mut self.pts);
+        let points = curr_pts.filter(|c| !c.is_empty() && !prev_pts.is_empty());
+        if let Some(c) = curr_pts {
+            self.pts.clone_from(c);
+        }
+        let verify = |rel: &Pose| -> f32 {
+            points.map_or(f32::INFINITY, |c| agreement(&prev_pts, c, rel).score())
+        };
         if scan == 0 {
             self.n = 0;
             self.last = curr.clone();
@@ -304,7 +378,7 @@ impl<const MAP: usize> Odometry<MAP> {
                 // (the tracking's reach is no statement about the robot): unobservable.
                 reg.cov = widen_along(&reg.cov, &direction);
             }
-            if tracked(&reg, &curr, &cfg) {
+            if tracked(&reg, &curr, &cfg) && verify(&guess.compose(&reg.rel)) >= cfg.verify_keep {
                 self.last = curr.clone();
                 return self.accept(
                     &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
@@ -315,7 +389,19 @@ impl<const MAP: usize> Odometry<MAP> {
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let mut pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
+        let mut pair = register_sets_verified(
+            &self.last,
+            &curr,
+            motion,
+            &cfg,
+            &mut Assoc::new(),
+            true,
+            points.is_some().then_some(&verify as &dyn Fn(&Pose) -> f32),
+        );
+        if let Some(c) = points {
+            let start = motion.map_or(self.last_rel, |m| m.0);
+            pair = complete(pair, &prev_pts, c, Some(start), &cfg);
+        }
         if motion.is_none() {
             // What the scene cannot tell (a corridor's length) is the last motion again, not
             // no motion: the pair's estimate does not move along that direction from its

@@ -282,7 +282,11 @@ pub fn run_log_with(
         }
         core::mem::swap(&mut prev_pts, &mut curr_pts);
         if odometry {
-            let step = odo.update(&obs, None);
+            let step = if points {
+                odo.update_with_points(&obs, &prev_pts, None)
+            } else {
+                odo.update(&obs, None)
+            };
             if let (Some(r), Some((_, p0))) = (reg.as_ref(), prev.as_ref()) {
                 if std::env::var_os("BENCH_ODO_STEP").is_some() && r.is_registered() {
                     let truth = p0.inverse().compose(&rec.pose);
