@@ -378,7 +378,7 @@ impl<const MAP: usize> Odometry<MAP> {
                 // (the tracking's reach is no statement about the robot): unobservable.
                 reg.cov = widen_along(&reg.cov, &direction);
             }
-            if tracked(&reg, &curr, &cfg) && verify(&guess.compose(&reg.rel)) >= cfg.verify_keep {
+            if tracked(&reg, &curr, &cfg) && verify(&guess.compose(&reg.rel)) >= cfg.verify_track {
                 self.last = curr.clone();
                 return self.accept(
                     &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,

@@ -255,6 +255,18 @@ const ICP_MIN_PAIRS: usize = 20;
 const ICP_REACH: [f32; 2] = [1000.0, 300.0];
 /// Iterations at the wide reach.
 const ICP_WIDE: usize = 6;
+/// How far [`icp`] moves its answer along the weakest direction to test it, mm (θ in units
+/// of [`ROTATION_SCALE`]).
+const ICP_PROBE: f32 = 300.0;
+/// The points' score must drop by more than this when moved by [`ICP_PROBE`] one way or the other, or
+/// the direction is one the points cannot tell.
+const ICP_PROBE_DROP: f32 = 0.05;
+/// Directions of translation probed either side of the weakest one, rad.
+const ICP_PROBE_SPREAD: f32 = 0.07;
+/// Beams either side at most for a surface's direction.
+const NORMAL_SPAN: usize = 8;
+/// Wanted length of the base of a surface's direction, mm.
+const NORMAL_BASE: f32 = 150.0;
 /// Bearings searched for the nearest point either side of the projected one, rad.
 const ICP_WINDOW: f32 = 0.2;
 /// A standard deviation above this (mm; θ in units of [`ROTATION_SCALE`]) is a direction the
@@ -385,28 +397,98 @@ pub fn icp<const N: usize>(
         }
     }
     let (h, sse, m) = last?;
-    // Covariance: σ² (JᵀJ)⁻¹ with σ² the residuals' scatter, times the correlation of
-    // neighbouring points; a direction the points do not determine is unobservable.
-    let sigma2 = (sse / (m.saturating_sub(3).max(1)) as f32).max(100.0) * ICP_CORRELATION;
-    let (vals, vecs) = eigen_sym3(&h);
-    let mut cov_s = ZERO3;
     let mut unobservable = None;
-    for (k, (&l, v)) in vals.iter().zip(&vecs).enumerate() {
-        let var = if l > 0.0 { sigma2 / l } else { f32::INFINITY };
-        let var = if var.is_finite() && var < ICP_DEGENERATE_SIGMA * ICP_DEGENERATE_SIGMA {
-            var
-        } else {
-            if k == 0 {
-                unobservable = Some(*v);
-            }
-            UNOBSERVABLE_VARIANCE
+    let here = agreement(prev, curr, &pose);
+    // Covariance: σ² (JᵀJ)⁻¹ with σ² the residuals' scatter, times the correlation of
+    // neighbouring points. A direction of translation along which moving the answer by
+    // ICP_PROBE (either way) leaves the points agreeing about as well is one the points cannot
+    // tell (a corridor's plain walls): the normals' noise alone would make it look determined
+    // in JᵀJ, so it is found by probing, and its variance is unobservable.
+    let sigma2 = (sse / (m.saturating_sub(3).max(1)) as f32).max(100.0) * ICP_CORRELATION;
+    let least = here.score() - ICP_PROBE_DROP;
+    let mut flat: Option<([f32; 3], f32)> = None;
+    // The weakest direction of translation (θ eliminated: the Schur complement of JᵀJ), and
+    // either side of it by ICP_PROBE_SPREAD.
+    let hth = h[2][2].max(1e-12);
+    let s2 = [
+        h[0][0] - h[0][2] * h[2][0] / hth,
+        h[0][1] - h[0][2] * h[2][1] / hth,
+        h[1][1] - h[1][2] * h[2][1] / hth,
+    ];
+    let weakest = 0.5 * libm::atan2f(-2.0 * s2[1], s2[2] - s2[0]);
+    for k in [0.0f32, -1.0, 1.0] {
+        let (sn, cs) = sin_cos(weakest + k * ICP_PROBE_SPREAD);
+        let probe = |sign: f32| {
+            let d = sign * ICP_PROBE;
+            agreement(prev, curr, &Pose::new(pose.x + d * cs, pose.y + d * sn, pose.theta))
+                .score()
         };
-        for a in 0..3 {
-            for b in 0..3 {
-                cov_s[a][b] += var * v[a] * v[b];
-            }
+        let kept = probe(1.0).min(probe(-1.0));
+        if kept > least && flat.is_none_or(|(_, b)| kept > b) {
+            flat = Some(([cs, sn, 0.0], kept));
         }
     }
+    let cov_s = match flat {
+        Some((d, _)) => {
+            unobservable = Some(d);
+            // JᵀJ on the plane across `d` (spanned by e1 = (−d_y, d_x, 0) and e2 = θ), its
+            // inverse there, and the unobservable variance along `d`.
+            let e = [[-d[1], d[0], 0.0], [0.0, 0.0, 1.0]];
+            let mut h2 = [[0.0f32; 2]; 2];
+            for i in 0..2 {
+                for j in 0..2 {
+                    for a in 0..3 {
+                        for b in 0..3 {
+                            h2[i][j] += e[i][a] * h[a][b] * e[j][b];
+                        }
+                    }
+                }
+            }
+            let det = h2[0][0] * h2[1][1] - h2[0][1] * h2[1][0];
+            if !(det > 0.0) {
+                return None;
+            }
+            let inv2 = [
+                [h2[1][1] / det, -h2[0][1] / det],
+                [-h2[1][0] / det, h2[0][0] / det],
+            ];
+            let mut c = ZERO3;
+            for a in 0..3 {
+                for b in 0..3 {
+                    c[a][b] = UNOBSERVABLE_VARIANCE * d[a] * d[b];
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            c[a][b] += sigma2 * e[i][a] * inv2[i][j] * e[j][b];
+                        }
+                    }
+                }
+            }
+            c
+        }
+        None => {
+            let (vals, vecs) = eigen_sym3(&h);
+            let mut c = ZERO3;
+            for (k, (&l, v)) in vals.iter().zip(&vecs).enumerate() {
+                let var = if l > 0.0 { sigma2 / l } else { f32::INFINITY };
+                let var = if var.is_finite()
+                    && var < ICP_DEGENERATE_SIGMA * ICP_DEGENERATE_SIGMA
+                {
+                    var
+                } else {
+                    if k == 0 {
+                        unobservable = Some(*v);
+                    }
+                    UNOBSERVABLE_VARIANCE
+                };
+                for a in 0..3 {
+                    for b in 0..3 {
+                        c[a][b] += var * v[a] * v[b];
+                    }
+                }
+            }
+            c
+        }
+    };
     let mut cov = cov_s;
     for a in 0..3 {
         cov[a][2] /= ROTATION_SCALE;
@@ -420,7 +502,7 @@ pub fn icp<const N: usize>(
         cov,
         unobservable,
         pairs: u16::try_from(m).unwrap_or(u16::MAX),
-        agreement: agreement(prev, curr, &pose),
+        agreement: here,
     })
 }
 
@@ -456,23 +538,48 @@ fn pairs<const N: usize>(
         if !(d2 < reach * reach) {
             return;
         }
-        // The nearer neighbour in scan order makes the segment.
-        let nb = [k.checked_sub(1).and_then(point), point(k + 1)];
-        let dist = |b: &[f32; 2]| (q[0] - b[0]) * (q[0] - b[0]) + (q[1] - b[1]) * (q[1] - b[1]);
-        let b = match nb {
-            [Some(x), Some(y)] => Some(if dist(&x) < dist(&y) { x } else { y }),
-            [x, y] => x.or(y),
+        // The surface's direction at `a`: from the returns either side of it, w beams away,
+        // w growing until they are NORMAL_BASE apart (a normal from two neighbours alone
+        // takes the range noise as tilt, which would make a corridor's length look
+        // determined); the surface ends where two returns jump apart.
+        let same = |x: &[f32; 2], y: &[f32; 2], w: usize| {
+            hypot(x[0] - y[0], x[1] - y[1]) < (300.0 + 0.05 * hypot(a[0], a[1])) * w as f32
         };
-        let n = match b {
-            Some(b) if hypot(b[0] - a[0], b[1] - a[1]) < 300.0 + 0.05 * hypot(a[0], a[1]) => {
-                let t = [b[0] - a[0], b[1] - a[1]];
-                let l = hypot(t[0], t[1]);
-                if !(l > 1e-3) {
+        let mut span: Option<([f32; 2], [f32; 2])> = None;
+        for w in 1..=NORMAL_SPAN {
+            let (Some(l), Some(r)) = (k.checked_sub(w).and_then(point), point(k + w)) else {
+                break;
+            };
+            if !same(&l, &r, 2 * w) {
+                break;
+            }
+            span = Some((l, r));
+            if hypot(r[0] - l[0], r[1] - l[1]) >= NORMAL_BASE {
+                break;
+            }
+        }
+        if span.is_none() {
+            // One side only: the nearer neighbour on the same surface.
+            let nb = [k.checked_sub(1).and_then(point), point(k + 1)];
+            span = nb
+                .iter()
+                .flatten()
+                .filter(|b| same(b, &a, 1))
+                .min_by(|x, y| {
+                    hypot(q[0] - x[0], q[1] - x[1]).total_cmp(&hypot(q[0] - y[0], q[1] - y[1]))
+                })
+                .map(|b| (a, *b));
+        }
+        let n = match span {
+            Some((l, r)) => {
+                let t = [r[0] - l[0], r[1] - l[1]];
+                let len = hypot(t[0], t[1]);
+                if !(len > 1e-3) {
                     return;
                 }
-                [-t[1] / l, t[0] / l]
+                [-t[1] / len, t[0] / len]
             }
-            _ => {
+            None => {
                 // No neighbour on the same surface: point to point along the offset.
                 let l = hypot(q[0] - a[0], q[1] - a[1]);
                 if !(l > 1e-3) {
@@ -578,7 +685,10 @@ pub(crate) fn complete<const N: usize>(
     for start in starts.iter().flatten() {
         if let Some(r) = icp(prev_pts, curr_pts, start) {
             let s = r.agreement.score();
-            if best.as_ref().is_none_or(|(_, b)| s > *b) {
+            // The earlier starts (the features' answer, then the guess) unless a later one's
+            // points agree clearly better: along a direction the points cannot tell the
+            // answer stays near its start.
+            if best.as_ref().is_none_or(|(_, b)| s > *b + 0.02) {
                 best = Some((r, s));
             }
         }

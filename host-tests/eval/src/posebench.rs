@@ -180,6 +180,7 @@ fn pose_config() -> pfe_pose::Config {
             "verify_margin" => c.verify_margin = v,
             "verify_accept" => c.verify_accept = v,
             "verify_keep" => c.verify_keep = v,
+            "verify_track" => c.verify_track = v,
             _ => eprintln!("PFE_POSE_CFG: unknown setting {k}"),
         }
     }
@@ -230,7 +231,7 @@ pub fn run_log_with(
     let mut prev_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
     let mut curr_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
     let mut last_motion: Option<Pose> = None;
-    let mut odo = Box::new(Odometry::<64>::new(Default::default()));
+    let mut odo = Box::new(Odometry::<64>::new(pose_cfg));
     let mut track: Vec<(Pose, Pose, Pose)> = Vec::new();
     let mut chained = Pose::IDENTITY;
     // PL-ICP from the noisy prior, chained (its answer, or the prior where it gives none).

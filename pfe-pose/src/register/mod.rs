@@ -139,6 +139,9 @@ pub struct Config {
     /// without trying the ICP; below it, an ICP answer whose points agree better by
     /// [`Config::verify_margin`] replaces it.
     pub verify_keep: f32,
+    /// With the scans' points: the odometry's tracking against the map is taken only when
+    /// its points' score against the previous scan reaches this.
+    pub verify_track: f32,
 }
 
 impl Default for Config {
@@ -177,6 +180,7 @@ impl Config {
         verify_margin: 0.15,
         verify_accept: 0.5,
         verify_keep: 0.85,
+        verify_track: 0.85,
     };
 }
 
