@@ -674,6 +674,38 @@ pub(crate) fn complete<const N: usize>(
         f32::NEG_INFINITY
     };
     if own >= cfg.verify_keep {
+        if let (crate::Status::Degenerate { direction }, true) = (reg.status, cfg.points_resolve) {
+            // What the features cannot tell the points may: the ICP from the features'
+            // answer, taken when it determines every direction, agrees as well and moved
+            // little across the features' unobservable direction.
+            if let Some(r) = icp(prev_pts, curr_pts, &reg.rel) {
+                let d = [
+                    r.pose.x - reg.rel.x,
+                    r.pose.y - reg.rel.y,
+                    crate::geom::wrap(r.pose.theta - reg.rel.theta) * ROTATION_SCALE,
+                ];
+                let along = d[0] * direction[0] + d[1] * direction[1] + d[2] * direction[2];
+                let across = [
+                    d[0] - along * direction[0],
+                    d[1] - along * direction[1],
+                    d[2] - along * direction[2],
+                ];
+                let off = crate::geom::sqrt(
+                    across[0] * across[0] + across[1] * across[1] + across[2] * across[2],
+                );
+                if r.unobservable.is_none()
+                    && r.agreement.score() >= own - RESOLVE_SLACK
+                    && off < RESOLVE_ACROSS
+                {
+                    return crate::Registration {
+                        rel: r.pose,
+                        cov: r.cov,
+                        status: crate::Status::Ok,
+                        ..reg
+                    };
+                }
+            }
+        }
         return reg;
     }
     let starts = [
@@ -708,6 +740,13 @@ pub(crate) fn complete<const N: usize>(
         _ => reg,
     }
 }
+
+/// A points' answer may agree this much less than the features' degenerate one and still
+/// resolve its direction.
+const RESOLVE_SLACK: f32 = 0.02;
+/// ...and move at most this far off the features' unobservable direction (mm, θ in units of
+/// [`ROTATION_SCALE`]).
+const RESOLVE_ACROSS: f32 = 100.0;
 
 /// Beams kept of a scan by `pfe odometry`, the pose benchmark and the firmware: an LMS200's
 /// 180° at 0.5° (361); a scan of more beams keeps every k-th one.

@@ -181,6 +181,7 @@ fn pose_config() -> pfe_pose::Config {
             "verify_accept" => c.verify_accept = v,
             "verify_keep" => c.verify_keep = v,
             "verify_track" => c.verify_track = v,
+            "points_resolve" => c.points_resolve = v > 0.0,
             _ => eprintln!("PFE_POSE_CFG: unknown setting {k}"),
         }
     }

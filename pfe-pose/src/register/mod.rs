@@ -142,6 +142,9 @@ pub struct Config {
     /// With the scans' points: the odometry's tracking against the map is taken only when
     /// its points' score against the previous scan reaches this.
     pub verify_track: f32,
+    /// With the scans' points: a registration degenerate by its features is resolved by the
+    /// points' ICP when they determine every direction.
+    pub points_resolve: bool,
 }
 
 impl Default for Config {
@@ -181,6 +184,7 @@ impl Config {
         verify_accept: 0.5,
         verify_keep: 0.85,
         verify_track: 0.85,
+        points_resolve: true,
     };
 }
 
