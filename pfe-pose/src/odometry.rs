@@ -119,7 +119,7 @@ pub struct Step {
 /// assert!((step.pose.x - 400.0).abs() < 5.0 && (step.pose.theta - 0.2).abs() < 1e-3);
 /// ```
 #[derive(Clone, Debug)]
-pub struct Odometry<const MAP: usize> {
+pub struct Odometry<const MAP: usize, const PTS: usize = 0> {
     cfg: ConfigSlot,
     map: [Entry; MAP],
     n: usize,
@@ -130,7 +130,7 @@ pub struct Odometry<const MAP: usize> {
     /// The previous scan's features.
     last: Set,
     /// The previous scan's ranges (empty when it came without: [`Odometry::update_scan`]).
-    pts: RangeScan<SCAN_BEAMS>,
+    pts: RangeScan<PTS>,
 }
 
 /// The settings of an [`Odometry`]: the default ones as a tag only, so that a new odometry
@@ -160,13 +160,20 @@ pub const ODOMETRY_MAP: usize = 64;
 /// [`Odometry::update_features`].
 pub type FeatureOdometry = Odometry<ODOMETRY_MAP>;
 
-impl<const MAP: usize> Default for Odometry<MAP> {
+/// [`FeatureOdometry`] that also keeps the previous scan's ranges ([`SCAN_BEAMS`] u16, 722
+/// bytes more), so that [`Odometry::update_scan`] verifies and completes the registration by
+/// the scans' points ([`crate::points`]): `pfe odometry --points` and the pose benchmark.
+/// (The firmware runs [`FeatureOdometry`]: without the ranges [`Odometry::update_scan`] is
+/// [`Odometry::update_features`].)
+pub type PointOdometry = Odometry<ODOMETRY_MAP, SCAN_BEAMS>;
+
+impl<const MAP: usize, const PTS: usize> Default for Odometry<MAP, PTS> {
     fn default() -> Self {
         Self::new_default()
     }
 }
 
-impl<const MAP: usize> Odometry<MAP> {
+impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
     /// An odometry that has seen no scan, with registration settings `cfg`.
     pub const fn new(cfg: Config) -> Self {
         Self::with_slot(ConfigSlot::Custom(cfg))
@@ -267,11 +274,12 @@ impl<const MAP: usize> Odometry<MAP> {
     /// at bearing `geometry.bearing(i)`): the scans' own points then verify the registration
     /// and, when the features cannot register a scan, a point-to-line ICP against the
     /// previous scan takes over ([`crate::points`]). The previous scan's ranges are kept (at
-    /// most [`SCAN_BEAMS`], u16 mm).
+    /// most `PTS` beams, u16 mm: [`PointOdometry`]); with `PTS` = 0 ([`FeatureOdometry`])
+    /// this is [`Odometry::update_features`].
     ///
     /// ```
     /// use pfe_core::ScanGeometry;
-    /// use pfe_pose::{FeatureOdometry, Status};
+    /// use pfe_pose::{PointOdometry, Status};
     /// // A room's corner; no features given: the points alone register the 0.2 m step.
     /// let g = ScanGeometry::LMS200_180_050;
     /// let room = |dx: f32| -> Vec<f32> {
@@ -284,7 +292,7 @@ impl<const MAP: usize> Odometry<MAP> {
     ///         r
     ///     }).collect()
     /// };
-    /// let mut odo = FeatureOdometry::new_default();
+    /// let mut odo = Box::new(PointOdometry::new_default());
     /// odo.update_scan(&[], &g, &room(0.0), None);
     /// let step = odo.update_scan(&[], &g, &room(200.0), None);
     /// assert_eq!(step.status, Status::Ok);
@@ -308,7 +316,7 @@ impl<const MAP: usize> Odometry<MAP> {
     pub fn update_with_points(
         &mut self,
         obs: &[Observation],
-        pts: &RangeScan<SCAN_BEAMS>,
+        pts: &RangeScan<PTS>,
         motion: Option<(Pose, Cov3)>,
     ) -> Step {
         let cfg = self.cfg.get();
@@ -319,21 +327,31 @@ impl<const MAP: usize> Odometry<MAP> {
     fn update_set(
         &mut self,
         curr: Set,
-        curr_pts: Option<&RangeScan<SCAN_BEAMS>>,
+        curr_pts: Option<&RangeScan<PTS>>,
         motion: Option<(Pose, Cov3)>,
         cfg: Config,
     ) -> Step {
         let scan = self.scans;
         self.scans = self.scans.saturating_add(1);
-        // The previous scan's ranges and this one's, when both are there.
-        let prev_pts = core::mem::take(&mut self.pts);
-        let points = curr_pts.filter(|c| !c.is_empty() && !prev_pts.is_empty());
-        if let Some(c) = curr_pts {
-            self.pts.clone_from(c);
+        let step = self.update_inner(curr, curr_pts, motion, cfg, scan);
+        match curr_pts {
+            Some(c) => self.pts.clone_from(c),
+            None => self.pts.clear(),
         }
-        let verify = |rel: &Pose| -> f32 {
-            points.map_or(f32::INFINITY, |c| agreement(&prev_pts, c, rel).score())
-        };
+        step
+    }
+
+    /// [`Odometry::update_set`] before the scan's ranges replace the previous scan's.
+    fn update_inner(
+        &mut self,
+        curr: Set,
+        curr_pts: Option<&RangeScan<PTS>>,
+        motion: Option<(Pose, Cov3)>,
+        cfg: Config,
+        scan: u32,
+    ) -> Step {
+        // This scan's ranges, when the previous scan's are there too.
+        let points = curr_pts.filter(|c| !c.is_empty() && !self.pts.is_empty());
         if scan == 0 {
             self.n = 0;
             self.last = curr.clone();
@@ -378,7 +396,10 @@ impl<const MAP: usize> Odometry<MAP> {
                 // (the tracking's reach is no statement about the robot): unobservable.
                 reg.cov = widen_along(&reg.cov, &direction);
             }
-            if tracked(&reg, &curr, &cfg) && verify(&guess.compose(&reg.rel)) >= cfg.verify_track {
+            let agrees = points.is_none_or(|c| {
+                agreement(&self.pts, c, &guess.compose(&reg.rel)).score() >= cfg.verify_track
+            });
+            if tracked(&reg, &curr, &cfg) && agrees {
                 self.last = curr.clone();
                 return self.accept(
                     &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
@@ -389,19 +410,24 @@ impl<const MAP: usize> Odometry<MAP> {
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let mut pair = register_sets_verified(
-            &self.last,
-            &curr,
-            motion,
-            &cfg,
-            &mut Assoc::new(),
-            true,
-            points.is_some().then_some(&verify as &dyn Fn(&Pose) -> f32),
-        );
-        if let Some(c) = points {
-            let start = motion.map_or(self.last_rel, |m| m.0);
-            pair = complete(pair, &prev_pts, c, Some(start), &cfg);
-        }
+        let mut pair = match points {
+            Some(c) => {
+                let prev_pts = &self.pts;
+                let verify = |rel: &Pose| agreement(prev_pts, c, rel).score();
+                let pair = register_sets_verified(
+                    &self.last,
+                    &curr,
+                    motion,
+                    &cfg,
+                    &mut Assoc::new(),
+                    true,
+                    Some(&verify),
+                );
+                let start = motion.map_or(self.last_rel, |m| m.0);
+                complete(pair, prev_pts, c, Some(start), &cfg)
+            }
+            None => register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true),
+        };
         if motion.is_none() {
             // What the scene cannot tell (a corridor's length) is the last motion again, not
             // no motion: the pair's estimate does not move along that direction from its

@@ -6,7 +6,7 @@
 use pfe_core::ScanGeometry;
 use pfe_pose::points::{agreement, icp, register_scans, RangeScan, SCAN_BEAMS};
 use pfe_pose::{
-    wrap, Config, Cov3, FeatureOdometry, LineObs, Observation, Pose, Status, UNOBSERVABLE_VARIANCE,
+    wrap, Config, Cov3, PointOdometry, LineObs, Observation, Pose, Status, UNOBSERVABLE_VARIANCE,
 };
 
 /// xorshift64* with Box–Muller normals.
@@ -322,7 +322,7 @@ fn corridor_points_are_degenerate_never_ok() {
 fn odometry_on_points_alone_follows_a_drive() {
     let world = room();
     let mut rng = Rng(21);
-    let mut odo = Box::new(FeatureOdometry::new_default());
+    let mut odo = Box::new(PointOdometry::new_default());
     let mut truth = Pose::new(-1000.0, -500.0, 0.3);
     let start = truth;
     for k in 0..40 {
@@ -364,7 +364,7 @@ fn never_panics_on_bad_ranges() {
         (3.0, -0.01),
         (-1e6, 1e-9),
     ];
-    let mut odo = Box::new(FeatureOdometry::new_default());
+    let mut odo = Box::new(PointOdometry::new_default());
     for r in &bad {
         for (start, step) in geometries {
             let mut a = RangeScan::<SCAN_BEAMS>::new();

@@ -232,7 +232,7 @@ pub fn run_log_with(
     let mut prev_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
     let mut curr_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
     let mut last_motion: Option<Pose> = None;
-    let mut odo = Box::new(Odometry::<64>::new(pose_cfg));
+    let mut odo = Box::new(Odometry::<64, { pfe_pose::points::SCAN_BEAMS }>::new(pose_cfg));
     let mut track: Vec<(Pose, Pose, Pose)> = Vec::new();
     let mut chained = Pose::IDENTITY;
     // PL-ICP from the noisy prior, chained (its answer, or the prior where it gives none).

@@ -437,7 +437,7 @@ pub(crate) fn register_sets_verified(
     ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
     let first = ranked.first().map_or(0.0, |h| h.score);
     // The refined candidates, for the points' verification.
-    let mut cands: [Option<Refined>; REFINE] = [None; REFINE];
+    let mut cands = [Pose::IDENTITY; REFINE];
     let mut nc = 0usize;
     for h in ranked.iter() {
         // One that the rest of the scene supports far less than the best is not refined.
@@ -465,7 +465,7 @@ pub(crate) fn register_sets_verified(
         }
         if verify.is_some() && r.score > cfg.min_score {
             if let Some(slot) = cands.get_mut(nc) {
-                *slot = Some(r);
+                *slot = r.pose;
                 nc += 1;
             }
         }
@@ -492,13 +492,25 @@ pub(crate) fn register_sets_verified(
     if let Some(v) = verify {
         let own = v(&best.pose);
         let mut top = own;
-        for c in cands.iter().take(nc).flatten() {
-            let score = v(&c.pose);
+        let mut pick = None;
+        for c in cands.iter().take(nc) {
+            let score = v(c);
             if score > top && score > own + cfg.verify_margin {
                 top = score;
-                best = *c;
-                resolved = true;
+                pick = Some(*c);
             }
+        }
+        if let Some(start) = pick {
+            // Refined again from its answer (the candidates keep their poses only).
+            let mut r = refine(&mut w, start, prior.as_ref(), !lazy);
+            if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
+                r = finish(&mut w, r.pose, prior.as_ref(), true, None);
+            }
+            if cfg.visibility_weight > 0.0 {
+                r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
+            }
+            best = r;
+            resolved = true;
         }
         if !resolved && own >= cfg.verify_accept {
             // The points confirm the winner: a close runner-up is no ambiguity.
