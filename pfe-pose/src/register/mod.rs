@@ -62,6 +62,10 @@ pub const ROTATION_SCALE: f32 = 1000.0;
 const REFINE: usize = 12;
 /// Hypotheses scoring below this fraction of the best one's are not refined.
 const REFINE_RATIO: f32 = 0.5;
+/// A refined hypothesis this far from the winner (mm, rad) is a distinct solution, which the
+/// points' verification may prefer.
+const DISTINCT_MM: f32 = 300.0;
+const DISTINCT_RAD: f32 = 0.087;
 /// Gauss–Newton steps at most.
 const ITERATIONS: usize = 10;
 
@@ -494,6 +498,13 @@ pub(crate) fn register_sets_verified(
         let mut top = own;
         let mut pick = None;
         for c in cands.iter().take(nc) {
+            // Only a distinct solution (aliasing): near the winner the points, with their
+            // tolerance of several cm, cannot judge better than the features.
+            let far = crate::geom::hypot(c.x - best.pose.x, c.y - best.pose.y) > DISTINCT_MM
+                || wrap(c.theta - best.pose.theta).abs() > DISTINCT_RAD;
+            if !far {
+                continue;
+            }
             let score = v(c);
             if score > top && score > own + cfg.verify_margin {
                 top = score;
