@@ -420,8 +420,12 @@ pub fn icp<const N: usize>(
         let (sn, cs) = sin_cos(weakest + k * ICP_PROBE_SPREAD);
         let probe = |sign: f32| {
             let d = sign * ICP_PROBE;
-            agreement(prev, curr, &Pose::new(pose.x + d * cs, pose.y + d * sn, pose.theta))
-                .score()
+            agreement(
+                prev,
+                curr,
+                &Pose::new(pose.x + d * cs, pose.y + d * sn, pose.theta),
+            )
+            .score()
         };
         let kept = probe(1.0).min(probe(-1.0));
         if kept > least && flat.is_none_or(|(_, b)| kept > b) {
@@ -470,9 +474,7 @@ pub fn icp<const N: usize>(
             let mut c = ZERO3;
             for (k, (&l, v)) in vals.iter().zip(&vecs).enumerate() {
                 let var = if l > 0.0 { sigma2 / l } else { f32::INFINITY };
-                let var = if var.is_finite()
-                    && var < ICP_DEGENERATE_SIGMA * ICP_DEGENERATE_SIGMA
-                {
+                let var = if var.is_finite() && var < ICP_DEGENERATE_SIGMA * ICP_DEGENERATE_SIGMA {
                     var
                 } else {
                     if k == 0 {
@@ -726,17 +728,19 @@ pub(crate) fn complete<const N: usize>(
         }
     }
     match best {
-        Some((r, s)) if s >= cfg.verify_accept && s > own + cfg.verify_margin => crate::Registration {
-            rel: r.pose,
-            cov: r.cov,
-            status: match r.unobservable {
-                Some(direction) => crate::Status::Degenerate { direction },
-                None => crate::Status::Ok,
-            },
-            matches: (0, 0),
-            chi2: 0.0,
-            ..reg
-        },
+        Some((r, s)) if s >= cfg.verify_accept && s > own + cfg.verify_margin => {
+            crate::Registration {
+                rel: r.pose,
+                cov: r.cov,
+                status: match r.unobservable {
+                    Some(direction) => crate::Status::Degenerate { direction },
+                    None => crate::Status::Ok,
+                },
+                matches: (0, 0),
+                chi2: 0.0,
+                ..reg
+            }
+        }
         _ => reg,
     }
 }

@@ -6,7 +6,7 @@
 use pfe_core::ScanGeometry;
 use pfe_pose::points::{agreement, icp, register_scans, RangeScan, SCAN_BEAMS};
 use pfe_pose::{
-    wrap, Config, Cov3, PointOdometry, LineObs, Observation, Pose, Status, UNOBSERVABLE_VARIANCE,
+    wrap, Config, Cov3, LineObs, Observation, PointOdometry, Pose, Status, UNOBSERVABLE_VARIANCE,
 };
 
 /// xorshift64* with Box–Muller normals.
@@ -73,11 +73,7 @@ fn corridor() -> World {
 
 /// The ranges (mm, NaN: no return beyond 30 m) of a scanner at `pose` in `world`, with noise.
 fn scan(world: &World, pose: &Pose, rng: &mut Rng) -> Vec<f32> {
-    let (px, py, pt) = (
-        f64::from(pose.x),
-        f64::from(pose.y),
-        f64::from(pose.theta),
-    );
+    let (px, py, pt) = (f64::from(pose.x), f64::from(pose.y), f64::from(pose.theta));
     (0..361)
         .map(|i| {
             let b = pt + f64::from(GEOMETRY.bearing(i));
@@ -208,7 +204,10 @@ fn icp_recovers_room_motions_with_a_consistent_covariance() {
         }
     }
     let pct = 100.0 * inside as f64 / n as f64;
-    assert!((90.0..=100.0).contains(&pct), "{pct} % inside the 95 % ellipsoid");
+    assert!(
+        (90.0..=100.0).contains(&pct),
+        "{pct} % inside the 95 % ellipsoid"
+    );
 }
 
 /// The agreement tells the right pose from wrong ones: shifted by 0.5 m or turned by 5°, many
@@ -222,7 +221,11 @@ fn agreement_prefers_the_truth() {
         let a = ranges(&scan(&world, &p0, &mut rng));
         let b = ranges(&scan(&world, &p0.compose(&rel), &mut rng));
         let right = agreement(&a, &b, &rel).score();
-        assert!(right > 0.8, "{right} {p0:?} {rel:?} {:?}", agreement(&a, &b, &rel));
+        assert!(
+            right > 0.8,
+            "{right} {p0:?} {rel:?} {:?}",
+            agreement(&a, &b, &rel)
+        );
         for wrong in [
             Pose::new(rel.x + 500.0, rel.y, rel.theta),
             Pose::new(rel.x, rel.y - 500.0, rel.theta),
@@ -313,7 +316,10 @@ fn corridor_points_are_degenerate_never_ok() {
             Status::None(_) => {}
         }
     }
-    assert!(flagged * 100 >= 99 * n, "{flagged} of {n} flagged degenerate");
+    assert!(
+        flagged * 100 >= 99 * n,
+        "{flagged} of {n} flagged degenerate"
+    );
 }
 
 /// The odometry with the scans' ranges drives around the room with no features at all: every
@@ -354,7 +360,9 @@ fn never_panics_on_bad_ranges() {
         vec![1e30; 361],
         vec![0.0; 361],
         (0..2000).map(|i| (i % 7) as f32 * 1000.0).collect(),
-        (0..361).map(|i| if i % 2 == 0 { f32::NAN } else { 1000.0 }).collect(),
+        (0..361)
+            .map(|i| if i % 2 == 0 { f32::NAN } else { 1000.0 })
+            .collect(),
     ];
     let geometries = [
         (GEOMETRY.start_angle, GEOMETRY.angle_step),
@@ -370,7 +378,11 @@ fn never_panics_on_bad_ranges() {
             let mut a = RangeScan::<SCAN_BEAMS>::new();
             a.set(start, step, r);
             let mut b = RangeScan::<SCAN_BEAMS>::new();
-            b.set(GEOMETRY.start_angle, GEOMETRY.angle_step, &vec![2000.0; 361]);
+            b.set(
+                GEOMETRY.start_angle,
+                GEOMETRY.angle_step,
+                &vec![2000.0; 361],
+            );
             for guess in [
                 Pose::IDENTITY,
                 Pose::new(f32::NAN, 0.0, 0.0),
@@ -390,4 +402,3 @@ fn never_panics_on_bad_ranges() {
         }
     }
 }
-

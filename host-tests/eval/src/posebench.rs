@@ -232,7 +232,9 @@ pub fn run_log_with(
     let mut prev_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
     let mut curr_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
     let mut last_motion: Option<Pose> = None;
-    let mut odo = Box::new(Odometry::<64, { pfe_pose::points::SCAN_BEAMS }>::new(pose_cfg));
+    let mut odo = Box::new(Odometry::<64, { pfe_pose::points::SCAN_BEAMS }>::new(
+        pose_cfg,
+    ));
     let mut track: Vec<(Pose, Pose, Pose)> = Vec::new();
     let mut chained = Pose::IDENTITY;
     // PL-ICP from the noisy prior, chained (its answer, or the prior where it gives none).
@@ -255,7 +257,11 @@ pub fn run_log_with(
             ranges: record.ranges_mm,
         };
         if points {
-            curr_pts.set(rec.geometry.start_angle, rec.geometry.angle_step, &rec.ranges);
+            curr_pts.set(
+                rec.geometry.start_angle,
+                rec.geometry.angle_step,
+                &rec.ranges,
+            );
         }
         let reg = prev.as_ref().map(|(p, _)| {
             if points {
