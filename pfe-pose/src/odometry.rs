@@ -414,7 +414,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             Some(c) => {
                 let prev_pts = &self.pts;
                 let verify = |rel: &Pose| agreement(prev_pts, c, rel).score();
-                let pair = register_sets_verified(
+                let pair = register_sets_verified::<{ crate::register::VERIFIED }>(
                     &self.last,
                     &curr,
                     motion,

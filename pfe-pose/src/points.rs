@@ -642,7 +642,7 @@ pub fn register_scans<const N: usize>(
     let mut assoc = crate::register::Assoc::new();
     let verify = |pose: &Pose| agreement(prev_pts, curr_pts, pose).score();
     let points = !prev_pts.is_empty() && !curr_pts.is_empty();
-    let mut r = crate::register::register_sets_verified(
+    let mut r = crate::register::register_sets_verified::<{ crate::register::VERIFIED }>(
         &p,
         &c,
         None,

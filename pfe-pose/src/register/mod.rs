@@ -62,6 +62,8 @@ pub const ROTATION_SCALE: f32 = 1000.0;
 const REFINE: usize = 12;
 /// Hypotheses scoring below this fraction of the best one's are not refined.
 const REFINE_RATIO: f32 = 0.5;
+/// Refined hypotheses kept for the points' verification.
+pub(crate) const VERIFIED: usize = REFINE;
 /// A refined hypothesis this far from the winner (mm, rad) is a distinct solution, which the
 /// points' verification may prefer.
 const DISTINCT_MM: f32 = 300.0;
@@ -367,7 +369,7 @@ pub(crate) fn register_sets(
     assoc: &mut Assoc,
     search: bool,
 ) -> Registration {
-    register_sets_verified(prev, curr, prior, cfg, assoc, search, None)
+    register_sets_verified::<0>(prev, curr, prior, cfg, assoc, search, None)
 }
 
 /// [`register_sets`] with `verify`: a score of a pose by the scans' own points (higher is
@@ -375,8 +377,10 @@ pub(crate) fn register_sets(
 /// agree better than the features' winner's by [`Config::verify_margin`] wins instead (the
 /// features alone cannot tell aliased poses apart: periodic pillars, short lines far away);
 /// an ambiguity the points resolve is no failure.
+/// `K`: refined hypotheses kept for the verification ([`VERIFIED`] with `verify`; 0 without,
+/// so that the features-only registration's frame does not grow).
 #[inline(never)]
-pub(crate) fn register_sets_verified(
+pub(crate) fn register_sets_verified<const K: usize>(
     prev: &Set,
     curr: &Set,
     prior: Option<(Pose, Cov3)>,
@@ -441,7 +445,7 @@ pub(crate) fn register_sets_verified(
     ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
     let first = ranked.first().map_or(0.0, |h| h.score);
     // The refined candidates, for the points' verification.
-    let mut cands = [Pose::IDENTITY; REFINE];
+    let mut cands = [Pose::IDENTITY; K];
     let mut nc = 0usize;
     for h in ranked.iter() {
         // One that the rest of the scene supports far less than the best is not refined.
