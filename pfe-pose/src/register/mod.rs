@@ -187,7 +187,7 @@ impl Config {
         scale_by_residuals: true,
         ambiguity: 2.0,
         verify_margin: 0.15,
-        verify_accept: 0.5,
+        verify_accept: 0.2,
         verify_keep: 0.85,
         verify_track: 0.85,
         points_resolve: true,
