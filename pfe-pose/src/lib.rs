@@ -55,12 +55,13 @@
 mod geom;
 mod obs;
 mod odometry;
+pub mod points;
 pub mod register;
 mod set;
 
 pub use geom::{compose_covariance, wrap, Cov3, Pose};
 pub use obs::{LineObs, Observation, PointObs};
-pub use odometry::{FeatureOdometry, Odometry, Step, ODOMETRY_MAP};
+pub use odometry::{FeatureOdometry, Odometry, PointOdometry, Step, ODOMETRY_MAP};
 pub use register::{
     register, register_with, Config, Failure, Registration, Status, ROTATION_SCALE,
     UNOBSERVABLE_VARIANCE,

@@ -36,8 +36,10 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
+use crate::points::{agreement, complete, RangeScan, SCAN_BEAMS};
 use crate::register::{
-    register_sets, Assoc, Config, Status, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
+    register_sets, register_sets_verified, Assoc, Config, Status, NONE, ROTATION_SCALE,
+    UNOBSERVABLE_VARIANCE,
 };
 use crate::set::{Set, MAX_OBS};
 
@@ -117,7 +119,7 @@ pub struct Step {
 /// assert!((step.pose.x - 400.0).abs() < 5.0 && (step.pose.theta - 0.2).abs() < 1e-3);
 /// ```
 #[derive(Clone, Debug)]
-pub struct Odometry<const MAP: usize> {
+pub struct Odometry<const MAP: usize, const PTS: usize = 0> {
     cfg: ConfigSlot,
     map: [Entry; MAP],
     n: usize,
@@ -127,6 +129,8 @@ pub struct Odometry<const MAP: usize> {
     scans: u32,
     /// The previous scan's features.
     last: Set,
+    /// The previous scan's ranges (empty when it came without: [`Odometry::update_scan`]).
+    pts: RangeScan<PTS>,
 }
 
 /// The settings of an [`Odometry`]: the default ones as a tag only, so that a new odometry
@@ -156,13 +160,20 @@ pub const ODOMETRY_MAP: usize = 64;
 /// [`Odometry::update_features`].
 pub type FeatureOdometry = Odometry<ODOMETRY_MAP>;
 
-impl<const MAP: usize> Default for Odometry<MAP> {
+/// [`FeatureOdometry`] that also keeps the previous scan's ranges ([`SCAN_BEAMS`] u16, 722
+/// bytes more), so that [`Odometry::update_scan`] verifies and completes the registration by
+/// the scans' points ([`crate::points`]): `pfe odometry --points` and the pose benchmark.
+/// (The firmware runs [`FeatureOdometry`]: without the ranges [`Odometry::update_scan`] is
+/// [`Odometry::update_features`].)
+pub type PointOdometry = Odometry<ODOMETRY_MAP, SCAN_BEAMS>;
+
+impl<const MAP: usize, const PTS: usize> Default for Odometry<MAP, PTS> {
     fn default() -> Self {
         Self::new_default()
     }
 }
 
-impl<const MAP: usize> Odometry<MAP> {
+impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
     /// An odometry that has seen no scan, with registration settings `cfg`.
     pub const fn new(cfg: Config) -> Self {
         Self::with_slot(ConfigSlot::Custom(cfg))
@@ -191,6 +202,7 @@ impl<const MAP: usize> Odometry<MAP> {
             last_rel: Pose::IDENTITY,
             scans: 0,
             last: Set::new(),
+            pts: RangeScan::new(),
         }
     }
 
@@ -201,6 +213,7 @@ impl<const MAP: usize> Odometry<MAP> {
         self.cov = ZERO3;
         self.last_rel = Pose::IDENTITY;
         self.scans = 0;
+        self.pts.clear();
     }
 
     /// The latest pose in the first scan's frame and its covariance.
@@ -228,7 +241,7 @@ impl<const MAP: usize> Odometry<MAP> {
     pub fn update(&mut self, obs: &[Observation], motion: Option<(Pose, Cov3)>) -> Step {
         let cfg = self.cfg.get();
         let curr = Set::from_obs(obs.iter().copied(), &cfg);
-        self.update_set(curr, motion, cfg)
+        self.update_set(curr, None, motion, cfg)
     }
 
     /// [`Odometry::update`] with the scan's pfe-core features: those
@@ -254,12 +267,91 @@ impl<const MAP: usize> Odometry<MAP> {
     ) -> Step {
         let cfg = self.cfg.get();
         let curr = Set::from_obs(features.iter().filter_map(Observation::from_feature), &cfg);
-        self.update_set(curr, motion, cfg)
+        self.update_set(curr, None, motion, cfg)
     }
 
-    fn update_set(&mut self, curr: Set, motion: Option<(Pose, Cov3)>, cfg: Config) -> Step {
+    /// [`Odometry::update_features`] with the scan's ranges too (mm, NaN: no return; beam `i`
+    /// at bearing `geometry.bearing(i)`): the scans' own points then verify the registration
+    /// and, when the features cannot register a scan, a point-to-line ICP against the
+    /// previous scan takes over ([`crate::points`]). The previous scan's ranges are kept (at
+    /// most `PTS` beams, u16 mm: [`PointOdometry`]); with `PTS` = 0 ([`FeatureOdometry`])
+    /// this is [`Odometry::update_features`].
+    ///
+    /// ```
+    /// use pfe_core::ScanGeometry;
+    /// use pfe_pose::{PointOdometry, Status};
+    /// // A room's corner; no features given: the points alone register the 0.2 m step.
+    /// let g = ScanGeometry::LMS200_180_050;
+    /// let room = |dx: f32| -> Vec<f32> {
+    ///     (0..361).map(|i| {
+    ///         let (s, c) = g.bearing(i).sin_cos();
+    ///         let mut r = f32::INFINITY;
+    ///         if c > 1e-6 { r = r.min((3000.0 - dx) / c); }
+    ///         if s > 1e-6 { r = r.min(2000.0 / s); }
+    ///         if s < -1e-6 { r = r.min(2500.0 / -s); }
+    ///         r
+    ///     }).collect()
+    /// };
+    /// let mut odo = Box::new(PointOdometry::new_default());
+    /// odo.update_scan(&[], &g, &room(0.0), None);
+    /// let step = odo.update_scan(&[], &g, &room(200.0), None);
+    /// assert_eq!(step.status, Status::Ok);
+    /// assert!((step.pose.x - 200.0).abs() < 5.0);
+    /// ```
+    pub fn update_scan(
+        &mut self,
+        features: &[pfe_core::Feature],
+        geometry: &pfe_core::ScanGeometry,
+        ranges_mm: &[f32],
+        motion: Option<(Pose, Cov3)>,
+    ) -> Step {
+        let cfg = self.cfg.get();
+        let curr = Set::from_obs(features.iter().filter_map(Observation::from_feature), &cfg);
+        let mut pts = RangeScan::new();
+        pts.set(geometry.start_angle, geometry.angle_step, ranges_mm);
+        self.update_set(curr, Some(&pts), motion, cfg)
+    }
+
+    /// [`Odometry::update`] with the scan's ranges `pts` (see [`Odometry::update_scan`]).
+    pub fn update_with_points(
+        &mut self,
+        obs: &[Observation],
+        pts: &RangeScan<PTS>,
+        motion: Option<(Pose, Cov3)>,
+    ) -> Step {
+        let cfg = self.cfg.get();
+        let curr = Set::from_obs(obs.iter().copied(), &cfg);
+        self.update_set(curr, Some(pts), motion, cfg)
+    }
+
+    fn update_set(
+        &mut self,
+        curr: Set,
+        curr_pts: Option<&RangeScan<PTS>>,
+        motion: Option<(Pose, Cov3)>,
+        cfg: Config,
+    ) -> Step {
         let scan = self.scans;
         self.scans = self.scans.saturating_add(1);
+        let step = self.update_inner(curr, curr_pts, motion, cfg, scan);
+        match curr_pts {
+            Some(c) => self.pts.clone_from(c),
+            None => self.pts.clear(),
+        }
+        step
+    }
+
+    /// [`Odometry::update_set`] before the scan's ranges replace the previous scan's.
+    fn update_inner(
+        &mut self,
+        curr: Set,
+        curr_pts: Option<&RangeScan<PTS>>,
+        motion: Option<(Pose, Cov3)>,
+        cfg: Config,
+        scan: u32,
+    ) -> Step {
+        // This scan's ranges, when the previous scan's are there too.
+        let points = curr_pts.filter(|c| !c.is_empty() && !self.pts.is_empty());
         if scan == 0 {
             self.n = 0;
             self.last = curr.clone();
@@ -304,7 +396,10 @@ impl<const MAP: usize> Odometry<MAP> {
                 // (the tracking's reach is no statement about the robot): unobservable.
                 reg.cov = widen_along(&reg.cov, &direction);
             }
-            if tracked(&reg, &curr, &cfg) {
+            let agrees = points.is_none_or(|c| {
+                agreement(&self.pts, c, &guess.compose(&reg.rel)).score() >= cfg.verify_track
+            });
+            if tracked(&reg, &curr, &cfg) && agrees {
                 self.last = curr.clone();
                 return self.accept(
                     &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
@@ -315,7 +410,24 @@ impl<const MAP: usize> Odometry<MAP> {
         // First against the previous scan (the motion prior, if any, gating it): its result,
         // widened to three standard deviations, gates and starts the registration against the
         // map.
-        let mut pair = register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true);
+        let mut pair = match points {
+            Some(c) => {
+                let prev_pts = &self.pts;
+                let verify = |rel: &Pose| agreement(prev_pts, c, rel).score();
+                let pair = register_sets_verified::<{ crate::register::VERIFIED }>(
+                    &self.last,
+                    &curr,
+                    motion,
+                    &cfg,
+                    &mut Assoc::new(),
+                    true,
+                    Some(&verify),
+                );
+                let start = motion.map_or(self.last_rel, |m| m.0);
+                complete(pair, prev_pts, c, Some(start), &cfg)
+            }
+            None => register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true),
+        };
         if motion.is_none() {
             // What the scene cannot tell (a corridor's length) is the last motion again, not
             // no motion: the pair's estimate does not move along that direction from its

@@ -13,7 +13,7 @@ use super::{interrupt, Failure};
 use crate::foxglove::odometry as fox;
 use crate::foxglove::FoxgloveWriter;
 use pfe_formats::{carmen, Format, InputError, Record};
-use pfe_pose::{Cov3, FeatureOdometry, Observation, Pose, Status, Step};
+use pfe_pose::{Cov3, Observation, PointOdometry, Pose, Status, Step};
 
 /// Features the local map of the odometry holds (the firmware's too).
 pub const MAP: usize = pfe_pose::ODOMETRY_MAP;
@@ -53,6 +53,12 @@ pub struct Args {
     /// Let --mcap replace an existing file.
     #[arg(long, requires = "mcap")]
     force: bool,
+    /// Also use the scans' own points (host only: the firmware registers features alone):
+    /// they verify the features' registration, resolve what the features leave degenerate,
+    /// and a point-to-line ICP registers the scans the features cannot (pfe-pose's
+    /// `PointOdometry::update_scan`; docs/POSE.md).
+    #[arg(long)]
+    points: bool,
 }
 
 /// A finite number > 0.
@@ -221,7 +227,7 @@ pub fn run(a: Args) -> Result<(), Failure> {
         Some(path) => Some(OdometryMcap::create(path, a.force)?),
         None => None,
     };
-    let mut odometry = Box::new(FeatureOdometry::new_default());
+    let mut odometry = Box::new(PointOdometry::new_default());
     let mut out = stdout();
     let mut count = [0u64; 3];
     let mut n = 0u64;
@@ -263,7 +269,11 @@ pub fn run(a: Args) -> Result<(), Failure> {
             without_odometry += 1;
         }
         last_odometry = odo;
-        let step = odometry.update_features(&ex.features, prior);
+        let step = if a.points {
+            odometry.update_scan(&ex.features, &record.geometry, &record.ranges_mm, prior)
+        } else {
+            odometry.update_features(&ex.features, prior)
+        };
         n += 1;
         if n % 256 == 0 {
             bar.set_message(format!("{n} scans"));

@@ -27,6 +27,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use pfe_core::{Config, ScanGeometry};
 use pfe_formats::{Format, Record};
+use pfe_pose::points::{agreement, register_scans, RangeScan};
 use pfe_pose::{register_with, wrap, Observation, Odometry, Pose, Status};
 
 use crate::methods::{Method, Pfe, ScanContext};
@@ -176,6 +177,11 @@ fn pose_config() -> pfe_pose::Config {
             "min_matches" => c.min_matches = v as usize,
             "scale" => c.scale_by_residuals = v > 0.0,
             "ambiguity" => c.ambiguity = v,
+            "verify_margin" => c.verify_margin = v,
+            "verify_accept" => c.verify_accept = v,
+            "verify_keep" => c.verify_keep = v,
+            "verify_track" => c.verify_track = v,
+            "points_resolve" => c.points_resolve = v > 0.0,
             _ => eprintln!("PFE_POSE_CFG: unknown setting {k}"),
         }
     }
@@ -220,7 +226,15 @@ pub fn run_log_with(
     let pose_cfg = pose_config();
     let mut st = Stats::default();
     let mut prev: Option<(Vec<Observation>, Pose)> = None;
-    let mut odo = Box::new(Odometry::<64>::new(Default::default()));
+    // The scans' ranges for the points' verification and fallback, and the last registered
+    // motion (the fallback's first guess).
+    let points = std::env::var("PFE_POSE_POINTS").map_or(true, |v| v != "0");
+    let mut prev_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
+    let mut curr_pts = Box::new(RangeScan::<{ pfe_pose::points::SCAN_BEAMS }>::new());
+    let mut last_motion: Option<Pose> = None;
+    let mut odo = Box::new(Odometry::<64, { pfe_pose::points::SCAN_BEAMS }>::new(
+        pose_cfg,
+    ));
     let mut track: Vec<(Pose, Pose, Pose)> = Vec::new();
     let mut chained = Pose::IDENTITY;
     // PL-ICP from the noisy prior, chained (its answer, or the prior where it gives none).
@@ -242,11 +256,45 @@ pub fn run_log_with(
             geometry: record.geometry,
             ranges: record.ranges_mm,
         };
-        let reg = prev
-            .as_ref()
-            .map(|(p, _)| register_with(p, &obs, None, &pose_cfg));
+        if points {
+            curr_pts.set(
+                rec.geometry.start_angle,
+                rec.geometry.angle_step,
+                &rec.ranges,
+            );
+        }
+        let reg = prev.as_ref().map(|(p, _)| {
+            if points {
+                register_scans(p, &prev_pts, &obs, &curr_pts, last_motion, &pose_cfg)
+            } else {
+                register_with(p, &obs, None, &pose_cfg)
+            }
+        });
+        last_motion = reg.filter(|r| r.is_registered()).map(|r| r.rel);
+        if let (Some(r), Some((_, p0)), true) = (
+            reg.as_ref(),
+            prev.as_ref(),
+            std::env::var_os("BENCH_AGREE").is_some(),
+        ) {
+            let truth = p0.inverse().compose(&rec.pose);
+            let bad = (r.rel.x - truth.x).hypot(r.rel.y - truth.y) > 200.0
+                || wrap(r.rel.theta - truth.theta).abs() > 0.087;
+            eprintln!(
+                "AGREE {} {} {:?} {:.3} {:.3}",
+                st.pairs + 1,
+                u8::from(bad),
+                r.status,
+                agreement(&prev_pts, &curr_pts, &truth).score(),
+                agreement(&prev_pts, &curr_pts, &r.rel).score()
+            );
+        }
+        core::mem::swap(&mut prev_pts, &mut curr_pts);
         if odometry {
-            let step = odo.update(&obs, None);
+            let step = if points {
+                odo.update_with_points(&obs, &prev_pts, None)
+            } else {
+                odo.update(&obs, None)
+            };
             if let (Some(r), Some((_, p0))) = (reg.as_ref(), prev.as_ref()) {
                 if std::env::var_os("BENCH_ODO_STEP").is_some() && r.is_registered() {
                     let truth = p0.inverse().compose(&rec.pose);

@@ -62,6 +62,12 @@ pub const ROTATION_SCALE: f32 = 1000.0;
 const REFINE: usize = 12;
 /// Hypotheses scoring below this fraction of the best one's are not refined.
 const REFINE_RATIO: f32 = 0.5;
+/// Refined hypotheses kept for the points' verification.
+pub(crate) const VERIFIED: usize = REFINE;
+/// A refined hypothesis this far from the winner (mm, rad) is a distinct solution, which the
+/// points' verification may prefer.
+const DISTINCT_MM: f32 = 300.0;
+const DISTINCT_RAD: f32 = 0.087;
 /// Gauss–Newton steps at most.
 const ITERATIONS: usize = 10;
 
@@ -127,6 +133,24 @@ pub struct Config {
     /// Give up ([`Failure::Ambiguous`]) when a distinct second solution scores at least this
     /// fraction of the best (above 1: never).
     pub ambiguity: f32,
+    /// With the scans' points ([`crate::points`]): a refined hypothesis whose points' score
+    /// ([`crate::points::Agreement::score`]) exceeds the features' winner's by more than this
+    /// wins instead.
+    pub verify_margin: f32,
+    /// With the scans' points: a registration whose points' score is below this is refused,
+    /// and a point-to-line ICP's answer ([`crate::points::icp`]) is taken when its score
+    /// reaches it.
+    pub verify_accept: f32,
+    /// With the scans' points: a registration whose points' score reaches this is kept
+    /// without trying the ICP; below it, an ICP answer whose points agree better by
+    /// [`Config::verify_margin`] replaces it.
+    pub verify_keep: f32,
+    /// With the scans' points: the odometry's tracking against the map is taken only when
+    /// its points' score against the previous scan reaches this.
+    pub verify_track: f32,
+    /// With the scans' points: a registration degenerate by its features is resolved by the
+    /// points' ICP when they determine every direction.
+    pub points_resolve: bool,
 }
 
 impl Default for Config {
@@ -162,6 +186,11 @@ impl Config {
         min_matches: 3,
         scale_by_residuals: true,
         ambiguity: 2.0,
+        verify_margin: 0.15,
+        verify_accept: 0.2,
+        verify_keep: 0.85,
+        verify_track: 0.85,
+        points_resolve: true,
     };
 }
 
@@ -340,6 +369,26 @@ pub(crate) fn register_sets(
     assoc: &mut Assoc,
     search: bool,
 ) -> Registration {
+    register_sets_verified::<0>(prev, curr, prior, cfg, assoc, search, None)
+}
+
+/// [`register_sets`] with `verify`: a score of a pose by the scans' own points (higher is
+/// better, see [`crate::points::agreement`]). Among the refined hypotheses, one whose points
+/// agree better than the features' winner's by [`Config::verify_margin`] wins instead (the
+/// features alone cannot tell aliased poses apart: periodic pillars, short lines far away);
+/// an ambiguity the points resolve is no failure.
+/// `K`: refined hypotheses kept for the verification ([`VERIFIED`] with `verify`; 0 without,
+/// so that the features-only registration's frame does not grow).
+#[inline(never)]
+pub(crate) fn register_sets_verified<const K: usize>(
+    prev: &Set,
+    curr: &Set,
+    prior: Option<(Pose, Cov3)>,
+    cfg: &Config,
+    assoc: &mut Assoc,
+    search: bool,
+    verify: Option<&dyn Fn(&Pose) -> f32>,
+) -> Registration {
     let prior = check_prior(prior, cfg);
     let fallback = |failure: Failure, prior: Option<&Prior>, hypotheses: u32| {
         let (rel, cov) = match prior {
@@ -395,6 +444,9 @@ pub(crate) fn register_sets(
     let ranked = order.get_mut(..top.n).unwrap_or(&mut []);
     ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
     let first = ranked.first().map_or(0.0, |h| h.score);
+    // The refined candidates, for the points' verification.
+    let mut cands = [Pose::IDENTITY; K];
+    let mut nc = 0usize;
     for h in ranked.iter() {
         // One that the rest of the scene supports far less than the best is not refined.
         if h.score < REFINE_RATIO * first {
@@ -419,6 +471,12 @@ pub(crate) fn register_sets(
         if cfg.visibility_weight > 0.0 && !hopeless {
             r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
         }
+        if verify.is_some() && r.score > cfg.min_score {
+            if let Some(slot) = cands.get_mut(nc) {
+                *slot = r.pose;
+                nc += 1;
+            }
+        }
         match &best {
             Some(b) if !better(&r, b) => {
                 if lazy || !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
@@ -435,9 +493,45 @@ pub(crate) fn register_sets(
             }
         }
     }
-    let Some(best) = best else {
+    let Some(mut best) = best else {
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     };
+    let mut resolved = false;
+    if let Some(v) = verify {
+        let own = v(&best.pose);
+        let mut top = own;
+        let mut pick = None;
+        for c in cands.iter().take(nc) {
+            // Only a distinct solution (aliasing): near the winner the points, with their
+            // tolerance of several cm, cannot judge better than the features.
+            let far = crate::geom::hypot(c.x - best.pose.x, c.y - best.pose.y) > DISTINCT_MM
+                || wrap(c.theta - best.pose.theta).abs() > DISTINCT_RAD;
+            if !far {
+                continue;
+            }
+            let score = v(c);
+            if score > top && score > own + cfg.verify_margin {
+                top = score;
+                pick = Some(*c);
+            }
+        }
+        if let Some(start) = pick {
+            // Refined again from its answer (the candidates keep their poses only).
+            let mut r = refine(&mut w, start, prior.as_ref(), !lazy);
+            if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
+                r = finish(&mut w, r.pose, prior.as_ref(), true, None);
+            }
+            if cfg.visibility_weight > 0.0 {
+                r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
+            }
+            best = r;
+            resolved = true;
+        }
+        if !resolved && own >= cfg.verify_accept {
+            // The points confirm the winner: a close runner-up is no ambiguity.
+            resolved = true;
+        }
+    }
     let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
     if matched < cfg.min_matches && !(corridor && best.scene_degenerate && best.matches.0 >= 2) {
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
@@ -445,7 +539,7 @@ pub(crate) fn register_sets(
     if !(best.score > cfg.min_score) {
         return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
     }
-    if second_score >= cfg.ambiguity * best.score {
+    if !resolved && second_score >= cfg.ambiguity * best.score {
         return fallback(Failure::Ambiguous, prior.as_ref(), hypotheses);
     }
     // The winner's covariance and status, and its associations (for the odometry's map).
