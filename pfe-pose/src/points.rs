@@ -275,7 +275,7 @@ const ICP_DEGENERATE_SIGMA: f32 = 300.0;
 
 /// Point-to-line ICP (Censi, ICRA 2008) of `curr` against `prev` from `guess` (the pose of
 /// `curr` in `prev`'s frame): each point of `curr`, placed by the estimate, is paired with the
-/// nearest return of `prev` within [`ICP_WINDOW`] of its bearing and the nearer of that
+/// nearest return of `prev` within 0.2 rad of its bearing and the nearer of that
 /// return's neighbours (the segment between them), and the pose minimising the squared
 /// point-to-line distances is solved by Gauss–Newton; the worst 10 % and those beyond the
 /// reach are dropped. `None` when too few points pair or the solution is not finite; the
