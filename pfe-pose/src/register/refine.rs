@@ -47,10 +47,40 @@ pub(super) struct Scratch {
     /// The angle index: for each of [`BUCKETS`] equal ranges of α over the circle, the
     /// previous lines (bit `i`: line `i`) within [`Work::reach`] of it.
     buckets: [u64; BUCKETS],
+    /// The ρ index: for each of [`RHO_BUCKETS`] ranges of ρ ([`RHO_WIDTH`] wide from 0, the
+    /// last one open), the previous lines whose ρ gate reach ([`rho_reach`]) meets it.
+    rho: [u64; RHO_BUCKETS],
+    /// The previous lines the ρ index cannot place (not finite, or too far): always
+    /// candidates.
+    rho_any: u64,
 }
 
 /// Ranges of α in the angle index.
-const BUCKETS: usize = 64;
+const BUCKETS: usize = 32;
+/// Ranges of ρ in the ρ index.
+const RHO_BUCKETS: usize = 32;
+/// Width of a range of ρ in the ρ index, mm.
+const RHO_WIDTH: f32 = 512.0;
+/// Largest |ρ| and gate reach the ρ index takes, mm (its margin of 1 mm covers the rounding
+/// of sums up to this size many times over).
+const RHO_LIMIT: f32 = 1.0e6;
+
+/// The range of ρ in the ρ index of `x` (any value: below 0 the first, beyond the last the
+/// last; NaN the first).
+fn rho_bucket(x: f32) -> usize {
+    // `as` saturates: negative and NaN to 0.
+    ((x * (1.0 / RHO_WIDTH)) as usize).min(RHO_BUCKETS - 1)
+}
+
+/// An upper bound of `sqrt(gate · var)` with room for rounding: a ρ gate's half width, mm.
+/// `None` when it cannot be bounded (a negative, non-finite or too large value).
+fn rho_reach(gate: f32, var: f32) -> Option<f32> {
+    if !(var >= 0.0 && gate > 0.0) {
+        return None;
+    }
+    let w = crate::geom::sqrt(gate * var) * 1.001 + 1.0;
+    (w <= RHO_LIMIT).then_some(w)
+}
 /// Widest angle gate the index serves, rad (wider gates look at every line).
 const MAX_REACH: f32 = 0.6;
 
@@ -69,6 +99,8 @@ impl Scratch {
             curr_sc: [[0.0; 2]; MAX_OBS],
             prev_sc: [[0.0; 2]; MAX_OBS],
             buckets: [0; BUCKETS],
+            rho: [0; RHO_BUCKETS],
+            rho_any: 0,
         }
     }
 }
@@ -87,6 +119,9 @@ pub(super) struct Work<'a> {
     /// The largest variance of α among the previous lines.
     max_var_a: f32,
     s: &'a mut Scratch,
+    /// Tests only: every previous line a candidate (the reference the indices are held to).
+    #[cfg(test)]
+    pub(super) brute: bool,
 }
 
 impl<'a> Work<'a> {
@@ -129,6 +164,26 @@ impl<'a> Work<'a> {
                 }
             }
         }
+        // The ρ index: line `i` in every range that [ρ_i − w_i, ρ_i + w_i] meets, w_i its own
+        // part of the ρ gate (see `rho_candidates`).
+        s.rho = [0; RHO_BUCKETS];
+        s.rho_any = 0;
+        for (i, l) in prev.lines().iter().enumerate().take(64) {
+            let bit = 1u64 << i;
+            match rho_reach(cfg.gate, l.cov.c) {
+                Some(w) if l.r.abs() <= RHO_LIMIT => {
+                    for m in s
+                        .rho
+                        .iter_mut()
+                        .take(rho_bucket(l.r + w) + 1)
+                        .skip(rho_bucket(l.r - w))
+                    {
+                        *m |= bit;
+                    }
+                }
+                _ => s.rho_any |= bit,
+            }
+        }
         Self {
             prev,
             curr,
@@ -138,7 +193,34 @@ impl<'a> Work<'a> {
             reach,
             max_var_a,
             s,
+            #[cfg(test)]
+            brute: false,
         }
+    }
+
+    /// The previous lines whose ρ may lie within the ρ gate of `q` (as bits), `reach` the
+    /// current line's part of the gate (from [`rho_reach`]; `None`: every line).
+    ///
+    /// Why no line that could match is left out: a match needs `(q − ρ_i)² ≤ g (v + c_i)`
+    /// (f32), `v` the current line's variance of ρ with the slack, `c_i` the previous
+    /// line's; so `|q − ρ_i| ≤ √(g v) + √(g c_i)` up to a few ulps, which the 0.1 % and 1 mm
+    /// of [`rho_reach`] cover on both sides, as they do the rounding of `q ± reach` and
+    /// `ρ_i ± w_i` (both below [`RHO_LIMIT`]). The two intervals meet at some ρ, whose range
+    /// both cover ([`rho_bucket`] is monotonic).
+    fn rho_candidates(&self, q: f32, reach: Option<f32>) -> u64 {
+        #[cfg(test)]
+        if self.brute {
+            return u64::MAX;
+        }
+        let Some(reach) = reach.filter(|_| q.abs() <= RHO_LIMIT) else {
+            return u64::MAX;
+        };
+        let (from, to) = (rho_bucket(q - reach), rho_bucket(q + reach));
+        let mut bits = self.s.rho_any;
+        for m in self.s.rho.iter().take(to + 1).skip(from) {
+            bits |= m;
+        }
+        bits
     }
 
     /// Sine and cosine of previous line `i`'s α.
@@ -154,14 +236,27 @@ impl<'a> Work<'a> {
     /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
     /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
     /// the index serves.
-    fn candidates(&self, centre: f32, half: f32) -> u64 {
+    ///
+    /// With `rho` (the current line's ρ and its part of the ρ gate, see
+    /// [`Work::rho_candidates`]) only those whose ρ may also agree: of the lines near
+    /// `centre` those near `rho`, of the lines near `centre + π` those near `−rho` (the
+    /// orientation a match takes decides both).
+    fn candidates(&self, centre: f32, half: f32, rho: (f32, Option<f32>)) -> u64 {
         let nl = self.prev.lines().len().min(64);
         let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
-        if !(half <= self.reach) || !centre.is_finite() {
+        let (same, turned) = (
+            self.rho_candidates(rho.0, rho.1),
+            self.rho_candidates(-rho.0, rho.1),
+        );
+        #[cfg(test)]
+        if self.brute {
             return all;
         }
+        if !(half <= self.reach) || !centre.is_finite() {
+            return (same | turned) & all;
+        }
         let at = |x: f32| self.s.buckets.get(bucket(x)).copied().unwrap_or(u64::MAX);
-        (at(centre) | at(centre + PI)) & all
+        ((at(centre) & same) | (at(centre + PI) & turned)) & all
     }
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
@@ -216,11 +311,19 @@ impl<'a> Work<'a> {
                 c: lk.cov.c + 2.0 * h * lk.cov.b + h * h * lk.cov.a,
             };
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
-            let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
+            // The segment in the previous frame, when first needed.
+            let mut ext_prev = None;
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
-            // Only the previous lines within the angle gate (either orientation) can match.
+            // Only the previous lines within the angle gate and the ρ gate (either orientation)
+            // can match.
             let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
-            let mut bits = self.candidates(a, half);
+            // (The bound needs every variance in the sum non-negative.)
+            let rho_gate = if ct_.c >= 0.0 {
+                rho_reach(gate, ct_.c + sr * sr)
+            } else {
+                None
+            };
+            let mut bits = self.candidates(a, half, (r, rho_gate));
             while bits != 0 {
                 let i = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
@@ -262,6 +365,8 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
+                let ext = *ext_prev
+                    .get_or_insert_with(|| lk.ext.map(|(s, e)| (transform(s), transform(e))));
                 let Some(frac) = overlap(ext, li, *psc, cfg.overlap_slack + sr) else {
                     continue;
                 };
@@ -600,5 +705,187 @@ fn add_prior(n: &mut Normal, pose: &Pose, p: &Prior) {
     n.h = crate::geom::add3(&n.h, &p.info);
     for (g, row) in n.g.iter_mut().zip(&p.info) {
         *g += row[0] * e[0] + row[1] * e[1] + row[2] * e[2];
+    }
+}
+
+#[cfg(test)]
+mod index_tests {
+    //! The association's indices (angle and ρ) against every previous line tried: the same
+    //! matches, scores and normal equations, bit for bit.
+    use super::*;
+    use crate::geom::normalise_line;
+
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn unit(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.unit()
+        }
+        /// 10^(lo..hi).
+        fn log(&mut self, lo: f32, hi: f32) -> f32 {
+            libm::powf(10.0, self.range(lo, hi))
+        }
+        fn pick(&mut self, n: u64) -> u64 {
+            self.next() % n
+        }
+    }
+
+    /// A random line's covariance: variances over many orders, any correlation.
+    fn cov(rng: &mut Rng) -> Sym2 {
+        let (a, c) = (rng.log(-8.0, 0.5), rng.log(-2.0, 8.0));
+        let corr = rng.range(-0.9999, 0.9999);
+        Sym2 {
+            a,
+            b: corr * libm::sqrtf(a * c),
+            c,
+        }
+    }
+
+    /// A segment on the line (α, ρ), or none.
+    fn ext(rng: &mut Rng, a: f32, r: f32) -> Option<([f32; 2], [f32; 2])> {
+        if rng.pick(5) == 0 {
+            return None;
+        }
+        let (s, c) = (libm::sinf(a), libm::cosf(a));
+        let (t0, t1) = (rng.range(-8000.0, 8000.0), rng.range(-8000.0, 8000.0));
+        let at = |t: f32| [r * c - t * s, r * s + t * c];
+        Some((at(t0), at(t1)))
+    }
+
+    fn rho(rng: &mut Rng) -> f32 {
+        match rng.pick(6) {
+            0 => rng.range(0.0, 200.0),
+            1 => rng.range(0.0, 2.0e6),
+            _ => rng.range(0.0, 20000.0),
+        }
+    }
+
+    /// Two sets, the current one partly the previous one seen from `truth` (with noise),
+    /// partly anything; a few degenerate values pushed without checks.
+    fn sets(rng: &mut Rng, truth: &Pose, cfg: &Config) -> (Set, Set) {
+        let (mut p, mut c) = (Set::new(), Set::new());
+        let np = 2 + rng.pick(63) as usize;
+        let inv = truth.inverse();
+        for _ in 0..np {
+            let (a, r) = (rng.range(-PI, PI), rho(rng));
+            let e = ext(rng, a, r);
+            p.push_line(a, r, cov(rng), e, rng.range(0.0, 5000.0), Some(cfg));
+            if rng.pick(3) > 0 {
+                let (ca, cr) = inv.transform_line(a, r);
+                let (ca, cr) =
+                    normalise_line(ca + rng.range(-0.05, 0.05), cr + rng.range(-300.0, 300.0));
+                let e = ext(rng, ca, cr);
+                c.push_line(ca, cr, cov(rng), e, rng.range(0.0, 5000.0), Some(cfg));
+            }
+        }
+        for _ in 0..rng.pick(20) {
+            let (a, r) = (rng.range(-PI, PI), rho(rng));
+            let e = ext(rng, a, r);
+            c.push_line(a, r, cov(rng), e, 1.0, Some(cfg));
+        }
+        // Degenerate values (a map's lines are not checked): NaN, ∞, negative variances.
+        for set in [&mut p, &mut c] {
+            if rng.pick(4) == 0 {
+                let bad = [f32::NAN, f32::INFINITY, -1.0, 3.0e9][rng.pick(4) as usize];
+                let k = rng.pick(3);
+                let cv = Sym2 {
+                    a: if k == 0 { bad } else { 1e-4 },
+                    b: 0.0,
+                    c: if k == 1 { bad } else { 100.0 },
+                };
+                let r = if k == 2 { bad.abs() } else { 1000.0 };
+                set.push_line(0.3, r, cv, None, 1.0, None);
+            }
+        }
+        for _ in 0..rng.pick(6) {
+            let q = [rng.range(-5000.0, 5000.0), rng.range(-5000.0, 5000.0)];
+            let cv = Sym2 {
+                a: 100.0,
+                b: 0.0,
+                c: 100.0,
+            };
+            p.push_pt(q, cv, 1.0, Some(cfg));
+            c.push_pt(inv.transform_point(q), cv, 1.0, Some(cfg));
+        }
+        (p, c)
+    }
+
+    fn same_normal(a: &Normal, b: &Normal) -> bool {
+        let bits = |n: &Normal| {
+            let mut v = [0u32; 14];
+            for (i, x) in n.h.iter().flatten().chain(&n.g).enumerate() {
+                v[i] = x.to_bits();
+            }
+            v[12] = n.chi2.to_bits();
+            v[13] = n.score.to_bits();
+            v
+        };
+        bits(a) == bits(b) && a.lines == b.lines && a.pts == b.pts
+    }
+
+    #[test]
+    fn indices_change_nothing() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut matched = 0usize;
+        for round in 0..3000 {
+            let mut cfg = Config::default();
+            if round % 7 == 0 {
+                cfg.gate = rng.range(0.5, 40.0);
+                cfg.slack = [
+                    rng.range(0.0, 0.5),
+                    rng.range(0.0, 500.0),
+                    rng.range(0.0, 0.1),
+                ];
+            }
+            let truth = Pose::new(
+                rng.range(-3000.0, 3000.0),
+                rng.range(-3000.0, 3000.0),
+                rng.range(-PI, PI),
+            );
+            let (p, c) = sets(&mut rng, &truth, &cfg);
+            for _ in 0..4 {
+                let pose = if rng.pick(2) == 0 {
+                    Pose::new(
+                        truth.x + rng.range(-200.0, 200.0),
+                        truth.y + rng.range(-200.0, 200.0),
+                        truth.theta + rng.range(-0.1, 0.1),
+                    )
+                } else {
+                    Pose::new(
+                        rng.range(-5000.0, 5000.0),
+                        rng.range(-5000.0, 5000.0),
+                        rng.range(-PI, PI),
+                    )
+                };
+                let slack = [1.0, 0.5, 0.25, 0.1, 0.0][rng.pick(5) as usize];
+                let (mut s1, mut s2) = (Scratch::new(), Scratch::new());
+                let mut fast = Work::new(&p, &c, &cfg, None, &mut s1);
+                let mut brute = Work::new(&p, &c, &cfg, None, &mut s2);
+                brute.brute = true;
+                let (mut oa, mut ob) = (Assoc::new(), Assoc::new());
+                let na = fast.associate(&pose, slack, Some(&mut oa));
+                let nb = brute.associate(&pose, slack, Some(&mut ob));
+                assert!(same_normal(&na, &nb), "round {round}: {pose:?}");
+                assert_eq!((oa.lines, oa.pts), (ob.lines, ob.pts), "round {round}");
+                assert_eq!(fast.nc, brute.nc);
+                for (x, y) in fast.s.contrib.iter().zip(&brute.s.contrib).take(fast.nc) {
+                    assert!(x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits()));
+                }
+                let (sa, sb) = (fast.score(&pose, slack), brute.score(&pose, slack));
+                assert_eq!(sa.to_bits(), sb.to_bits(), "round {round}");
+                matched += usize::from(na.lines);
+            }
+        }
+        // The cases must include matches, many of them.
+        assert!(matched > 20_000, "{matched}");
     }
 }
