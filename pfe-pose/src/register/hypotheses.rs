@@ -78,7 +78,7 @@ impl Top {
 /// `(b − a)` modulo π, in [0, π).
 fn undirected(a: f32, b: f32) -> f32 {
     let d = b - a;
-    let u = d - PI * libm::floorf(d / PI);
+    let u = d - PI * crate::geom::floor(d / PI);
     if (0.0..PI).contains(&u) {
         u
     } else {
@@ -88,7 +88,7 @@ fn undirected(a: f32, b: f32) -> f32 {
 
 /// `x` modulo π, in (−π/2, π/2].
 fn mod_pi(x: f32) -> f32 {
-    x - PI * libm::roundf(x / PI)
+    x - PI * crate::geom::round(x / PI)
 }
 
 /// Hypotheses of `curr`'s pose in `prev`'s frame, scored; returns how many were scored. Without
@@ -364,74 +364,97 @@ const VOTE_ANGLE: f32 = 0.035;
 /// Clusters kept.
 const VOTES: usize = 96;
 
-#[derive(Clone, Copy)]
-struct Vote {
-    /// The mean of the votes.
-    mean: Pose,
-    n: u16,
-}
-
-/// The hypotheses formed, clustered: how many pairs of features agree on each pose.
+/// The hypotheses formed, clustered: how many pairs of features agree on each pose. Each
+/// cluster's mean (x, y, θ) and count in arrays of their own, so that the search for a
+/// vote's cluster runs down the x values alone.
 struct Votes {
-    items: [Vote; VOTES],
-    n: usize,
+    x: [f32; VOTES],
+    y: [f32; VOTES],
+    theta: [f32; VOTES],
+    n: [u16; VOTES],
+    len: usize,
 }
 
 impl Votes {
     fn new() -> Self {
         Self {
-            items: [Vote {
-                mean: Pose::IDENTITY,
-                n: 0,
-            }; VOTES],
-            n: 0,
+            x: [0.0; VOTES],
+            y: [0.0; VOTES],
+            theta: [0.0; VOTES],
+            n: [0; VOTES],
+            len: 0,
         }
     }
 
     /// A vote for `pose`: into the first cluster whose mean it is near, else a new one (when
     /// full, in place of a cluster of one vote).
     fn add(&mut self, pose: Pose) {
-        let n = self.n;
-        for v in self.items.iter_mut().take(n) {
+        let len = self.len.min(VOTES);
+        for (j, &mx) in self.x.iter().enumerate().take(len) {
             // The cheapest test first: most clusters differ in x.
-            let dx = pose.x - v.mean.x;
+            let dx = pose.x - mx;
             if !(dx.abs() < VOTE_DISTANCE) {
                 continue;
             }
-            let d = [dx, pose.y - v.mean.y, wrap(pose.theta - v.mean.theta)];
+            let (Some(y), Some(theta), Some(n)) =
+                (self.y.get_mut(j), self.theta.get_mut(j), self.n.get_mut(j))
+            else {
+                continue;
+            };
+            let d = [dx, pose.y - *y, wrap(pose.theta - *theta)];
             if d[1].abs() < VOTE_DISTANCE && d[2].abs() < VOTE_ANGLE {
-                v.n = v.n.saturating_add(1);
-                let k = 1.0 / f32::from(v.n);
-                v.mean = Pose::new(
-                    v.mean.x + d[0] * k,
-                    v.mean.y + d[1] * k,
-                    v.mean.theta + d[2] * k,
-                );
+                *n = n.saturating_add(1);
+                let k = 1.0 / f32::from(*n);
+                let mean = Pose::new(mx + d[0] * k, *y + d[1] * k, *theta + d[2] * k);
+                *y = mean.y;
+                *theta = mean.theta;
+                if let Some(x) = self.x.get_mut(j) {
+                    *x = mean.x;
+                }
                 return;
             }
         }
-        let new = Vote { mean: pose, n: 1 };
-        if let Some(slot) = self.items.get_mut(n) {
-            *slot = new;
-            self.n += 1;
-        } else if let Some(slot) = self.items.iter_mut().find(|v| v.n <= 1) {
-            *slot = new;
+        let slot = if len < VOTES {
+            self.len = len + 1;
+            Some(len)
+        } else {
+            self.n.iter().position(|&c| c <= 1)
+        };
+        if let Some(j) = slot {
+            for (a, v) in [
+                (&mut self.x, pose.x),
+                (&mut self.y, pose.y),
+                (&mut self.theta, pose.theta),
+            ] {
+                if let Some(a) = a.get_mut(j) {
+                    *a = v;
+                }
+            }
+            if let Some(n) = self.n.get_mut(j) {
+                *n = 1;
+            }
         }
     }
 
     /// The mean pose of the cluster with the most votes (the first formed among equals),
     /// removed.
     fn take_best(&mut self) -> Option<Pose> {
-        let n = self.n;
-        let mut best: Option<&mut Vote> = None;
-        for v in self.items.iter_mut().take(n) {
-            if v.n > 0 && best.as_ref().is_none_or(|b| v.n > b.n) {
-                best = Some(v);
+        let mut best: Option<(usize, u16)> = None;
+        for (j, &n) in self.n.iter().enumerate().take(self.len) {
+            if n > 0 && best.is_none_or(|b| n > b.1) {
+                best = Some((j, n));
             }
         }
-        let v = best?;
-        v.n = 0;
-        v.mean.is_finite().then_some(v.mean)
+        let (j, _) = best?;
+        if let Some(n) = self.n.get_mut(j) {
+            *n = 0;
+        }
+        let mean = Pose {
+            x: self.x.get(j).copied()?,
+            y: self.y.get(j).copied()?,
+            theta: self.theta.get(j).copied()?,
+        };
+        mean.is_finite().then_some(mean)
     }
 }
 

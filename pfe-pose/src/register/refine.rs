@@ -47,40 +47,10 @@ pub(super) struct Scratch {
     /// The angle index: for each of [`BUCKETS`] equal ranges of α over the circle, the
     /// previous lines (bit `i`: line `i`) within [`Work::reach`] of it.
     buckets: [u64; BUCKETS],
-    /// The ρ index: for each of [`RHO_BUCKETS`] ranges of ρ ([`RHO_WIDTH`] wide from 0, the
-    /// last one open), the previous lines whose ρ gate reach ([`rho_reach`]) meets it.
-    rho: [u64; RHO_BUCKETS],
-    /// The previous lines the ρ index cannot place (not finite, or too far): always
-    /// candidates.
-    rho_any: u64,
 }
 
 /// Ranges of α in the angle index.
-const BUCKETS: usize = 32;
-/// Ranges of ρ in the ρ index.
-const RHO_BUCKETS: usize = 32;
-/// Width of a range of ρ in the ρ index, mm.
-const RHO_WIDTH: f32 = 512.0;
-/// Largest |ρ| and gate reach the ρ index takes, mm (its margin of 1 mm covers the rounding
-/// of sums up to this size many times over).
-const RHO_LIMIT: f32 = 1.0e6;
-
-/// The range of ρ in the ρ index of `x` (any value: below 0 the first, beyond the last the
-/// last; NaN the first).
-fn rho_bucket(x: f32) -> usize {
-    // `as` saturates: negative and NaN to 0.
-    ((x * (1.0 / RHO_WIDTH)) as usize).min(RHO_BUCKETS - 1)
-}
-
-/// An upper bound of `sqrt(gate · var)` with room for rounding: a ρ gate's half width, mm.
-/// `None` when it cannot be bounded (a negative, non-finite or too large value).
-fn rho_reach(gate: f32, var: f32) -> Option<f32> {
-    if !(var >= 0.0 && gate > 0.0) {
-        return None;
-    }
-    let w = crate::geom::sqrt(gate * var) * 1.001 + 1.0;
-    (w <= RHO_LIMIT).then_some(w)
-}
+const BUCKETS: usize = 64;
 /// Widest angle gate the index serves, rad (wider gates look at every line).
 const MAX_REACH: f32 = 0.6;
 
@@ -99,8 +69,6 @@ impl Scratch {
             curr_sc: [[0.0; 2]; MAX_OBS],
             prev_sc: [[0.0; 2]; MAX_OBS],
             buckets: [0; BUCKETS],
-            rho: [0; RHO_BUCKETS],
-            rho_any: 0,
         }
     }
 }
@@ -119,7 +87,7 @@ pub(super) struct Work<'a> {
     /// The largest variance of α among the previous lines.
     max_var_a: f32,
     s: &'a mut Scratch,
-    /// Tests only: every previous line a candidate (the reference the indices are held to).
+    /// Tests only: every previous line a candidate (the reference the index is held to).
     #[cfg(test)]
     pub(super) brute: bool,
 }
@@ -149,8 +117,8 @@ impl<'a> Work<'a> {
         let width = 2.0 * PI / BUCKETS as f32;
         for (i, l) in prev.lines().iter().enumerate().take(64) {
             let bit = 1u64 << i;
-            let from = libm::floorf((l.a - reach + PI) / width);
-            let to = libm::floorf((l.a + reach + PI) / width);
+            let from = crate::geom::floor((l.a - reach + PI) / width);
+            let to = crate::geom::floor((l.a + reach + PI) / width);
             if !(from.is_finite() && to.is_finite()) {
                 continue;
             }
@@ -162,26 +130,6 @@ impl<'a> Work<'a> {
                 if let Some(m) = s.buckets.get_mut(b.rem_euclid(BUCKETS as i32) as usize) {
                     *m |= bit;
                 }
-            }
-        }
-        // The ρ index: line `i` in every range that [ρ_i − w_i, ρ_i + w_i] meets, w_i its own
-        // part of the ρ gate (see `rho_candidates`).
-        s.rho = [0; RHO_BUCKETS];
-        s.rho_any = 0;
-        for (i, l) in prev.lines().iter().enumerate().take(64) {
-            let bit = 1u64 << i;
-            match rho_reach(cfg.gate, l.cov.c) {
-                Some(w) if l.r.abs() <= RHO_LIMIT => {
-                    for m in s
-                        .rho
-                        .iter_mut()
-                        .take(rho_bucket(l.r + w) + 1)
-                        .skip(rho_bucket(l.r - w))
-                    {
-                        *m |= bit;
-                    }
-                }
-                _ => s.rho_any |= bit,
             }
         }
         Self {
@@ -198,31 +146,6 @@ impl<'a> Work<'a> {
         }
     }
 
-    /// The previous lines whose ρ may lie within the ρ gate of `q` (as bits), `reach` the
-    /// current line's part of the gate (from [`rho_reach`]; `None`: every line).
-    ///
-    /// Why no line that could match is left out: a match needs `(q − ρ_i)² ≤ g (v + c_i)`
-    /// (f32), `v` the current line's variance of ρ with the slack, `c_i` the previous
-    /// line's; so `|q − ρ_i| ≤ √(g v) + √(g c_i)` up to a few ulps, which the 0.1 % and 1 mm
-    /// of [`rho_reach`] cover on both sides, as they do the rounding of `q ± reach` and
-    /// `ρ_i ± w_i` (both below [`RHO_LIMIT`]). The two intervals meet at some ρ, whose range
-    /// both cover ([`rho_bucket`] is monotonic).
-    fn rho_candidates(&self, q: f32, reach: Option<f32>) -> u64 {
-        #[cfg(test)]
-        if self.brute {
-            return u64::MAX;
-        }
-        let Some(reach) = reach.filter(|_| q.abs() <= RHO_LIMIT) else {
-            return u64::MAX;
-        };
-        let (from, to) = (rho_bucket(q - reach), rho_bucket(q + reach));
-        let mut bits = self.s.rho_any;
-        for m in self.s.rho.iter().take(to + 1).skip(from) {
-            bits |= m;
-        }
-        bits
-    }
-
     /// Sine and cosine of previous line `i`'s α.
     pub(super) fn prev_sc(&self, i: usize) -> [f32; 2] {
         self.s.prev_sc.get(i).copied().unwrap_or([0.0, 1.0])
@@ -236,27 +159,18 @@ impl<'a> Work<'a> {
     /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
     /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
     /// the index serves.
-    ///
-    /// With `rho` (the current line's ρ and its part of the ρ gate, see
-    /// [`Work::rho_candidates`]) only those whose ρ may also agree: of the lines near
-    /// `centre` those near `rho`, of the lines near `centre + π` those near `−rho` (the
-    /// orientation a match takes decides both).
-    fn candidates(&self, centre: f32, half: f32, rho: (f32, Option<f32>)) -> u64 {
+    fn candidates(&self, centre: f32, half: f32) -> u64 {
         let nl = self.prev.lines().len().min(64);
         let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
-        let (same, turned) = (
-            self.rho_candidates(rho.0, rho.1),
-            self.rho_candidates(-rho.0, rho.1),
-        );
         #[cfg(test)]
         if self.brute {
             return all;
         }
         if !(half <= self.reach) || !centre.is_finite() {
-            return (same | turned) & all;
+            return all;
         }
         let at = |x: f32| self.s.buckets.get(bucket(x)).copied().unwrap_or(u64::MAX);
-        ((at(centre) & same) | (at(centre + PI) & turned)) & all
+        (at(centre) | at(centre + PI)) & all
     }
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
@@ -314,16 +228,9 @@ impl<'a> Work<'a> {
             // The segment in the previous frame, when first needed.
             let mut ext_prev = None;
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
-            // Only the previous lines within the angle gate and the ρ gate (either orientation)
-            // can match.
+            // Only the previous lines within the angle gate (either orientation) can match.
             let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
-            // (The bound needs every variance in the sum non-negative.)
-            let rho_gate = if ct_.c >= 0.0 {
-                rho_reach(gate, ct_.c + sr * sr)
-            } else {
-                None
-            };
-            let mut bits = self.candidates(a, half, (r, rho_gate));
+            let mut bits = self.candidates(a, half);
             while bits != 0 {
                 let i = bits.trailing_zeros() as usize;
                 bits &= bits - 1;
@@ -523,7 +430,12 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
 /// cosine of its α) are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
+#[inline(always)]
 fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, sc: [f32; 2], slack: f32) -> Option<f32> {
+    // `f32::min` and `f32::max` (the other one when one is NaN; either of ±0), without a call
+    // to the soft `fminf`/`fmaxf` the Cortex-M4F would make.
+    let min = |a: f32, b: f32| if a < b || b.is_nan() { a } else { b };
+    let max = |a: f32, b: f32| if a > b || b.is_nan() { a } else { b };
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
         return Some(1.0);
     };
@@ -531,13 +443,13 @@ fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, sc: [f32; 2], slack: f3
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
     let (a0, a1) = (along(s), along(e));
     let (b0, b1) = (along(ps), along(pe));
-    let (alo, ahi) = (a0.min(a1), a0.max(a1));
-    let (blo, bhi) = (b0.min(b1), b0.max(b1));
-    let gap = alo.max(blo) - ahi.min(bhi);
+    let (alo, ahi) = (min(a0, a1), max(a0, a1));
+    let (blo, bhi) = (min(b0, b1), max(b0, b1));
+    let gap = max(alo, blo) - min(ahi, bhi);
     if !(gap <= slack) {
         return None;
     }
-    let shorter = (ahi - alo).min(bhi - blo).max(1.0);
+    let shorter = max(min(ahi - alo, bhi - blo), 1.0);
     Some((-gap / shorter).clamp(0.0, 1.0))
 }
 
@@ -710,7 +622,7 @@ fn add_prior(n: &mut Normal, pose: &Pose, p: &Prior) {
 
 #[cfg(test)]
 mod index_tests {
-    //! The association's indices (angle and ρ) against every previous line tried: the same
+    //! The association's angle index against every previous line tried: the same
     //! matches, scores and normal equations, bit for bit.
     use super::*;
     use crate::geom::normalise_line;
