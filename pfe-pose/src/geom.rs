@@ -39,6 +39,7 @@ impl Pose {
     };
 
     /// The pose (x mm, y mm, θ rad), θ wrapped into (−π, π].
+    #[inline(always)]
     pub fn new(x: f32, y: f32, theta: f32) -> Self {
         Self {
             x,
@@ -214,6 +215,7 @@ pub(crate) fn sqrt(x: f32) -> f32 {
 }
 
 /// `sqrt(x² + y²)` with [`sqrt`] (for lengths in mm: no overflow to fear).
+#[inline(always)]
 pub(crate) fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)
 }
@@ -389,6 +391,7 @@ pub(crate) struct Sym2 {
 }
 
 impl Sym2 {
+    #[inline(always)]
     pub fn add(self, o: Sym2) -> Sym2 {
         Sym2 {
             a: self.a + o.a,
@@ -419,6 +422,7 @@ impl Sym2 {
     }
 
     /// `R M Rᵀ` for the rotation by an angle of sine `s`, cosine `c`.
+    #[inline(always)]
     pub fn rotate(self, s: f32, c: f32) -> Sym2 {
         let (a, b, d) = (self.a, self.b, self.c);
         Sym2 {

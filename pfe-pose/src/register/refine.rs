@@ -55,6 +55,7 @@ const BUCKETS: usize = 64;
 const MAX_REACH: f32 = 0.6;
 
 /// The bucket of angle `x` (any finite value).
+#[inline(always)]
 fn bucket(x: f32) -> usize {
     let u = (wrap(x) + PI) * (BUCKETS as f32 / (2.0 * PI));
     // `as` saturates (NaN to 0); the last bucket takes α = π.
@@ -159,6 +160,7 @@ impl<'a> Work<'a> {
     /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
     /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
     /// the index serves.
+    #[inline(always)]
     fn candidates(&self, centre: f32, half: f32) -> u64 {
         let nl = self.prev.lines().len().min(64);
         let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
@@ -230,10 +232,21 @@ impl<'a> Work<'a> {
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             // Only the previous lines within the angle gate (either orientation) can match.
             let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
-            let mut bits = self.candidates(a, half);
-            while bits != 0 {
-                let i = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
+            let bits = self.candidates(a, half);
+            // As two 32-bit words: the Cortex-M4 has no 64-bit bit scan.
+            let (mut lo, mut hi) = (bits as u32, (bits >> 32) as u32);
+            loop {
+                let i = if lo != 0 {
+                    let t = lo.trailing_zeros();
+                    lo &= lo - 1;
+                    t as usize
+                } else if hi != 0 {
+                    let t = hi.trailing_zeros();
+                    hi &= hi - 1;
+                    32 + t as usize
+                } else {
+                    break;
+                };
                 let Ok(iu) = u8::try_from(i) else { break };
                 let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.s.prev_sc.get(i))
                 else {
@@ -407,6 +420,7 @@ impl Work<'_> {
 
 /// `H += Jᵀ W J`, `g += Jᵀ W e` for a 2-row residual with rows `j0`, `j1`; returns the
 /// match's `Jᵀ W J`.
+#[inline(always)]
 fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 2]) -> Cov3 {
     let mut hi = ZERO3;
     // W J: rows.
