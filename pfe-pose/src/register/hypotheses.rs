@@ -95,10 +95,10 @@ fn mod_pi(x: f32) -> f32 {
 /// `search` (and with a prior), the prior's pose alone. Not inlined: its tables are not
 /// on the stack during the refinement.
 #[inline(never)]
-pub(super) fn hypothesise(
+pub(super) fn hypothesise<'s>(
     w: &mut Work,
-    prev: &Set,
-    curr: &Set,
+    prev: &'s Set,
+    curr: &'s Set,
     prior: Option<&Prior>,
     cfg: &Config,
     top: &mut Top,
@@ -144,7 +144,7 @@ pub(super) fn hypothesise(
     let (hc, nc) = top_k::<12>(cl.iter().map(|l| l.rank));
     let hp = hp.get(..np).unwrap_or(&[]);
     let hc = hc.get(..nc).unwrap_or(&[]);
-    let line = |s: &[Line], i: u8| s.get(usize::from(i)).copied();
+    let line = |s: &'s [Line], i: u8| s.get(usize::from(i));
     let mut pair_hyps = 0u32;
     // Pairs of non-parallel lines: the current scan's ordered pairs sorted by the angle between
     // them, each pair of the previous scan looked up in it within its gate.
@@ -237,7 +237,7 @@ pub(super) fn hypothesise(
     let (qc, nqc) = top_k::<8>(cp.iter().map(|p| p.rank));
     let qp = qp.get(..nqp).unwrap_or(&[]);
     let qc = qc.get(..nqc).unwrap_or(&[]);
-    let pt = |s: &[Pt], i: u8| s.get(usize::from(i)).copied();
+    let pt = |s: &'s [Pt], i: u8| s.get(usize::from(i));
     // The current scan's ordered pairs of points: their distance and its variance.
     let mut cdist = [[(0.0f32, 0.0f32); 8]; 8];
     for (row, &c) in cdist.iter_mut().zip(qc) {
@@ -373,6 +373,9 @@ struct Votes {
     theta: [f32; VOTES],
     n: [u16; VOTES],
     len: usize,
+    /// No cluster before this one has a single vote (counts only grow while votes come in,
+    /// and a replaced cluster has one vote again: the first single one never moves back).
+    single: usize,
 }
 
 impl Votes {
@@ -383,6 +386,7 @@ impl Votes {
             theta: [0.0; VOTES],
             n: [0; VOTES],
             len: 0,
+            single: 0,
         }
     }
 
@@ -418,7 +422,15 @@ impl Votes {
             self.len = len + 1;
             Some(len)
         } else {
-            self.n.iter().position(|&c| c <= 1)
+            let from = self.single;
+            let j = self
+                .n
+                .iter()
+                .skip(from)
+                .position(|&c| c <= 1)
+                .map(|j| j + from);
+            self.single = j.unwrap_or(VOTES);
+            j
         };
         if let Some(j) = slot {
             for (a, v) in [
@@ -449,6 +461,7 @@ impl Votes {
         if let Some(n) = self.n.get_mut(j) {
             *n = 0;
         }
+        self.single = 0;
         let mean = Pose {
             x: self.x.get(j).copied()?,
             y: self.y.get(j).copied()?,
