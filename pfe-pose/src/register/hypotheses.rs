@@ -75,6 +75,31 @@ impl Top {
     }
 }
 
+/// Bounds of the squared translation for [`within_translation`]: `max²` less and plus 0.01 %
+/// (NaN, so that every test fails, when `max` is not positive and finite).
+fn squared_bounds(max: f32) -> (f32, f32) {
+    if max > 0.0 && max < 1e18 {
+        (max * max * (1.0 - 1e-4), max * max * (1.0 + 1e-4))
+    } else {
+        (f32::NAN, f32::NAN)
+    }
+}
+
+/// `hypot(x, y) <= max`, bit for bit, without the square root when the square is clearly
+/// inside or outside `square` (from [`squared_bounds`]): the root is within a few ulps, far
+/// less than the 0.01 %.
+#[inline(always)]
+fn within_translation(x: f32, y: f32, max: f32, square: (f32, f32)) -> bool {
+    let q = x * x + y * y;
+    if q <= square.0 {
+        true
+    } else if q > square.1 {
+        false
+    } else {
+        crate::geom::sqrt(q) <= max
+    }
+}
+
 /// `(b − a)` modulo π, in [0, π).
 fn undirected(a: f32, b: f32) -> f32 {
     let d = b - a;
@@ -106,6 +131,7 @@ pub(super) fn hypothesise<'s>(
 ) -> u32 {
     let mut count = 0u32;
     let mut votes = Votes::new();
+    let square = squared_bounds(cfg.max_translation);
     let within = |pose: &Pose| match prior {
         Some(p) => {
             let d = [
@@ -116,7 +142,7 @@ pub(super) fn hypothesise<'s>(
             quad3(&p.gate_info, &d) < cfg.prior_gate
         }
         None => {
-            crate::geom::hypot(pose.x, pose.y) <= cfg.max_translation
+            within_translation(pose.x, pose.y, cfg.max_translation, square)
                 && pose.theta.abs() <= cfg.max_rotation
         }
     };
@@ -501,4 +527,43 @@ fn solve_two_lines(
     let x = (bi * sj - bj * si) / det;
     let y = (ci * bj - cj * bi) / det;
     (x.is_finite() && y.is_finite()).then_some([x, y])
+}
+
+#[cfg(test)]
+mod tests {
+    /// [`super::within_translation`] against `hypot(x, y) <= max` on random translations,
+    /// many of them at the bound, and on degenerate bounds.
+    #[test]
+    fn within_translation_is_hypot() {
+        let mut s = 0x853c_49e6_748f_ea9bu64;
+        let mut next = || {
+            s ^= s >> 12;
+            s ^= s << 25;
+            s ^= s >> 27;
+            (s.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut near = 0;
+        for k in 0..400_000 {
+            let max = [3000.0f32, 1.0, 1234.567, 0.0, -5.0, f32::NAN, f32::INFINITY][k % 7];
+            let r = if max.is_finite() && max > 0.0 {
+                max
+            } else {
+                3000.0
+            };
+            // Radii within 0.1 % of the bound, or anywhere up to twice it.
+            let radius = if k % 2 == 0 {
+                r * (1.0 + (next() - 0.5) * 2e-3)
+            } else {
+                2.0 * r * next()
+            };
+            let a = next() * 6.283;
+            let (x, y) = (radius * libm::cosf(a), radius * libm::sinf(a));
+            let want = crate::geom::hypot(x, y) <= max;
+            let got = super::within_translation(x, y, max, super::squared_bounds(max));
+            assert_eq!(got, want, "{x} {y} {max}");
+            near += usize::from(want != (crate::geom::hypot(x, y) <= max * 0.9999));
+        }
+        // The bound itself was exercised: points on both sides within 0.01 % of it.
+        assert!(near > 1000, "{near}");
+    }
 }
