@@ -171,6 +171,7 @@ const WHOLE: f32 = 8_388_608.0;
 
 /// `libm::floorf`, bit for bit, without its software loop: the integer part by the FPU's
 /// conversion (exact below 2²³, as is `x` less it), the sign of a zero kept.
+#[inline(always)]
 pub(crate) fn floor(x: f32) -> f32 {
     if !(x.abs() < WHOLE) {
         return libm::floorf(x);
@@ -182,6 +183,7 @@ pub(crate) fn floor(x: f32) -> f32 {
 }
 
 /// `libm::roundf` (half away from zero), bit for bit, as [`floor`].
+#[inline(always)]
 pub(crate) fn round(x: f32) -> f32 {
     if !(x.abs() < WHOLE) {
         return libm::roundf(x);

@@ -101,6 +101,7 @@ fn within_translation(x: f32, y: f32, max: f32, square: (f32, f32)) -> bool {
 }
 
 /// `(b − a)` modulo π, in [0, π).
+#[inline(always)]
 fn undirected(a: f32, b: f32) -> f32 {
     let d = b - a;
     let u = d - PI * crate::geom::floor(d / PI);
@@ -112,6 +113,7 @@ fn undirected(a: f32, b: f32) -> f32 {
 }
 
 /// `x` modulo π, in (−π/2, π/2].
+#[inline(always)]
 fn mod_pi(x: f32) -> f32 {
     x - PI * crate::geom::round(x / PI)
 }
@@ -500,6 +502,7 @@ impl Votes {
 /// The translation that maps lines `k`, `l` of the current scan onto `i`, `j` of the previous
 /// one under the rotation of sine and cosine `th`; `sc`: sine and cosine of the α of `i`, `k`,
 /// `j`, `l`.
+#[inline(always)]
 fn solve_two_lines(
     li: &Line,
     lk: &Line,
