@@ -250,7 +250,7 @@ pub(super) fn hypothesise<'s>(
                         w.curr_sc(usize::from(l)),
                     ];
                     for (th, s, c) in [(theta, sth, cth), (wrap(theta + PI), -sth, -cth)] {
-                        if let Some(t) = solve_two_lines(&li, &lk, &lj, &ll, scs, [s, c]) {
+                        if let Some(t) = solve_two_lines(li, lk, lj, ll, scs, [s, c]) {
                             pair_hyps += 1;
                             consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
                         }
@@ -559,7 +559,7 @@ mod tests {
             } else {
                 2.0 * r * next()
             };
-            let a = next() * 6.283;
+            let a = next() * core::f32::consts::TAU;
             let (x, y) = (radius * libm::cosf(a), radius * libm::sinf(a));
             let want = crate::geom::hypot(x, y) <= max;
             let got = super::within_translation(x, y, max, super::squared_bounds(max));
