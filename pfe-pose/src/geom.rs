@@ -39,6 +39,7 @@ impl Pose {
     };
 
     /// The pose (x mm, y mm, θ rad), θ wrapped into (−π, π].
+    #[inline(always)]
     pub fn new(x: f32, y: f32, theta: f32) -> Self {
         Self {
             x,
@@ -140,15 +141,22 @@ pub fn compose_covariance(a: &Pose, ca: &Cov3, b: &Pose, cb: &Cov3) -> Cov3 {
 }
 
 /// Angle wrapped into (−π, π] (NaN stays NaN).
+#[inline(always)]
 pub fn wrap(a: f32) -> f32 {
     if a > -PI && a <= PI {
         return a;
     }
+    wrap_turns(a)
+}
+
+/// [`wrap`] of an angle outside (−π, π].
+#[inline(never)]
+fn wrap_turns(a: f32) -> f32 {
     if !a.is_finite() {
         return f32::NAN;
     }
     let two_pi = 2.0 * PI;
-    let mut w = a - two_pi * libm::floorf((a + PI) / two_pi);
+    let mut w = a - two_pi * floor((a + PI) / two_pi);
     if w <= -PI {
         w += two_pi;
     }
@@ -158,11 +166,45 @@ pub fn wrap(a: f32) -> f32 {
     w
 }
 
-/// `(sin x, cos x)`.
+/// Below this magnitude an `f32` may have a fraction; at and above it every one is whole.
+const WHOLE: f32 = 8_388_608.0;
+
+/// `libm::floorf`, bit for bit, without its software loop: the integer part by the FPU's
+/// conversion (exact below 2²³, as is `x` less it), the sign of a zero kept.
+#[inline(always)]
+pub(crate) fn floor(x: f32) -> f32 {
+    if !(x.abs() < WHOLE) {
+        return libm::floorf(x);
+    }
+    let t = x as i32 as f32;
+    let r = if x - t < 0.0 { t - 1.0 } else { t };
+    // −0 stays −0 (a negative `x` gives a negative result or −0, a positive one neither).
+    f32::from_bits(r.to_bits() | (x.to_bits() & 0x8000_0000))
+}
+
+/// `libm::roundf` (half away from zero), bit for bit, as [`floor`].
+#[inline(always)]
+pub(crate) fn round(x: f32) -> f32 {
+    if !(x.abs() < WHOLE) {
+        return libm::roundf(x);
+    }
+    let t = x as i32 as f32;
+    let f = x - t;
+    let r = if f >= 0.5 {
+        t + 1.0
+    } else if f <= -0.5 {
+        t - 1.0
+    } else {
+        t
+    };
+    f32::from_bits(r.to_bits() | (x.to_bits() & 0x8000_0000))
+}
+
 /// Square root to within an ulp or so, in plain `f32` arithmetic (so the same bits on every
 /// target): a first guess from the exponent, three Newton steps. libm's `sqrtf` is a
 /// bit-by-bit software loop on a Cortex-M4F (a few hundred instructions); this is about
 /// twenty. Negative and NaN give NaN, +∞ gives +∞; subnormal inputs go to libm.
+#[inline(always)]
 pub(crate) fn sqrt(x: f32) -> f32 {
     if !(x >= f32::MIN_POSITIVE) || x == f32::INFINITY {
         return if x == 0.0 { 0.0 } else { libm::sqrtf(x) };
@@ -175,6 +217,7 @@ pub(crate) fn sqrt(x: f32) -> f32 {
 }
 
 /// `sqrt(x² + y²)` with [`sqrt`] (for lengths in mm: no overflow to fear).
+#[inline(always)]
 pub(crate) fn hypot(x: f32, y: f32) -> f32 {
     sqrt(x * x + y * y)
 }
@@ -350,6 +393,7 @@ pub(crate) struct Sym2 {
 }
 
 impl Sym2 {
+    #[inline(always)]
     pub fn add(self, o: Sym2) -> Sym2 {
         Sym2 {
             a: self.a + o.a,
@@ -359,6 +403,7 @@ impl Sym2 {
     }
 
     /// Inverse (`None` when not positive definite).
+    #[inline(always)]
     pub fn inverse(self) -> Option<Sym2> {
         let det = self.a * self.c - self.b * self.b;
         if !(self.a > 0.0) || !(self.c > 0.0) || !(det > 1e-12 * self.a * self.c) {
@@ -373,11 +418,13 @@ impl Sym2 {
     }
 
     /// `rᵀ M r`.
+    #[inline(always)]
     pub fn quad(self, r: [f32; 2]) -> f32 {
         self.a * r[0] * r[0] + 2.0 * self.b * r[0] * r[1] + self.c * r[1] * r[1]
     }
 
     /// `R M Rᵀ` for the rotation by an angle of sine `s`, cosine `c`.
+    #[inline(always)]
     pub fn rotate(self, s: f32, c: f32) -> Sym2 {
         let (a, b, d) = (self.a, self.b, self.c);
         Sym2 {
@@ -389,6 +436,69 @@ impl Sym2 {
 
     pub fn finite(self) -> bool {
         self.a.is_finite() && self.b.is_finite() && self.c.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod round_tests {
+    /// [`super::floor`] and [`super::round`] against libm on every sign, exponent and many
+    /// mantissas (all of them near the halves and the integers), NaN and ±∞.
+    #[test]
+    fn floor_and_round_are_libms() {
+        let check = |x: f32| {
+            assert_eq!(
+                super::floor(x).to_bits(),
+                libm::floorf(x).to_bits(),
+                "floor {x:e}"
+            );
+            assert_eq!(
+                super::round(x).to_bits(),
+                libm::roundf(x).to_bits(),
+                "round {x:e}"
+            );
+        };
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..2_000_000 {
+            s ^= s >> 12;
+            s ^= s << 25;
+            s ^= s >> 27;
+            check(f32::from_bits(
+                (s.wrapping_mul(0x9e37_79b9_7f4a_7c15) >> 32) as u32,
+            ));
+        }
+        // The neighbours of `x` away from and towards zero (for x ≠ 0).
+        let near = |x: f32| {
+            [
+                f32::from_bits(x.to_bits() + 1),
+                f32::from_bits(x.to_bits() - 1),
+            ]
+        };
+        for k in 1i32..70_000 {
+            let h = k as f32 * 0.5;
+            let [up, down] = near(h);
+            for x in [h, up, down, h * 1.0e-3, h * 97.0] {
+                check(x);
+                check(-x);
+            }
+        }
+        for x in [
+            0.0f32,
+            -0.0,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            8_388_607.5,
+        ] {
+            check(x);
+        }
+        for e in 0..40 {
+            let p = (1u64 << e) as f32;
+            let [up, down] = near(p);
+            for x in [p, up, down, p + 0.5, p - 0.5] {
+                check(x);
+                check(-x);
+            }
+        }
     }
 }
 

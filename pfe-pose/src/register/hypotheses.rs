@@ -75,10 +75,36 @@ impl Top {
     }
 }
 
+/// Bounds of the squared translation for [`within_translation`]: `max²` less and plus 0.01 %
+/// (NaN, so that every test fails, when `max` is not positive and finite).
+fn squared_bounds(max: f32) -> (f32, f32) {
+    if max > 0.0 && max < 1e18 {
+        (max * max * (1.0 - 1e-4), max * max * (1.0 + 1e-4))
+    } else {
+        (f32::NAN, f32::NAN)
+    }
+}
+
+/// `hypot(x, y) <= max`, bit for bit, without the square root when the square is clearly
+/// inside or outside `square` (from [`squared_bounds`]): the root is within a few ulps, far
+/// less than the 0.01 %.
+#[inline(always)]
+fn within_translation(x: f32, y: f32, max: f32, square: (f32, f32)) -> bool {
+    let q = x * x + y * y;
+    if q <= square.0 {
+        true
+    } else if q > square.1 {
+        false
+    } else {
+        crate::geom::sqrt(q) <= max
+    }
+}
+
 /// `(b − a)` modulo π, in [0, π).
+#[inline(always)]
 fn undirected(a: f32, b: f32) -> f32 {
     let d = b - a;
-    let u = d - PI * libm::floorf(d / PI);
+    let u = d - PI * crate::geom::floor(d / PI);
     if (0.0..PI).contains(&u) {
         u
     } else {
@@ -87,18 +113,19 @@ fn undirected(a: f32, b: f32) -> f32 {
 }
 
 /// `x` modulo π, in (−π/2, π/2].
+#[inline(always)]
 fn mod_pi(x: f32) -> f32 {
-    x - PI * libm::roundf(x / PI)
+    x - PI * crate::geom::round(x / PI)
 }
 
 /// Hypotheses of `curr`'s pose in `prev`'s frame, scored; returns how many were scored. Without
 /// `search` (and with a prior), the prior's pose alone. Not inlined: its tables are not
 /// on the stack during the refinement.
 #[inline(never)]
-pub(super) fn hypothesise(
+pub(super) fn hypothesise<'s>(
     w: &mut Work,
-    prev: &Set,
-    curr: &Set,
+    prev: &'s Set,
+    curr: &'s Set,
     prior: Option<&Prior>,
     cfg: &Config,
     top: &mut Top,
@@ -106,6 +133,7 @@ pub(super) fn hypothesise(
 ) -> u32 {
     let mut count = 0u32;
     let mut votes = Votes::new();
+    let square = squared_bounds(cfg.max_translation);
     let within = |pose: &Pose| match prior {
         Some(p) => {
             let d = [
@@ -116,7 +144,7 @@ pub(super) fn hypothesise(
             quad3(&p.gate_info, &d) < cfg.prior_gate
         }
         None => {
-            crate::geom::hypot(pose.x, pose.y) <= cfg.max_translation
+            within_translation(pose.x, pose.y, cfg.max_translation, square)
                 && pose.theta.abs() <= cfg.max_rotation
         }
     };
@@ -144,7 +172,7 @@ pub(super) fn hypothesise(
     let (hc, nc) = top_k::<12>(cl.iter().map(|l| l.rank));
     let hp = hp.get(..np).unwrap_or(&[]);
     let hc = hc.get(..nc).unwrap_or(&[]);
-    let line = |s: &[Line], i: u8| s.get(usize::from(i)).copied();
+    let line = |s: &'s [Line], i: u8| s.get(usize::from(i));
     let mut pair_hyps = 0u32;
     // Pairs of non-parallel lines: the current scan's ordered pairs sorted by the angle between
     // them, each pair of the previous scan looked up in it within its gate.
@@ -222,7 +250,7 @@ pub(super) fn hypothesise(
                         w.curr_sc(usize::from(l)),
                     ];
                     for (th, s, c) in [(theta, sth, cth), (wrap(theta + PI), -sth, -cth)] {
-                        if let Some(t) = solve_two_lines(&li, &lk, &lj, &ll, scs, [s, c]) {
+                        if let Some(t) = solve_two_lines(li, lk, lj, ll, scs, [s, c]) {
                             pair_hyps += 1;
                             consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
                         }
@@ -237,7 +265,7 @@ pub(super) fn hypothesise(
     let (qc, nqc) = top_k::<8>(cp.iter().map(|p| p.rank));
     let qp = qp.get(..nqp).unwrap_or(&[]);
     let qc = qc.get(..nqc).unwrap_or(&[]);
-    let pt = |s: &[Pt], i: u8| s.get(usize::from(i)).copied();
+    let pt = |s: &'s [Pt], i: u8| s.get(usize::from(i));
     // The current scan's ordered pairs of points: their distance and its variance.
     let mut cdist = [[(0.0f32, 0.0f32); 8]; 8];
     for (row, &c) in cdist.iter_mut().zip(qc) {
@@ -364,80 +392,117 @@ const VOTE_ANGLE: f32 = 0.035;
 /// Clusters kept.
 const VOTES: usize = 96;
 
-#[derive(Clone, Copy)]
-struct Vote {
-    /// The mean of the votes.
-    mean: Pose,
-    n: u16,
-}
-
-/// The hypotheses formed, clustered: how many pairs of features agree on each pose.
+/// The hypotheses formed, clustered: how many pairs of features agree on each pose. Each
+/// cluster's mean (x, y, θ) and count in arrays of their own, so that the search for a
+/// vote's cluster runs down the x values alone.
 struct Votes {
-    items: [Vote; VOTES],
-    n: usize,
+    x: [f32; VOTES],
+    y: [f32; VOTES],
+    theta: [f32; VOTES],
+    n: [u16; VOTES],
+    len: usize,
+    /// No cluster before this one has a single vote (counts only grow while votes come in,
+    /// and a replaced cluster has one vote again: the first single one never moves back).
+    single: usize,
 }
 
 impl Votes {
     fn new() -> Self {
         Self {
-            items: [Vote {
-                mean: Pose::IDENTITY,
-                n: 0,
-            }; VOTES],
-            n: 0,
+            x: [0.0; VOTES],
+            y: [0.0; VOTES],
+            theta: [0.0; VOTES],
+            n: [0; VOTES],
+            len: 0,
+            single: 0,
         }
     }
 
     /// A vote for `pose`: into the first cluster whose mean it is near, else a new one (when
     /// full, in place of a cluster of one vote).
     fn add(&mut self, pose: Pose) {
-        let n = self.n;
-        for v in self.items.iter_mut().take(n) {
+        let len = self.len.min(VOTES);
+        for (j, &mx) in self.x.iter().enumerate().take(len) {
             // The cheapest test first: most clusters differ in x.
-            let dx = pose.x - v.mean.x;
+            let dx = pose.x - mx;
             if !(dx.abs() < VOTE_DISTANCE) {
                 continue;
             }
-            let d = [dx, pose.y - v.mean.y, wrap(pose.theta - v.mean.theta)];
+            let (Some(y), Some(theta), Some(n)) =
+                (self.y.get_mut(j), self.theta.get_mut(j), self.n.get_mut(j))
+            else {
+                continue;
+            };
+            let d = [dx, pose.y - *y, wrap(pose.theta - *theta)];
             if d[1].abs() < VOTE_DISTANCE && d[2].abs() < VOTE_ANGLE {
-                v.n = v.n.saturating_add(1);
-                let k = 1.0 / f32::from(v.n);
-                v.mean = Pose::new(
-                    v.mean.x + d[0] * k,
-                    v.mean.y + d[1] * k,
-                    v.mean.theta + d[2] * k,
-                );
+                *n = n.saturating_add(1);
+                let k = 1.0 / f32::from(*n);
+                let mean = Pose::new(mx + d[0] * k, *y + d[1] * k, *theta + d[2] * k);
+                *y = mean.y;
+                *theta = mean.theta;
+                if let Some(x) = self.x.get_mut(j) {
+                    *x = mean.x;
+                }
                 return;
             }
         }
-        let new = Vote { mean: pose, n: 1 };
-        if let Some(slot) = self.items.get_mut(n) {
-            *slot = new;
-            self.n += 1;
-        } else if let Some(slot) = self.items.iter_mut().find(|v| v.n <= 1) {
-            *slot = new;
+        let slot = if len < VOTES {
+            self.len = len + 1;
+            Some(len)
+        } else {
+            let from = self.single;
+            let j = self
+                .n
+                .iter()
+                .skip(from)
+                .position(|&c| c <= 1)
+                .map(|j| j + from);
+            self.single = j.unwrap_or(VOTES);
+            j
+        };
+        if let Some(j) = slot {
+            for (a, v) in [
+                (&mut self.x, pose.x),
+                (&mut self.y, pose.y),
+                (&mut self.theta, pose.theta),
+            ] {
+                if let Some(a) = a.get_mut(j) {
+                    *a = v;
+                }
+            }
+            if let Some(n) = self.n.get_mut(j) {
+                *n = 1;
+            }
         }
     }
 
     /// The mean pose of the cluster with the most votes (the first formed among equals),
     /// removed.
     fn take_best(&mut self) -> Option<Pose> {
-        let n = self.n;
-        let mut best: Option<&mut Vote> = None;
-        for v in self.items.iter_mut().take(n) {
-            if v.n > 0 && best.as_ref().is_none_or(|b| v.n > b.n) {
-                best = Some(v);
+        let mut best: Option<(usize, u16)> = None;
+        for (j, &n) in self.n.iter().enumerate().take(self.len) {
+            if n > 0 && best.is_none_or(|b| n > b.1) {
+                best = Some((j, n));
             }
         }
-        let v = best?;
-        v.n = 0;
-        v.mean.is_finite().then_some(v.mean)
+        let (j, _) = best?;
+        if let Some(n) = self.n.get_mut(j) {
+            *n = 0;
+        }
+        self.single = 0;
+        let mean = Pose {
+            x: self.x.get(j).copied()?,
+            y: self.y.get(j).copied()?,
+            theta: self.theta.get(j).copied()?,
+        };
+        mean.is_finite().then_some(mean)
     }
 }
 
 /// The translation that maps lines `k`, `l` of the current scan onto `i`, `j` of the previous
 /// one under the rotation of sine and cosine `th`; `sc`: sine and cosine of the α of `i`, `k`,
 /// `j`, `l`.
+#[inline(always)]
 fn solve_two_lines(
     li: &Line,
     lk: &Line,
@@ -465,4 +530,43 @@ fn solve_two_lines(
     let x = (bi * sj - bj * si) / det;
     let y = (ci * bj - cj * bi) / det;
     (x.is_finite() && y.is_finite()).then_some([x, y])
+}
+
+#[cfg(test)]
+mod tests {
+    /// [`super::within_translation`] against `hypot(x, y) <= max` on random translations,
+    /// many of them at the bound, and on degenerate bounds.
+    #[test]
+    fn within_translation_is_hypot() {
+        let mut s = 0x853c_49e6_748f_ea9bu64;
+        let mut next = || {
+            s ^= s >> 12;
+            s ^= s << 25;
+            s ^= s >> 27;
+            (s.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut near = 0;
+        for k in 0..400_000 {
+            let max = [3000.0f32, 1.0, 1234.567, 0.0, -5.0, f32::NAN, f32::INFINITY][k % 7];
+            let r = if max.is_finite() && max > 0.0 {
+                max
+            } else {
+                3000.0
+            };
+            // Radii within 0.1 % of the bound, or anywhere up to twice it.
+            let radius = if k % 2 == 0 {
+                r * (1.0 + (next() - 0.5) * 2e-3)
+            } else {
+                2.0 * r * next()
+            };
+            let a = next() * core::f32::consts::TAU;
+            let (x, y) = (radius * libm::cosf(a), radius * libm::sinf(a));
+            let want = crate::geom::hypot(x, y) <= max;
+            let got = super::within_translation(x, y, max, super::squared_bounds(max));
+            assert_eq!(got, want, "{x} {y} {max}");
+            near += usize::from(want != (crate::geom::hypot(x, y) <= max * 0.9999));
+        }
+        // The bound itself was exercised: points on both sides within 0.01 % of it.
+        assert!(near > 1000, "{near}");
+    }
 }

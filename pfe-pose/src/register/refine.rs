@@ -55,6 +55,7 @@ const BUCKETS: usize = 64;
 const MAX_REACH: f32 = 0.6;
 
 /// The bucket of angle `x` (any finite value).
+#[inline(always)]
 fn bucket(x: f32) -> usize {
     let u = (wrap(x) + PI) * (BUCKETS as f32 / (2.0 * PI));
     // `as` saturates (NaN to 0); the last bucket takes α = π.
@@ -87,6 +88,9 @@ pub(super) struct Work<'a> {
     /// The largest variance of α among the previous lines.
     max_var_a: f32,
     s: &'a mut Scratch,
+    /// Tests only: every previous line a candidate (the reference the index is held to).
+    #[cfg(test)]
+    pub(super) brute: bool,
 }
 
 impl<'a> Work<'a> {
@@ -114,8 +118,8 @@ impl<'a> Work<'a> {
         let width = 2.0 * PI / BUCKETS as f32;
         for (i, l) in prev.lines().iter().enumerate().take(64) {
             let bit = 1u64 << i;
-            let from = libm::floorf((l.a - reach + PI) / width);
-            let to = libm::floorf((l.a + reach + PI) / width);
+            let from = crate::geom::floor((l.a - reach + PI) / width);
+            let to = crate::geom::floor((l.a + reach + PI) / width);
             if !(from.is_finite() && to.is_finite()) {
                 continue;
             }
@@ -138,6 +142,8 @@ impl<'a> Work<'a> {
             reach,
             max_var_a,
             s,
+            #[cfg(test)]
+            brute: false,
         }
     }
 
@@ -154,9 +160,14 @@ impl<'a> Work<'a> {
     /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
     /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
     /// the index serves.
+    #[inline(always)]
     fn candidates(&self, centre: f32, half: f32) -> u64 {
         let nl = self.prev.lines().len().min(64);
         let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
+        #[cfg(test)]
+        if self.brute {
+            return all;
+        }
         if !(half <= self.reach) || !centre.is_finite() {
             return all;
         }
@@ -216,14 +227,26 @@ impl<'a> Work<'a> {
                 c: lk.cov.c + 2.0 * h * lk.cov.b + h * h * lk.cov.a,
             };
             let sr = slack * (cfg.slack[1] + cfg.slack[2] * lk.reach);
-            let ext = lk.ext.map(|(s, e)| (transform(s), transform(e)));
+            // The segment in the previous frame, when first needed.
+            let mut ext_prev = None;
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             // Only the previous lines within the angle gate (either orientation) can match.
             let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
-            let mut bits = self.candidates(a, half);
-            while bits != 0 {
-                let i = bits.trailing_zeros() as usize;
-                bits &= bits - 1;
+            let bits = self.candidates(a, half);
+            // As two 32-bit words: the Cortex-M4 has no 64-bit bit scan.
+            let (mut lo, mut hi) = (bits as u32, (bits >> 32) as u32);
+            loop {
+                let i = if lo != 0 {
+                    let t = lo.trailing_zeros();
+                    lo &= lo - 1;
+                    t as usize
+                } else if hi != 0 {
+                    let t = hi.trailing_zeros();
+                    hi &= hi - 1;
+                    32 + t as usize
+                } else {
+                    break;
+                };
                 let Ok(iu) = u8::try_from(i) else { break };
                 let (Some(li), Some(psc)) = (self.prev.lines().get(i), self.s.prev_sc.get(i))
                 else {
@@ -262,6 +285,8 @@ impl<'a> Work<'a> {
                 if !(d2 < gate) {
                     continue;
                 }
+                let ext = *ext_prev
+                    .get_or_insert_with(|| lk.ext.map(|(s, e)| (transform(s), transform(e))));
                 let Some(frac) = overlap(ext, li, *psc, cfg.overlap_slack + sr) else {
                     continue;
                 };
@@ -395,6 +420,7 @@ impl Work<'_> {
 
 /// `H += Jᵀ W J`, `g += Jᵀ W e` for a 2-row residual with rows `j0`, `j1`; returns the
 /// match's `Jᵀ W J`.
+#[inline(always)]
 fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 2]) -> Cov3 {
     let mut hi = ZERO3;
     // W J: rows.
@@ -418,7 +444,12 @@ fn accumulate(n: &mut Normal, j0: &[f32; 3], j1: &[f32; 3], w: &Sym2, e: &[f32; 
 /// cosine of its α) are farther apart
 /// along `li` than `slack`; otherwise the length of their overlap over the shorter one's (1
 /// when either has no extent).
+#[inline(always)]
 fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, sc: [f32; 2], slack: f32) -> Option<f32> {
+    // `f32::min` and `f32::max` (the other one when one is NaN; either of ±0), without a call
+    // to the soft `fminf`/`fmaxf` the Cortex-M4F would make.
+    let min = |a: f32, b: f32| if a < b || b.is_nan() { a } else { b };
+    let max = |a: f32, b: f32| if a > b || b.is_nan() { a } else { b };
     let (Some((s, e)), Some((ps, pe))) = (ext, li.ext) else {
         return Some(1.0);
     };
@@ -426,13 +457,13 @@ fn overlap(ext: Option<([f32; 2], [f32; 2])>, li: &Line, sc: [f32; 2], slack: f3
     let along = |p: [f32; 2]| -sa * p[0] + ca * p[1];
     let (a0, a1) = (along(s), along(e));
     let (b0, b1) = (along(ps), along(pe));
-    let (alo, ahi) = (a0.min(a1), a0.max(a1));
-    let (blo, bhi) = (b0.min(b1), b0.max(b1));
-    let gap = alo.max(blo) - ahi.min(bhi);
+    let (alo, ahi) = (min(a0, a1), max(a0, a1));
+    let (blo, bhi) = (min(b0, b1), max(b0, b1));
+    let gap = max(alo, blo) - min(ahi, bhi);
     if !(gap <= slack) {
         return None;
     }
-    let shorter = (ahi - alo).min(bhi - blo).max(1.0);
+    let shorter = max(min(ahi - alo, bhi - blo), 1.0);
     Some((-gap / shorter).clamp(0.0, 1.0))
 }
 
@@ -600,5 +631,187 @@ fn add_prior(n: &mut Normal, pose: &Pose, p: &Prior) {
     n.h = crate::geom::add3(&n.h, &p.info);
     for (g, row) in n.g.iter_mut().zip(&p.info) {
         *g += row[0] * e[0] + row[1] * e[1] + row[2] * e[2];
+    }
+}
+
+#[cfg(test)]
+mod index_tests {
+    //! The association's angle index against every previous line tried: the same
+    //! matches, scores and normal equations, bit for bit.
+    use super::*;
+    use crate::geom::normalise_line;
+
+    struct Rng(u64);
+
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn unit(&mut self) -> f32 {
+            (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        }
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            lo + (hi - lo) * self.unit()
+        }
+        /// 10^(lo..hi).
+        fn log(&mut self, lo: f32, hi: f32) -> f32 {
+            libm::powf(10.0, self.range(lo, hi))
+        }
+        fn pick(&mut self, n: u64) -> u64 {
+            self.next() % n
+        }
+    }
+
+    /// A random line's covariance: variances over many orders, any correlation.
+    fn cov(rng: &mut Rng) -> Sym2 {
+        let (a, c) = (rng.log(-8.0, 0.5), rng.log(-2.0, 8.0));
+        let corr = rng.range(-0.9999, 0.9999);
+        Sym2 {
+            a,
+            b: corr * libm::sqrtf(a * c),
+            c,
+        }
+    }
+
+    /// A segment on the line (α, ρ), or none.
+    fn ext(rng: &mut Rng, a: f32, r: f32) -> Option<([f32; 2], [f32; 2])> {
+        if rng.pick(5) == 0 {
+            return None;
+        }
+        let (s, c) = (libm::sinf(a), libm::cosf(a));
+        let (t0, t1) = (rng.range(-8000.0, 8000.0), rng.range(-8000.0, 8000.0));
+        let at = |t: f32| [r * c - t * s, r * s + t * c];
+        Some((at(t0), at(t1)))
+    }
+
+    fn rho(rng: &mut Rng) -> f32 {
+        match rng.pick(6) {
+            0 => rng.range(0.0, 200.0),
+            1 => rng.range(0.0, 2.0e6),
+            _ => rng.range(0.0, 20000.0),
+        }
+    }
+
+    /// Two sets, the current one partly the previous one seen from `truth` (with noise),
+    /// partly anything; a few degenerate values pushed without checks.
+    fn sets(rng: &mut Rng, truth: &Pose, cfg: &Config) -> (Set, Set) {
+        let (mut p, mut c) = (Set::new(), Set::new());
+        let np = 2 + rng.pick(63) as usize;
+        let inv = truth.inverse();
+        for _ in 0..np {
+            let (a, r) = (rng.range(-PI, PI), rho(rng));
+            let e = ext(rng, a, r);
+            p.push_line(a, r, cov(rng), e, rng.range(0.0, 5000.0), Some(cfg));
+            if rng.pick(3) > 0 {
+                let (ca, cr) = inv.transform_line(a, r);
+                let (ca, cr) =
+                    normalise_line(ca + rng.range(-0.05, 0.05), cr + rng.range(-300.0, 300.0));
+                let e = ext(rng, ca, cr);
+                c.push_line(ca, cr, cov(rng), e, rng.range(0.0, 5000.0), Some(cfg));
+            }
+        }
+        for _ in 0..rng.pick(20) {
+            let (a, r) = (rng.range(-PI, PI), rho(rng));
+            let e = ext(rng, a, r);
+            c.push_line(a, r, cov(rng), e, 1.0, Some(cfg));
+        }
+        // Degenerate values (a map's lines are not checked): NaN, ∞, negative variances.
+        for set in [&mut p, &mut c] {
+            if rng.pick(4) == 0 {
+                let bad = [f32::NAN, f32::INFINITY, -1.0, 3.0e9][rng.pick(4) as usize];
+                let k = rng.pick(3);
+                let cv = Sym2 {
+                    a: if k == 0 { bad } else { 1e-4 },
+                    b: 0.0,
+                    c: if k == 1 { bad } else { 100.0 },
+                };
+                let r = if k == 2 { bad.abs() } else { 1000.0 };
+                set.push_line(0.3, r, cv, None, 1.0, None);
+            }
+        }
+        for _ in 0..rng.pick(6) {
+            let q = [rng.range(-5000.0, 5000.0), rng.range(-5000.0, 5000.0)];
+            let cv = Sym2 {
+                a: 100.0,
+                b: 0.0,
+                c: 100.0,
+            };
+            p.push_pt(q, cv, 1.0, Some(cfg));
+            c.push_pt(inv.transform_point(q), cv, 1.0, Some(cfg));
+        }
+        (p, c)
+    }
+
+    fn same_normal(a: &Normal, b: &Normal) -> bool {
+        let bits = |n: &Normal| {
+            let mut v = [0u32; 14];
+            for (i, x) in n.h.iter().flatten().chain(&n.g).enumerate() {
+                v[i] = x.to_bits();
+            }
+            v[12] = n.chi2.to_bits();
+            v[13] = n.score.to_bits();
+            v
+        };
+        bits(a) == bits(b) && a.lines == b.lines && a.pts == b.pts
+    }
+
+    #[test]
+    fn indices_change_nothing() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut matched = 0usize;
+        for round in 0..3000 {
+            let mut cfg = Config::default();
+            if round % 7 == 0 {
+                cfg.gate = rng.range(0.5, 40.0);
+                cfg.slack = [
+                    rng.range(0.0, 0.5),
+                    rng.range(0.0, 500.0),
+                    rng.range(0.0, 0.1),
+                ];
+            }
+            let truth = Pose::new(
+                rng.range(-3000.0, 3000.0),
+                rng.range(-3000.0, 3000.0),
+                rng.range(-PI, PI),
+            );
+            let (p, c) = sets(&mut rng, &truth, &cfg);
+            for _ in 0..4 {
+                let pose = if rng.pick(2) == 0 {
+                    Pose::new(
+                        truth.x + rng.range(-200.0, 200.0),
+                        truth.y + rng.range(-200.0, 200.0),
+                        truth.theta + rng.range(-0.1, 0.1),
+                    )
+                } else {
+                    Pose::new(
+                        rng.range(-5000.0, 5000.0),
+                        rng.range(-5000.0, 5000.0),
+                        rng.range(-PI, PI),
+                    )
+                };
+                let slack = [1.0, 0.5, 0.25, 0.1, 0.0][rng.pick(5) as usize];
+                let (mut s1, mut s2) = (Scratch::new(), Scratch::new());
+                let mut fast = Work::new(&p, &c, &cfg, None, &mut s1);
+                let mut brute = Work::new(&p, &c, &cfg, None, &mut s2);
+                brute.brute = true;
+                let (mut oa, mut ob) = (Assoc::new(), Assoc::new());
+                let na = fast.associate(&pose, slack, Some(&mut oa));
+                let nb = brute.associate(&pose, slack, Some(&mut ob));
+                assert!(same_normal(&na, &nb), "round {round}: {pose:?}");
+                assert_eq!((oa.lines, oa.pts), (ob.lines, ob.pts), "round {round}");
+                assert_eq!(fast.nc, brute.nc);
+                for (x, y) in fast.s.contrib.iter().zip(&brute.s.contrib).take(fast.nc) {
+                    assert!(x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits()));
+                }
+                let (sa, sb) = (fast.score(&pose, slack), brute.score(&pose, slack));
+                assert_eq!(sa.to_bits(), sb.to_bits(), "round {round}");
+                matched += usize::from(na.lines);
+            }
+        }
+        // The cases must include matches, many of them.
+        assert!(matched > 20_000, "{matched}");
     }
 }
