@@ -518,6 +518,20 @@ mod tests {
     use crate::feature::{CircleFeature, LineFeature};
     use crate::geometry::Point;
 
+    /// A walk is suspect of sweeps out of place when it did not note its starts, or when more
+    /// than one valid point in `SUSPECT_EVERY` starts a segment: 361 valid points with 20
+    /// starts (one in 18.05) are not, with 21 they are.
+    #[test]
+    fn a_walk_with_more_starts_than_sweeps_in_place_make_is_suspect() {
+        use crate::flags::START;
+        let flags = |starts: usize| -> [u8; 361] {
+            core::array::from_fn(|i| if i < starts { START } else { 0 })
+        };
+        assert!(!super::suspect(&flags(20), true, 361));
+        assert!(super::suspect(&flags(21), true, 361));
+        assert!(super::suspect(&flags(0), false, 361));
+    }
+
     /// Each moved sweep's standard errors over the sweeps, squared and summed; sweeps not
     /// moved add nothing.
     #[test]
