@@ -17,6 +17,7 @@ use crate::arc::arc_fit;
 use crate::classify;
 use crate::config::Config;
 use crate::feature::Feature;
+use crate::fit::line::fit_line;
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::math;
 use crate::output::FeatureSink;
@@ -223,6 +224,12 @@ fn emit<const SCRUTINY: bool>(
             }
         };
         let n = e + 1 - s;
+        // The segment's plain line fit, which the pillar and the corner search share.
+        let line = if todo.len() + 2 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
+            pass.points.get(s..=e).and_then(|p| fit_line(p).ok())
+        } else {
+            None
+        };
         if todo.len() + 3 <= PIECES
             && matches!(feature, Some(Some(Feature::Line(_))))
             && n > *MERGE_SIZES.start()
@@ -233,7 +240,7 @@ fn emit<const SCRUTINY: bool>(
             }
             let pillar = arc
                 .as_ref()
-                .and_then(|a| bump(pass.points.get(s..=e)?, a.0, config))
+                .and_then(|a| bump(pass.points.get(s..=e)?, line.as_ref()?, a.0, config))
                 .map(|(i, j)| (i, j, typed::<true>(pass, s + i, s + j, config)));
             if let Some((i, j, f)) =
                 pillar.filter(|p| matches!(p.2, Some(Some(Feature::Circle(_)))))
@@ -250,8 +257,12 @@ fn emit<const SCRUTINY: bool>(
                 continue;
             }
         }
-        if todo.len() + 2 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
-            if let Some(k) = pass.points.get(s..=e).and_then(|pts| corner(pts, config)) {
+        if let Some(line) = line {
+            if let Some(k) = pass
+                .points
+                .get(s..=e)
+                .and_then(|pts| corner(pts, &line, config))
+            {
                 // Second piece first: the first is emitted first.
                 let _ = todo.push((s + k, e));
                 let _ = todo.push((s, s + k - 1));

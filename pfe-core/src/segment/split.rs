@@ -15,12 +15,12 @@ use super::MERGE_SIZES;
 /// Where the line segment `pts` is two lines: the points of the first, when its residual sum
 /// exceeds the noise's and the best split near its apex (both pieces of at least `min_points`)
 /// lowers it by more than the typing's `chi2 · σ_r²` and below `ratio` times the line's (the
-/// test a circle must pass against the line).
-pub(super) fn corner(pts: &[Point], config: &Config) -> Option<usize> {
+/// test a circle must pass against the line). `line` is the fit of `pts`.
+pub(super) fn corner(pts: &[Point], line: &LineFit, config: &Config) -> Option<usize> {
     let Typing::CompareFits { chi2, ratio, .. } = config.typing else {
         return None;
     };
-    let sse_l = fit_line(pts).ok()?.sse();
+    let sse_l = line.sse();
     let var = config.sigma_r * config.sigma_r;
     // A line within the noise (at most σ_r² a degree of freedom) is not split.
     if !(sse_l > var * (pts.len() as f32 - 2.0) && sse_l > chi2 * var) {
@@ -43,20 +43,24 @@ const BUMP_GROW_SIGMAS: f32 = 3.0;
 /// and no single corner explains): its first and last index in `pts`, a strict part of them.
 /// The arc is the run of same-side residuals around the largest one ([`peak`]) or a side of
 /// the best two-line split, grown while the next point lies on its circle, and must face the
-/// scanner ([`facing`]).
-pub(super) fn bump(pts: &[Point], rule: &NoiseRule, config: &Config) -> Option<(usize, usize)> {
+/// scanner ([`facing`]). `line` is the fit of `pts`.
+pub(super) fn bump(
+    pts: &[Point],
+    line: &LineFit,
+    rule: &NoiseRule,
+    config: &Config,
+) -> Option<(usize, usize)> {
     let n = pts.len();
     // The arc of at least `MERGE_SIZES.start()` points and some line beside it.
     if n <= *MERGE_SIZES.start() {
         return None;
     }
-    let line = fit_line(pts).ok()?;
     let var = config.sigma_r * config.sigma_r;
     if !(line.sse() > var * (n as f32 - 2.0) && line.sse() > rule.model.arc_chi2 * var) {
         return None;
     }
     let arc_of = |(i, j): (usize, usize)| arc_fit(pts.get(i..=j)?, rule).map(|c| (i, j, c));
-    let peak = peak(pts, line, config)?;
+    let peak = peak(pts, *line, config)?;
     let (mut i, mut j, circle) = arc_of(peak).or_else(|| {
         // An arc at an end of the segment that the peak misses is one side of its best
         // two-line split.

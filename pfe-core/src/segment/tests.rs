@@ -5,7 +5,13 @@ use super::join::{join_lines, same_line};
 use super::split::corner;
 use super::*;
 use crate::feature::LineFeature;
+use crate::fit::line::fit_line;
 use crate::geometry::Point;
+
+/// [`corner`] of `pts` with their own line fit, as the segment step calls it.
+fn corner_of(pts: &[Point], config: &Config) -> Option<usize> {
+    corner(pts, &fit_line(pts).ok()?, config)
+}
 
 /// A V of `n` points (apex at index `m`, legs ±`slope` mm a point) with `zig` mm added to
 /// and taken from every other point, and its residual sums in f64: one line, and the best
@@ -56,12 +62,12 @@ fn a_corner_splits_at_its_apex_when_two_lines_explain_it_far_better() {
     assert!(two < 1e-6 * one);
     // σ_r² = one/30: the line is beyond the noise (14 degrees of freedom) and the split
     // gains 30 σ_r² > chi2 25.
-    assert_eq!(corner(&pts, &with_var(one / 30.0)), Some(9));
+    assert_eq!(corner_of(&pts, &with_var(one / 30.0)), Some(9));
     // σ_r² = one/20: 20 σ_r² < 25, not split.
-    assert_eq!(corner(&pts, &with_var(one / 20.0)), None);
+    assert_eq!(corner_of(&pts, &with_var(one / 20.0)), None);
     // The paper's typing never splits.
     let paper = Config::paper().with_sigma_r(libm::sqrt(one / 30.0) as f32);
-    assert_eq!(corner(&pts, &paper), None);
+    assert_eq!(corner_of(&pts, &paper), None);
 }
 
 #[test]
@@ -84,14 +90,14 @@ fn the_gain_and_the_ratio_both_decide() {
     let (pts, one, two) = at(0.45);
     assert!(libm::fabs(two / one - 0.45) < 0.01, "{}", two / one);
     // Gain 0.55·60 = 33 σ_r² > 25 and ratio 0.45 < 0.5: split (near the apex).
-    let k = corner(&pts, &with_var(one / 60.0));
+    let k = corner_of(&pts, &with_var(one / 60.0));
     assert!(k.is_some_and(|k| (9..=11).contains(&k)), "{k:?}");
     // Gain 0.55·40 = 22 σ_r² < 25: not split (the line is still beyond the noise: 40 > 18).
-    assert_eq!(corner(&pts, &with_var(one / 40.0)), None);
+    assert_eq!(corner_of(&pts, &with_var(one / 40.0)), None);
     // Ratio 0.6 > 0.5 with a gain of 0.4·100 = 40 σ_r²: not split.
     let (pts, one, two) = at(0.6);
     assert!(libm::fabs(two / one - 0.6) < 0.01, "{}", two / one);
-    assert_eq!(corner(&pts, &with_var(one / 100.0)), None);
+    assert_eq!(corner_of(&pts, &with_var(one / 100.0)), None);
 }
 
 #[test]
@@ -100,18 +106,18 @@ fn a_line_within_the_noise_is_not_split() {
     // noise, though two lines would explain it all (gain 57 σ_r² > 25, ratio 0).
     let (pts, one, two) = v(60, 30, 2.0, 0.0);
     assert!(two < 1e-6 * one);
-    assert_eq!(corner(&pts, &with_var(one / (0.98 * 58.0))), None);
+    assert_eq!(corner_of(&pts, &with_var(one / (0.98 * 58.0))), None);
     // 1.03 σ_r² a degree of freedom: split.
-    assert_eq!(corner(&pts, &with_var(one / (1.03 * 58.0))), Some(30));
+    assert_eq!(corner_of(&pts, &with_var(one / (1.03 * 58.0))), Some(30));
     // Runs of fewer than `min_points` are not cut off: the apex at index 2, or 13 of 16.
     for m in [2, 13] {
         let (pts, one, _) = v(16, m, 20.0, 0.0);
-        assert_eq!(corner(&pts, &with_var(one / 30.0)), None, "apex {m}");
+        assert_eq!(corner_of(&pts, &with_var(one / 30.0)), None, "apex {m}");
     }
     // At index 4 and 12 both runs have 4 points: split.
     for m in [4, 12] {
         let (pts, one, _) = v(16, m, 20.0, 0.0);
-        let k = corner(&pts, &with_var(one / 30.0));
+        let k = corner_of(&pts, &with_var(one / 30.0));
         assert!(k.is_some_and(|k| k == m || k == m + 1), "apex {m}: {k:?}");
     }
 }
