@@ -37,6 +37,8 @@ const BUMP_SIGMAS: f32 = 2.0;
 const BUMP_ROUNDS: usize = 3;
 /// Residual (in σ_r) to the bump's circle within which neighbouring points join the arc.
 const BUMP_GROW_SIGMAS: f32 = 3.0;
+/// Most times the arc is grown and its circle fitted again.
+const BUMP_GROW_ROUNDS: usize = 8;
 
 /// An arc inside the segment `pts` typed a line whose fit is far beyond the noise (a pillar
 /// against a wall, its edges meeting the wall without a range jump, that the walk followed
@@ -61,7 +63,7 @@ pub(super) fn bump(
     }
     let arc_of = |(i, j): (usize, usize)| arc_fit(pts.get(i..=j)?, rule).map(|c| (i, j, c));
     let peak = peak(pts, *line, config)?;
-    let (mut i, mut j, circle) = arc_of(peak).or_else(|| {
+    let (mut i, mut j, mut circle) = arc_of(peak).or_else(|| {
         // An arc at an end of the segment that the peak misses is one side of its best
         // two-line split.
         if peak.0 > 0 && peak.1 + 1 < n {
@@ -70,17 +72,26 @@ pub(super) fn bump(
         let (k, _) = corner_split(pts)?;
         arc_of((0, k.checked_sub(1)?)).or_else(|| arc_of((k, n - 1)))
     })?;
-    let on = |k: usize| {
-        pts.get(k).is_some_and(|p| {
-            math::abs(p.distance(&circle.center) - circle.radius)
-                <= BUMP_GROW_SIGMAS * config.sigma_r
-        })
-    };
-    while i > 0 && on(i - 1) {
-        i -= 1;
-    }
-    while j + 1 < n && on(j + 1) {
-        j += 1;
+    // Grown while the next point lies on the circle, the circle fitted again to what it grew
+    // to: a circle fitted to part of an arc strays from the rest.
+    for _ in 0..BUMP_GROW_ROUNDS {
+        let on = |k: usize| {
+            pts.get(k).is_some_and(|p| {
+                math::abs(p.distance(&circle.center) - circle.radius)
+                    <= BUMP_GROW_SIGMAS * config.sigma_r
+            })
+        };
+        let (i0, j0) = (i, j);
+        while i > 0 && on(i - 1) {
+            i -= 1;
+        }
+        while j + 1 < n && on(j + 1) {
+            j += 1;
+        }
+        match arc_of((i, j)) {
+            Some((_, _, c)) if (i, j) != (i0, j0) => circle = c,
+            _ => break,
+        }
     }
     (j + 1 - i >= *MERGE_SIZES.start()
         && (i > 0 || j + 1 < n)
