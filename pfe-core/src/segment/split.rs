@@ -37,6 +37,8 @@ const BUMP_SIGMAS: f32 = 2.0;
 const BUMP_ROUNDS: usize = 3;
 /// Residual (in σ_r) to the bump's circle within which neighbouring points join the arc.
 const BUMP_GROW_SIGMAS: f32 = 3.0;
+/// Points at a segment's end tried for an arc there, shortest first.
+const END_RUNS: [usize; 2] = [16, 32];
 /// Most times the arc is grown and its circle fitted again.
 const BUMP_GROW_ROUNDS: usize = 8;
 
@@ -63,15 +65,30 @@ pub(super) fn bump(
     }
     let arc_of = |(i, j): (usize, usize)| arc_fit(pts.get(i..=j)?, rule).map(|c| (i, j, c));
     let peak = peak(pts, *line, config)?;
-    let (mut i, mut j, mut circle) = arc_of(peak).or_else(|| {
-        // An arc at an end of the segment that the peak misses is one side of its best
-        // two-line split.
-        if peak.0 > 0 && peak.1 + 1 < n {
-            return None;
-        }
-        let (k, _) = corner_split(pts)?;
-        arc_of((0, k.checked_sub(1)?)).or_else(|| arc_of((k, n - 1)))
-    })?;
+    let at_end = peak.0 == 0 || peak.1 + 1 == n;
+    let (mut i, mut j, mut circle) = arc_of(peak)
+        .or_else(|| {
+            // An arc at an end of the segment that the peak misses is one side of its best
+            // two-line split,
+            if !at_end {
+                return None;
+            }
+            let (k, _) = corner_split(pts)?;
+            arc_of((0, k.checked_sub(1)?)).or_else(|| arc_of((k, n - 1)))
+        })
+        .or_else(|| {
+            // or, when the split is in the arc, the last points at that end.
+            END_RUNS
+                .iter()
+                .filter(|&&m| at_end && m < n)
+                .find_map(|&m| {
+                    if peak.1 + 1 == n {
+                        arc_of((n - m, n - 1))
+                    } else {
+                        arc_of((0, m - 1))
+                    }
+                })
+        })?;
     // Grown while the next point lies on the circle, the circle fitted again to what it grew
     // to: a circle fitted to part of an arc strays from the rest.
     for _ in 0..BUMP_GROW_ROUNDS {
