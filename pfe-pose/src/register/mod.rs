@@ -24,7 +24,9 @@
 //! 3. **Refinement**: the best few hypotheses (at least half the best one's score) are
 //!    refined by Gauss–Newton over the gated
 //!    matches (re-associated each step while the slack shrinks to zero), weighted by the
-//!    features' covariances; the prior enters as one more measurement. The best refined one
+//!    features' covariances; the prior enters as one more measurement. A hypothesis whose
+//!    refinement lands on the pose another one was refined to (within 30 mm and 0.01 rad) is
+//!    that solution again and stops there. The best refined one
 //!    wins, after a visibility check: a pose under which one scan's segments
 //!    would hide what the other scan saw, or the robot would have gone through a wall, loses
 //!    score.
@@ -47,7 +49,7 @@ use crate::geom::{finite3, inverse_spd3, wrap, Cov3, Pose};
 use crate::obs::Observation;
 use crate::set::{Set, MAX_OBS};
 use hypotheses::{hypothesise, Top};
-use refine::{finish, refine, Refined, Scratch, Work};
+use refine::{converge, finish, refine, Refined, Scratch, Work};
 use visibility::visibility_penalty;
 
 /// Variance given to a direction the scene cannot tell when there is no prior: 10¹² mm² (a
@@ -447,12 +449,23 @@ pub(crate) fn register_sets_verified<const K: usize>(
     // The refined candidates, for the points' verification.
     let mut cands = [Pose::IDENTITY; K];
     let mut nc = 0usize;
-    for h in ranked.iter() {
+    for i in 0..ranked.len() {
+        let Some((done, rest)) = ranked.split_at_mut_checked(i) else {
+            break;
+        };
+        let Some(h) = rest.first_mut() else { break };
         // One that the rest of the scene supports far less than the best is not refined.
         if h.score < REFINE_RATIO * first {
             break;
         }
-        let mut r = refine(&mut w, h.pose, prior.as_ref(), !lazy);
+        // Each refined one's slot keeps the pose it reached; one that converges onto such a
+        // pose is that solution again, not refined further (its slot NaN: matches nothing).
+        let Some(pose) = converge(&mut w, h.pose, prior.as_ref(), done) else {
+            h.pose.x = f32::NAN;
+            continue;
+        };
+        h.pose = pose;
+        let mut r = finish(&mut w, pose, prior.as_ref(), !lazy, None);
         if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
             // Fewer matches than asked for: in a corridor, enough for what its parallel walls
             // tell (the heading and the offset across it), registered as degenerate.

@@ -3,6 +3,7 @@
 
 use core::f32::consts::PI;
 
+use super::hypotheses::Hyp;
 use super::{Assoc, Config, Prior, ITERATIONS, NONE, ROTATION_SCALE, UNOBSERVABLE_VARIANCE};
 use crate::geom::{eigen_sym3, inverse_spd3, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::set::{Line, Set, MAX_OBS};
@@ -492,6 +493,24 @@ fn from_scaled_cov(c: &Cov3) -> Cov3 {
 
 /// Gauss–Newton from `start`, then [`finish`]ed (fully when `full`).
 pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: bool) -> Refined {
+    let pose = converge(w, start, prior, &[]).unwrap_or(start);
+    finish(w, pose, prior, full, None)
+}
+
+/// A refinement this near a pose already refined (mm, rad) converges onto it: the same
+/// solution, not refined again.
+const CONVERGED_MM: f32 = 30.0;
+const CONVERGED_RAD: f32 = 0.01;
+
+/// The Gauss–Newton of [`refine`] from `start`: the pose it converges to, or `None` as soon
+/// as a step lands within [`CONVERGED_MM`] and [`CONVERGED_RAD`] of one of `done` (the
+/// poses other hypotheses were refined to: the same solution again).
+pub(super) fn converge(
+    w: &mut Work,
+    start: Pose,
+    prior: Option<&Prior>,
+    done: &[Hyp],
+) -> Option<Pose> {
     let cfg = w.cfg;
     let mut pose = start;
     let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
@@ -526,13 +545,21 @@ pub(super) fn refine(w: &mut Work, start: Pose, prior: Option<&Prior>, full: boo
             break;
         }
         pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
+        let near = |d: &Hyp| {
+            (d.pose.x - pose.x).abs() < CONVERGED_MM
+                && (d.pose.y - pose.y).abs() < CONVERGED_MM
+                && wrap(d.pose.theta - pose.theta).abs() < CONVERGED_RAD
+        };
+        if done.iter().any(near) {
+            return None;
+        }
         let small = crate::geom::hypot(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
         if small && slack == 0.0 {
             break;
         }
         stage += 1;
     }
-    finish(w, pose, prior, full, None)
+    Some(pose)
 }
 
 /// The final association at `pose` (its matches into `out`) and, when `full`, the
@@ -813,5 +840,61 @@ mod index_tests {
         }
         // The cases must include matches, many of them.
         assert!(matched > 20_000, "{matched}");
+    }
+}
+
+#[cfg(test)]
+mod converge_tests {
+    //! The refinement stops when it lands on a solution refined already, and only then.
+    use super::*;
+    use crate::geom::normalise_line;
+    use core::f32::consts::FRAC_PI_2;
+
+    #[test]
+    fn stops_on_a_solution_refined_already_and_only_there() {
+        let cfg = Config::default();
+        let truth = Pose::new(300.0, 100.0, 0.2);
+        let inv = truth.inverse();
+        let (mut p, mut c) = (Set::new(), Set::new());
+        let cv = Sym2 {
+            a: 1e-6,
+            b: 0.0,
+            c: 25.0,
+        };
+        let walls = [
+            (0.0, 3000.0),
+            (FRAC_PI_2, 2000.0),
+            (PI, 1500.0),
+            (-FRAC_PI_2, 2500.0),
+            (0.7, 2200.0),
+        ];
+        for (a, r) in walls {
+            p.push_line(a, r, cv, None, 1.0, Some(&cfg));
+            let (ca, cr) = inv.transform_line(a, r);
+            let (ca, cr) = normalise_line(ca, cr);
+            c.push_line(ca, cr, cv, None, 1.0, Some(&cfg));
+        }
+        let mut s = Scratch::new();
+        let mut w = Work::new(&p, &c, &cfg, None, &mut s);
+        let start = Pose::new(380.0, 40.0, 0.23);
+        let alone = converge(&mut w, start, None, &[]);
+        assert!(alone.is_some_and(|a| (a.x - truth.x).abs() < 1.0
+            && (a.y - truth.y).abs() < 1.0
+            && (a.theta - truth.theta).abs() < 1e-4));
+        let alone = alone.unwrap_or(start);
+        let hyp = |pose: Pose| Hyp { pose, score: 1.0 };
+        // Another start that reaches the same solution stops there.
+        let other = Pose::new(250.0, 160.0, 0.17);
+        assert!(converge(&mut w, other, None, &[hyp(alone)]).is_none());
+        // Solutions apart from it in x, y or θ alone neither stop it nor change it.
+        let bits = |p: Pose| [p.x.to_bits(), p.y.to_bits(), p.theta.to_bits()];
+        for d in [
+            Pose::new(alone.x + 40.0, alone.y, alone.theta),
+            Pose::new(alone.x, alone.y - 40.0, alone.theta),
+            Pose::new(alone.x, alone.y, alone.theta + 0.015),
+        ] {
+            let r = converge(&mut w, start, None, &[hyp(d)]);
+            assert_eq!(r.map(bits), Some(bits(alone)), "{d:?}");
+        }
     }
 }
