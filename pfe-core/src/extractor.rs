@@ -557,21 +557,29 @@ fn scrutinised(
         flags.iter_mut().for_each(|f| *f |= (*f & WALKED) << 4);
         walk_again(beams, (points, ranges, flags), rule, true, stats);
         if starts(flags) >= unmoved {
-            // The first walk stands: the points are loaded again (exactly as they were, the
-            // first walk's marks kept), then moved again when apart. The same walk over them
-            // would mark them the same (and count its predictions again).
-            let motion = scan.deskewing();
-            let slots = (&mut *points, &mut *ranges, &mut *flags);
-            preprocess::load_keeping::<STASHED>(slots, &beams, motion, scan, config, stats);
-            flags
-                .iter_mut()
-                .for_each(|f| *f = (*f & VALID) | (*f & STASHED) >> 4);
+            // The first walk stands (the same walk over the points would mark them the same,
+            // and count its predictions again). When apart, on the points as moved: they are
+            // what loading them again and moving them again gives, so only its marks come
+            // back (on the valid points, as a load keeps them).
             stats.predictions += predictions;
-            if !apart {
+            if apart {
+                flags.iter_mut().for_each(|f| {
+                    *f = match *f & VALID {
+                        0 => 0,
+                        _ => VALID | (*f & STASHED) >> 4,
+                    }
+                });
+            } else {
+                // The points as they were: loaded again, the first walk's marks kept.
+                let motion = scan.deskewing();
+                let slots = (&mut *points, &mut *ranges, &mut *flags);
+                preprocess::load_keeping::<STASHED>(slots, &beams, motion, scan, config, stats);
+                flags
+                    .iter_mut()
+                    .for_each(|f| *f = (*f & VALID) | (*f & STASHED) >> 4);
                 stats.scan_sigma_um = walk_sigma_um;
                 return Marks::standing(walk, None);
             }
-            offsets.apply(points, ranges, flags);
         } else {
             flags.iter_mut().for_each(|f| *f &= !STASHED);
         }
