@@ -114,9 +114,12 @@ impl Scatter {
     #[cfg_attr(feature = "std", allow(dead_code))]
     fn of_windows(points: &[Point], sigma_r: f32) -> Self {
         let n = points.len();
+        let scale = PER_SIGMA / sigma_r;
+        if !(scale > 0.0 && math::finite(scale)) {
+            return Self::of_stream(points, sigma_r);
+        }
         let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
         let (mut n1, mut n2) = (0usize, 0usize);
-        let scale = PER_SIGMA / sigma_r;
         // The middle of every window of five, then the one-beam residuals of the second and
         // the last but one point (one point when they are the same, none below three points).
         for w in points.windows(5) {
@@ -124,11 +127,11 @@ impl Scatter {
                 continue;
             };
             let r = math::sqrt(m.x * m.x + m.y * m.y);
-            if let Some(e) = residual_at(b, m, c, r) {
-                count(&mut one, &mut n1, e, scale);
+            if let Some(e) = residual_or_not_finite(b, m, c, r) {
+                count_finite(&mut one, &mut n1, e, scale);
             }
-            if let Some(e) = residual_at(a, m, d, r) {
-                count(&mut two, &mut n2, e, scale);
+            if let Some(e) = residual_or_not_finite(a, m, d, r) {
+                count_finite(&mut two, &mut n2, e, scale);
             }
         }
         let mut edge = |i: usize| {
@@ -330,6 +333,27 @@ fn count(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
     }
 }
 
+/// [`count`] for `e` a residual or not finite (not counted), `scale` positive and finite:
+/// one comparison where `|e| · scale` falls within the bins, where [`count`] after
+/// [`residual_at`] tests `e` for finiteness and clamps the bin.
+#[cfg_attr(feature = "std", allow(dead_code))]
+#[inline(always)]
+fn count_finite(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
+    let x = math::abs(e) * scale;
+    let bin = if x < BINS as f32 {
+        // 0 ≤ x < BINS: the mask changes nothing (it bounds the index for the compiler).
+        (x as usize) & (BINS - 1)
+    } else if math::finite(e) {
+        BINS - 1
+    } else {
+        return;
+    };
+    if let Some(h) = hist.get_mut(bin) {
+        *h = h.saturating_add(1);
+        *total += 1;
+    }
+}
+
 /// [`at_span`]'s estimate from the histogram of its `total` residuals.
 fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
     if total < MIN_SAMPLES {
@@ -374,6 +398,21 @@ fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
     let s = (a.x * b.y - a.y * b.x) * r / den;
     let e = r - s;
     math::finite(e).then_some(e)
+}
+
+/// [`residual_at`] without its finiteness test: `e` when it is a residual, or not finite
+/// when [`residual_at`] gives `None` for a reason other than the sine test.
+#[cfg_attr(feature = "std", allow(dead_code))]
+#[inline(always)]
+fn residual_or_not_finite(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
+    let (cx, cy) = (b.x - a.x, b.y - a.y);
+    let chord = math::sqrt(cx * cx + cy * cy);
+    let den = m.x * cy - m.y * cx;
+    if !(math::abs(den) > MIN_SINE * r * chord) {
+        return None;
+    }
+    let s = (a.x * b.y - a.y * b.x) * r / den;
+    Some(r - s)
 }
 
 /// Points whose residuals [`Scatter::of_blocks`] computes at once.
@@ -596,6 +635,51 @@ mod tests {
             estimated += usize::from(blocks.sigma().is_some());
         }
         assert!(compared == 300 && estimated > 30, "{estimated}");
+    }
+
+    /// The board's count of a residual or a non-finite value puts every value in the bin
+    /// [`count`] gives it after [`residual_at`]'s finiteness test, and skips what that skips:
+    /// the bins' edges, values beyond the last bin (up to overflowing `|e| · scale`), ±∞ and
+    /// NaN, at positive finite scales.
+    #[test]
+    fn the_count_of_finite_residuals_bins_as_count_does() {
+        let values = |scale: f32| {
+            let edge = |b: f32| b / scale;
+            [
+                0.0,
+                -0.0,
+                1e-30,
+                edge(1.0),
+                edge(1.0).next_down(),
+                edge(1.0).next_up(),
+                -edge(7.5),
+                edge(511.0),
+                edge(511.0).next_down(),
+                edge(512.0),
+                edge(512.0).next_down(),
+                -edge(512.0).next_up(),
+                edge(9000.0),
+                3e38,
+                -f32::MAX,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::NAN,
+            ]
+        };
+        for sigma_r in [0.3f32, 1.0, 5.0, 33.0, 1e-30] {
+            let scale = PER_SIGMA / sigma_r;
+            assert!(scale > 0.0 && math::finite(scale));
+            let (mut want, mut got) = ([0u16; BINS], [0u16; BINS]);
+            let (mut n_want, mut n_got) = (0usize, 0usize);
+            for e in values(scale) {
+                if math::finite(e) {
+                    count(&mut want, &mut n_want, e, scale);
+                }
+                count_finite(&mut got, &mut n_got, e, scale);
+                assert_eq!((got, n_got), (want, n_want), "{e} at scale {scale}");
+            }
+            assert_eq!(n_got, 15, "at scale {scale}");
+        }
     }
 
     /// [`at_span`] over the triples of valid points only, each point's validity tested.
