@@ -309,13 +309,21 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
     let mut hist = [0u16; BINS];
     let mut total = 0usize;
     let scale = PER_SIGMA / sigma_r;
-    for w in points.windows(2 * span + 1) {
-        let (Some(&a), Some(&m), Some(&b)) = (w.first(), w.get(span), w.last()) else {
-            continue;
-        };
-        // A triple with a point that is not finite has no residual ([`residual_at`]).
-        if let Some(e) = chord_residual(a, m, b) {
-            count(&mut hist, &mut total, e, scale);
+    let windows = points.windows(2 * span + 1);
+    let triples = windows.filter_map(|w| Some((*w.first()?, *w.get(span)?, *w.last()?)));
+    if scale > 0.0 && math::finite(scale) {
+        for (a, m, b) in triples {
+            let r = math::sqrt(m.x * m.x + m.y * m.y);
+            if let Some(e) = residual_or_not_finite(a, m, b, r) {
+                count_finite(&mut hist, &mut total, e, scale);
+            }
+        }
+    } else {
+        for (a, m, b) in triples {
+            // A triple with a point that is not finite has no residual ([`residual_at`]).
+            if let Some(e) = chord_residual(a, m, b) {
+                count(&mut hist, &mut total, e, scale);
+            }
         }
     }
     estimate(&hist, total, sigma_r)
@@ -336,7 +344,6 @@ fn count(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
 /// [`count`] for `e` a residual or not finite (not counted), `scale` positive and finite:
 /// one comparison where `|e| · scale` falls within the bins, where [`count`] after
 /// [`residual_at`] tests `e` for finiteness and clamps the bin.
-#[cfg_attr(feature = "std", allow(dead_code))]
 #[inline(always)]
 fn count_finite(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
     let x = math::abs(e) * scale;
@@ -402,7 +409,6 @@ fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
 
 /// [`residual_at`] without its finiteness test: `e` when it is a residual, or not finite
 /// when [`residual_at`] gives `None` for a reason other than the sine test.
-#[cfg_attr(feature = "std", allow(dead_code))]
 #[inline(always)]
 fn residual_or_not_finite(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
     let (cx, cy) = (b.x - a.x, b.y - a.y);
