@@ -369,13 +369,24 @@ fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
     // A first σ from the lower quartile of all residuals (too large where edges and clutter
     // add large ones), then twice the median of those within 3 σ of the last.
     let to_mm = sigma_r / PER_SIGMA;
-    let mut s = quantile_bin(hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
-    let mut inliers = 0;
+    // Below 2²⁴ residuals every count is exact in f32: the quantiles in integers.
+    let quantile = match total < EXACT {
+        true => quantile_bin_counted,
+        false => quantile_bin,
+    };
+    let mut s = quantile(hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
+    // The residuals in the first `upto` bins, `inliers`: the next sum starts from them.
+    let (mut inliers, mut upto) = (0usize, 0usize);
     for _ in 0..2 {
         let within = INLIER * RESIDUAL_PER_SIGMA * s / to_mm;
         let bins = (within as usize).clamp(1, BINS - 1);
-        inliers = hist.iter().take(bins).map(|&h| usize::from(h)).sum();
-        s = quantile_bin(hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
+        inliers = match (hist.get(upto..bins), hist.get(bins..upto)) {
+            (Some(more), _) => inliers + sum(more),
+            (_, Some(fewer)) => inliers - sum(fewer),
+            _ => hist.iter().take(bins).map(|&h| usize::from(h)).sum(),
+        };
+        upto = bins;
+        s = quantile(hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
     }
     // Noise explains the scan only when most residuals are within 3 σ of it (a scan of
     // clutter, edges and posts has a quartile but no noise level).
@@ -488,6 +499,45 @@ fn residual_or_nan(a: Point, m: Point, b: Point, r: f32) -> f32 {
     } else {
         f32::NAN
     }
+}
+
+/// Counts below which [`quantile_bin_counted`] is [`quantile_bin`]: every whole number up to
+/// 2²⁴ is an f32.
+const EXACT: usize = 1 << 24;
+
+/// The sum of `counts`, eight at a time.
+fn sum(counts: &[u16]) -> usize {
+    let mut eights = counts.chunks_exact(8);
+    let mut total = 0usize;
+    for c in eights.by_ref() {
+        total += c.iter().map(|&h| usize::from(h)).sum::<usize>();
+    }
+    total
+        + eights
+            .remainder()
+            .iter()
+            .map(|&h| usize::from(h))
+            .sum::<usize>()
+}
+
+/// [`quantile_bin`] for a histogram of fewer than [`EXACT`] counts and `half` at most that:
+/// the cumulative count in integers, against the least whole number not below `half` (the
+/// same comparison, as the f32 sum of whole numbers below 2²⁴ is exact), the same result.
+fn quantile_bin_counted(hist: &[u16; BINS], half: f32) -> f32 {
+    if !(half >= 0.0 && half < EXACT as f32) {
+        return quantile_bin(hist, half);
+    }
+    let whole = half as u32;
+    let need = whole + u32::from((whole as f32) < half);
+    let mut below = 0u32;
+    for (i, &h) in hist.iter().enumerate() {
+        let h = u32::from(h);
+        if below + h >= need && h > 0 {
+            return i as f32 + (half - below as f32) / h as f32;
+        }
+        below += h;
+    }
+    BINS as f32
 }
 
 /// Where the histogram's cumulative count reaches `half`, in bins (linear within a bin).
@@ -685,6 +735,38 @@ mod tests {
                 assert_eq!((got, n_got), (want, n_want), "{e} at scale {scale}");
             }
             assert_eq!(n_got, 15, "at scale {scale}");
+        }
+    }
+
+    /// The quantiles and inlier sums in integers are the f32 ones: histograms of 0 to 1500
+    /// residuals, sparse and dense, with empty bins first, at every quarter and half count.
+    #[test]
+    fn the_quantile_in_integers_is_the_quantile() {
+        let mut s = 41u32;
+        let mut u = move || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            s >> 8
+        };
+        for t in 0..150u32 {
+            let mut hist = [0u16; BINS];
+            let (spread, count) = (1 + u() % 500, u() % 1500);
+            let skip = (u() % 40) as usize;
+            for _ in 0..count {
+                let b = skip + (u() % spread) as usize * (u() % 3) as usize / 2;
+                if let Some(h) = hist.get_mut(b.min(BINS - 1)) {
+                    *h += 1;
+                }
+            }
+            let total: usize = hist.iter().map(|&h| usize::from(h)).sum();
+            for q in 0..=4 * total + 2 {
+                let half = q as f32 * 0.25;
+                let (want, got) = (quantile_bin(&hist, half), quantile_bin_counted(&hist, half));
+                assert_eq!(got.to_bits(), want.to_bits(), "hist {t}, half {half}");
+            }
+            for cut in [0, 1, 7, 8, 9, 100, BINS] {
+                let want: usize = hist.iter().take(cut).map(|&h| usize::from(h)).sum();
+                assert_eq!(sum(&hist[..cut]), want, "hist {t}, cut {cut}");
+            }
         }
     }
 
