@@ -9,7 +9,7 @@ use crate::classify;
 use crate::config::Config;
 use crate::error::ExtractError;
 use crate::feature::Feature;
-use crate::flags::{END, JUMP, START, VALID, VEIL};
+use crate::flags::{self, starts, END, JUMP, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::mark::{self, Neighbours};
 use crate::output::{FeatureSink, Stage, StageObserver, Stats, Unobserved};
@@ -545,7 +545,7 @@ fn scrutinised(
     if offsets.moved() == 0 {
         return Marks::standing(walk, noted);
     }
-    let (unmoved, walk_sigma_um) = (starts(flags), stats.scan_sigma_um);
+    let walk_sigma_um = stats.scan_sigma_um;
     offsets.apply(points, ranges, flags);
     let gauge = (scan.geometry.r_max, beams.gap_factor);
     let moved = Marking::own(points, config, gauge, stats);
@@ -554,8 +554,12 @@ fn scrutinised(
         walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
     } else {
         let rule = if apart { &walk.rule } else { &moved.rule };
-        flags.iter_mut().for_each(|f| *f |= (*f & WALKED) << 4);
-        walk_again(beams, (points, ranges, flags), rule, true, stats);
+        // The first walk's starts, and its marks kept in `STASHED` where the walk again
+        // clears them.
+        let unmoved = starts(flags);
+        flags::rewrite(flags, stash);
+        let mut pass = Pass::over(beams, (&*points, &*ranges, &mut *flags), None, stats);
+        mark::mark(&mut pass, rule, true);
         if starts(flags) >= unmoved {
             // The first walk stands (the same walk over the points would mark them the same,
             // and count its predictions again). When apart, on the points as moved: they are
@@ -563,12 +567,7 @@ fn scrutinised(
             // back (on the valid points, as a load keeps them).
             stats.predictions += predictions;
             if apart {
-                flags.iter_mut().for_each(|f| {
-                    *f = match *f & VALID {
-                        0 => 0,
-                        _ => VALID | (*f & STASHED) >> 4,
-                    }
-                });
+                flags::rewrite(flags, unstash_valid);
             } else {
                 // The points as they were: loaded again, the first walk's marks kept.
                 let motion = scan.deskewing();
@@ -581,7 +580,8 @@ fn scrutinised(
                 return Marks::standing(walk, None);
             }
         } else {
-            flags.iter_mut().for_each(|f| *f &= !STASHED);
+            let unstashed = u32::from(!STASHED);
+            flags::rewrite(flags, |f, lanes| f & (unstashed * lanes));
         }
     }
     stats.scan_sigma_um = moved_sigma_um;
@@ -605,9 +605,25 @@ fn walk_again(
     uneven: bool,
     stats: &mut Stats,
 ) -> Neighbours {
-    flags.iter_mut().for_each(|f| *f &= VALID | STASHED);
+    let kept = u32::from(VALID | STASHED);
+    flags::rewrite(flags, |f, lanes| f & (kept * lanes));
     let mut pass = Pass::over(beams, (points, ranges, flags), None, stats);
     mark::mark(&mut pass, rule, uneven)
+}
+
+/// A flag (or each byte of a word, `lanes`: see [`flags::rewrite`]) with the [`WALKED`] bits
+/// kept in [`STASHED`] and cleared as a walk again clears them (`VALID` and `STASHED` kept).
+fn stash(f: u32, lanes: u32) -> u32 {
+    let (kept, walked) = (u32::from(VALID | STASHED), u32::from(WALKED));
+    (f & (kept * lanes)) | ((f & (walked * lanes)) << 4)
+}
+
+/// A flag (or each byte of a word) as loading the points again keeps it, then with its
+/// [`STASHED`] bits back as [`WALKED`]: `VALID` and those where valid, else 0.
+fn unstash_valid(f: u32, lanes: u32) -> u32 {
+    // 0xff in the bytes of valid points (`VALID` is bit 0), else 0.
+    let v = f & (u32::from(VALID) * lanes);
+    v | (((f & (u32::from(STASHED) * lanes)) >> 4) & (v * 0xff))
 }
 
 /// The flags a walk sets ([`mark::mark`]).
@@ -616,11 +632,8 @@ const WALKED: u8 = START | JUMP;
 /// step sets (none of [`crate::flags`]).
 const STASHED: u8 = WALKED << 4;
 const _: () = assert!(STASHED >> 4 == WALKED && STASHED & (VALID | WALKED | END | VEIL) == 0);
-
-/// Segment starts among `flags` (the marks of a walk).
-fn starts(flags: &[u8]) -> usize {
-    flags.iter().filter(|f| **f & START != 0).count()
-}
+// The flags rewritten four at a time: `VALID` times 0xff is a byte's mask.
+const _: () = assert!(VALID == 1);
 
 /// The extraction's result from its statistics.
 fn outcome(stats: &Stats) -> Result<Stats, ExtractError> {
@@ -635,6 +648,31 @@ mod tests {
     use super::*;
     use crate::math;
     use crate::scan::ScanGeometry;
+
+    /// The flag rules the sweeps' second walk rewrites four flags at a time by are the
+    /// byte-wise steps they replace, for every byte: the stash (`*f |= (*f & WALKED) << 4`,
+    /// then the walk's `*f &= VALID | STASHED`), and the marks back on the moved points
+    /// (loading them again: `VALID | (*f & STASHED)` where valid, else 0; then
+    /// `(*f & VALID) | (*f & STASHED) >> 4`); four bytes in a word as each on its own.
+    #[test]
+    fn the_stash_rules_are_the_byte_steps() {
+        for f in 0..=255u8 {
+            let stashed = (f | (f & WALKED) << 4) & (VALID | STASHED);
+            assert_eq!(stash(u32::from(f), 1), u32::from(stashed), "{f:#04x}");
+            let loaded = if f & VALID != 0 {
+                VALID | (f & STASHED)
+            } else {
+                0
+            };
+            let back = (loaded & VALID) | (loaded & STASHED) >> 4;
+            assert_eq!(unstash_valid(u32::from(f), 1), u32::from(back), "{f:#04x}");
+            let word = u32::from_le_bytes([f, 0xff, f ^ 0x55, 0xa1]);
+            for rule in [stash, unstash_valid] {
+                let bytes = word.to_le_bytes().map(|b| rule(u32::from(b), 1) as u8);
+                assert_eq!(rule(word, 0x0101_0101).to_le_bytes(), bytes, "{f:#04x}");
+            }
+        }
+    }
 
     /// The default mode's check step, run over the starts its walk noted, changes the same
     /// marks as the check step reading every flag: a corridor (side walls seen at grazing
