@@ -9,18 +9,23 @@ use crate::classify;
 use crate::config::Config;
 use crate::error::ExtractError;
 use crate::feature::Feature;
-use crate::flags::{END, JUMP, START, VALID, VEIL};
+use crate::flags::{END, START, VEIL};
 use crate::geometry::Point;
-use crate::mark::{self, Neighbours};
+use crate::mark;
 use crate::output::{FeatureSink, Stage, StageObserver, Stats, Unobserved};
 use crate::pass::Pass;
-use crate::preprocess::{self, scatter};
+use crate::preprocess;
 use crate::reach;
+#[cfg(test)]
 use crate::rule::Rule;
 use crate::scan::Scan;
 use crate::segment;
 use crate::sift;
 use crate::sweeps;
+
+mod marking;
+
+use marking::{in_place, Marking};
 
 /// Feature extractor with room for `N` readings and `M` features. About `25·N + 64·M` bytes:
 /// put it in a `static` on a microcontroller.
@@ -365,253 +370,6 @@ fn steps<O: StageObserver + ?Sized>(
     }
     observer.ended(Stage::Sift);
     outcome(pass.stats)
-}
-
-/// How a walk marks: the σ_r it takes (the fits after it take it too) and its rule.
-#[derive(Clone, Copy)]
-struct Marking {
-    sigma_r: f32,
-    rule: Rule,
-    /// The scatter of the points it took its σ_r from ([`Marking::own`]), for
-    /// [`scrutinised`] to ask the same points no more.
-    scatter: Option<scatter::Scatter>,
-}
-
-impl Marking {
-    /// With `config` as it is, for a scanner of maximum range and gap factor `gauge`.
-    fn of(config: &Config, (r_max, gap): (f32, f32)) -> Self {
-        let rule = Rule::new(config, r_max, gap);
-        Self {
-            sigma_r: config.sigma_r,
-            rule,
-            scatter: None,
-        }
-    }
-
-    /// With the σ_r of `points` where they scatter well beyond `config`'s ([`scatter`]),
-    /// noted in `stats.scan_sigma_um` (0 where not).
-    fn own(points: &[Point], config: &Config, gauge: (f32, f32), stats: &mut Stats) -> Self {
-        let scatter = scatter::Scatter::of(points, config.sigma_r);
-        let sigma_r = match scatter.sigma() {
-            Some(sigma) => {
-                stats.scan_sigma_um = (sigma * 1000.0) as u32;
-                sigma
-            }
-            None => {
-                stats.scan_sigma_um = 0;
-                config.sigma_r
-            }
-        };
-        Self {
-            scatter: Some(scatter),
-            ..Self::of(&config.with_sigma_r(sigma_r), gauge)
-        }
-    }
-}
-
-/// The marks the check step and the segments go on from.
-struct Marks {
-    /// How they were made.
-    by: Marking,
-    /// The neighbouring starts the walk noted, when they were made by the walk the check step
-    /// follows (else `None`: it reads every flag).
-    noted: Neighbours,
-    /// Interleaved sweeps were moved onto sweep 0 by an estimate of their offset.
-    moved: bool,
-    /// The variance the features inherit from that estimate ([`sweeps::Offsets::variance`]);
-    /// zero when no sweep was moved by one.
-    alignment: [f32; 3],
-}
-
-/// Interleaved sweeps without odometry (default mode) are moved onto sweep 0 by their offset
-/// estimated from the scan, when the marks of `walk` (which noted `noted` and counted
-/// `predictions`) or, with the checks for real scans, the scan's scatter show them out of
-/// place, and walked again; otherwise the walk's marks stand.
-#[inline(always)]
-fn in_place(
-    (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
-    slots: (&mut [Point], &mut [f32], &mut [u8]),
-    walk: Marking,
-    (noted, predictions): (Neighbours, usize),
-    stats: &mut Stats,
-) -> Marks {
-    let sweeps = usize::from(scan.sweeps.max(1));
-    if !(sweeps > 1 && scan.deskewing().is_none() && walk.rule.noise().is_some()) {
-        return Marks::standing(walk, noted);
-    }
-    if config.scrutinised() {
-        return scrutinised(
-            (beams, scan, config),
-            slots,
-            walk,
-            (noted, predictions),
-            stats,
-        );
-    }
-    let (points, ranges, flags) = slots;
-    match suspected(scan, (points, ranges, flags), noted.is_some(), stats) {
-        Suspect::No => Marks::standing(walk, noted),
-        // Nothing to move: the marks stand (the check step reads every flag).
-        Suspect::Unmoved => Marks::standing(walk, None),
-        Suspect::Moved => {
-            // Walked here, not in `suspected`: its frame stays off the walk's stack path.
-            let noted = walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
-            Marks {
-                by: walk,
-                noted,
-                moved: true,
-                alignment: [0.0; 3],
-            }
-        }
-    }
-}
-
-impl Marks {
-    /// The marks of `walk`, where the points stand, as the check step follows them.
-    fn standing(by: Marking, noted: Neighbours) -> Self {
-        Self {
-            by,
-            noted,
-            moved: false,
-            alignment: [0.0; 3],
-        }
-    }
-}
-
-/// What [`suspected`] did with the walk's marks.
-enum Suspect {
-    /// Not suspect: they stand.
-    No,
-    /// Suspect, but no sweep was moved: they stand.
-    Unmoved,
-    /// The sweeps were moved onto sweep 0: the points are to be walked again.
-    Moved,
-}
-
-/// [`in_place`] without the checks for real scans: the sweeps are moved when the walk's marks
-/// (`noted`: whether it noted every neighbouring start) are suspect ([`sweeps::suspect`]);
-/// the caller walks them again with the same rule.
-#[inline(never)]
-fn suspected(
-    scan: &Scan<'_>,
-    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
-    noted: bool,
-    stats: &mut Stats,
-) -> Suspect {
-    // The marks' evidence (many segment starts): no fit is made before aligning.
-    if !sweeps::suspect(flags, noted, stats.valid) {
-        return Suspect::No;
-    }
-    let sweeps = usize::from(scan.sweeps.max(1));
-    let step = scan.geometry.angle_step;
-    stats.sweeps_aligned = sweeps::align(points, ranges, flags, sweeps, step);
-    match stats.sweeps_aligned {
-        0 => Suspect::Unmoved,
-        _ => Suspect::Moved,
-    }
-}
-
-/// [`in_place`] with the checks for real scans: declared sweeps (without odometry) with a
-/// significant offset ([`sweeps`]) are moved onto sweep 0, so that the lines lie where sweep 0
-/// saw them rather than between the sweeps, and walked again:
-/// - two sweeps: with the first walk's σ when their scatter shows them apart, else with the
-///   moved points' own σ (a turn between the sweeps moves points across the beams, which the
-///   scatter shows only where beams graze a surface, and there the walk marks them). The new
-///   walk is kept when it leaves fewer marks; otherwise the first walk's marks stand (kept in
-///   [`STASHED`] meanwhile; its `predictions` count again, as when it was walked again), fitted
-///   on the moved points when the sweeps showed apart and on the points as they were if not;
-/// - more sweeps, when apart: with the first walk's σ (its marks on the unmoved points cut
-///   segments into pieces of one period, four sweeps drifting apart).
-///
-/// The fits of moved points use their own σ.
-#[inline(never)]
-fn scrutinised(
-    (beams, scan, config): (Beams<'_>, &Scan<'_>, &Config),
-    (points, ranges, flags): (&mut [Point], &mut [f32], &mut [u8]),
-    walk: Marking,
-    (noted, predictions): (Neighbours, usize),
-    stats: &mut Stats,
-) -> Marks {
-    let sweeps = usize::from(scan.sweeps.max(1));
-    // The walk's σ came from these points' scatter at the same σ_r: asked once.
-    let apart = match &walk.scatter {
-        Some(seen) => seen.sweeps_apart(points, sweeps, config.sigma_r),
-        None => scatter::sweeps_apart(points, sweeps, config.sigma_r),
-    };
-    let offsets = match apart || sweeps == 2 {
-        true => sweeps::Offsets::of(points, sweeps, scan.geometry.angle_step),
-        false => sweeps::Offsets::default(),
-    };
-    if offsets.moved() == 0 {
-        return Marks::standing(walk, noted);
-    }
-    let (unmoved, walk_sigma_um) = (starts(flags), stats.scan_sigma_um);
-    offsets.apply(points, ranges, flags);
-    let gauge = (scan.geometry.r_max, beams.gap_factor);
-    let moved = Marking::own(points, config, gauge, stats);
-    let moved_sigma_um = stats.scan_sigma_um;
-    if sweeps > 2 {
-        walk_again(beams, (points, ranges, flags), &walk.rule, true, stats);
-    } else {
-        let rule = if apart { &walk.rule } else { &moved.rule };
-        flags.iter_mut().for_each(|f| *f |= (*f & WALKED) << 4);
-        walk_again(beams, (points, ranges, flags), rule, true, stats);
-        if starts(flags) >= unmoved {
-            // The first walk stands: the points are loaded again (exactly as they were, the
-            // first walk's marks kept), then moved again when apart. The same walk over them
-            // would mark them the same (and count its predictions again).
-            let motion = scan.deskewing();
-            let slots = (&mut *points, &mut *ranges, &mut *flags);
-            preprocess::load_keeping::<STASHED>(slots, &beams, motion, scan, config, stats);
-            flags
-                .iter_mut()
-                .for_each(|f| *f = (*f & VALID) | (*f & STASHED) >> 4);
-            stats.predictions += predictions;
-            if !apart {
-                stats.scan_sigma_um = walk_sigma_um;
-                return Marks::standing(walk, None);
-            }
-            offsets.apply(points, ranges, flags);
-        } else {
-            flags.iter_mut().for_each(|f| *f &= !STASHED);
-        }
-    }
-    stats.scan_sigma_um = moved_sigma_um;
-    stats.sweeps_aligned = offsets.moved();
-    // The check step reads every flag (the same outcome as following the walk's notes).
-    Marks {
-        by: moved,
-        noted: None,
-        moved: true,
-        alignment: offsets.variance(),
-    }
-}
-
-/// Walks the points (no motion) again with `rule`, from the flags of the pre-processing
-/// (`uneven`: see [`mark::mark`]); returns the neighbouring starts it noted (every walk's
-/// predictions are counted).
-fn walk_again(
-    beams: Beams<'_>,
-    (points, ranges, flags): (&[Point], &[f32], &mut [u8]),
-    rule: &Rule,
-    uneven: bool,
-    stats: &mut Stats,
-) -> Neighbours {
-    flags.iter_mut().for_each(|f| *f &= VALID | STASHED);
-    let mut pass = Pass::over(beams, (points, ranges, flags), None, stats);
-    mark::mark(&mut pass, rule, uneven)
-}
-
-/// The flags a walk sets ([`mark::mark`]).
-const WALKED: u8 = START | JUMP;
-/// Where [`scrutinised`] keeps the first walk's [`WALKED`] flags while it walks again: bits no
-/// step sets (none of [`crate::flags`]).
-const STASHED: u8 = WALKED << 4;
-const _: () = assert!(STASHED >> 4 == WALKED && STASHED & (VALID | WALKED | END | VEIL) == 0);
-
-/// Segment starts among `flags` (the marks of a walk).
-fn starts(flags: &[u8]) -> usize {
-    flags.iter().filter(|f| **f & START != 0).count()
 }
 
 /// The extraction's result from its statistics.

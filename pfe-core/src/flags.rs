@@ -74,10 +74,75 @@ pub(crate) fn next_flag(flags: &[u8], from: usize, seek: Seek) -> Option<usize> 
     Some(base + rest.iter().position(|&f| seek.hit(f))?)
 }
 
+/// Each byte of a word of four flags.
+const BYTES: u32 = 0x0101_0101;
+
+/// Rewrites every flag of `flags` by `rule`, four at a time: `rule(word, lanes)` changes each
+/// byte of `word` on its own (no carry between bytes) with its masks times `lanes`, so the
+/// same rule rewrites the four bytes of a word (`lanes` = [`BYTES`]) and the flags left over
+/// one by one (`lanes` = 1).
+#[inline(always)]
+pub(crate) fn rewrite(flags: &mut [u8], rule: impl Fn(u32, u32) -> u32) {
+    let mut words = flags.chunks_exact_mut(4);
+    for w in words.by_ref() {
+        if let Ok(b) = <[u8; 4]>::try_from(&*w) {
+            w.copy_from_slice(&rule(u32::from_le_bytes(b), BYTES).to_le_bytes());
+        }
+    }
+    for f in words.into_remainder() {
+        *f = rule(u32::from(*f), 1) as u8;
+    }
+}
+
+/// Segment starts among `flags`, four flags at a time.
+pub(crate) fn starts(flags: &[u8]) -> usize {
+    const SHIFT: u32 = START.trailing_zeros();
+    let mut words = flags.chunks_exact(4);
+    let mut n = 0usize;
+    for w in words.by_ref() {
+        if let Ok(b) = <[u8; 4]>::try_from(w) {
+            // Each byte 0 or 1; the product's top byte is their sum.
+            let ones = (u32::from_le_bytes(b) >> SHIFT) & BYTES;
+            n += (ones.wrapping_mul(BYTES) >> 24) as usize;
+        }
+    }
+    let rest = words.remainder().iter();
+    n + rest.filter(|f| **f & START != 0).count()
+}
+
 #[cfg(test)]
 mod tests {
     extern crate std;
     use super::*;
+
+    /// Flags rewritten four at a time are each rewritten by the rule on its own, and the
+    /// starts counted four at a time are the starts: every length to 11 of flags made of
+    /// every byte value.
+    #[test]
+    fn flags_four_at_a_time_are_flags_one_by_one() {
+        let rule = |f: u32, lanes: u32| {
+            let valid = f & (u32::from(VALID) * lanes);
+            let walked = (f & (u32::from(START | JUMP) * lanes)) << 4;
+            valid | (walked & (valid * 0xff)) | (f & (0x40 * lanes))
+        };
+        let mut s = 5u32;
+        for t in 0..3000 {
+            let len = t % 12;
+            let flags: std::vec::Vec<u8> = (0..len)
+                .map(|_| {
+                    s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                    (s >> 24) as u8
+                })
+                .collect();
+            let mut got = flags.clone();
+            rewrite(&mut got, rule);
+            let want: std::vec::Vec<u8> =
+                flags.iter().map(|&f| rule(u32::from(f), 1) as u8).collect();
+            assert_eq!(got, want, "{flags:?}");
+            let count = flags.iter().filter(|&&f| f & START != 0).count();
+            assert_eq!(starts(&flags), count, "{flags:?}");
+        }
+    }
 
     /// `Seek::none_in` never skips a word with a hit: every word of four flags made of the
     /// five flag bits.

@@ -307,15 +307,15 @@ struct Rows<'a> {
 /// The rows of a sweep, made once for the four passes over them (two solutions, each its sums
 /// and its residuals), and the largest range of their beams, mm.
 struct Table {
-    rows: [Row; MAX_ROWS],
-    len: usize,
+    /// Not zeroed first (1.3 KB a sweep).
+    rows: heapless::Vec<Row, MAX_ROWS>,
     far: f32,
 }
 
 impl Table {
     /// The rows, in the order they were made.
     fn rows(&self) -> &[Row] {
-        self.rows.get(..self.len).unwrap_or(&[])
+        &self.rows
     }
 }
 
@@ -323,14 +323,11 @@ impl Rows<'_> {
     /// Every row, and the largest range of their beams.
     fn table(&self) -> Table {
         let mut t = Table {
-            rows: [[0.0; 5]; MAX_ROWS],
-            len: 0,
+            rows: heapless::Vec::new(),
             far: 0.0,
         };
         self.each(|row, range| {
-            if let Some(slot) = t.rows.get_mut(t.len) {
-                *slot = *row;
-                t.len += 1;
+            if t.rows.push(*row).is_ok() {
                 t.far = t.far.max(range);
             }
         });

@@ -114,9 +114,12 @@ impl Scatter {
     #[cfg_attr(feature = "std", allow(dead_code))]
     fn of_windows(points: &[Point], sigma_r: f32) -> Self {
         let n = points.len();
+        let scale = PER_SIGMA / sigma_r;
+        if !(scale > 0.0 && math::finite(scale)) {
+            return Self::of_stream(points, sigma_r);
+        }
         let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
         let (mut n1, mut n2) = (0usize, 0usize);
-        let scale = PER_SIGMA / sigma_r;
         // The middle of every window of five, then the one-beam residuals of the second and
         // the last but one point (one point when they are the same, none below three points).
         for w in points.windows(5) {
@@ -124,11 +127,11 @@ impl Scatter {
                 continue;
             };
             let r = math::sqrt(m.x * m.x + m.y * m.y);
-            if let Some(e) = residual_at(b, m, c, r) {
-                count(&mut one, &mut n1, e, scale);
+            if let Some(e) = residual_or_not_finite(b, m, c, r) {
+                count_finite(&mut one, &mut n1, e, scale);
             }
-            if let Some(e) = residual_at(a, m, d, r) {
-                count(&mut two, &mut n2, e, scale);
+            if let Some(e) = residual_or_not_finite(a, m, d, r) {
+                count_finite(&mut two, &mut n2, e, scale);
             }
         }
         let mut edge = |i: usize| {
@@ -306,13 +309,21 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
     let mut hist = [0u16; BINS];
     let mut total = 0usize;
     let scale = PER_SIGMA / sigma_r;
-    for w in points.windows(2 * span + 1) {
-        let (Some(&a), Some(&m), Some(&b)) = (w.first(), w.get(span), w.last()) else {
-            continue;
-        };
-        // A triple with a point that is not finite has no residual ([`residual_at`]).
-        if let Some(e) = chord_residual(a, m, b) {
-            count(&mut hist, &mut total, e, scale);
+    let windows = points.windows(2 * span + 1);
+    let triples = windows.filter_map(|w| Some((*w.first()?, *w.get(span)?, *w.last()?)));
+    if scale > 0.0 && math::finite(scale) {
+        for (a, m, b) in triples {
+            let r = math::sqrt(m.x * m.x + m.y * m.y);
+            if let Some(e) = residual_or_not_finite(a, m, b, r) {
+                count_finite(&mut hist, &mut total, e, scale);
+            }
+        }
+    } else {
+        for (a, m, b) in triples {
+            // A triple with a point that is not finite has no residual ([`residual_at`]).
+            if let Some(e) = chord_residual(a, m, b) {
+                count(&mut hist, &mut total, e, scale);
+            }
         }
     }
     estimate(&hist, total, sigma_r)
@@ -330,6 +341,26 @@ fn count(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
     }
 }
 
+/// [`count`] for `e` a residual or not finite (not counted), `scale` positive and finite:
+/// one comparison where `|e| · scale` falls within the bins, where [`count`] after
+/// [`residual_at`] tests `e` for finiteness and clamps the bin.
+#[inline(always)]
+fn count_finite(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
+    let x = math::abs(e) * scale;
+    let bin = if x < BINS as f32 {
+        // 0 ≤ x < BINS: the mask changes nothing (it bounds the index for the compiler).
+        (x as usize) & (BINS - 1)
+    } else if math::finite(e) {
+        BINS - 1
+    } else {
+        return;
+    };
+    if let Some(h) = hist.get_mut(bin) {
+        *h = h.saturating_add(1);
+        *total += 1;
+    }
+}
+
 /// [`at_span`]'s estimate from the histogram of its `total` residuals.
 fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
     if total < MIN_SAMPLES {
@@ -338,13 +369,24 @@ fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
     // A first σ from the lower quartile of all residuals (too large where edges and clutter
     // add large ones), then twice the median of those within 3 σ of the last.
     let to_mm = sigma_r / PER_SIGMA;
-    let mut s = quantile_bin(hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
-    let mut inliers = 0;
+    // Below 2²⁴ residuals every count is exact in f32: the quantiles in integers.
+    let quantile = match total < EXACT {
+        true => quantile_bin_counted,
+        false => quantile_bin,
+    };
+    let mut s = quantile(hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
+    // The residuals in the first `upto` bins, `inliers`: the next sum starts from them.
+    let (mut inliers, mut upto) = (0usize, 0usize);
     for _ in 0..2 {
         let within = INLIER * RESIDUAL_PER_SIGMA * s / to_mm;
         let bins = (within as usize).clamp(1, BINS - 1);
-        inliers = hist.iter().take(bins).map(|&h| usize::from(h)).sum();
-        s = quantile_bin(hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
+        inliers = match (hist.get(upto..bins), hist.get(bins..upto)) {
+            (Some(more), _) => inliers + sum(more),
+            (_, Some(fewer)) => inliers - sum(fewer),
+            _ => hist.iter().take(bins).map(|&h| usize::from(h)).sum(),
+        };
+        upto = bins;
+        s = quantile(hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
     }
     // Noise explains the scan only when most residuals are within 3 σ of it (a scan of
     // clutter, edges and posts has a quartile but no noise level).
@@ -374,6 +416,20 @@ fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
     let s = (a.x * b.y - a.y * b.x) * r / den;
     let e = r - s;
     math::finite(e).then_some(e)
+}
+
+/// [`residual_at`] without its finiteness test: `e` when it is a residual, or not finite
+/// when [`residual_at`] gives `None` for a reason other than the sine test.
+#[inline(always)]
+fn residual_or_not_finite(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
+    let (cx, cy) = (b.x - a.x, b.y - a.y);
+    let chord = math::sqrt(cx * cx + cy * cy);
+    let den = m.x * cy - m.y * cx;
+    if !(math::abs(den) > MIN_SINE * r * chord) {
+        return None;
+    }
+    let s = (a.x * b.y - a.y * b.x) * r / den;
+    Some(r - s)
 }
 
 /// Points whose residuals [`Scatter::of_blocks`] computes at once.
@@ -443,6 +499,45 @@ fn residual_or_nan(a: Point, m: Point, b: Point, r: f32) -> f32 {
     } else {
         f32::NAN
     }
+}
+
+/// Counts below which [`quantile_bin_counted`] is [`quantile_bin`]: every whole number up to
+/// 2²⁴ is an f32.
+const EXACT: usize = 1 << 24;
+
+/// The sum of `counts`, eight at a time.
+fn sum(counts: &[u16]) -> usize {
+    let mut eights = counts.chunks_exact(8);
+    let mut total = 0usize;
+    for c in eights.by_ref() {
+        total += c.iter().map(|&h| usize::from(h)).sum::<usize>();
+    }
+    total
+        + eights
+            .remainder()
+            .iter()
+            .map(|&h| usize::from(h))
+            .sum::<usize>()
+}
+
+/// [`quantile_bin`] for a histogram of fewer than [`EXACT`] counts and `half` at most that:
+/// the cumulative count in integers, against the least whole number not below `half` (the
+/// same comparison, as the f32 sum of whole numbers below 2²⁴ is exact), the same result.
+fn quantile_bin_counted(hist: &[u16; BINS], half: f32) -> f32 {
+    if !(half >= 0.0 && half < EXACT as f32) {
+        return quantile_bin(hist, half);
+    }
+    let whole = half as u32;
+    let need = whole + u32::from((whole as f32) < half);
+    let mut below = 0u32;
+    for (i, &h) in hist.iter().enumerate() {
+        let h = u32::from(h);
+        if below + h >= need && h > 0 {
+            return i as f32 + (half - below as f32) / h as f32;
+        }
+        below += h;
+    }
+    BINS as f32
 }
 
 /// Where the histogram's cumulative count reaches `half`, in bins (linear within a bin).
@@ -596,6 +691,83 @@ mod tests {
             estimated += usize::from(blocks.sigma().is_some());
         }
         assert!(compared == 300 && estimated > 30, "{estimated}");
+    }
+
+    /// The board's count of a residual or a non-finite value puts every value in the bin
+    /// [`count`] gives it after [`residual_at`]'s finiteness test, and skips what that skips:
+    /// the bins' edges, values beyond the last bin (up to overflowing `|e| · scale`), ±∞ and
+    /// NaN, at positive finite scales.
+    #[test]
+    fn the_count_of_finite_residuals_bins_as_count_does() {
+        let values = |scale: f32| {
+            let edge = |b: f32| b / scale;
+            [
+                0.0,
+                -0.0,
+                1e-30,
+                edge(1.0),
+                edge(1.0).next_down(),
+                edge(1.0).next_up(),
+                -edge(7.5),
+                edge(511.0),
+                edge(511.0).next_down(),
+                edge(512.0),
+                edge(512.0).next_down(),
+                -edge(512.0).next_up(),
+                edge(9000.0),
+                3e38,
+                -f32::MAX,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::NAN,
+            ]
+        };
+        for sigma_r in [0.3f32, 1.0, 5.0, 33.0, 1e-30] {
+            let scale = PER_SIGMA / sigma_r;
+            assert!(scale > 0.0 && math::finite(scale));
+            let (mut want, mut got) = ([0u16; BINS], [0u16; BINS]);
+            let (mut n_want, mut n_got) = (0usize, 0usize);
+            for e in values(scale) {
+                if math::finite(e) {
+                    count(&mut want, &mut n_want, e, scale);
+                }
+                count_finite(&mut got, &mut n_got, e, scale);
+                assert_eq!((got, n_got), (want, n_want), "{e} at scale {scale}");
+            }
+            assert_eq!(n_got, 15, "at scale {scale}");
+        }
+    }
+
+    /// The quantiles and inlier sums in integers are the f32 ones: histograms of 0 to 1500
+    /// residuals, sparse and dense, with empty bins first, at every quarter and half count.
+    #[test]
+    fn the_quantile_in_integers_is_the_quantile() {
+        let mut s = 41u32;
+        let mut u = move || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            s >> 8
+        };
+        for t in 0..150u32 {
+            let mut hist = [0u16; BINS];
+            let (spread, count) = (1 + u() % 500, u() % 1500);
+            let skip = (u() % 40) as usize;
+            for _ in 0..count {
+                let b = skip + (u() % spread) as usize * (u() % 3) as usize / 2;
+                if let Some(h) = hist.get_mut(b.min(BINS - 1)) {
+                    *h += 1;
+                }
+            }
+            let total: usize = hist.iter().map(|&h| usize::from(h)).sum();
+            for q in 0..=4 * total + 2 {
+                let half = q as f32 * 0.25;
+                let (want, got) = (quantile_bin(&hist, half), quantile_bin_counted(&hist, half));
+                assert_eq!(got.to_bits(), want.to_bits(), "hist {t}, half {half}");
+            }
+            for cut in [0, 1, 7, 8, 9, 100, BINS] {
+                let want: usize = hist.iter().take(cut).map(|&h| usize::from(h)).sum();
+                assert_eq!(sum(&hist[..cut]), want, "hist {t}, cut {cut}");
+            }
+        }
     }
 
     /// [`at_span`] over the triples of valid points only, each point's validity tested.
