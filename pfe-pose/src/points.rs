@@ -670,6 +670,122 @@ pub(crate) fn complete<const N: usize>(
     guess: Option<Pose>,
     cfg: &crate::Config,
 ) -> crate::Registration {
+    let reg = complete_from(reg, prev_pts, curr_pts, guess, cfg);
+    if reg.is_registered() {
+        search_along(reg, prev_pts, curr_pts)
+    } else {
+        reg
+    }
+}
+
+/// Offsets tried either side of an answer along its least determined direction (3 m).
+const SEARCH_OFFSETS: usize = 60;
+/// Their spacing, mm (below the agreement's tolerance).
+const SEARCH_STEP: f32 = 50.0;
+/// An answer found along the least determined direction replaces `reg` when its points agree
+/// this much better (or when `reg` is degenerate and the points determine every direction).
+const SEARCH_MARGIN: f32 = 0.03;
+/// Local maxima of the agreement along the direction refined by the ICP, best first.
+const SEARCH_STARTS: usize = 2;
+/// The best local maximum must agree this much better than any other at least 0.3 m from it,
+/// or the direction stays ambiguous (periodic pillars, doors along a corridor).
+const SEARCH_DISTINCT: f32 = 0.05;
+/// A degenerate answer becomes "ok" only when the search's agrees at least this well.
+const SEARCH_RESOLVE: f32 = 0.85;
+
+/// `reg` (registered) checked along the direction its covariance determines least (a
+/// corridor's length, periodic pillars): the points' agreement at offsets of up to
+/// [`SEARCH_OFFSETS`] × [`SEARCH_STEP`] either way, the best local maxima refined by [`icp`]; the best ICP answer
+/// replaces `reg` when its points agree clearly better, or, for a degenerate `reg`, when it
+/// determines every direction and agrees at least as well.
+fn search_along<const N: usize>(
+    reg: crate::Registration,
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+) -> crate::Registration {
+    let c = &reg.cov;
+    let axis = 0.5 * libm::atan2f(2.0 * c[0][1], c[0][0] - c[1][1]);
+    if !axis.is_finite() {
+        return reg;
+    }
+    let (sn, cs) = sin_cos(axis);
+    let own = agreement(prev_pts, curr_pts, &reg.rel).score();
+    let at = |k: i32| {
+        let d = k as f32 * SEARCH_STEP;
+        Pose::new(reg.rel.x + d * cs, reg.rel.y + d * sn, reg.rel.theta)
+    };
+    let n = SEARCH_OFFSETS as i32;
+    let mut scores = [f32::NEG_INFINITY; 2 * SEARCH_OFFSETS + 1];
+    for (k, slot) in (-n..=n).zip(scores.iter_mut()) {
+        *slot = agreement(prev_pts, curr_pts, &at(k)).score();
+    }
+    // The best local maxima, at least 0.3 m from each other.
+    let peak = |i: usize| {
+        let s = scores.get(i).copied().unwrap_or(f32::NEG_INFINITY);
+        let left = i.checked_sub(1).and_then(|j| scores.get(j)).copied();
+        let right = scores.get(i + 1).copied();
+        s.is_finite() && left.is_none_or(|l| l <= s) && right.is_none_or(|r| r < s)
+    };
+    let mut starts = [None::<(i32, f32)>; SEARCH_STARTS];
+    for slot in 0..SEARCH_STARTS {
+        let mut top: Option<(i32, f32)> = None;
+        for (i, &s) in scores.iter().enumerate() {
+            let k = i as i32 - n;
+            let taken = starts
+                .iter()
+                .flatten()
+                .any(|(j, _)| (j - k).unsigned_abs() as f32 * SEARCH_STEP < 300.0);
+            if peak(i) && !taken && top.is_none_or(|(_, b)| s > b) {
+                top = Some((k, s));
+            }
+        }
+        if let Some(t) = starts.get_mut(slot) {
+            *t = top;
+        }
+    }
+    let distinct = match starts {
+        [Some((_, a)), Some((_, b))] => a - b >= SEARCH_DISTINCT,
+        _ => true,
+    };
+    if !distinct {
+        return reg;
+    }
+    let degenerate = matches!(reg.status, crate::Status::Degenerate { .. });
+    let mut best: Option<(IcpResult, f32)> = None;
+    for (k, _) in starts.iter().flatten() {
+        if let Some(r) = icp(prev_pts, curr_pts, &at(*k)) {
+            let s = r.agreement.score();
+            if r.unobservable.is_none() && best.as_ref().is_none_or(|(_, b)| s > *b) {
+                best = Some((r, s));
+            }
+        }
+    }
+    match best {
+        Some((r, s))
+            if s > own + SEARCH_MARGIN
+                || (degenerate && s >= own - RESOLVE_SLACK && s >= SEARCH_RESOLVE) =>
+        {
+            crate::Registration {
+                rel: r.pose,
+                cov: r.cov,
+                status: crate::Status::Ok,
+                matches: (0, 0),
+                chi2: 0.0,
+                ..reg
+            }
+        }
+        _ => reg,
+    }
+}
+
+/// [`complete`] before the search along the answer's least determined direction.
+fn complete_from<const N: usize>(
+    reg: crate::Registration,
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+    guess: Option<Pose>,
+    cfg: &crate::Config,
+) -> crate::Registration {
     let own = if reg.is_registered() {
         agreement(prev_pts, curr_pts, &reg.rel).score()
     } else {
