@@ -672,7 +672,40 @@ pub(crate) fn complete<const N: usize>(
 ) -> crate::Registration {
     let reg = complete_from(reg, prev_pts, curr_pts, guess, cfg);
     if reg.is_registered() {
-        search_along(reg, prev_pts, curr_pts)
+        polish(search_along(reg, prev_pts, curr_pts), prev_pts, curr_pts)
+    } else {
+        reg
+    }
+}
+
+/// The ICP may move an "ok" answer of the features at most this far to polish it, mm (θ in
+/// units of [`ROTATION_SCALE`]).
+const POLISH_REACH: f32 = 150.0;
+
+/// An "ok" answer of the features refined by [`icp`] on the points (the features' fits leave
+/// a few cm the raw points resolve), taken when the points determine every direction, agree at
+/// least as well and the ICP moved it less than [`POLISH_REACH`]; the covariance stays the
+/// features' (the ICP's own is no better calibrated).
+fn polish<const N: usize>(
+    reg: crate::Registration,
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+) -> crate::Registration {
+    if !matches!(reg.status, crate::Status::Ok) || reg.matches == (0, 0) {
+        return reg;
+    }
+    let own = agreement(prev_pts, curr_pts, &reg.rel).score();
+    let Some(r) = icp(prev_pts, curr_pts, &reg.rel) else {
+        return reg;
+    };
+    let d = [
+        r.pose.x - reg.rel.x,
+        r.pose.y - reg.rel.y,
+        crate::geom::wrap(r.pose.theta - reg.rel.theta) * ROTATION_SCALE,
+    ];
+    let moved = crate::geom::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if r.unobservable.is_none() && r.agreement.score() >= own && moved < POLISH_REACH {
+        crate::Registration { rel: r.pose, ..reg }
     } else {
         reg
     }
