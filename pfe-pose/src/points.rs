@@ -724,7 +724,7 @@ const SEARCH_STARTS: usize = 2;
 /// or the direction stays ambiguous (periodic pillars, doors along a corridor).
 const SEARCH_DISTINCT: f32 = 0.05;
 /// A degenerate answer becomes "ok" only when the search's agrees at least this well.
-const SEARCH_RESOLVE: f32 = 0.85;
+const SEARCH_RESOLVE: f32 = 0.9;
 
 /// `reg` (registered) checked along the direction its covariance determines least (a
 /// corridor's length, periodic pillars): the points' agreement at offsets of up to
@@ -892,6 +892,38 @@ fn complete_from<const N: usize>(
         }
         _ => reg,
     }
+}
+
+/// A key scan refines a pose when their points agree at least this well after the ICP.
+const KEY_AGREE: f32 = 0.85;
+/// ...and the ICP moved the pose less than this, mm (θ in units of [`ROTATION_SCALE`]).
+const KEY_REACH: f32 = 150.0;
+
+/// `pose` (of the scan `curr`, in the odometry frame) refined by [`icp`] against the key scan
+/// `key` at `key_pose`: registering against one key scan for many scans keeps their errors from
+/// adding up as chained pairs do. `None` (the caller then takes `curr` as the new key) when the
+/// points do not determine every direction, agree less than [`KEY_AGREE`] or the ICP moved
+/// the pose [`KEY_REACH`] or more.
+pub fn refine_on_key<const N: usize>(
+    key: &RangeScan<N>,
+    key_pose: &Pose,
+    curr: &RangeScan<N>,
+    pose: &Pose,
+) -> Option<Pose> {
+    let rel = key_pose.inverse().compose(pose);
+    let r = icp(key, curr, &rel)?;
+    let d = [
+        r.pose.x - rel.x,
+        r.pose.y - rel.y,
+        crate::geom::wrap(r.pose.theta - rel.theta) * ROTATION_SCALE,
+    ];
+    let moved = crate::geom::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    let out = key_pose.compose(&r.pose);
+    (r.unobservable.is_none()
+        && r.agreement.score() >= KEY_AGREE
+        && moved < KEY_REACH
+        && out.is_finite())
+    .then_some(out)
 }
 
 /// A points' answer may agree this much less than the features' degenerate one and still
