@@ -895,9 +895,9 @@ fn complete_from<const N: usize>(
 }
 
 /// A key scan refines a pose when their points agree at least this well after the ICP.
-const KEY_AGREE: f32 = 0.85;
+const KEY_AGREE: f32 = 0.9;
 /// ...and the ICP moved the pose less than this, mm (θ in units of [`ROTATION_SCALE`]).
-const KEY_REACH: f32 = 150.0;
+const KEY_REACH: f32 = 80.0;
 
 /// `pose` (of the scan `curr`, in the odometry frame) refined by [`icp`] against the key scan
 /// `key` at `key_pose`: registering against one key scan for many scans keeps their errors from
