@@ -164,9 +164,10 @@ pub const ODOMETRY_MAP: usize = 64;
 /// [`Odometry::update_features`].
 pub type FeatureOdometry = Odometry<ODOMETRY_MAP>;
 
-/// [`FeatureOdometry`] that also keeps the previous scan's ranges ([`SCAN_BEAMS`] u16, 722
-/// bytes more), so that [`Odometry::update_scan`] verifies and completes the registration by
-/// the scans' points ([`crate::points`]): `pfe odometry --points` and the pose benchmark.
+/// [`FeatureOdometry`] that also keeps the previous scan's and a key scan's ranges
+/// ([`SCAN_BEAMS`] u16 each, 1 444 bytes more), so that [`Odometry::update_scan`] verifies and
+/// completes the registration by the scans' points and refines each pose against the key scan
+/// ([`crate::points`]): `pfe odometry --points` and the pose benchmark.
 /// (The firmware runs [`FeatureOdometry`]: without the ranges [`Odometry::update_scan`] is
 /// [`Odometry::update_features`].)
 pub type PointOdometry = Odometry<ODOMETRY_MAP, SCAN_BEAMS>;
