@@ -36,7 +36,7 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
-use crate::points::{agreement, complete, RangeScan, SCAN_BEAMS};
+use crate::points::{agreement, complete, refine_on_key, RangeScan, SCAN_BEAMS};
 use crate::register::{
     register_sets, register_sets_verified, Assoc, Config, Status, NONE, ROTATION_SCALE,
     UNOBSERVABLE_VARIANCE,
@@ -131,6 +131,10 @@ pub struct Odometry<const MAP: usize, const PTS: usize = 0> {
     last: Set,
     /// The previous scan's ranges (empty when it came without: [`Odometry::update_scan`]).
     pts: RangeScan<PTS>,
+    /// The key scan's ranges (empty without points) and its pose: each scan's pose is refined
+    /// against them ([`crate::points::refine_on_key`]).
+    key: RangeScan<PTS>,
+    key_pose: Pose,
 }
 
 /// The settings of an [`Odometry`]: the default ones as a tag only, so that a new odometry
@@ -160,9 +164,10 @@ pub const ODOMETRY_MAP: usize = 64;
 /// [`Odometry::update_features`].
 pub type FeatureOdometry = Odometry<ODOMETRY_MAP>;
 
-/// [`FeatureOdometry`] that also keeps the previous scan's ranges ([`SCAN_BEAMS`] u16, 722
-/// bytes more), so that [`Odometry::update_scan`] verifies and completes the registration by
-/// the scans' points ([`crate::points`]): `pfe odometry --points` and the pose benchmark.
+/// [`FeatureOdometry`] that also keeps the previous scan's and a key scan's ranges
+/// ([`SCAN_BEAMS`] u16 each, 1 444 bytes more), so that [`Odometry::update_scan`] verifies and
+/// completes the registration by the scans' points and refines each pose against the key scan
+/// ([`crate::points`]): `pfe odometry --points` and the pose benchmark.
 /// (The firmware runs [`FeatureOdometry`]: without the ranges [`Odometry::update_scan`] is
 /// [`Odometry::update_features`].)
 pub type PointOdometry = Odometry<ODOMETRY_MAP, SCAN_BEAMS>;
@@ -203,6 +208,8 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             scans: 0,
             last: Set::new(),
             pts: RangeScan::new(),
+            key: RangeScan::new(),
+            key_pose: Pose::IDENTITY,
         }
     }
 
@@ -214,6 +221,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
         self.last_rel = Pose::IDENTITY;
         self.scans = 0;
         self.pts.clear();
+        self.key.clear();
     }
 
     /// The latest pose in the first scan's frame and its covariance.
@@ -333,10 +341,33 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
     ) -> Step {
         let scan = self.scans;
         self.scans = self.scans.saturating_add(1);
-        let step = self.update_inner(curr, curr_pts, motion, cfg, scan);
+        let old = self.pose;
+        let mut step = self.update_inner(curr, curr_pts, motion, cfg, scan);
         match curr_pts {
-            Some(c) => self.pts.clone_from(c),
-            None => self.pts.clear(),
+            Some(c) if !c.is_empty() => {
+                // The pose refined against the key scan's points; the key moves on to this
+                // scan when they no longer refine it.
+                let keep = !self.key.is_empty()
+                    && match refine_on_key(&self.key, &self.key_pose, c, &step.pose) {
+                        Some(pose) => {
+                            step.pose = pose;
+                            step.rel = old.inverse().compose(&pose);
+                            self.pose = pose;
+                            self.last_rel = step.rel;
+                            true
+                        }
+                        None => false,
+                    };
+                if !keep {
+                    self.key.clone_from(c);
+                    self.key_pose = step.pose;
+                }
+                self.pts.clone_from(c);
+            }
+            _ => {
+                self.pts.clear();
+                self.key.clear();
+            }
         }
         step
     }

@@ -1,0 +1,171 @@
+//! The points' search along an answer's least determined direction, the ICP's polish of the
+//! features' answer and the refinement against a key scan.
+
+use super::{agreement, icp, IcpResult, RangeScan, RESOLVE_SLACK};
+use crate::geom::{sin_cos, Pose};
+use crate::register::ROTATION_SCALE;
+
+/// The ICP may move an "ok" answer of the features at most this far to polish it, mm (θ in
+/// units of [`ROTATION_SCALE`]).
+const POLISH_REACH: f32 = 150.0;
+
+/// An "ok" answer of the features refined by [`icp`] on the points (the features' fits leave
+/// a few cm the raw points resolve), taken when the points determine every direction, agree at
+/// least as well and the ICP moved it less than [`POLISH_REACH`]; the covariance stays the
+/// features' (the ICP's own is no better calibrated).
+pub(super) fn polish<const N: usize>(
+    reg: crate::Registration,
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+) -> crate::Registration {
+    if !matches!(reg.status, crate::Status::Ok) || reg.matches == (0, 0) {
+        return reg;
+    }
+    let own = agreement(prev_pts, curr_pts, &reg.rel).score();
+    let Some(r) = icp(prev_pts, curr_pts, &reg.rel) else {
+        return reg;
+    };
+    let d = [
+        r.pose.x - reg.rel.x,
+        r.pose.y - reg.rel.y,
+        crate::geom::wrap(r.pose.theta - reg.rel.theta) * ROTATION_SCALE,
+    ];
+    let moved = crate::geom::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    if r.unobservable.is_none() && r.agreement.score() >= own && moved < POLISH_REACH {
+        crate::Registration { rel: r.pose, ..reg }
+    } else {
+        reg
+    }
+}
+
+/// Offsets tried either side of an answer along its least determined direction (3 m).
+const SEARCH_OFFSETS: usize = 60;
+/// Their spacing, mm (below the agreement's tolerance).
+const SEARCH_STEP: f32 = 50.0;
+/// An answer found along the least determined direction replaces `reg` when its points agree
+/// this much better (or when `reg` is degenerate and the points determine every direction).
+const SEARCH_MARGIN: f32 = 0.03;
+/// Local maxima of the agreement along the direction refined by the ICP, best first.
+const SEARCH_STARTS: usize = 2;
+/// The best local maximum must agree this much better than any other at least 0.3 m from it,
+/// or the direction stays ambiguous (periodic pillars, doors along a corridor).
+const SEARCH_DISTINCT: f32 = 0.05;
+/// A degenerate answer becomes "ok" only when the search's agrees at least this well.
+const SEARCH_RESOLVE: f32 = 0.9;
+
+/// `reg` (registered) checked along the direction its covariance determines least (a
+/// corridor's length, periodic pillars): the points' agreement at offsets of up to
+/// [`SEARCH_OFFSETS`] × [`SEARCH_STEP`] either way, the best local maxima refined by [`icp`]; the best ICP answer
+/// replaces `reg` when its points agree clearly better, or, for a degenerate `reg`, when it
+/// determines every direction and agrees at least as well.
+pub(super) fn search_along<const N: usize>(
+    reg: crate::Registration,
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+) -> crate::Registration {
+    let c = &reg.cov;
+    let axis = 0.5 * libm::atan2f(2.0 * c[0][1], c[0][0] - c[1][1]);
+    if !axis.is_finite() {
+        return reg;
+    }
+    let (sn, cs) = sin_cos(axis);
+    let own = agreement(prev_pts, curr_pts, &reg.rel).score();
+    let at = |k: i32| {
+        let d = k as f32 * SEARCH_STEP;
+        Pose::new(reg.rel.x + d * cs, reg.rel.y + d * sn, reg.rel.theta)
+    };
+    let n = SEARCH_OFFSETS as i32;
+    let mut scores = [f32::NEG_INFINITY; 2 * SEARCH_OFFSETS + 1];
+    for (k, slot) in (-n..=n).zip(scores.iter_mut()) {
+        *slot = agreement(prev_pts, curr_pts, &at(k)).score();
+    }
+    // The best local maxima, at least 0.3 m from each other.
+    let peak = |i: usize| {
+        let s = scores.get(i).copied().unwrap_or(f32::NEG_INFINITY);
+        let left = i.checked_sub(1).and_then(|j| scores.get(j)).copied();
+        let right = scores.get(i + 1).copied();
+        s.is_finite() && left.is_none_or(|l| l <= s) && right.is_none_or(|r| r < s)
+    };
+    let mut starts = [None::<(i32, f32)>; SEARCH_STARTS];
+    for slot in 0..SEARCH_STARTS {
+        let mut top: Option<(i32, f32)> = None;
+        for (i, &s) in scores.iter().enumerate() {
+            let k = i as i32 - n;
+            let taken = starts
+                .iter()
+                .flatten()
+                .any(|(j, _)| (j - k).unsigned_abs() as f32 * SEARCH_STEP < 300.0);
+            if peak(i) && !taken && top.is_none_or(|(_, b)| s > b) {
+                top = Some((k, s));
+            }
+        }
+        if let Some(t) = starts.get_mut(slot) {
+            *t = top;
+        }
+    }
+    let distinct = match starts {
+        [Some((_, a)), Some((_, b))] => a - b >= SEARCH_DISTINCT,
+        _ => true,
+    };
+    if !distinct {
+        return reg;
+    }
+    let degenerate = matches!(reg.status, crate::Status::Degenerate { .. });
+    let mut best: Option<(IcpResult, f32)> = None;
+    for (k, _) in starts.iter().flatten() {
+        if let Some(r) = icp(prev_pts, curr_pts, &at(*k)) {
+            let s = r.agreement.score();
+            if r.unobservable.is_none() && best.as_ref().is_none_or(|(_, b)| s > *b) {
+                best = Some((r, s));
+            }
+        }
+    }
+    match best {
+        Some((r, s))
+            if s > own + SEARCH_MARGIN
+                || (degenerate && s >= own - RESOLVE_SLACK && s >= SEARCH_RESOLVE) =>
+        {
+            crate::Registration {
+                rel: r.pose,
+                cov: r.cov,
+                status: crate::Status::Ok,
+                matches: (0, 0),
+                chi2: 0.0,
+                ..reg
+            }
+        }
+        _ => reg,
+    }
+}
+
+/// A key scan refines a pose when their points agree at least this well after the ICP.
+const KEY_AGREE: f32 = 0.9;
+/// ...and the ICP moved the pose less than this, mm (θ in units of [`ROTATION_SCALE`]).
+const KEY_REACH: f32 = 80.0;
+
+/// `pose` (of the scan `curr`, in the odometry frame) refined by [`icp`] against the key scan
+/// `key` at `key_pose`: registering against one key scan for many scans keeps their errors from
+/// adding up as chained pairs do. `None` (the caller then takes `curr` as the new key) when the
+/// points do not determine every direction, agree less than 0.9 ([`agreement`]) or the ICP
+/// moved the pose 80 mm or more (θ in units of [`ROTATION_SCALE`]).
+pub fn refine_on_key<const N: usize>(
+    key: &RangeScan<N>,
+    key_pose: &Pose,
+    curr: &RangeScan<N>,
+    pose: &Pose,
+) -> Option<Pose> {
+    let rel = key_pose.inverse().compose(pose);
+    let r = icp(key, curr, &rel)?;
+    let d = [
+        r.pose.x - rel.x,
+        r.pose.y - rel.y,
+        crate::geom::wrap(r.pose.theta - rel.theta) * ROTATION_SCALE,
+    ];
+    let moved = crate::geom::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    let out = key_pose.compose(&r.pose);
+    (r.unobservable.is_none()
+        && r.agreement.score() >= KEY_AGREE
+        && moved < KEY_REACH
+        && out.is_finite())
+    .then_some(out)
+}
