@@ -588,6 +588,21 @@ impl Evidence {
 mod tests {
     use super::*;
 
+    /// σ from the differences' sum of squares: each difference of two two-beam differences
+    /// has 4 σ² of variance; the rounding's q/√12 and the floor bound it below.
+    #[test]
+    fn sigma_is_the_root_of_a_quarter_of_the_mean_square() {
+        let noise = |sum_sq: f32, count: u32| Noise { sum_sq, count };
+        assert_eq!(noise(4.0 * 100.0 * 25.0, 100).sigma(0.0), Some(5.0));
+        assert_eq!(noise(4.0 * 10.0 * 9.0, 10).sigma(1.0), Some(3.0));
+        assert_eq!(
+            noise(4.0 * 10.0 * 9.0, 10).sigma(50.0),
+            Some(50.0 / 12f32.sqrt())
+        );
+        assert_eq!(noise(0.0, 10).sigma(0.0), Some(SIGMA_FLOOR));
+        assert_eq!(noise(1.0, 7).sigma(0.0), None);
+    }
+
     #[test]
     fn median_of_few() {
         assert_eq!(median(&mut []), 0.0);

@@ -510,10 +510,37 @@ fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
 #[cfg(test)]
 mod tests {
     use super::{
-        aligned_circle, aligned_line, invert, offset, Offsets, Solution, SweepOffset, ROT_SCALE,
+        aligned_circle, aligned_line, aligned_object, invert, offset, Offsets, Solution,
+        SweepOffset, ROT_SCALE,
     };
-    use crate::feature::{CircleFeature, LineFeature};
+    use crate::feature::{CircleFeature, LineFeature, ObjectFeature};
     use crate::geometry::Point;
+
+    /// An object's centre inherits the sweeps' offsets as a point does: (x, y) moved by
+    /// (dx, dy) and turned by dθ about the scanner, (−y, x) dθ.
+    #[test]
+    fn an_object_inherits_the_offsets_as_its_centre_does() {
+        let mut of = ObjectFeature {
+            first: 10,
+            last: 14,
+            points: 5,
+            center: Point::new(2000.0, 500.0),
+            cov: [[100.0, 10.0], [10.0, 50.0]],
+            extent: 120.0,
+        };
+        aligned_object(&mut of, [4.0, 9.0, 1e-6]);
+        let [[xx, xy], [yx, yy]] = of.cov;
+        assert!(
+            (xx - (100.0 + 4.0 + 1e-6 * 500.0 * 500.0)).abs() < 1e-3,
+            "{xx}"
+        );
+        assert!(
+            (yy - (50.0 + 9.0 + 1e-6 * 2000.0 * 2000.0)).abs() < 1e-3,
+            "{yy}"
+        );
+        assert!((xy - (10.0 - 1e-6 * 2000.0 * 500.0)).abs() < 1e-3, "{xy}");
+        assert_eq!(xy, yx);
+    }
 
     /// A walk is suspect of sweeps out of place when it did not note its starts, or when more
     /// than one valid point in `SUSPECT_EVERY` starts a segment: 361 valid points with 20
