@@ -370,11 +370,15 @@ fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
     // add large ones), then twice the median of those within 3 σ of the last.
     let to_mm = sigma_r / PER_SIGMA;
     // Below 2²⁴ residuals every count is exact in f32: the quantiles in integers.
-    let quantile = match total < EXACT {
-        true => quantile_bin_counted,
-        false => quantile_bin,
+    // Direct calls (a function pointer would leave the firmware's stack bound unsound).
+    let quantile = |half: f32| {
+        if total < EXACT {
+            quantile_bin_counted(hist, half)
+        } else {
+            quantile_bin(hist, half)
+        }
     };
-    let mut s = quantile(hist, total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
+    let mut s = quantile(total as f32 * 0.25) * to_mm * QUARTILE_TO_SIGMA;
     // The residuals in the first `upto` bins, `inliers`: the next sum starts from them.
     let (mut inliers, mut upto) = (0usize, 0usize);
     for _ in 0..2 {
@@ -386,7 +390,7 @@ fn estimate(hist: &[u16; BINS], total: usize, sigma_r: f32) -> Option<f32> {
             _ => hist.iter().take(bins).map(|&h| usize::from(h)).sum(),
         };
         upto = bins;
-        s = quantile(hist, inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
+        s = quantile(inliers as f32 * 0.5) * to_mm * MEDIAN_TO_SIGMA;
     }
     // Noise explains the scan only when most residuals are within 3 σ of it (a scan of
     // clutter, edges and posts has a quartile but no noise level).
