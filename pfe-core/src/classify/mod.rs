@@ -31,6 +31,9 @@ const CURVED_CHI2: f32 = 6.63;
 const CURVED_FIT: f32 = 1.5;
 /// Largest radius of the circle that shows a run curved, mm.
 const CURVED_MAX_RADIUS: f32 = 1000.0;
+/// What the best two-line split of a segment may beat its circle by, in σ_r², and the circle
+/// still be taken: the split has more parameters (two lines and where they meet) than the circle.
+const SPLIT_PARAMS: f32 = 4.0;
 
 /// Whether the points `pts` of a segment typed a line are curved instead (in the default
 /// mode): a circle of at most [`CURVED_MAX_RADIUS`] explains them to the noise and
@@ -192,7 +195,7 @@ fn circle_of<const SCRUTINY: bool>(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| !SCRUTINY || is_arc(pts, c, *sse_c, 0.0))
+                .filter(|(c, sse_c)| !SCRUTINY || is_arc(pts, c, *sse_c, -SPLIT_PARAMS * var))
         }
     }
 }
