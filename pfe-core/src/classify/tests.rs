@@ -401,7 +401,11 @@ fn mean_cos2_takes_the_finite_shares_in_order() {
     let at60 = Point::new(1.0, 3.0f32.sqrt());
     let c2 = mean_cos2_still(&[at60; 9], x);
     assert!((c2 - 0.25).abs() < 1e-6, "{c2}");
-    let blind = [Point::new(0.0, 0.0), Point::new(f32::NAN, 1.0), Point::INVALID];
+    let blind = [
+        Point::new(0.0, 0.0),
+        Point::new(f32::NAN, 1.0),
+        Point::INVALID,
+    ];
     assert_eq!(mean_cos2_still(&blind, x), 1.0);
     assert_eq!(mean_cos2_still(&[], x), 1.0);
     let mut pts: heapless::Vec<Point, 40> = (0..40)
