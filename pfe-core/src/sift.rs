@@ -18,7 +18,7 @@
 
 use crate::config::Config;
 use crate::feature::{Feature, LineFeature, ObjectFeature};
-use crate::flags::{END, START, VEIL};
+use crate::flags::{END, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::math;
 use crate::output::FeatureSink;
@@ -266,11 +266,18 @@ pub(crate) fn isolated(pass: &Pass<'_>, s: usize, e: usize) -> bool {
 
 /// The last point of the run of returns from the valid point `s` without a jump.
 fn run_end(pass: &Pass<'_>, s: usize) -> usize {
-    let mut e = s;
-    while e + 1 < pass.len() && pass.valid(e + 1) && !jump(pass, e) {
-        e += 1;
-    }
-    e
+    // Each next point's flag beside its range and the one before: one bounds test a scan.
+    let (Some(flags), Some(ranges)) = (pass.flags.get(s + 1..), pass.ranges.get(s..)) else {
+        return s;
+    };
+    let joined = |(&f, r): (&u8, &[f32])| {
+        f & VALID != 0 && matches!(r, [a, b] if math::abs(b - a) < OBJECT_JUMP_MM)
+    };
+    s + flags
+        .iter()
+        .zip(ranges.windows(2))
+        .take_while(|&step| joined(step))
+        .count()
 }
 
 /// True when a feature holds a point of `s..=e`.

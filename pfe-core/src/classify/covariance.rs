@@ -24,22 +24,72 @@ pub(super) fn mean_cos2(
     pts: &[Point],
     normal: impl Fn(Point) -> Point,
 ) -> f32 {
-    let (mut sum, mut n) = (0.0f32, 0usize);
+    if pass.motion.is_none() {
+        return mean_cos2_still(pts, normal);
+    }
+    let mut mean = MeanCos2::default();
     for (i, &p) in pts.iter().enumerate() {
-        let o = pass.origin(s + i);
-        let (d, m) = (Point::new(p.x - o.x, p.y - o.y), normal(p));
-        let c2 = (d.x * m.x + d.y * m.y) * (d.x * m.x + d.y * m.y)
-            / ((d.x * d.x + d.y * d.y) * (m.x * m.x + m.y * m.y));
+        mean.add(cos2(p, pass.origin(s + i), normal(p)));
+    }
+    mean.get()
+}
+
+/// [`mean_cos2`] with every beam from the origin (a scan not de-skewed): the shares of
+/// [`BLOCK`] points at a time, element by element (which vectorises on the host), then summed
+/// in order, as one at a time.
+pub(super) fn mean_cos2_still(pts: &[Point], normal: impl Fn(Point) -> Point) -> f32 {
+    let o = Point::new(0.0, 0.0);
+    let mut mean = MeanCos2::default();
+    let mut blocks = pts.chunks_exact(BLOCK);
+    for block in &mut blocks {
+        let mut c2 = [0.0f32; BLOCK];
+        for (c, &p) in c2.iter_mut().zip(block) {
+            *c = cos2(p, o, normal(p));
+        }
+        c2.into_iter().for_each(|c| mean.add(c));
+    }
+    for &p in blocks.remainder() {
+        mean.add(cos2(p, o, normal(p)));
+    }
+    mean.get()
+}
+
+/// The running mean of [`mean_cos2`]: of the finite shares, in the order added.
+#[derive(Default)]
+struct MeanCos2 {
+    sum: f32,
+    n: usize,
+}
+
+impl MeanCos2 {
+    #[inline(always)]
+    fn add(&mut self, c2: f32) {
         if math::finite(c2) {
-            sum += c2;
-            n += 1;
+            self.sum += c2;
+            self.n += 1;
         }
     }
-    if n > 0 {
-        sum / n as f32
-    } else {
-        1.0
+
+    /// The mean, 1 when no share was finite.
+    fn get(&self) -> f32 {
+        if self.n > 0 {
+            self.sum / self.n as f32
+        } else {
+            1.0
+        }
     }
+}
+
+/// Points whose shares [`mean_cos2`] computes at once.
+const BLOCK: usize = 8;
+
+/// cos² of the angle between the beam from `o` to `p` and the normal `m` (NaN when either is
+/// zero).
+#[inline(always)]
+fn cos2(p: Point, o: Point, m: Point) -> f32 {
+    let d = Point::new(p.x - o.x, p.y - o.y);
+    (d.x * m.x + d.y * m.y) * (d.x * m.x + d.y * m.y)
+        / ((d.x * d.x + d.y * d.y) * (m.x * m.x + m.y * m.y))
 }
 
 /// Adds the share of a beam-to-beam systematic range error σ_sys (`s`, mm) to a line's

@@ -79,9 +79,35 @@ pub(crate) fn feature<const SCRUTINY: bool>(
     e: usize,
     config: &Config,
 ) -> Option<Feature> {
-    let pts = pass.points.get(s..=e)?;
-    let origin = pass.origin((s + e) / 2);
+    feature_and_line::<SCRUTINY>(pass, s, e, config).0
+}
+
+/// [`feature`] with the plain line fit of the segment's points (`None` when it failed), which
+/// the caller may use again instead of fitting the same points again.
+pub(crate) fn feature_and_line<const SCRUTINY: bool>(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> (Option<Feature>, Option<LineFit>) {
+    let Some(pts) = pass.points.get(s..=e) else {
+        return (None, None);
+    };
     let line = fit_line(pts).ok();
+    (feature_of::<SCRUTINY>(pass, s, e, pts, line, config), line)
+}
+
+/// [`feature`] of the points `pts` of the segment `s..=e`, `line` their line fit.
+#[inline(always)]
+fn feature_of<const SCRUTINY: bool>(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    pts: &[Point],
+    line: Option<LineFit>,
+    config: &Config,
+) -> Option<Feature> {
+    let origin = pass.origin((s + e) / 2);
     let honest = honest(config, SCRUTINY);
     let var = config.sigma_r * config.sigma_r;
     match circle_of::<SCRUTINY>(pts, line.as_ref(), config) {

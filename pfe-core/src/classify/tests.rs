@@ -410,3 +410,63 @@ fn a_pillar_facing_the_scanner_is_a_circle_though_two_lines_fit_it_as_well() {
     let line = fit_line(&away).ok();
     assert!(circle_of::<true>(&away, line.as_ref(), &config).is_none());
 }
+/// The mean share of range noise along the normal, one point at a time as before the blocks:
+/// the reference [`covariance::mean_cos2_still`] must equal bit for bit.
+fn mean_cos2_one_by_one(pts: &[Point], normal: impl Fn(Point) -> Point) -> f32 {
+    let (mut sum, mut n) = (0.0f32, 0usize);
+    for &p in pts {
+        let m = normal(p);
+        let c2 = (p.x * m.x + p.y * m.y) * (p.x * m.x + p.y * m.y)
+            / ((p.x * p.x + p.y * p.y) * (m.x * m.x + m.y * m.y));
+        if c2.is_finite() {
+            sum += c2;
+            n += 1;
+        }
+    }
+    if n > 0 {
+        sum / n as f32
+    } else {
+        1.0
+    }
+}
+
+/// Beams along the normal share all the noise, at 60° to it a quarter; points that tell
+/// nothing (at the scanner, not finite) are left out, and none at all gives 1. In blocks the
+/// mean is the one-by-one mean bit for bit, for every length around the block's and a normal
+/// that depends on the point (a circle's).
+#[test]
+fn mean_cos2_takes_the_finite_shares_in_order() {
+    use covariance::mean_cos2_still;
+    let x = |_: Point| Point::new(2.0, 0.0);
+    assert_eq!(mean_cos2_still(&[Point::new(3.0, 0.0); 11], x), 1.0);
+    let at60 = Point::new(1.0, 3.0f32.sqrt());
+    let c2 = mean_cos2_still(&[at60; 9], x);
+    assert!((c2 - 0.25).abs() < 1e-6, "{c2}");
+    let blind = [
+        Point::new(0.0, 0.0),
+        Point::new(f32::NAN, 1.0),
+        Point::INVALID,
+    ];
+    assert_eq!(mean_cos2_still(&blind, x), 1.0);
+    assert_eq!(mean_cos2_still(&[], x), 1.0);
+    let mut pts: heapless::Vec<Point, 40> = (0..40)
+        .map(|i| {
+            let t = 0.37 * i as f32;
+            Point::new(1000.0 + 300.0 * t.cos(), 200.0 * t.sin() - 50.0 * i as f32)
+        })
+        .collect();
+    pts[5] = Point::new(0.0, 0.0);
+    pts[17] = Point::INVALID;
+    pts[26] = Point::new(f32::INFINITY, 3.0);
+    let centre = |p: Point| Point::new(p.x - 1100.0, p.y + 40.0);
+    let tilted = |_: Point| Point::new(0.6, 0.8);
+    for n in 0..=pts.len() {
+        let p = &pts[..n];
+        for (a, b) in [
+            (mean_cos2_still(p, centre), mean_cos2_one_by_one(p, centre)),
+            (mean_cos2_still(p, tilted), mean_cos2_one_by_one(p, tilted)),
+        ] {
+            assert_eq!(a.to_bits(), b.to_bits(), "{n} points: {a} against {b}");
+        }
+    }
+}

@@ -316,7 +316,7 @@ pub fn line_feature(
     origin: Point,
     sigma_r: f32,
 ) -> Option<Feature> {
-    let cov = line.covariance_range(pts.iter().copied(), origin, sigma_r);
+    let cov = line.covariance_range_of(pts, origin, sigma_r);
     line_feature_with(pts, first, last, line, cov)
 }
 

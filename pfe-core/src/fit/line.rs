@@ -5,6 +5,9 @@ use crate::error::FitError;
 use crate::geometry::Point;
 use crate::math;
 
+/// Points whose terms [`LineFit::covariance_range_of`] computes at once.
+const BLOCK: usize = 8;
+
 /// A fitted line and the moments it came from.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -391,6 +394,47 @@ impl LineFit {
         self.covariance_from([suu, suu_s, su_s, s_s], d, sigma_r)
     }
 
+    /// [`LineFit::covariance_range`] of the points `pts`, the same bit for bit: each point's
+    /// terms (its lever and incidence, a division) [`BLOCK`] points at a time, element by element
+    /// (which vectorises on the host), then summed in order.
+    pub(crate) fn covariance_range_of(
+        &self,
+        pts: &[Point],
+        origin: Point,
+        sigma_r: f32,
+    ) -> LineCovariance {
+        let (nc, ns) = self.normal();
+        let (tx, ty) = (-ns, nc);
+        let ct = (self.centroid.x - origin.x) * tx + (self.centroid.y - origin.y) * ty;
+        let terms = |p: &Point| {
+            let (bx, by) = (p.x - origin.x, p.y - origin.y);
+            let bdot = bx * nc + by * ns;
+            let cos2b = bdot * bdot / (bx * bx + by * by + f32::MIN_POSITIVE);
+            (bx * tx + by * ty - ct, cos2b)
+        };
+        let mut sums = [0.0f32; 4];
+        let mut add = |(u, cos2b): (f32, f32)| {
+            let uc = u * cos2b;
+            sums = [
+                sums[0] + u * u,
+                sums[1] + u * uc,
+                sums[2] + uc,
+                sums[3] + cos2b,
+            ];
+        };
+        let mut blocks = pts.chunks_exact(BLOCK);
+        for block in &mut blocks {
+            let mut t = [(0.0f32, 0.0f32); BLOCK];
+            for (t, p) in t.iter_mut().zip(block) {
+                *t = terms(p);
+            }
+            t.into_iter().for_each(&mut add);
+        }
+        blocks.remainder().iter().map(terms).for_each(&mut add);
+        let d = self.centroid.x * tx + self.centroid.y * ty;
+        self.covariance_from(sums, d, sigma_r)
+    }
+
     /// `covariance_range` for the points of consecutive `beams` from the origin (`ends`: the
     /// first and the last), with each point's lever and incidence taken where its beam meets
     /// the line (the same first-order propagation, evaluated at the fitted points instead of
@@ -585,3 +629,7 @@ mod tests {
         Ok(())
     }
 }
+
+#[cfg(test)]
+#[path = "line_block_tests.rs"]
+mod block_tests;

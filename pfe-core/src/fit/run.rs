@@ -104,23 +104,26 @@ fn two_lines(points: &[Point]) -> Option<(f32, (usize, f32))> {
     let hi = (apex.0 + REACH).min(n - 2);
     let o = *points.get(apex.0)?;
     let mut sums = [[0.0f32; 5]; 2 * REACH + 2];
-    let mut s = [0.0f32; 5];
-    for (i, p) in points.iter().enumerate() {
+    let add = |s: [f32; 5], p: &Point| {
         let (ex, ey) = (p.x - o.x, p.y - o.y);
-        s = [
+        [
             s[0] + ex,
             s[1] + ey,
             s[2] + ex * ex,
             s[3] + ey * ey,
             s[4] + ex * ey,
-        ];
-        // Prefix sums through lo − 1 ..= hi.
-        if i + 1 >= lo && i <= hi {
-            if let Some(slot) = sums.get_mut(i + 1 - lo) {
-                *slot = s;
-            }
-        }
+        ]
+    };
+    // The prefix sums through lo − 1 ..= hi are kept: the sums in three runs, no test a point
+    // outside them.
+    let (head, rest) = points.split_at_checked(lo - 1)?;
+    let (kept, tail) = rest.split_at_checked(hi + 2 - lo)?;
+    let mut s = head.iter().fold([0.0f32; 5], add);
+    for (slot, p) in sums.iter_mut().zip(kept) {
+        s = add(s, p);
+        *slot = s;
     }
+    let s = tail.iter().fold(s, add);
     let sse = |s: [f32; 5], m: usize| {
         let (_, [sxx, syy, sxy]) = centre(s, 1.0 / m as f32);
         smaller_eigenvalue(sxx, syy, sxy)

@@ -17,7 +17,7 @@ use crate::arc::arc_fit;
 use crate::classify;
 use crate::config::Config;
 use crate::feature::Feature;
-use crate::fit::line::fit_line;
+use crate::fit::line::{fit_line, LineFit};
 use crate::flags::{next_flag, Seek, END, JUMP, START};
 use crate::math;
 use crate::output::FeatureSink;
@@ -216,17 +216,18 @@ fn emit<const SCRUTINY: bool>(
     // The arc piece of a split around a pillar, typed already.
     let mut known: Option<(usize, usize, Option<Option<Feature>>)> = None;
     while let Some((s, e)) = todo.pop() {
-        let feature = match known.take() {
-            Some((ks, ke, f)) if (ks, ke) == (s, e) => f,
+        let (feature, fitted) = match known.take() {
+            Some((ks, ke, f)) if (ks, ke) == (s, e) => (f, None),
             other => {
                 known = other;
-                typed::<true>(pass, s, e, config)
+                typed_and_line(pass, s, e, config)
             }
         };
         let n = e + 1 - s;
-        // The segment's plain line fit, which the pillar and the corner search share.
+        // The segment's plain line fit (the typing's), which the pillar and the corner search
+        // share.
         let line = if todo.len() + 2 <= PIECES && matches!(feature, Some(Some(Feature::Line(_)))) {
-            pass.points.get(s..=e).and_then(|p| fit_line(p).ok())
+            fitted.or_else(|| pass.points.get(s..=e).and_then(|p| fit_line(p).ok()))
         } else {
             None
         };
@@ -376,6 +377,22 @@ fn typed<const SCRUTINY: bool>(
     config: &Config,
 ) -> Option<Option<Feature>> {
     (e + 1 - s >= config.min_points).then(|| classify::feature::<SCRUTINY>(pass, s, e, config))
+}
+
+/// [`typed`] with the checks for real scans, and the line fit of the segment's points when it
+/// was typed (`None` when short or when the fit failed).
+fn typed_and_line(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> (Option<Option<Feature>>, Option<LineFit>) {
+    if e + 1 - s >= config.min_points {
+        let (f, line) = classify::feature_and_line::<true>(pass, s, e, config);
+        (Some(f), line)
+    } else {
+        (None, None)
+    }
 }
 
 /// Marks the segment `s..=e` and stores its feature, counting what happened.
