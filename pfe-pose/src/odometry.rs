@@ -452,7 +452,11 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             let agrees = points.is_none_or(|c| {
                 agreement(&self.pts, c, &guess.compose(&reg.rel)).score() >= cfg.verify_track
             });
-            if tracked(&reg, &curr, &cfg) && agrees {
+            // With the points, a tracking the map leaves degenerate is not taken: it keeps
+            // the last motion along what the map cannot tell, and the pair's search along
+            // that direction by the points does better.
+            let degenerate = matches!(reg.status, Status::Degenerate { .. });
+            if tracked(&reg, &curr, &cfg) && agrees && !(points.is_some() && degenerate) {
                 self.last = curr.clone();
                 return self.accept(
                     &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
