@@ -572,7 +572,16 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                 // Not registered: the last motion again, its heading corrected by the
                 // directions of the lines, which the map (in the predicted pose's frame)
                 // and the scan share.
-                if let Some((d, var)) = heading(&map, &curr) {
+                // With the scans' points, the turn is taken only when they agree with it at
+                // least as well as with the last motion.
+                let turn = heading(&map, &curr).filter(|(d, _)| {
+                    points.is_none_or(|c| {
+                        let turned = guess.compose(&Pose::new(0.0, 0.0, *d));
+                        agreement(&self.pts, c, &turned).score()
+                            >= agreement(&self.pts, c, &guess).score()
+                    })
+                });
+                if let Some((d, var)) = turn {
                     rel = guess.compose(&Pose::new(0.0, 0.0, d));
                     rel_cov[2][2] = var;
                     for i in 0..2 {
