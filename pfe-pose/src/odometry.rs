@@ -36,7 +36,7 @@ use core::f32::consts::PI;
 
 use crate::geom::{compose_covariance, sin_cos, wrap, Cov3, Pose, Sym2, ZERO3};
 use crate::obs::{LineObs, Observation, PointObs};
-use crate::points::{agreement, complete, refine_on_key, RangeScan, SCAN_BEAMS};
+use crate::points::{agreement, complete, recheck, refine_on_key, RangeScan, SCAN_BEAMS};
 use crate::register::{
     register_sets, register_sets_verified, Assoc, Config, Status, NONE, ROTATION_SCALE,
     UNOBSERVABLE_VARIANCE,
@@ -341,10 +341,32 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
     ) -> Step {
         let scan = self.scans;
         self.scans = self.scans.saturating_add(1);
-        let old = self.pose;
+        let (old, old_cov, old_last) = (self.pose, self.cov, self.last_rel);
         let mut step = self.update_inner(curr, curr_pts, motion, cfg, scan);
         match curr_pts {
             Some(c) if !c.is_empty() => {
+                // A step the points contradict is looked at again from the last motion and
+                // no motion; a better answer replaces it and restarts the map from this scan
+                // (the features were fused into it at the contradicted pose).
+                if let Some(r) = (scan > 0)
+                    .then(|| recheck(&self.pts, c, &step.rel, &old_last))
+                    .flatten()
+                {
+                    step.rel = r.pose;
+                    step.rel_cov = r.cov;
+                    step.status = match r.unobservable {
+                        Some(direction) => Status::Degenerate { direction },
+                        None => Status::Ok,
+                    };
+                    step.pose = old.compose(&r.pose);
+                    step.cov = compose_covariance(&old, &old_cov, &r.pose, &r.cov);
+                    self.pose = step.pose;
+                    self.cov = step.cov;
+                    self.last_rel = r.pose;
+                    let curr = self.last.clone();
+                    self.n = 0;
+                    self.insert_all(&curr, &Assoc::new(), &step.pose, scan);
+                }
                 // The pose refined against the key scan's points; the key moves on to this
                 // scan when they no longer refine it.
                 let keep = !self.key.is_empty()
@@ -430,7 +452,11 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             let agrees = points.is_none_or(|c| {
                 agreement(&self.pts, c, &guess.compose(&reg.rel)).score() >= cfg.verify_track
             });
-            if tracked(&reg, &curr, &cfg) && agrees {
+            // With the points, a tracking the map leaves degenerate is not taken: it keeps
+            // the last motion along what the map cannot tell, and the pair's search along
+            // that direction by the points does better.
+            let degenerate = matches!(reg.status, Status::Degenerate { .. });
+            if tracked(&reg, &curr, &cfg) && agrees && !(points.is_some() && degenerate) {
                 self.last = curr.clone();
                 return self.accept(
                     &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
@@ -546,7 +572,16 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                 // Not registered: the last motion again, its heading corrected by the
                 // directions of the lines, which the map (in the predicted pose's frame)
                 // and the scan share.
-                if let Some((d, var)) = heading(&map, &curr) {
+                // With the scans' points, the turn is taken only when they agree with it at
+                // least as well as with the last motion.
+                let turn = heading(&map, &curr).filter(|(d, _)| {
+                    points.is_none_or(|c| {
+                        let turned = guess.compose(&Pose::new(0.0, 0.0, *d));
+                        agreement(&self.pts, c, &turned).score()
+                            >= agreement(&self.pts, c, &guess).score()
+                    })
+                });
+                if let Some((d, var)) = turn {
                     rel = guess.compose(&Pose::new(0.0, 0.0, d));
                     rel_cov[2][2] = var;
                     for i in 0..2 {

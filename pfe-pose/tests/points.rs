@@ -4,7 +4,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use pfe_core::ScanGeometry;
-use pfe_pose::points::{agreement, icp, register_scans, RangeScan, SCAN_BEAMS};
+use pfe_pose::points::{agreement, icp, recheck, register_scans, RangeScan, SCAN_BEAMS};
 use pfe_pose::{
     wrap, Config, Cov3, LineObs, Observation, PointOdometry, Pose, Status, UNOBSERVABLE_VARIANCE,
 };
@@ -492,4 +492,27 @@ fn odometry_key_scan_keeps_the_error_of_one_registration() {
     let (pose, _) = odo.pose();
     let e = error(&pose, &start.inverse().compose(&truth));
     assert!(e[0].hypot(e[1]) < 1.5 && e[2].abs() < 0.0014, "{e:?}");
+}
+
+/// A step the points contradict (a quarter turn off, 0.9 m off) is found again by
+/// `recheck` from a last motion far from it (a turn on the spot), within 30 mm and 0.6° of the
+/// truth; a step they agree with is left alone.
+#[test]
+fn recheck_replaces_a_step_the_points_contradict() {
+    let world = room();
+    let mut rng = Rng(51);
+    let p0 = Pose::new(-1800.0, -200.0, 0.1);
+    let truth = Pose::new(900.0, 150.0, 0.25);
+    let a = ranges(&scan(&world, &p0, &mut rng));
+    let b = ranges(&scan(&world, &p0.compose(&truth), &mut rng));
+    let last = Pose::new(0.0, 0.0, -0.3);
+    for wrong in [Pose::new(900.0, 150.0, 1.82), Pose::new(0.0, 0.0, 0.25)] {
+        let r = recheck(&a, &b, &wrong, &last).expect("rechecked");
+        let e = error(&r.pose, &truth);
+        assert!(
+            e[0].hypot(e[1]) < 30.0 && e[2].abs() < 0.0105,
+            "{wrong:?}: {r:?}"
+        );
+    }
+    assert!(recheck(&a, &b, &truth, &last).is_none());
 }

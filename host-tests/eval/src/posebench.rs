@@ -17,7 +17,9 @@
 //! Diagnostics (environment): `PFE_POSE_CFG="name=value,..."` overrides registration
 //! settings; `BENCH_VERBOSE=1` prints each failing pair with the registration seeded at the
 //! reference; `BENCH_DUMP=K` dumps pair K's features and ranges; `BENCH_ODO=1` and
-//! `BENCH_ODO_STEP=1` compare odometry steps with the pairs.
+//! `BENCH_ODO_STEP=1` compare odometry steps with the pairs; `BENCH_TRACK=DIR` writes each
+//! log's odometry track (`DIR/LOG.tsv`: scan, odometry pose, reference pose, status, the
+//! pair's registration and its status) for the analysis of its windows.
 #![allow(clippy::needless_range_loop)]
 
 use std::fmt::Write as _;
@@ -240,6 +242,8 @@ pub fn run_log_with(
     // PL-ICP from the noisy prior, chained (its answer, or the prior where it gives none).
     let mut icp_chain = Pose::IDENTITY;
     let mut icp_track: Vec<Pose> = Vec::new();
+    let track_dir = std::env::var_os("BENCH_TRACK").map(PathBuf::from);
+    let mut track_tsv = String::new();
     for record in pfe_formats::scans(Format::Carmen, input).take(max_pairs.saturating_add(1)) {
         let record =
             record.map_err(|e| anyhow::Error::new(e).context(path.display().to_string()))?;
@@ -324,6 +328,29 @@ pub fn run_log_with(
                 chained = chained.compose(&r.rel);
             }
             track.push((step.pose, rec.pose, chained));
+            if track_dir.is_some() {
+                let (pr, ps) = reg
+                    .map_or((Pose::new(f32::NAN, f32::NAN, f32::NAN), "-".into()), |r| {
+                        (r.rel, format!("{:?}", r.status).replace(' ', ""))
+                    });
+                let (e, p) = (step.pose, rec.pose);
+                let _ = writeln!(
+                    track_tsv,
+                    "{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}",
+                    track.len() - 1,
+                    e.x,
+                    e.y,
+                    e.theta,
+                    p.x,
+                    p.y,
+                    p.theta,
+                    format!("{:?}", step.status).replace(' ', ""),
+                    pr.x,
+                    pr.y,
+                    pr.theta,
+                    ps
+                );
+            }
         }
         st.seconds += t0.elapsed().as_secs_f64();
         let points: Vec<[f64; 2]> = if baseline {
@@ -488,6 +515,11 @@ pub fn run_log_with(
             st.last = None;
         }
         prev = Some((obs, rec.pose));
+    }
+    if let Some(dir) = track_dir.filter(|_| odometry) {
+        let file = dir.join(format!("{}.tsv", log_name(path)));
+        std::fs::write(&file, &track_tsv)
+            .with_context(|| format!("{}: cannot write", file.display()))?;
     }
     // Odometry windows of 50 scans (start every 25).
     if odometry {

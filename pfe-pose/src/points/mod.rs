@@ -8,9 +8,11 @@
 //! previous scan saw through (free space), which no static scene allows.
 
 mod icp;
+mod recover;
 mod search;
 
 pub use icp::{icp, IcpResult, ICP_CORRELATION};
+pub use recover::{recheck, RECHECK_BELOW};
 pub use search::refine_on_key;
 
 use crate::geom::{hypot, sin_cos, Pose};
