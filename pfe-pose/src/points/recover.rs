@@ -33,7 +33,7 @@ const REFINED: usize = 8;
 
 /// The step `rel` (the current scan's pose in the previous scan's frame) looked at again when
 /// the two scans' points agree less than [`RECHECK_BELOW`] under it: [`icp`] from `last` (the
-/// last motion) and from the [`REFINED`] motions of a grid (headings 5° apart up to ±40°
+/// last motion) and from the best 8 (`REFINED`) motions of a grid (headings 5° apart up to ±40°
 /// from the last motion's,
 /// translations 0.5 m apart from 0.5 m back to 2 m forward and 1 m either side) under which
 /// the points agree best; the best answer (the last motion's unless another agrees clearly
