@@ -31,10 +31,6 @@ const CURVED_CHI2: f32 = 6.63;
 const CURVED_FIT: f32 = 1.5;
 /// Largest radius of the circle that shows a run curved, mm.
 const CURVED_MAX_RADIUS: f32 = 1000.0;
-/// What the best two-line split of a segment may beat its circle by, in σ_r², and the circle
-/// still be taken when it faces the scanner: the split has more parameters (a second line and
-/// where they meet) than the circle.
-const SPLIT_PARAMS: f32 = 4.0;
 
 /// Whether the points `pts` of a segment typed a line are curved instead (in the default
 /// mode): a circle of at most [`CURVED_MAX_RADIUS`] explains them to the noise and
@@ -222,26 +218,9 @@ fn circle_of<const SCRUTINY: bool>(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| {
-                    // The split's extra parameters are allowed for only for an arc that faces
-                    // the scanner, as a pillar's does: the inside of a rounded corner must
-                    // beat its two lines outright.
-                    let margin = if faces_scanner(pts, c) {
-                        -SPLIT_PARAMS * var
-                    } else {
-                        0.0
-                    };
-                    !SCRUTINY || is_arc(pts, c, *sse_c, margin)
-                })
+                .filter(|(c, sse_c)| !SCRUTINY || is_arc(pts, c, *sse_c, 0.0))
         }
     }
-}
-
-/// Whether the arc of `pts` on `circle` faces the scanner (the circle's centre farther from
-/// the scan's origin than the arc's middle point, as a pillar's is).
-fn faces_scanner(pts: &[Point], circle: &Circle) -> bool {
-    pts.get(pts.len() / 2)
-        .is_some_and(|m| math::hypot(circle.center.x, circle.center.y) > math::hypot(m.x, m.y))
 }
 
 /// Whether `circle` (residual sum `sse_c`) is an arc really there: enough points, an arc of
