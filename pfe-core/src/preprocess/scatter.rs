@@ -409,17 +409,7 @@ fn chord_residual(a: Point, m: Point, b: Point) -> Option<f32> {
 /// `|den|` with an infinite or NaN bound, and fails.
 #[inline(always)]
 fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
-    let (cx, cy) = (b.x - a.x, b.y - a.y);
-    let chord = math::sqrt(cx * cx + cy * cy);
-    // The sine of the beam's angle to the chord, times r·chord.
-    let den = m.x * cy - m.y * cx;
-    if !(math::abs(den) > MIN_SINE * r * chord) {
-        return None;
-    }
-    // Beam direction m / r meets the chord at s = (a × b) / (d × c).
-    let s = (a.x * b.y - a.y * b.x) * r / den;
-    let e = r - s;
-    math::finite(e).then_some(e)
+    residual_or_not_finite(a, m, b, r).filter(|e| math::finite(*e))
 }
 
 /// [`residual_at`] without its finiteness test: `e` when it is a residual, or not finite
@@ -428,10 +418,12 @@ fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
 fn residual_or_not_finite(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
     let (cx, cy) = (b.x - a.x, b.y - a.y);
     let chord = math::sqrt(cx * cx + cy * cy);
+    // The sine of the beam's angle to the chord, times r·chord.
     let den = m.x * cy - m.y * cx;
     if !(math::abs(den) > MIN_SINE * r * chord) {
         return None;
     }
+    // Beam direction m / r meets the chord at s = (a × b) / (d × c).
     let s = (a.x * b.y - a.y * b.x) * r / den;
     Some(r - s)
 }
