@@ -585,6 +585,10 @@ impl Evidence {
 }
 
 #[cfg(test)]
+#[path = "interleave_leverage.rs"]
+mod leverage;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 

@@ -162,3 +162,7 @@ fn peak(pts: &[Point], mut line: LineFit, config: &Config) -> Option<(usize, usi
     }
     Some((i, j))
 }
+
+#[cfg(all(test, feature = "libm"))]
+#[path = "split_tests.rs"]
+mod tests;

@@ -1,0 +1,60 @@
+//! [`bump`]'s first test at its bound: a line is searched for a bump only when its residual
+//! sum exceeds the noise's, `σ_r² (n − 2)`; equal is not enough.
+#![allow(clippy::indexing_slicing)]
+
+use super::*;
+use crate::rule::Rule;
+
+/// Points every 10 mm along a wall 2 m ahead, over 5 130 mm centred on the bearing 0, with a
+/// pillar of `radius` mm standing out of it (its centre on the wall line).
+fn pillar_on_wall(radius: f32) -> [Point; 514] {
+    core::array::from_fn(|k| {
+        let x = -2565.0 + 10.0 * k as f32;
+        let bulge = if x.abs() < radius {
+            libm::sqrtf(radius * radius - x * x)
+        } else {
+            0.0
+        };
+        Point::new(x, 2000.0 - bulge)
+    })
+}
+
+fn bump_at(pts: &[Point], line: &LineFit, sigma_r: f32) -> Option<(usize, usize)> {
+    let config = Config::default().with_sigma_r(sigma_r);
+    let rule = Rule::new(&config, 8000.0, 0.02);
+    bump(pts, line, rule.noise()?, &config)
+}
+
+/// The σ_r near √(sse / (n − 2)) whose `σ_r² (n − 2)` is `sse` in f32, if one is.
+fn tie(sse: f32, n: usize) -> Option<f32> {
+    let s0 = libm::sqrtf(sse / (n as f32 - 2.0));
+    (-8i32..=8)
+        .map(|k| f32::from_bits(s0.to_bits().wrapping_add_signed(k)))
+        .find(|&s| s * s * (n as f32 - 2.0) == sse)
+}
+
+/// A pillar against a wall, the σ_r set so that the noise's residual sum equals the line's
+/// exactly: not searched. One f32 step lower in σ_r (the line's sum beyond the noise's), the
+/// bump is found: the pillar's points (x within ±100 mm: 247 to 266) and no more than the
+/// 150 mm of wall beside it that lie within 3 σ_r of its circle.
+#[test]
+fn a_line_whose_residual_sum_equals_the_noises_is_not_searched_for_a_bump() {
+    // Radii a little apart until one gives an exact tie (the squares of f32 σ_r hit about
+    // every other f32; 512 = n − 2 scales exactly).
+    let found = (0..32).find_map(|k| {
+        let pts = pillar_on_wall(100.0 + 0.25 * k as f32);
+        let line = fit_line(&pts).ok()?;
+        Some((pts, line, tie(line.sse(), pts.len())?))
+    });
+    let Some((pts, line, sigma_r)) = found else {
+        panic!("no exact tie");
+    };
+    assert!(sigma_r > 10.0 && sigma_r < 40.0, "{sigma_r}");
+    assert_eq!(bump_at(&pts, &line, sigma_r), None);
+    let below = f32::from_bits(sigma_r.to_bits() - 1);
+    let found = bump_at(&pts, &line, below);
+    assert!(
+        matches!(found, Some((i, j)) if i <= 247 && j >= 266 && i >= 232 && j <= 281),
+        "{found:?}"
+    );
+}
