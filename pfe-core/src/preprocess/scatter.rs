@@ -550,6 +550,10 @@ fn quantile_bin(hist: &[u16; BINS], half: f32) -> f32 {
 }
 
 #[cfg(test)]
+#[path = "scatter_bins.rs"]
+mod bins;
+
+#[cfg(test)]
 mod tests {
     use super::*;
 
