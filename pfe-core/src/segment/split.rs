@@ -163,6 +163,6 @@ fn peak(pts: &[Point], mut line: LineFit, config: &Config) -> Option<(usize, usi
     Some((i, j))
 }
 
-#[cfg(all(test, feature = "libm"))]
+#[cfg(test)]
 #[path = "split_tests.rs"]
 mod tests;

@@ -11,7 +11,7 @@ fn pillar_on_wall(radius: f32) -> [Point; 514] {
     core::array::from_fn(|k| {
         let x = -2565.0 + 10.0 * k as f32;
         let bulge = if x.abs() < radius {
-            libm::sqrtf(radius * radius - x * x)
+            math::sqrt(radius * radius - x * x)
         } else {
             0.0
         };
@@ -27,7 +27,7 @@ fn bump_at(pts: &[Point], line: &LineFit, sigma_r: f32) -> Option<(usize, usize)
 
 /// The σ_r near √(sse / (n − 2)) whose `σ_r² (n − 2)` is `sse` in f32, if one is.
 fn tie(sse: f32, n: usize) -> Option<f32> {
-    let s0 = libm::sqrtf(sse / (n as f32 - 2.0));
+    let s0 = math::sqrt(sse / (n as f32 - 2.0));
     (-8i32..=8)
         .map(|k| f32::from_bits(s0.to_bits().wrapping_add_signed(k)))
         .find(|&s| s * s * (n as f32 - 2.0) == sse)
