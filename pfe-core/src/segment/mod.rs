@@ -361,7 +361,7 @@ fn curved_object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option
     let (a, b) = (pts.first()?, pts.last()?);
     if !(a.distance(b) <= sift::OBJECT_MAX_MM)
         || !sift::isolated(pass, s, e)
-        || !classify::curved(pts, config)
+        || !classify::curved(pass, s, pts, config)
     {
         return None;
     }
