@@ -32,21 +32,25 @@ const CURVED_FIT: f32 = 1.5;
 /// Largest radius of the circle that shows a run curved, mm.
 const CURVED_MAX_RADIUS: f32 = 1000.0;
 
-/// Whether the points `pts` of a segment typed a line are curved instead (in the default
-/// mode): a circle of at most [`CURVED_MAX_RADIUS`] explains them to the noise and
+/// Whether the points `pts` of the segment from beam `s` typed a line are curved instead (in
+/// the default mode): a circle of at most [`CURVED_MAX_RADIUS`] explains them to the noise and
 /// significantly better than the line, though not by as much as the typing asks of a circle
-/// (too few points or too short an arc for one): a pillar seen over a few beams. The caller
+/// (too few points or too short an arc for one): a pillar seen over a few beams. The noise is
+/// the range noise's share along the line's normal ([`mean_cos2`]): a pillar's side seen
+/// obliquely bends by less than σ_r, but by far more than the noise across it. The caller
 /// reports such a run, when it is small, as an object rather than a line.
-pub(crate) fn curved(pts: &[Point], config: &Config) -> bool {
+pub(crate) fn curved(pass: &Pass<'_>, s: usize, pts: &[Point], config: &Config) -> bool {
     if !matches!(config.typing, Typing::CompareFits { .. }) || pts.len() < 4 {
         return false;
     }
-    let var = config.sigma_r * config.sigma_r;
     let Ok(line) = fit_line(pts) else {
         return false;
     };
+    let normal = Point::new(line.cos_alpha, line.sin_alpha);
+    let var = config.sigma_r * config.sigma_r;
+    let var_l = var * mean_cos2(pass, s, pts, |_| normal);
     let sse_l = line.sse();
-    if !(sse_l > CURVED_CHI2 * var) {
+    if !(sse_l > CURVED_CHI2 * var_l) {
         return false;
     }
     let Some((c, sse_c)) = fit_circle(pts, config.circle_method)
@@ -57,7 +61,7 @@ pub(crate) fn curved(pts: &[Point], config: &Config) -> bool {
     };
     let dof = pts.len().saturating_sub(3).max(1) as f32;
     c.radius <= CURVED_MAX_RADIUS
-        && sse_l - sse_c > CURVED_CHI2 * var
+        && sse_l - sse_c > CURVED_CHI2 * var_l
         && sse_c <= CURVED_FIT * var * dof
 }
 
