@@ -204,8 +204,9 @@ fn circle_of<const SCRUTINY: bool>(
             let algebraic = (sse_l > chi2 * var && sse_l > 1.5 * var * pts.len() as f32)
                 .then(|| fit_circle(pts, config.circle_method).ok())
                 .flatten()
+                .filter(|c| c.radius <= 1.5 * max_radius)
                 .map(|c| (c, NormalEquations::at(pts, &c)))
-                .filter(|(c, eq)| c.radius <= 1.5 * max_radius && eq.sse < 2.0 * ratio * sse_l);
+                .filter(|(_, eq)| eq.sse < 2.0 * ratio * sse_l);
             algebraic
                 .and_then(|(c, eq)| {
                     if config.circle_refine > 0 {

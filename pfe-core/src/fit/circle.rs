@@ -337,9 +337,14 @@ pub(crate) fn refine_from(
                 center: Point::new(best.center.x - step[0], best.center.y - step[1]),
                 radius: best.radius - step[2],
             };
+            // A candidate of no positive radius is never taken: not summed.
+            if !(cand.radius > 0.0) {
+                lambda *= 10.0;
+                continue;
+            }
             let at_cand = NormalEquations::at(points, &cand);
             let sse = at_cand.sse;
-            if math::finite(sse) && sse < eq.sse && cand.radius > 0.0 {
+            if math::finite(sse) && sse < eq.sse {
                 let gain = eq.sse - sse;
                 best = cand;
                 eq = at_cand;

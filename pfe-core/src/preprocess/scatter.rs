@@ -190,12 +190,14 @@ impl Scatter {
     #[cfg_attr(not(feature = "std"), allow(dead_code))]
     fn of_blocks(points: &[Point], sigma_r: f32) -> Self {
         let n = points.len();
-        if n < 5 {
+        // Up to `u16::MAX` points no bin saturates, so the counts need no saturating add.
+        if n < 5 || n > usize::from(u16::MAX) {
             return Self::of_stream(points, sigma_r);
         }
-        // One bin more than [`count`] fills: [`NONE`], where no residual goes.
-        let (mut one, mut two) = ([0u16; BINS + 1], [0u16; BINS + 1]);
-        let (mut n1, mut n2) = (0usize, 0usize);
+        // Twice the bins [`count`] fills, so that a bin masked to them needs no bounds test:
+        // [`NONE`], where no residual goes, is the first past them.
+        let (mut one, mut two) = ([0u16; 2 * BINS], [0u16; 2 * BINS]);
+        let mut n1 = 0usize;
         let scale = PER_SIGMA / sigma_r;
         let (head, _) = one.split_at_mut(BINS);
         if let Ok(head) = <&mut [u16; BINS]>::try_from(head) {
@@ -219,20 +221,29 @@ impl Scatter {
                 .unwrap_or_default();
             residual_bins(block, scale, (&mut bins.0, &mut bins.1));
             let windows = block.len() - 4;
-            for (&a, &b) in bins.0.iter().zip(&bins.1).take(windows) {
-                // As `count` counts: saturating, and only residuals.
-                if let Some(h) = one.get_mut(usize::from(a)) {
-                    *h = h.saturating_add(1);
+            let (b1, b2) = (
+                bins.0.get(..windows).unwrap_or_default(),
+                bins.1.get(..windows).unwrap_or_default(),
+            );
+            // As `count` counts (below `u16::MAX` points it never saturates), into `NONE`
+            // where there is no residual.
+            for (&a, &b) in b1.iter().zip(b2) {
+                // The mask keeps every bin (and `NONE`) and proves the index in bounds.
+                if let Some(h) = one.get_mut(usize::from(a) & (2 * BINS - 1)) {
+                    *h = h.wrapping_add(1);
                 }
-                if let Some(h) = two.get_mut(usize::from(b)) {
-                    *h = h.saturating_add(1);
+                if let Some(h) = two.get_mut(usize::from(b) & (2 * BINS - 1)) {
+                    *h = h.wrapping_add(1);
                 }
-                n1 += usize::from(a != NONE);
-                n2 += usize::from(b != NONE);
             }
             from += BLOCK;
         }
-        let at = |hist: &[u16; BINS + 1], n| {
+        // Every window of five gave a bin or `NONE`.
+        let windows = n - 4;
+        let none =
+            |hist: &[u16; 2 * BINS]| usize::from(hist.get(usize::from(NONE)).copied().unwrap_or(0));
+        let (n1, n2) = (n1 + windows - none(&one), windows - none(&two));
+        let at = |hist: &[u16; 2 * BINS], n| {
             let (head, _) = hist.split_at(BINS);
             <&[u16; BINS]>::try_from(head)
                 .ok()

@@ -90,7 +90,10 @@ pub(super) fn bump(
                 })
         })?;
     // Grown while the next point lies on the circle, the circle fitted again to what it grew
-    // to: a circle fitted to part of an arc strays from the rest.
+    // to: a circle fitted to part of an arc strays from the rest. `grown` is the arc test of
+    // `i..=j` (`circle` until one fails: the same points give the same circle, so neither an
+    // ungrown run nor the final one is tested again).
+    let mut grown = Some(circle);
     for _ in 0..BUMP_GROW_ROUNDS {
         let on = |k: usize| {
             pts.get(k).is_some_and(|p| {
@@ -105,15 +108,18 @@ pub(super) fn bump(
         while j + 1 < n && on(j + 1) {
             j += 1;
         }
-        match arc_of((i, j)) {
-            Some((_, _, c)) if (i, j) != (i0, j0) => circle = c,
-            _ => break,
+        if (i, j) == (i0, j0) {
+            break;
+        }
+        grown = arc_of((i, j)).map(|(_, _, c)| c);
+        match grown {
+            Some(c) => circle = c,
+            None => break,
         }
     }
     (j + 1 - i >= *MERGE_SIZES.start()
         && (i > 0 || j + 1 < n)
-        && arc_fit(pts.get(i..=j)?, rule)
-            .is_some_and(|c| facing(pts.get(i..=j).unwrap_or(&[]), &c)))
+        && grown.is_some_and(|c| facing(pts.get(i..=j).unwrap_or(&[]), &c)))
     .then_some((i, j))
 }
 
