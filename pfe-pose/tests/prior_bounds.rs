@@ -1,6 +1,8 @@
 //! The motion bounds hold around a prior too: a prior wider than them (the odometry's search
 //! after a scan nothing registered takes them as its σ) never yields an answer beyond them.
 
+use core::f32::consts::{FRAC_PI_2, PI};
+
 use pfe_pose::{register_with, Config, LineObs, Observation, PointObs, Pose, Status};
 
 /// A hall's four walls (α, ρ in the hall's frame) and three pillars, seen from `pose`.
@@ -8,9 +10,9 @@ fn hall(pose: &Pose) -> Vec<Observation> {
     let inv = pose.inverse();
     let walls = [
         (0.0f32, 9000.0f32),
-        (1.5708, 7000.0),
-        (3.1416, 8000.0),
-        (-1.5708, 6000.0),
+        (FRAC_PI_2, 7000.0),
+        (PI, 8000.0),
+        (-FRAC_PI_2, 6000.0),
     ];
     let pillars = [[2000.0f32, 1500.0], [-3000.0, -2500.0], [4500.0, -1000.0]];
     let mut o: Vec<Observation> = walls
