@@ -19,7 +19,8 @@
 //! reference; `BENCH_DUMP=K` dumps pair K's features and ranges; `BENCH_ODO=1` and
 //! `BENCH_ODO_STEP=1` compare odometry steps with the pairs; `BENCH_TRACK=DIR` writes each
 //! log's odometry track (`DIR/LOG.tsv`: scan, odometry pose, reference pose, status, the
-//! pair's registration and its status) for the analysis of its windows.
+//! pair's registration and its status) for the analysis of its windows; `BENCH_NIS=1` prints
+//! each "ok" pair's error, stated covariance, NIS, matches, χ² and the path that gave it.
 #![allow(clippy::needless_range_loop)]
 
 use std::fmt::Write as _;
@@ -507,6 +508,34 @@ pub fn run_log_with(
                     c[2][2] += 0.4f64.to_radians().powi(2);
                     if let Some(v) = nis(&c, &e) {
                         st.nis.push(v);
+                    }
+                    if std::env::var_os("BENCH_NIS").is_some() {
+                        // Which path gave the answer: the features' own registration
+                        // ("feat"), its pose polished by the points ("polish") or another
+                        // (the ICP's covariance, "icp").
+                        let f = prev
+                            .as_ref()
+                            .map(|(p, _)| register_with(p, &obs, None, &pose_cfg));
+                        let path_name = match f {
+                            Some(f) if f.rel == reg.rel && f.cov == reg.cov => "feat",
+                            Some(f) if f.cov == reg.cov => "polish",
+                            _ => "icp",
+                        };
+                        let r = &reg.cov;
+                        eprintln!(
+                            "NIS {} {} {:.2} {:.2} {:.5} {:.3} {:.3} {:.6} {:.3} {:.6} {:.9} {:.3} {} {} {:.2} {}",
+                            st.pairs, u8::from(bad), e[0], e[1], e[2],
+                            r[0][0], r[0][1], r[0][2], r[1][1], r[1][2], r[2][2],
+                            nis(&c, &e).unwrap_or(f64::INFINITY),
+                            reg.matches.0, reg.matches.1, reg.chi2, path_name
+                        );
+                        // The scans were swapped after the registration: `curr_pts` is the
+                        // previous scan's.
+                        eprintln!(
+                            "AGR {} {:.3}",
+                            st.pairs,
+                            agreement(&curr_pts, &prev_pts, &reg.rel).score()
+                        );
                     }
                 }
             }

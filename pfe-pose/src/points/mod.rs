@@ -306,9 +306,30 @@ pub(crate) fn complete<const N: usize>(
 ) -> crate::Registration {
     let reg = complete_from(reg, prev_pts, curr_pts, guess, cfg);
     if reg.is_registered() {
-        polish(search_along(reg, prev_pts, curr_pts), prev_pts, curr_pts)
+        let reg = polish(search_along(reg, prev_pts, curr_pts), prev_pts, curr_pts);
+        widen(reg, agreement(prev_pts, curr_pts, &reg.rel).score())
     } else {
         reg
+    }
+}
+
+/// The least agreement [`widen`] divides by: an "ok" answer's covariance grows at most
+/// fourfold.
+const WIDEN_FLOOR: f32 = 0.25;
+
+/// An "ok" answer's covariance divided by its points' agreement `score` (at least
+/// [`WIDEN_FLOOR`], at most 1). The features' and the ICP's covariances take every match as
+/// a static surface seen in both scans; where only a fraction of the points agree with the
+/// answer (people walking by, surfaces seen in one scan only, no returns), only that fraction
+/// supports it, and its errors were measured larger in that proportion.
+pub(crate) fn widen(reg: crate::Registration, score: f32) -> crate::Registration {
+    if !matches!(reg.status, crate::Status::Ok) || !(score < 1.0) {
+        return reg;
+    }
+    let k = 1.0 / score.max(WIDEN_FLOOR);
+    crate::Registration {
+        cov: reg.cov.map(|r| r.map(|v| v * k)),
+        ..reg
     }
 }
 

@@ -141,7 +141,12 @@ pub(super) fn hypothesise<'s>(
                 pose.y - p.pose.y,
                 wrap(pose.theta - p.pose.theta),
             ];
+            // The bounds hold around the prior too: a prior wider than them (the odometry's
+            // search after a scan nothing registered takes them as its σ, a 99.9 % gate of
+            // 12 m) does not reach beyond what one scan can move.
             quad3(&p.gate_info, &d) < cfg.prior_gate
+                && within_translation(d[0], d[1], cfg.max_translation, square)
+                && d[2].abs() <= cfg.max_rotation
         }
         None => {
             within_translation(pose.x, pose.y, cfg.max_translation, square)

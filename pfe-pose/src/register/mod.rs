@@ -7,8 +7,9 @@
 //!    distance fixes both too, and so does a line with a point. Only when none of these exist
 //!    (a corridor), single lines give the rotation and the translation across them, with none
 //!    along them. With a prior, the prior's pose is a hypothesis too and every hypothesis must
-//!    lie within its covariance (χ²₃ < [`Config::prior_gate`]); without one, the motion bounds
-//!    [`Config::max_translation`] and [`Config::max_rotation`] apply. Pairs of lines are
+//!    lie within its covariance (χ²₃ < [`Config::prior_gate`]) and within the motion bounds
+//!    [`Config::max_translation`] and [`Config::max_rotation`] of its pose (without a prior:
+//!    of no motion). Pairs of lines are
 //!    matched through the angle between them (the current scan's pairs sorted by it, each
 //!    previous pair looked up within its gate). The hypotheses formed are **voted** into
 //!    clusters of nearby poses (the right pose comes from many pairs of features); the
@@ -82,9 +83,9 @@ const ITERATIONS: usize = 10;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[non_exhaustive]
 pub struct Config {
-    /// Largest translation between two scans considered without a prior, mm.
+    /// Largest translation between two scans considered (from the prior's pose, if any), mm.
     pub max_translation: f32,
-    /// Largest rotation between two scans considered without a prior, rad.
+    /// Largest rotation between two scans considered (from the prior's pose, if any), rad.
     pub max_rotation: f32,
     /// Model noise added to every line: (σ_α rad, σ_ρ mm). Covers what the range noise does
     /// not: walls that are not perfectly straight, partial views, the extraction's choices.
