@@ -102,3 +102,33 @@ fn a_map_answer_the_points_contradict_is_not_ok() {
         step.pose
     );
 }
+
+/// The same turn with the features seen from the truth: the map's search finds it, the points
+/// agree, and it is taken ("ok", within 50 mm and 0.01 rad).
+#[test]
+fn a_map_answer_the_points_confirm_is_taken() {
+    let mut rng = Rng(41);
+    let mut odo = Box::new(PointOdometry::new_default());
+    let p0 = Pose::IDENTITY;
+    odo.update_with_points(
+        &lines(&[0, 1, 2, 3, 4, 5, 6], &p0),
+        &ranges(&p0, &mut rng),
+        None,
+    );
+    let p1 = Pose::new(150.0, 0.0, 0.02);
+    odo.update_with_points(&lines(&[0, 1, 2], &p1), &ranges(&p1, &mut rng), None);
+    let truth = p1.compose(&Pose::new(300.0, 100.0, 1.0));
+    let step = odo.update_with_points(
+        &lines(&[3, 4, 5, 6], &truth),
+        &ranges(&truth, &mut rng),
+        None,
+    );
+    let e = (step.pose.x - truth.x).hypot(step.pose.y - truth.y);
+    let et = wrap(step.pose.theta - truth.theta).abs();
+    assert_eq!(step.status, Status::Ok);
+    assert!(
+        e < 50.0 && et < 0.01,
+        "{:?}: {e} mm, {et} rad off",
+        step.pose
+    );
+}
