@@ -19,7 +19,8 @@
 //! disagrees with the pair's beyond both covariances (χ²₃ 99.9 %: a wrong map match), the
 //! pair's result is taken and the map restarts from this scan. When the pair did not register
 //! either, the map is searched from the last motion; an answer that leaves a direction
-//! undetermined is refused (from so wide a search it is a guess), and then the scan is not
+//! undetermined is refused (from so wide a search it is a guess), and so is, with the scans'
+//! points, one they agree with less than [`Config::verify_accept`]; then the scan is not
 //! registered ([`Status::None`]): its pose is the prediction (the last motion again, turned by
 //! the heading the directions of its lines and the map's agree on, when at least two do) and
 //! the map is **kept**, so that the next scan re-localises against it.

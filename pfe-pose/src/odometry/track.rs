@@ -175,12 +175,21 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
         // determines every direction, a degenerate one from such a wide search is a guess.
         let map_only_degenerate =
             !pair.is_registered() && matches!(reg.status, Status::Degenerate { .. });
-        if !reg.is_registered() || disagree || map_only_degenerate {
+        // With the scans' points, such an answer is also refused when they agree with it less
+        // than a pair's ICP answer must (`verify_accept`): the map matched features wrongly.
+        // The points' second look (`recheck`) then starts from the prediction.
+        let map_only_refuted = !pair.is_registered()
+            && reg.is_registered()
+            && points.is_some_and(|c| {
+                !(agreement(&self.pts, c, &guess.compose(&reg.rel)).score() >= cfg.verify_accept)
+            });
+        let map_only_refused = map_only_degenerate || map_only_refuted;
+        if !reg.is_registered() || disagree || map_only_refused {
             // Not against the map: take the pair's registration (or the prediction) and
             // restart the map from this scan.
             let (mut rel, mut rel_cov, status) = if pair.is_registered() {
                 (pair.rel, pair.cov, pair.status)
-            } else if map_only_degenerate {
+            } else if map_only_refused {
                 (guess, guess_cov, Status::None(crate::Failure::NoConsensus))
             } else {
                 (guess, guess_cov, reg.status)

@@ -237,10 +237,12 @@ fn one_way<const N: usize>(onto: &RangeScan<N>, from: &RangeScan<N>, pose: &Pose
 /// [`crate::register_with`] verified and completed by the scans' points: among the refined
 /// hypotheses the one whose points agree best wins when the features' winner's agree clearly
 /// less ([`crate::Config::verify_margin`]); when the features do not register the pair, or
-/// their answer's points agree less than [`crate::Config::verify_accept`], a point-to-line
+/// their answer's points agree less than [`crate::Config::verify_keep`], a point-to-line
 /// ICP ([`icp`]) from that answer, from `guess` (the last motion, say) and from no motion is
-/// tried, and its best answer is taken if its points agree at least that well (and better
-/// than the features' answer). `prev_pts` and `curr_pts` are the two scans' ranges; empty
+/// tried, and its best answer is taken if its points agree at least
+/// [`crate::Config::verify_accept`] and better than the features' answer by
+/// [`crate::Config::verify_margin`] (else the features' answer stays, however low its
+/// points' score). `prev_pts` and `curr_pts` are the two scans' ranges; empty
 /// ones give [`crate::register_with`]'s answer.
 ///
 /// ```

@@ -140,9 +140,12 @@ pub struct Config {
     /// ([`crate::points::Agreement::score`]) exceeds the features' winner's by more than this
     /// wins instead.
     pub verify_margin: f32,
-    /// With the scans' points: a registration whose points' score is below this is refused,
-    /// and a point-to-line ICP's answer ([`crate::points::icp`]) is taken when its score
-    /// reaches it.
+    /// With the scans' points: the least points' score at which an answer is trusted. A
+    /// point-to-line ICP's answer ([`crate::points::icp`]) is taken when its score reaches it;
+    /// a features' winner reaching it is not ambiguous with a close runner-up; the odometry's
+    /// search of the map, when the pair did not register, is refused below it. A pair's
+    /// features' registration below it is not refused: the ICP's answer replaces it only when
+    /// that agrees better ([`Config::verify_keep`]).
     pub verify_accept: f32,
     /// With the scans' points: a registration whose points' score reaches this is kept
     /// without trying the ICP; below it, an ICP answer whose points agree better by
