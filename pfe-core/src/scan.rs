@@ -645,6 +645,34 @@ mod tests {
         assert!(down > 10 && up > 10, "{down} {up}");
     }
 
+    /// The grid needs at least 20 readings of at least 5 distinct values: readings on 50 mm
+    /// (1 000 to 1 200 mm) of only 4 values, however many, tell nothing (0); a fifth value
+    /// tells 50 mm from 20 readings on, not from 19. In mm and as raw codes of 10 mm.
+    #[test]
+    fn a_grid_needs_five_distinct_readings_and_twenty_in_all() {
+        let mm = |n: usize, kinds: usize| -> std::vec::Vec<f32> {
+            (0..n).map(|i| 1000.0 + 50.0 * (i % kinds) as f32).collect()
+        };
+        assert_eq!(Ranges::Mm(&mm(40, 4)).grid(8000.0), 0.0);
+        assert_eq!(Ranges::Mm(&mm(361, 4)).grid(8000.0), 0.0);
+        assert_eq!(Ranges::Mm(&mm(40, 5)).grid(8000.0), 50.0);
+        assert_eq!(Ranges::Mm(&mm(20, 5)).grid(8000.0), 50.0);
+        assert_eq!(Ranges::Mm(&mm(19, 5)).grid(8000.0), 0.0);
+        let codes = |kinds: usize| -> std::vec::Vec<u16> {
+            (0..40).map(|i| 100 + 5 * (i % kinds) as u16).collect()
+        };
+        let raw = |c: &[u16]| {
+            Ranges::Raw {
+                values: c,
+                mm_per_unit: 10.0,
+                max_valid: LMS_MAX_VALID_8M,
+            }
+            .grid(81_820.0)
+        };
+        assert_eq!(raw(&codes(4)), 0.0);
+        assert_eq!(raw(&codes(5)), 50.0);
+    }
+
     /// The sweeps declared, at least one; with odometry, its timing's.
     #[test]
     fn the_sweep_count_is_the_declared_or_the_timings() {

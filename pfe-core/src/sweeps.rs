@@ -556,6 +556,30 @@ mod tests {
         assert!(super::suspect(&flags(0), false, 361));
     }
 
+    /// An offset is applied when its χ² is above [`SweepOffset::CHI2_SIGNIFICANT`] and it
+    /// moves some point by more than [`SweepOffset::MIN_SHIFT_MM`] (the module's rule): at
+    /// either bound exactly it is not, one f32 step above both it is.
+    #[test]
+    fn an_offset_is_applied_only_above_both_bounds() {
+        let at = |chi2: f32, max_shift: f32| SweepOffset {
+            dx: 0.5,
+            dy: 0.0,
+            dtheta: 0.0,
+            sd: [0.1; 3],
+            sigma: 2.0,
+            chi2,
+            rows: 64,
+            max_shift,
+        };
+        let up = |x: f32| f32::from_bits(x.to_bits() + 1);
+        let (chi2, shift) = (SweepOffset::CHI2_SIGNIFICANT, SweepOffset::MIN_SHIFT_MM);
+        assert!(at(up(chi2), up(shift)).is_significant());
+        assert!(!at(up(chi2), shift).is_significant());
+        assert!(!at(chi2, up(shift)).is_significant());
+        assert!(!at(100.0, 0.5).is_significant());
+        assert!(!at(10.0, 30.0).is_significant());
+    }
+
     /// Each moved sweep's standard errors over the sweeps, squared and summed; sweeps not
     /// moved add nothing.
     #[test]
