@@ -1,5 +1,6 @@
-//! [`bump`]'s first test at its bound: a line is searched for a bump only when its residual
-//! sum exceeds the noise's, `σ_r² (n − 2)`; equal is not enough.
+//! [`bump`]'s and [`corner`]'s first tests at their bound: a line is searched for a bump, or
+//! split at a corner, only when its residual sum exceeds the noise's, `σ_r² (n − 2)`; equal is
+//! not enough.
 #![allow(clippy::indexing_slicing)]
 
 use super::*;
@@ -57,4 +58,33 @@ fn a_line_whose_residual_sum_equals_the_noises_is_not_searched_for_a_bump() {
         matches!(found, Some((i, j)) if i <= 247 && j >= 266 && i >= 232 && j <= 281),
         "{found:?}"
     );
+}
+
+/// An exact V of 34 points (legs ±`slope` mm a point, 100 mm apart, apex at 17).
+fn v34(slope: f32) -> [Point; 34] {
+    core::array::from_fn(|i| {
+        let t = i as f32 - 17.0;
+        Point::new(100.0 * t, slope * t.abs())
+    })
+}
+
+/// [`corner`]'s first test at its bound, as [`bump`]'s above: a V whose line's residual sum
+/// equals the noise's `σ_r² (n − 2)` exactly is not split; one f32 step lower in σ_r it is,
+/// at its apex (two lines leave nothing there; 32 degrees of freedom > chi2 25, so the other
+/// tests pass either way).
+#[test]
+fn a_corner_whose_line_sum_equals_the_noises_is_not_split() {
+    // Slopes a little apart until one gives an exact tie (32 = n − 2 scales exactly).
+    let found = (0..64).find_map(|k| {
+        let pts = v34(20.0 + 0.125 * k as f32);
+        let line = fit_line(&pts).ok()?;
+        Some((pts, line, tie(line.sse(), pts.len())?))
+    });
+    let Some((pts, line, sigma_r)) = found else {
+        panic!("no exact tie");
+    };
+    let at = |s: f32| corner(&pts, &line, &Config::default().with_sigma_r(s));
+    assert_eq!(at(sigma_r), None, "σ_r {sigma_r}");
+    let below = f32::from_bits(sigma_r.to_bits() - 1);
+    assert_eq!(at(below), Some(17), "σ_r {sigma_r}, sse {}", line.sse());
 }
