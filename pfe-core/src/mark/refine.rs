@@ -147,6 +147,63 @@ mod tests {
         corner_at(corner_x, 20)
     }
 
+    /// [`locate`] on the wall x = 1024 mm (y = 16 i − 512), its segment from 0, a break
+    /// detected at 20: the points before 20 that lie, as 20 does, 128 mm behind the reference
+    /// line (the wall through points 6 to 15; about 130 mm along the beam, far beyond
+    /// 2.5 σ_r) join the new segment; one in front of it does not; and when point 20 lies on
+    /// the reference line (exactly: on x = 1024 every prediction from it is exact in f32),
+    /// it has no side and none does.
+    #[test]
+    fn points_before_a_break_join_it_only_on_its_side() {
+        use crate::extractor::Extractor;
+        use crate::flags::VALID;
+        use crate::output::Stats;
+        use crate::scan::{Scan, ScanGeometry};
+        let located = |off: &dyn Fn(usize) -> f32| {
+            let at = |i: usize| Point::new(1024.0 + off(i), 16.0 * i as f32 - 512.0);
+            let points: [Point; 361] = core::array::from_fn(at);
+            let ranges: [f32; 361] = core::array::from_fn(|i| {
+                let p = at(i);
+                math::sqrt(p.x * p.x + p.y * p.y)
+            });
+            let mut flags = [VALID; 361];
+            let mut ex = Extractor::<361, 8>::new();
+            let config = crate::config::Config::default();
+            let loading = [1000.0f32; 361];
+            ex.with_pass(
+                &Scan::from_mm(ScanGeometry::LMS200_180_050, &loading),
+                &config,
+                |loaded, rule| {
+                    let mut stats = Stats::default();
+                    let mut pass = Pass::over(
+                        loaded.beams,
+                        (&points, &ranges, &mut flags),
+                        None,
+                        &mut stats,
+                    );
+                    let at_k = pass.predict(10, 20, 20);
+                    rule.noise()
+                        .map(|noise| locate(&mut pass, 0, 20, at_k, noise))
+                },
+            )
+        };
+        let behind =
+            |set: &'static [usize]| move |i: usize| f32::from(u8::from(set.contains(&i))) * 128.0;
+        assert_eq!(located(&behind(&[19, 20])), Some(19));
+        assert_eq!(located(&behind(&[18, 19, 20])), Some(18));
+        assert_eq!(located(&behind(&[16, 17, 18, 19, 20])), Some(16));
+        // 19 in front of the wall, 20 behind it.
+        let zig = |i: usize| match i {
+            19 => -128.0,
+            20 => 128.0,
+            _ => 0.0,
+        };
+        assert_eq!(located(&zig), Some(20));
+        // 20 back on the wall: no side to share.
+        assert_eq!(located(&behind(&[19])), Some(20));
+        assert_eq!(located(&behind(&[17, 18, 19])), Some(20));
+    }
+
     /// The boundary settles where the two fixed lines split the contested points best: at 20
     /// from a detection 1 or 2 points late or 1 early. Where a point lies on both lines (the
     /// apex, here point 19 on x = 1900 too), the split before and after it tie and the detected
