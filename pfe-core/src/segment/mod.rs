@@ -452,3 +452,6 @@ fn store(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
 #[cfg(test)]
 #[cfg(feature = "libm")]
 mod tests;
+
+#[cfg(test)]
+mod pieces_tests;

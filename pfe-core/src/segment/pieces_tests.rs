@@ -1,0 +1,72 @@
+//! [`emit`]'s pieces: a run split around one pillar after another still searches the pieces
+//! waiting after it (up to [`PIECES`] in all).
+
+use super::*;
+use crate::extractor::Extractor;
+use crate::geometry::{ray_circle_intersection, Point};
+use crate::scan::{Scan, ScanGeometry};
+
+/// Features [`emit`] gives for the whole run of valid beams of `ranges` (an LMS200 scan, 180°
+/// at 0.5°), with a scan's budget for pillar searches.
+fn emitted(ranges: &[f32; 361]) -> Vec<Feature, 16> {
+    let mut ex = Extractor::<361, 16>::new();
+    let config = Config::default();
+    let scan = Scan::from_mm(ScanGeometry::LMS200_180_050, ranges);
+    ex.with_pass(&scan, &config, |pass, rule| {
+        let mut out: Vec<Feature, 16> = Vec::new();
+        let s = (0..pass.len()).find(|&i| pass.valid(i));
+        let e = (0..pass.len()).rev().find(|&i| pass.valid(i));
+        let mut budget = PILLAR_SCANS * pass.len();
+        let arc = rule.noise().and_then(arc_rule).map(|r| (r, &mut budget));
+        if let (Some(s), Some(e)) = (s, e) {
+            emit::<true>(pass, s, e, arc, &config, &mut out);
+        }
+        out
+    })
+}
+
+/// Three pillars standing out of a wall 2 m ahead (their centres on it, radii 250, 200 and
+/// 150 mm, the largest at the run's far end), no noise, one run over beams within 60° of the
+/// wall's normal: three circles on the pillars between four pieces of the wall. The largest
+/// residual is the largest pillar's, so it is found first; the second is found in the piece
+/// before it, and the third in the piece before that, with four pieces waiting (the wall
+/// beyond each pillar, each pillar's arc).
+#[test]
+fn three_pillars_on_a_wall_are_three_circles() {
+    const WALL: f32 = 2000.0;
+    let pillars = [(-1100.0f32, 150.0f32), (0.0, 200.0), (1100.0, 250.0)];
+    let g = ScanGeometry::LMS200_180_050;
+    let ranges: [f32; 361] = core::array::from_fn(|i| {
+        let (s, c) = math::sin_cos(g.bearing(i));
+        if c < 0.5 {
+            return 0.0;
+        }
+        pillars
+            .iter()
+            .filter_map(|&(y, r)| {
+                ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(WALL, y), r)
+            })
+            .fold(WALL / c, f32::min)
+    });
+    let f = emitted(&ranges);
+    let circles: Vec<_, 16> = f
+        .iter()
+        .filter_map(|x| match x {
+            Feature::Circle(c) => Some((c.center, c.radius)),
+            _ => None,
+        })
+        .collect();
+    let lines = f
+        .iter()
+        .filter(|x| matches!(x, Feature::Line(l) if (l.rho - WALL).abs() < 5.0))
+        .count();
+    assert!(
+        circles.len() == 3
+            && circles.iter().zip(&pillars).all(|((c, r), &(y, radius))| {
+                c.distance(&Point::new(WALL, y)) < 15.0 && (r - radius).abs() < 15.0
+            })
+            && lines == 4
+            && f.len() == 7,
+        "{f:?}"
+    );
+}
