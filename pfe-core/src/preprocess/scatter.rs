@@ -1002,3 +1002,7 @@ mod tests {
         assert_eq!(sigma(&nan, 5.0), None);
     }
 }
+
+#[cfg(test)]
+#[path = "scatter_sign.rs"]
+mod sign;
