@@ -353,14 +353,15 @@ fn place_visible(
 }
 
 /// The small object of the segment `s..=e` typed a line, when its points are curved
-/// ([`classify::curved`]) and it is one as the sift step defines them (at most
-/// `sift::OBJECT_MAX_MM` across, a range jump or no return on both sides): a pillar or a leg
-/// seen over too few beams for a circle is no line.
+/// ([`classify::curved`]), at most `sift::OBJECT_MAX_MM` across and set apart from its
+/// neighbours by a range jump or no return on at least one side ([`sift::detached`]): a
+/// pillar or a leg seen over too few beams for a circle is no line, also when it stands in
+/// front of a wall or is partly hidden.
 fn curved_object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<Option<Feature>> {
     let pts = pass.points.get(s..=e)?;
     let (a, b) = (pts.first()?, pts.last()?);
     if !(a.distance(b) <= sift::OBJECT_MAX_MM)
-        || !sift::isolated(pass, s, e)
+        || !sift::detached(pass, s, e)
         || !classify::curved(pass, s, pts, config)
     {
         return None;

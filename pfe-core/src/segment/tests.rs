@@ -557,3 +557,44 @@ fn a_long_chain_is_joined_64_points_at_a_time() {
     // Joined 64 points at a time, then the two lines, collinear, made one.
     assert_eq!(spans.as_slice(), [(40, 139)], "{out:?}");
 }
+
+/// A post (253 mm radius, centre 3.2 m ahead) beside a wall seen at grazing incidence that
+/// runs into its near side: the wall's last return is 56 mm short of the post's first, so
+/// the post is set apart by a range jump on its far side only (where the wall behind is
+/// 0.44 m farther). Its 5 beams are an object, not a line (as they were when an object had
+/// to be set apart on both sides); the wall's two pieces stay lines.
+#[test]
+fn a_post_beside_a_wall_is_an_object() {
+    use crate::extractor::Extractor;
+    use crate::geometry::ray_circle_intersection;
+    use crate::scan::{Scan, ScanGeometry};
+    let g = ScanGeometry::LMS200_180_050;
+    let config = Config::default();
+    let (sa, ca) = crate::math::sin_cos(-1.225);
+    let ranges: [f32; 361] = core::array::from_fn(|i| {
+        let (s, c) = crate::math::sin_cos(g.bearing(i));
+        if !(170..=200).contains(&i) {
+            return 0.0;
+        }
+        let wall = 842.0 / (c * ca + s * sa);
+        let wall = if wall > 0.0 { wall } else { f32::INFINITY };
+        let post =
+            ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(3190.0, 73.0), 253.0)
+                .unwrap_or(f32::INFINITY);
+        let r = wall.min(post);
+        if r.is_finite() {
+            libm::roundf(r)
+        } else {
+            0.0
+        }
+    });
+    let mut ex = Extractor::<361, 16>::new();
+    assert!(ex.extract(&Scan::from_mm(g, &ranges), &config).is_ok());
+    let f = ex.features();
+    let span = |f: &Feature| (f.first(), f.last());
+    assert!(
+        matches!(f, [Feature::Line(_), Feature::Object(_), Feature::Line(_)]
+            if f.iter().map(span).eq([(170, 186), (187, 191), (192, 200)])),
+        "{f:?}"
+    );
+}
