@@ -259,9 +259,24 @@ fn jump(pass: &Pass<'_>, i: usize) -> bool {
 /// Whether the run `s..=e` has a range jump (or no return, or the scan's end) on both sides,
 /// as a small object has.
 pub(crate) fn isolated(pass: &Pass<'_>, s: usize, e: usize) -> bool {
-    let before = s == 0 || !pass.valid(s - 1) || jump(pass, s - 1);
-    let after = e + 1 >= pass.len() || !pass.valid(e + 1) || jump(pass, e);
-    before && after
+    jump_before(pass, s) && jump_after(pass, e)
+}
+
+/// Whether the run `s..=e` has a range jump (or no return, or the scan's end) on at least one
+/// side: a post standing in front of a wall, or partly hidden behind a nearer object, has it
+/// on one side only.
+pub(crate) fn detached(pass: &Pass<'_>, s: usize, e: usize) -> bool {
+    jump_before(pass, s) || jump_after(pass, e)
+}
+
+/// Whether a range jump, no return or the scan's start comes before the valid point `s`.
+fn jump_before(pass: &Pass<'_>, s: usize) -> bool {
+    s == 0 || !pass.valid(s - 1) || jump(pass, s - 1)
+}
+
+/// Whether a range jump, no return or the scan's end comes after the valid point `e`.
+fn jump_after(pass: &Pass<'_>, e: usize) -> bool {
+    e + 1 >= pass.len() || !pass.valid(e + 1) || jump(pass, e)
 }
 
 /// The last point of the run of returns from the valid point `s` without a jump.

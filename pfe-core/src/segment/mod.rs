@@ -352,15 +352,23 @@ fn place_visible(
     place(pass, second.0, second.1, second.2, out);
 }
 
+/// Most points of a curved run set apart on one side only that is an object: over more
+/// beams, a curved surface shows enough of itself for a circle or lines, and the middle of
+/// its points moves with the viewpoint (a pillar beside the scanner seen in two halves).
+const ONE_SIDED_MAX_POINTS: usize = 8;
+
 /// The small object of the segment `s..=e` typed a line, when its points are curved
-/// ([`classify::curved`]) and it is one as the sift step defines them (at most
-/// `sift::OBJECT_MAX_MM` across, a range jump or no return on both sides): a pillar or a leg
-/// seen over too few beams for a circle is no line.
+/// ([`classify::curved`]), at most `sift::OBJECT_MAX_MM` across and set apart from its
+/// neighbours by a range jump or no return on both sides ([`sift::isolated`]), or on one side
+/// when it has at most [`ONE_SIDED_MAX_POINTS`] points ([`sift::detached`]): a pillar or a leg
+/// seen over too few beams for a circle is no line, also when it stands in front of a wall
+/// or is partly hidden.
 fn curved_object(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<Option<Feature>> {
     let pts = pass.points.get(s..=e)?;
     let (a, b) = (pts.first()?, pts.last()?);
     if !(a.distance(b) <= sift::OBJECT_MAX_MM)
-        || !sift::isolated(pass, s, e)
+        || !(sift::isolated(pass, s, e)
+            || (pts.len() <= ONE_SIDED_MAX_POINTS && sift::detached(pass, s, e)))
         || !classify::curved(pass, s, pts, config)
     {
         return None;
