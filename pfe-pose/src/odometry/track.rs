@@ -88,7 +88,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             Some(c) => {
                 let prev_pts = &self.pts;
                 let verify = |rel: &Pose| agreement(prev_pts, c, rel).score();
-                let pair = register_sets_verified::<{ crate::register::VERIFIED }>(
+                let (pair, replaced) = register_sets_verified::<{ crate::register::VERIFIED }>(
                     &self.last,
                     &curr,
                     motion,
@@ -98,7 +98,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                     Some(&verify),
                 );
                 let start = motion.map_or(self.last_rel, |m| m.0);
-                complete(pair, prev_pts, c, Some(start), &cfg)
+                complete(pair, replaced, prev_pts, c, Some(start), &cfg)
             }
             None => register_sets(&self.last, &curr, motion, &cfg, &mut Assoc::new(), true),
         };

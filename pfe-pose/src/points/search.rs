@@ -47,24 +47,31 @@ const SEARCH_STEP: f32 = 50.0;
 const SEARCH_MARGIN: f32 = 0.03;
 /// Local maxima of the agreement along the direction refined by the ICP, best first.
 const SEARCH_STARTS: usize = 2;
-/// The best local maximum must agree this much better than any other at least 0.3 m from it,
-/// or the direction stays ambiguous (periodic pillars, doors along a corridor).
+/// The best local maximum must agree this much better than any other at least 0.3 m from it
+/// that a dip of as much sets apart, or the direction stays ambiguous (periodic pillars, doors
+/// along a corridor); bumps on one broad peak are no rivals.
 const SEARCH_DISTINCT: f32 = 0.05;
 /// A degenerate answer becomes "ok" only when the search's agrees at least this well.
 const SEARCH_RESOLVE: f32 = 0.9;
 
 /// `reg` (registered) checked along the direction its covariance determines least (a
-/// corridor's length, periodic pillars): the points' agreement at offsets of up to
+/// corridor's length, periodic pillars; `hint`, the features' unobservable direction, when
+/// they had one): the points' agreement at offsets of up to
 /// [`SEARCH_OFFSETS`] × [`SEARCH_STEP`] either way, the best local maxima refined by [`icp`]; the best ICP answer
 /// replaces `reg` when its points agree clearly better, or, for a degenerate `reg`, when it
 /// determines every direction and agrees at least as well.
 pub(super) fn search_along<const N: usize>(
     reg: crate::Registration,
+    hint: Option<[f32; 3]>,
     prev_pts: &RangeScan<N>,
     curr_pts: &RangeScan<N>,
 ) -> crate::Registration {
     let c = &reg.cov;
-    let axis = 0.5 * libm::atan2f(2.0 * c[0][1], c[0][0] - c[1][1]);
+    let axis = match hint {
+        // Mostly a translation: its heading.
+        Some(d) if d[0] * d[0] + d[1] * d[1] > 0.5 => libm::atan2f(d[1], d[0]),
+        _ => 0.5 * libm::atan2f(2.0 * c[0][1], c[0][0] - c[1][1]),
+    };
     if !axis.is_finite() {
         return reg;
     }
@@ -103,14 +110,14 @@ pub(super) fn search_along<const N: usize>(
             *t = top;
         }
     }
-    let distinct = match starts {
-        [Some((_, a)), Some((_, b))] => a - b >= SEARCH_DISTINCT,
-        _ => true,
-    };
-    if !distinct {
-        return reg;
-    }
     let degenerate = matches!(reg.status, crate::Status::Degenerate { .. });
+    if let Some((k0, best)) = starts.first().copied().flatten() {
+        // A degenerate answer is resolved by a distinct maximum only: on a broad one the
+        // points cannot tell where along it either.
+        if rival(&scores, k0 + n, best, !degenerate, &peak) {
+            return reg;
+        }
+    }
     let mut best: Option<(IcpResult, f32)> = None;
     for (k, _) in starts.iter().flatten() {
         if let Some(r) = icp(prev_pts, curr_pts, &at(*k)) {
@@ -136,6 +143,29 @@ pub(super) fn search_along<const N: usize>(
         }
         _ => reg,
     }
+}
+
+/// True when `scores` (the profile) has a local maximum (`peak`) at least 0.3 m from the best
+/// one at `at` that agrees within [`SEARCH_DISTINCT`] of its score `best` and, with `dip`, is
+/// set apart from it by a dip of [`SEARCH_DISTINCT`] below its own score.
+fn rival(scores: &[f32], at: i32, best: f32, dip: bool, peak: &dyn Fn(usize) -> bool) -> bool {
+    let apart = (300.0 / SEARCH_STEP) as i32;
+    scores.iter().enumerate().any(|(i, &s)| {
+        let i = i as i32;
+        if (i - at).abs() < apart || !(s > best - SEARCH_DISTINCT) || !peak(i as usize) {
+            return false;
+        }
+        if !dip {
+            return true;
+        }
+        let (lo, hi) = (i.min(at), i.max(at));
+        let low = scores
+            .iter()
+            .skip(lo as usize)
+            .take((hi - lo) as usize)
+            .fold(f32::INFINITY, |m, &v| m.min(v));
+        low < s - SEARCH_DISTINCT
+    })
 }
 
 /// A key scan refines a pose when their points agree at least this well after the ICP.
@@ -168,4 +198,41 @@ pub fn refine_on_key<const N: usize>(
         && moved < KEY_REACH
         && out.is_finite())
     .then_some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn peaks(scores: &[f32]) -> impl Fn(usize) -> bool + '_ {
+        move |i| {
+            let s = scores.get(i).copied().unwrap_or(f32::NEG_INFINITY);
+            let left = i.checked_sub(1).and_then(|j| scores.get(j)).copied();
+            let right = scores.get(i + 1).copied();
+            left.is_none_or(|l| l <= s) && right.is_none_or(|r| r < s)
+        }
+    }
+
+    /// A broad maximum with bumps on it (aces pair 253: 0.93–0.95 over 0.5 m) has no rival for
+    /// an "ok" answer, which only moves to a better agreement; for a degenerate one, which
+    /// the search would declare determined, the bumps still count. Two maxima set apart by a
+    /// dip (pillars along a corridor) are rivals either way.
+    #[test]
+    fn bumps_on_one_maximum_are_no_rivals() {
+        let mut broad = [0.2f32; 41];
+        for (i, s) in broad.iter_mut().enumerate().skip(10).take(20) {
+            *s = if i % 3 == 0 { 0.95 } else { 0.92 };
+        }
+        let peak = peaks(&broad);
+        let best = broad.iter().position(|s| *s == 0.95).unwrap_or(0) as i32;
+        assert!(!rival(&broad, best, 0.95, true, &peak));
+        assert!(rival(&broad, best, 0.95, false, &peak));
+        let mut two = [0.2f32; 41];
+        two[10] = 0.95;
+        two[30] = 0.93;
+        assert!(rival(&two, 10, 0.95, true, &peaks(&two)));
+        assert!(rival(&two, 10, 0.95, false, &peaks(&two)));
+        two[30] = 0.85;
+        assert!(!rival(&two, 10, 0.95, true, &peaks(&two)));
+    }
 }

@@ -192,7 +192,7 @@ impl Config {
         min_matches: 3,
         scale_by_residuals: true,
         ambiguity: 2.0,
-        verify_margin: 0.15,
+        verify_margin: 0.08,
         verify_accept: 0.2,
         verify_keep: 0.85,
         verify_track: 0.85,
@@ -375,7 +375,7 @@ pub(crate) fn register_sets(
     assoc: &mut Assoc,
     search: bool,
 ) -> Registration {
-    register_sets_verified::<0>(prev, curr, prior, cfg, assoc, search, None)
+    register_sets_verified::<0>(prev, curr, prior, cfg, assoc, search, None).0
 }
 
 /// [`register_sets`] with `verify`: a score of a pose by the scans' own points (higher is
@@ -384,7 +384,8 @@ pub(crate) fn register_sets(
 /// features alone cannot tell aliased poses apart: periodic pillars, short lines far away);
 /// an ambiguity the points resolve is no failure.
 /// `K`: refined hypotheses kept for the verification ([`VERIFIED`] with `verify`; 0 without,
-/// so that the features-only registration's frame does not grow).
+/// so that the features-only registration's frame does not grow). With the registration, the
+/// features' winner when the points' verification replaced it.
 #[inline(never)]
 pub(crate) fn register_sets_verified<const K: usize>(
     prev: &Set,
@@ -394,7 +395,7 @@ pub(crate) fn register_sets_verified<const K: usize>(
     assoc: &mut Assoc,
     search: bool,
     verify: Option<&dyn Fn(&Pose) -> f32>,
-) -> Registration {
+) -> (Registration, Option<Pose>) {
     let prior = check_prior(prior, cfg);
     let fallback = |failure: Failure, prior: Option<&Prior>, hypotheses: u32| {
         let (rel, cov) = match prior {
@@ -425,17 +426,20 @@ pub(crate) fn register_sets_verified<const K: usize>(
     };
     let prior = match prior {
         Ok(p) => p,
-        Err(f) => return fallback(f, None, 0),
+        Err(f) => return (fallback(f, None, 0), None),
     };
     if prev.len() < 2 || curr.len() < 2 {
-        return fallback(Failure::TooFewFeatures, prior.as_ref(), 0);
+        return (fallback(Failure::TooFewFeatures, prior.as_ref(), 0), None);
     }
     let mut top = Top::new();
     let mut scratch = Scratch::new();
     let mut w = Work::new(prev, curr, cfg, prior.as_ref(), &mut scratch);
     let hypotheses = hypothesise(&mut w, prev, curr, prior.as_ref(), cfg, &mut top, search);
     if top.n == 0 {
-        return fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses);
+        return (
+            fallback(Failure::NoHypothesis, prior.as_ref(), hypotheses),
+            None,
+        );
     }
     // Refine the best few; keep the best refined and the best distinct runner-up. When the
     // runner-up cannot make the result ambiguous (a best keeps at least 1/1.01 of the score
@@ -511,9 +515,13 @@ pub(crate) fn register_sets_verified<const K: usize>(
         }
     }
     let Some(mut best) = best else {
-        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+        return (
+            fallback(Failure::NoConsensus, prior.as_ref(), hypotheses),
+            None,
+        );
     };
     let mut resolved = false;
+    let mut replaced = None;
     if let Some(v) = verify {
         let own = v(&best.pose);
         let mut top = own;
@@ -541,6 +549,7 @@ pub(crate) fn register_sets_verified<const K: usize>(
             if cfg.visibility_weight > 0.0 {
                 r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
             }
+            replaced = Some(best.pose);
             best = r;
             resolved = true;
         }
@@ -551,13 +560,22 @@ pub(crate) fn register_sets_verified<const K: usize>(
     }
     let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
     if matched < cfg.min_matches && !(corridor && best.scene_degenerate && best.matches.0 >= 2) {
-        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+        return (
+            fallback(Failure::NoConsensus, prior.as_ref(), hypotheses),
+            replaced,
+        );
     }
     if !(best.score > cfg.min_score) {
-        return fallback(Failure::NoConsensus, prior.as_ref(), hypotheses);
+        return (
+            fallback(Failure::NoConsensus, prior.as_ref(), hypotheses),
+            replaced,
+        );
     }
     if !resolved && second_score >= cfg.ambiguity * best.score {
-        return fallback(Failure::Ambiguous, prior.as_ref(), hypotheses);
+        return (
+            fallback(Failure::Ambiguous, prior.as_ref(), hypotheses),
+            None,
+        );
     }
     // The winner's covariance and status, and its associations (for the odometry's map).
     let best = Refined {
@@ -568,16 +586,19 @@ pub(crate) fn register_sets_verified<const K: usize>(
         Some(direction) => Status::Degenerate { direction },
         None => Status::Ok,
     };
-    Registration {
-        rel: best.pose,
-        cov: best.cov,
-        status,
-        matches: best.matches,
-        hypotheses,
-        dropped: 0,
-        invalid: 0,
-        chi2: best.chi2,
-    }
+    (
+        Registration {
+            rel: best.pose,
+            cov: best.cov,
+            status,
+            matches: best.matches,
+            hypotheses,
+            dropped: 0,
+            invalid: 0,
+            chi2: best.chi2,
+        },
+        replaced,
+    )
 }
 
 /// A corridor: lines only, all parallel (within [`Config::min_pair_angle`]).
