@@ -1,9 +1,9 @@
-//! Gives the corner point between a short line and its longer neighbour to the neighbour
+//! Gives the corner point between two neighbouring lines to the line it lies on
 //! ([`give_corner_point`]). At a corner the walk keeps the first point of the next surface in
-//! the segment before it (the point lies at the corner, within the prediction's tolerance of
-//! both surfaces), and a segment that starts at an occlusion edge can take one point of the
-//! surface before it. A face seen over three beams then comes out as a four-point line, which
-//! no surface is: the three beams of a face are too few for a feature.
+//! the segment before it (the point lies near the corner, within the prediction's tolerance
+//! of both surfaces), and a segment that starts at an occlusion edge can take one point of the
+//! surface before it. The marks are then one beam off, and a face seen over three beams comes
+//! out as a four-point line, which no surface is: three beams are too few for a feature.
 
 use crate::config::Config;
 use crate::feature::{Feature, LineFeature};
@@ -24,11 +24,13 @@ const OFF_LINE_CHI2: f32 = 3.84;
 const REST_MAX: usize = 32;
 
 /// When the last two features in `out` are lines of neighbouring segments (no beam, no jump
-/// between them), one of exactly `min_points` points and the other longer, and the short one's
-/// point next to the other lies on the other's line (within [`ON_LINE_CHI2`] of its residual's
-/// variance: the range noise and the line's own uncertainty there), that point is moved to the
-/// longer segment; the rest of the short one is too short for a feature. Returns whether it
-/// did; each move takes one of `joins`.
+/// between them), the end point of one (of at most [`REST_MAX`] points) next to the other
+/// (longer than `min_points`) moves to the other when it lies on the other's line (within
+/// [`ON_LINE_CHI2`] of its residual's variance: the range noise's and the line's own there),
+/// off the line of its segment's other points (beyond [`OFF_LINE_CHI2`], or [`ON_LINE_CHI2`]
+/// when the rest is too short for a feature) and nearer the other's. Both are emitted again.
+/// Returns whether it moved. Each pair of neighbours is tested at most twice a scan, and a
+/// move types at most `REST_MAX` points more than the pair has: the work is bounded.
 pub(super) fn give_corner_point(
     pass: &mut Pass<'_>,
     rule: &NoiseRule,
@@ -118,3 +120,7 @@ fn closer(
     let off = off * off / var_f;
     off >= off_chi2 && on < off
 }
+
+#[cfg(test)]
+#[path = "ends_tests.rs"]
+mod tests;
