@@ -29,14 +29,18 @@ const REST_MAX: usize = 32;
 /// [`ON_LINE_CHI2`] of its residual's variance: the range noise's and the line's own there),
 /// off the line of its segment's other points (beyond [`OFF_LINE_CHI2`], or [`ON_LINE_CHI2`]
 /// when the rest is too short for a feature) and nearer the other's. Both are emitted again.
-/// Returns whether it moved. Each pair of neighbours is tested at most twice a scan, and a
-/// move types at most `REST_MAX` points more than the pair has: the work is bounded.
+/// Returns whether it moved. Each move takes one of `moves` (the scan's joins): the work is
+/// bounded.
 pub(super) fn give_corner_point(
     pass: &mut Pass<'_>,
     rule: &NoiseRule,
     config: &Config,
     out: &mut dyn FeatureSink,
+    moves: &mut usize,
 ) -> bool {
+    if *moves == 0 {
+        return false;
+    }
     let n = out.features_mut().len();
     let Some([Feature::Line(a), Feature::Line(b)]) = n
         .checked_sub(2)
@@ -67,6 +71,7 @@ pub(super) fn give_corner_point(
     } else {
         return false;
     };
+    *moves -= 1;
     let mut k = 0usize;
     out.retain(&mut |_| {
         k += 1;

@@ -78,7 +78,7 @@ pub(super) fn join_collinear(
     joins: &mut usize,
 ) {
     if !join_pair(pass, rule, config, out, joins) {
-        give_corner_point(pass, rule, config, out);
+        give_corner_point(pass, rule, config, out, joins);
     }
 }
 
