@@ -10,6 +10,7 @@ use crate::output::FeatureSink;
 use crate::pass::Pass;
 use crate::rule::NoiseRule;
 
+use super::ends::give_corner_point;
 use super::{emit, CHAIN_MIN};
 
 /// cos 0.2 rad: neighbouring lines whose normals differ more are not tested for being one.
@@ -67,6 +68,7 @@ pub(super) fn join_lines(
 /// allows), or a wall split where its roughness fooled the walk once.
 /// At most [`JOINS_MAX`] joins a scan, each of at most [`JOIN_MAX_POINTS`] points: the work
 /// they take is bounded.
+/// When it does not, the corner point between them may move ([`give_corner_point`]).
 #[inline(never)]
 pub(super) fn join_collinear(
     pass: &mut Pass<'_>,
@@ -75,8 +77,21 @@ pub(super) fn join_collinear(
     out: &mut dyn FeatureSink,
     joins: &mut usize,
 ) {
+    if !join_pair(pass, rule, config, out, joins) {
+        give_corner_point(pass, rule, config, out, joins);
+    }
+}
+
+/// [`join_collinear`]'s join: whether it joined the two lines.
+fn join_pair(
+    pass: &mut Pass<'_>,
+    rule: &NoiseRule,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+    joins: &mut usize,
+) -> bool {
     if *joins == 0 {
-        return;
+        return false;
     }
     let n = out.features_mut().len();
     let Some([Feature::Line(a), Feature::Line(b)]) = n
@@ -85,24 +100,24 @@ pub(super) fn join_collinear(
         .and_then(|last| <&[Feature; 2]>::try_from(last).ok())
         .copied()
     else {
-        return;
+        return false;
     };
     let (s, e) = (usize::from(a.first), usize::from(b.last));
     // Neighbours, also across a range jump: at grazing incidence a wall's points are far apart.
     if usize::from(a.last) + 1 != usize::from(b.first) || e + 1 - s > JOIN_MAX_POINTS {
-        return;
+        return false;
     }
     // Cheap first: the normals within 0.2 rad of each other (or of the other's opposite: one
     // line through the scanner's side has ρ near 0 and either normal).
     let (sa, ca) = math::sin_cos(a.alpha);
     let (sb, cb) = math::sin_cos(b.alpha);
     if !(math::abs(ca * cb + sa * sb) > COS_JOIN) {
-        return;
+        return false;
     }
     // The same line within both fits' stated uncertainty (99 % of χ²₂), and their points on one
     // line within the noise.
     if !(same_line(&a, &b) <= SAME_LINE_CHI2) {
-        return;
+        return false;
     }
     let tol = rule.k_sigma + rule.model.floor;
     let var = rule.sigma_r * rule.sigma_r;
@@ -111,7 +126,7 @@ pub(super) fn join_collinear(
         .get(s..=e)
         .is_some_and(|p| on_one_line(p, tol, var))
     {
-        return;
+        return false;
     }
     *joins -= 1;
     let mut k = 0usize;
@@ -125,6 +140,7 @@ pub(super) fn join_collinear(
     stats.segments = stats.segments.saturating_sub(2);
     stats.features = stats.features.saturating_sub(2);
     emit::<true>(pass, s, e, None, config, out);
+    true
 }
 
 /// The NIS of the difference of the lines `a` and `b` (both in the scanner's frame, ρ ≥ 0),

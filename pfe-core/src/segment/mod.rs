@@ -8,6 +8,7 @@
 //! one line within the noise are joined into one segment. A segment typed a line that is a
 //! pillar against a wall (no jump at its edges) is split around the pillar's arc.
 
+mod ends;
 mod join;
 mod split;
 

@@ -1,0 +1,131 @@
+//! Gives the corner point between two neighbouring lines to the line it lies on
+//! ([`give_corner_point`]). At a corner the walk keeps the first point of the next surface in
+//! the segment before it (the point lies near the corner, within the prediction's tolerance
+//! of both surfaces), and a segment that starts at an occlusion edge can take one point of the
+//! surface before it. The marks are then one beam off, and a face seen over three beams comes
+//! out as a four-point line, which no surface is: three beams are too few for a feature.
+
+use crate::config::Config;
+use crate::feature::{Feature, LineFeature};
+use crate::fit::line::fit_line;
+use crate::flags::{END, JUMP, START};
+use crate::output::FeatureSink;
+use crate::pass::Pass;
+use crate::rule::NoiseRule;
+
+use super::emit;
+
+/// 99 % of χ²₁: a point further from a line than this (in its residual's σ) is not on it.
+const ON_LINE_CHI2: f32 = 6.63;
+/// 95 % of χ²₁: a point this far from the line of its segment's other points (in its
+/// residual's σ) may be another surface's.
+const OFF_LINE_CHI2: f32 = 3.84;
+/// Most points of a segment whose end point may move (its other points are fitted again).
+const REST_MAX: usize = 32;
+
+/// When the last two features in `out` are lines of neighbouring segments (no beam, no jump
+/// between them), the end point of one (of at most [`REST_MAX`] points) next to the other
+/// (longer than `min_points`) moves to the other when it lies on the other's line (within
+/// [`ON_LINE_CHI2`] of its residual's variance: the range noise's and the line's own there),
+/// off the line of its segment's other points (beyond [`OFF_LINE_CHI2`], or [`ON_LINE_CHI2`]
+/// when the rest is too short for a feature) and nearer the other's. Both are emitted again.
+/// Returns whether it moved. Each move takes one of `moves` (the scan's joins): the work is
+/// bounded.
+pub(super) fn give_corner_point(
+    pass: &mut Pass<'_>,
+    rule: &NoiseRule,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+    moves: &mut usize,
+) -> bool {
+    if *moves == 0 {
+        return false;
+    }
+    let n = out.features_mut().len();
+    let Some([Feature::Line(a), Feature::Line(b)]) = n
+        .checked_sub(2)
+        .and_then(|k| out.features_mut().get(k..))
+        .and_then(|last| <&[Feature; 2]>::try_from(last).ok())
+        .copied()
+    else {
+        return false;
+    };
+    let (a0, a1, b0, b1) = (
+        usize::from(a.first),
+        usize::from(a.last),
+        usize::from(b.first),
+        usize::from(b.last),
+    );
+    if a1 + 1 != b0 || pass.flag(b0) & JUMP != 0 {
+        return false;
+    }
+    let (na, nb) = (a1 + 1 - a0, b1 + 1 - b0);
+    let min = config.min_points;
+    // The split point between the two segments after the move: the first point of the second.
+    // A segment the move leaves too short for a feature needs the surer evidence.
+    let off = |n: usize| if n > min { OFF_LINE_CHI2 } else { ON_LINE_CHI2 };
+    let split = if nb > min && na <= REST_MAX && closer(pass, rule, &b, a1, a0..=a1 - 1, off(na)) {
+        a1
+    } else if na > min && nb <= REST_MAX && closer(pass, rule, &a, b0, b0 + 1..=b1, off(nb)) {
+        b0 + 1
+    } else {
+        return false;
+    };
+    *moves -= 1;
+    let mut k = 0usize;
+    out.retain(&mut |_| {
+        k += 1;
+        k + 2 <= n
+    });
+    pass.clear(a1, END);
+    pass.clear(b0, START);
+    let stats = &mut *pass.stats;
+    stats.segments = stats.segments.saturating_sub(2);
+    stats.features = stats.features.saturating_sub(2);
+    emit::<true>(pass, a0, split - 1, None, config, out);
+    emit::<true>(pass, split, b1, None, config, out);
+    true
+}
+
+/// Whether point `i` lies on the line `l` (within [`ON_LINE_CHI2`]) and closer to it than to
+/// the line of the points `rest` (the short segment's others), each distance in its own σ: the
+/// range noise's plus that of the line there.
+fn closer(
+    pass: &Pass<'_>,
+    rule: &NoiseRule,
+    l: &LineFeature,
+    i: usize,
+    rest: core::ops::RangeInclusive<usize>,
+    off_chi2: f32,
+) -> bool {
+    if !pass.valid(i) {
+        return false;
+    }
+    let p = pass.point(i);
+    let var_r = rule.sigma_r * rule.sigma_r;
+    let (sin, cos) = crate::math::sin_cos(l.alpha);
+    let d = p.x * cos + p.y * sin - l.rho;
+    // ∂d/∂α = −x sin α + y cos α, ∂d/∂ρ = −1.
+    let t = cos * p.y - sin * p.x;
+    let var = var_r + t * t * l.var_alpha + l.var_rho - 2.0 * t * l.cov_alpha_rho;
+    let on = d * d / var;
+    if !(on <= ON_LINE_CHI2) {
+        return false;
+    }
+    // The other line, fitted to `rest` and carried to the point: its variance there is
+    // σ_r² (1/n + u²/Σu²), u the point's position along it from the centroid.
+    let Some(f) = pass.points.get(rest).and_then(|r| fit_line(r).ok()) else {
+        return false;
+    };
+    let u = (p.y - f.centroid.y) * f.cos_alpha - (p.x - f.centroid.x) * f.sin_alpha;
+    let (s, c) = (f.sin_alpha, f.cos_alpha);
+    let suu = s * s * f.sxx + c * c * f.syy - 2.0 * s * c * f.sxy;
+    let var_f = var_r * (1.0 + 1.0 / f.n as f32 + u * u / suu);
+    let off = f.signed_distance(&p);
+    let off = off * off / var_f;
+    off >= off_chi2 && on < off
+}
+
+#[cfg(test)]
+#[path = "ends_tests.rs"]
+mod tests;

@@ -1,0 +1,97 @@
+//! Tests of the corner point's move ([`give_corner_point`]).
+#![allow(clippy::indexing_slicing)]
+
+use heapless::Vec;
+
+use super::super::join::join_collinear;
+use super::super::{emit, JOINS_MAX};
+use crate::config::Config;
+use crate::extractor::Extractor;
+use crate::feature::Feature;
+use crate::geometry::Point;
+use crate::scan::{Scan, ScanGeometry};
+
+/// Ranges at 1° of a wall 3 m ahead (x = 3000 mm) from beam 83 on, and before it, from beam
+/// `face` to 82, a face at 45° running from the wall towards the scanner; their corner is at
+/// 0.25° past beam 82, so beam 83 is 28 mm off the face's line. No noise; other beams see
+/// nothing. `mirrored`: the same scene seen upside down (beam i at 180 − i).
+fn scene(g: &ScanGeometry, face: usize, mirrored: bool) -> [f32; 181] {
+    let d2r = core::f32::consts::PI / 180.0;
+    let corner_bearing = g.bearing(82) + 0.25 * d2r;
+    let c = Point::new(
+        3000.0,
+        3000.0 * crate::math::sin_cos(corner_bearing).0 / crate::math::sin_cos(corner_bearing).1,
+    );
+    let h = core::f32::consts::FRAC_1_SQRT_2;
+    // The face's normal (1, −1)/√2 and distance from the scanner.
+    let rho_a = h * (c.x - c.y);
+    core::array::from_fn(|j| {
+        let i = if mirrored { 180 - j } else { j };
+        let (s, co) = crate::math::sin_cos(g.bearing(i));
+        match i {
+            83..=100 => 3000.0 / co,
+            _ if (face..=82).contains(&i) => rho_a / (h * (co - s)),
+            _ => f32::NAN,
+        }
+    })
+}
+
+/// The features of the scene after its two segments (`first`, `second`) are emitted as the
+/// segment step does (each followed by [`join_collinear`]).
+fn segments_of(
+    ranges: &[f32; 181],
+    first: (usize, usize),
+    second: (usize, usize),
+) -> Vec<Feature, 8> {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let config = Config::default();
+    let mut ex = Extractor::<181, 8>::new();
+    ex.with_pass(&Scan::from_mm(g, ranges), &config, |pass, rule| {
+        let Some(noise) = rule.noise() else {
+            panic!("the default rule")
+        };
+        let mut out: Vec<Feature, 8> = Vec::new();
+        let mut joins = JOINS_MAX;
+        for (s, e) in [first, second] {
+            emit::<true>(pass, s, e, None, &config, &mut out);
+            join_collinear(pass, noise, &config, &mut out, &mut joins);
+        }
+        out
+    })
+}
+
+/// The first and last beam of each line of `out`.
+fn spans(out: &[Feature]) -> Vec<(u16, u16), 8> {
+    out.iter()
+        .map(|f| match f {
+            Feature::Line(l) => (l.first, l.last),
+            _ => (0, 0),
+        })
+        .collect()
+}
+
+/// A face seen over three beams (80..=82) and the wall's first beam (83) in one segment, the
+/// wall's others (84..=100) in the next: beam 83 lies on the wall's line and 28 mm (5.6 σ_r,
+/// beyond the 3-point line's uncertainty there) off the face's, so it goes to the wall, and
+/// the face's three beams are too few for a feature. Seen upside down (the wall first, its
+/// segment ending at the mirrored beam 97 after the face's first beam, beams 97..=100) the
+/// same.
+#[test]
+fn a_three_beam_face_and_the_next_surface_s_first_beam_are_not_one_line() {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let out = segments_of(&scene(&g, 80, false), (80, 83), (84, 100));
+    assert_eq!(spans(&out), [(83, 100)].as_slice(), "{out:?}");
+    let out = segments_of(&scene(&g, 80, true), (80, 96), (97, 100));
+    assert_eq!(spans(&out), [(80, 97)].as_slice(), "{out:?}");
+}
+
+/// A face seen over four beams (79..=82), its segment ending at its own last beam: that beam
+/// lies on the face's line, and both lines stay as they are.
+#[test]
+fn a_four_beam_face_keeps_its_beams() {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let out = segments_of(&scene(&g, 79, false), (79, 82), (83, 100));
+    assert_eq!(spans(&out), [(79, 82), (83, 100)].as_slice(), "{out:?}");
+    let out = segments_of(&scene(&g, 79, true), (80, 97), (98, 101));
+    assert_eq!(spans(&out), [(80, 97), (98, 101)].as_slice(), "{out:?}");
+}
