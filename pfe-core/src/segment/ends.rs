@@ -6,14 +6,15 @@
 //! out as a four-point line, which no surface is: three beams are too few for a feature.
 
 use crate::config::Config;
-use crate::feature::{Feature, LineFeature};
+use crate::feature::LineFeature;
 use crate::fit::line::fit_line;
-use crate::flags::{END, JUMP, START};
+use crate::flags::JUMP;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
 use crate::rule::NoiseRule;
 
 use super::emit;
+use super::join::{last_two_lines, unstore_last_two};
 
 /// 99 % of χ²₁: a point further from a line than this (in its residual's σ) is not on it.
 const ON_LINE_CHI2: f32 = 6.63;
@@ -41,13 +42,7 @@ pub(super) fn give_corner_point(
     if *moves == 0 {
         return false;
     }
-    let n = out.features_mut().len();
-    let Some([Feature::Line(a), Feature::Line(b)]) = n
-        .checked_sub(2)
-        .and_then(|k| out.features_mut().get(k..))
-        .and_then(|last| <&[Feature; 2]>::try_from(last).ok())
-        .copied()
-    else {
+    let Some((a, b)) = last_two_lines(out) else {
         return false;
     };
     let (a0, a1, b0, b1) = (
@@ -72,16 +67,7 @@ pub(super) fn give_corner_point(
         return false;
     };
     *moves -= 1;
-    let mut k = 0usize;
-    out.retain(&mut |_| {
-        k += 1;
-        k + 2 <= n
-    });
-    pass.clear(a1, END);
-    pass.clear(b0, START);
-    let stats = &mut *pass.stats;
-    stats.segments = stats.segments.saturating_sub(2);
-    stats.features = stats.features.saturating_sub(2);
+    unstore_last_two(pass, out, a1, b0);
     emit::<true>(pass, a0, split - 1, None, config, out);
     emit::<true>(pass, split, b1, None, config, out);
     true

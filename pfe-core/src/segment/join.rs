@@ -82,6 +82,37 @@ pub(super) fn join_collinear(
     }
 }
 
+/// The last two stored features, when both are lines.
+pub(super) fn last_two_lines(out: &mut dyn FeatureSink) -> Option<(LineFeature, LineFeature)> {
+    let n = out.features_mut().len();
+    let last = out.features_mut().get(n.checked_sub(2)?..)?;
+    match <&[Feature; 2]>::try_from(last).ok()? {
+        [Feature::Line(a), Feature::Line(b)] => Some((*a, *b)),
+        _ => None,
+    }
+}
+
+/// Takes the last two stored features back (the segments `..=a_last` and `b_first..`), to
+/// be emitted again.
+pub(super) fn unstore_last_two(
+    pass: &mut Pass<'_>,
+    out: &mut dyn FeatureSink,
+    a_last: usize,
+    b_first: usize,
+) {
+    let n = out.features_mut().len();
+    let mut k = 0usize;
+    out.retain(&mut |_| {
+        k += 1;
+        k + 2 <= n
+    });
+    pass.clear(a_last, END);
+    pass.clear(b_first, START);
+    let stats = &mut *pass.stats;
+    stats.segments = stats.segments.saturating_sub(2);
+    stats.features = stats.features.saturating_sub(2);
+}
+
 /// [`join_collinear`]'s join: whether it joined the two lines.
 fn join_pair(
     pass: &mut Pass<'_>,
@@ -93,13 +124,7 @@ fn join_pair(
     if *joins == 0 {
         return false;
     }
-    let n = out.features_mut().len();
-    let Some([Feature::Line(a), Feature::Line(b)]) = n
-        .checked_sub(2)
-        .and_then(|k| out.features_mut().get(k..))
-        .and_then(|last| <&[Feature; 2]>::try_from(last).ok())
-        .copied()
-    else {
+    let Some((a, b)) = last_two_lines(out) else {
         return false;
     };
     let (s, e) = (usize::from(a.first), usize::from(b.last));
@@ -129,16 +154,7 @@ fn join_pair(
         return false;
     }
     *joins -= 1;
-    let mut k = 0usize;
-    out.retain(&mut |_| {
-        k += 1;
-        k + 2 <= n
-    });
-    pass.clear(usize::from(a.last), END);
-    pass.clear(usize::from(b.first), START);
-    let stats = &mut *pass.stats;
-    stats.segments = stats.segments.saturating_sub(2);
-    stats.features = stats.features.saturating_sub(2);
+    unstore_last_two(pass, out, usize::from(a.last), usize::from(b.first));
     emit::<true>(pass, s, e, None, config, out);
     true
 }

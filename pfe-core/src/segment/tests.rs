@@ -268,6 +268,20 @@ fn same_line_is_the_nis_of_the_difference_with_both_covariances() {
     assert!(same_line(&line(0.10, 1000.0), &line(0.10 + 0.5, 1000.0)) > 100.0);
 }
 
+/// Gaussian draws of standard deviation `sigma` (Box–Muller on a linear congruential
+/// generator seeded with `seed`), one a call.
+fn gaussian(seed: u32, sigma: f32) -> impl FnMut() -> f32 {
+    let mut seed = seed;
+    move || {
+        let mut uniform = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / 16_777_216.0
+        };
+        let (u1, u2) = (uniform().max(1e-7), uniform());
+        sigma * libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(6.283_185_5 * u2)
+    }
+}
+
 /// 7 beams (0.5° apart) of a post of 250 mm radius whose centre is 4 m ahead, nothing
 /// else in the scan: its points bend by 17 σ_r² from their line (σ_r 5 mm), too little
 /// for the typing's circle (25 σ_r²) but far beyond the noise for a line. It is reported
@@ -322,15 +336,10 @@ fn a_post_seen_obliquely_is_an_object_and_a_plate_a_line() {
     let config = Config::default();
     let beams = 184..=187;
     let run = |range: &dyn Fn(f32, f32) -> Option<f32>, noise: f32, seed: u32| {
-        let mut seed = seed;
-        let mut uniform = || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (seed >> 8) as f32 / 16_777_216.0
-        };
+        let mut gauss = gaussian(seed, noise);
         let ranges: [f32; 361] = core::array::from_fn(|i| {
             let (s, c) = crate::math::sin_cos(g.bearing(i));
-            let (u1, u2) = (uniform().max(1e-7), uniform());
-            let n = noise * libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(6.283_185_5 * u2);
+            let n = gauss();
             beams
                 .contains(&i)
                 .then(|| range(c, s))
@@ -369,15 +378,10 @@ fn a_pillar_against_a_wall_is_a_circle_between_two_lines() {
     let g = ScanGeometry::LMS200_180_050;
     let (centre, radius, wall) = (760.0f32, 170.0f32, 700.0f32);
     for noise in [0.0f32, 5.0] {
-        let mut seed = 12_345u32;
-        let mut uniform = || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (seed >> 8) as f32 / 16_777_216.0
-        };
+        let mut gauss = gaussian(12_345u32, noise);
         let ranges: [f32; 361] = core::array::from_fn(|i| {
             let (s, c) = crate::math::sin_cos(g.bearing(i));
-            let (u1, u2) = (uniform().max(1e-7), uniform());
-            let n = noise * libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(6.283_185_5 * u2);
+            let n = gauss();
             if c < 0.5 {
                 return 0.0;
             }
@@ -423,16 +427,11 @@ fn a_pilaster_is_one_circle_over_all_its_beams() {
     let (centre, radius) = (Point::new(321.0, -1083.0), 245.0f32);
     let mut whole = 0;
     for draw in 0..40u32 {
-        let mut seed = 777 + draw;
-        let mut uniform = || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (seed >> 8) as f32 / 16_777_216.0
-        };
+        let mut gauss = gaussian(777 + draw, 5.0);
         let mut on_pillar = [false; 361];
         let ranges: [f32; 361] = core::array::from_fn(|i| {
             let (s, c) = crate::math::sin_cos(g.bearing(i));
-            let (u1, u2) = (uniform().max(1e-7), uniform());
-            let n = 5.0 * libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(6.283_185_5 * u2);
+            let n = gauss();
             let facing = libm::cosf(g.bearing(i) - alpha);
             if facing < 0.3 {
                 return 0.0;
@@ -614,15 +613,10 @@ fn a_pillar_beside_the_scanner_is_no_object() {
     let (sp, cp) = crate::math::sin_cos(-0.87);
     let centre = Point::new(232.0 * cp, 232.0 * sp);
     let run = |seed: u32| {
-        let mut seed = seed;
-        let mut uniform = || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            (seed >> 8) as f32 / 16_777_216.0
-        };
+        let mut gauss = gaussian(seed, 5.0);
         let ranges: [f32; 361] = core::array::from_fn(|i| {
             let (s, c) = crate::math::sin_cos(g.bearing(i));
-            let (u1, u2) = (uniform().max(1e-7), uniform());
-            let n = 5.0 * libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(6.283_185_5 * u2);
+            let n = gauss();
             let wall = if c > 0.25 { 2000.0 / c } else { 0.0 };
             ray_circle_intersection(Point::new(0.0, 0.0), c, s, centre, 150.0)
                 .map_or(wall, |r| libm::roundf(r + n))
