@@ -628,6 +628,27 @@ mod tests {
             .is_some());
         Ok(())
     }
+
+    /// Two points are a line, from a slice or an iterator: the line x cos α + y sin α = ρ
+    /// through them (here x + y = 2000 mm: α = 45°, ρ = 2000/√2); one point is too few.
+    #[test]
+    fn two_points_make_a_line_one_does_not() -> Result<(), FitError> {
+        let pts = [Point::new(1500.0, 500.0), Point::new(500.0, 1500.0)];
+        for l in [fit_line(&pts)?, fit_line_iter(pts.iter().copied())?] {
+            assert!(
+                (l.alpha - core::f32::consts::FRAC_PI_4).abs() < 1e-6,
+                "{}",
+                l.alpha
+            );
+            assert!((l.rho - 2000.0 * core::f32::consts::FRAC_1_SQRT_2).abs() < 1e-3);
+            assert!(l.sse().abs() < 1e-3);
+        }
+        let one = [pts[0]];
+        let few = FitError::TooFewPoints { got: 1, need: 2 };
+        assert_eq!(fit_line_iter(one.iter().copied()).err(), Some(few));
+        assert_eq!(fit_line(&one).err(), Some(few));
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -263,6 +263,100 @@ mod tests {
             .collect()
     }
 
+    /// [`best_split_sse`] and [`corner_split`] against their definition, by separate fits of
+    /// every split (f64 sums): the two lines meet at a point within [`REACH`] of the apex
+    /// (shared by both, or ending the first run), each run at least two points. Bent runs of
+    /// 5 to 12 points whose bend lies before, at or after the apex (noise of ±3 mm from a
+    /// fixed generator), so that the best meeting point is often the one past the apex.
+    #[test]
+    fn best_split_is_the_least_sum_of_the_splits_near_the_apex() {
+        let sse64 = |p: &[Point]| -> f64 {
+            let k = p.len() as f64;
+            let (mx, my) = p.iter().fold((0.0, 0.0), |a, q| {
+                (a.0 + f64::from(q.x) / k, a.1 + f64::from(q.y) / k)
+            });
+            let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+            for q in p {
+                let (dx, dy) = (f64::from(q.x) - mx, f64::from(q.y) - my);
+                sxx += dx * dx;
+                syy += dy * dy;
+                sxy += dx * dy;
+            }
+            let h = 0.5 * (sxx - syy);
+            0.5 * (sxx + syy) - libm::sqrt(h * h + sxy * sxy)
+        };
+        let mut seed = 0x2545_f491u32;
+        let mut noise = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed % 601) as f32 / 100.0 - 3.0
+        };
+        let (mut past_apex, mut checked) = (0, 0);
+        for n in 5..=12usize {
+            for bend in 1..n - 1 {
+                for turn in [0.02f32, 0.05, 0.1, 0.3, 1.4] {
+                    let pts: heapless::Vec<Point, 12> = (0..n)
+                        .map(|i| {
+                            let t = 100.0 * (i as f32 - bend as f32);
+                            let y = if i < bend { 0.0 } else { t * turn };
+                            Point::new(1000.0 + t, 2000.0 + y + noise())
+                        })
+                        .collect();
+                    let (a, b) = (pts[0], pts[n - 1]);
+                    let apex = (0..n)
+                        .max_by(|&i, &j| {
+                            let d = |k: usize| {
+                                let p = pts[k];
+                                ((p.x - a.x) * (b.y - a.y) - (p.y - a.y) * (b.x - a.x)).abs()
+                            };
+                            d(i).total_cmp(&d(j))
+                        })
+                        .unwrap_or(0);
+                    let (lo, hi) = (apex.saturating_sub(REACH).max(1), (apex + REACH).min(n - 2));
+                    let mut best = (f64::INFINITY, 0usize);
+                    let mut apart = (f64::INFINITY, 0usize);
+                    for j in lo..=hi {
+                        let shared = sse64(&pts[..=j]) + sse64(&pts[j..]);
+                        if shared < best.0 {
+                            best = (shared, j);
+                        }
+                        if j + 3 <= n {
+                            let sum = sse64(&pts[..=j]) + sse64(&pts[j + 1..]);
+                            if sum < best.0 {
+                                best = (sum, j);
+                            }
+                            if sum < apart.0 {
+                                apart = (sum, j + 1);
+                            }
+                        }
+                    }
+                    past_apex += usize::from(best.1 > apex);
+                    let got = best_split_sse(&pts).map(f64::from);
+                    let tol = |x: f64| 1e-3 * x + 0.5;
+                    assert!(
+                        got.is_some_and(|g| (g - best.0).abs() <= tol(best.0)),
+                        "n {n} bend {bend} turn {turn}: {got:?} against {}",
+                        best.0
+                    );
+                    if apart.0.is_finite() {
+                        let split = corner_split(&pts);
+                        // Near-ties in f32 may pick another split of the same sum.
+                        let of_k = |k: usize| sse64(&pts[..k]) + sse64(&pts[k..]);
+                        assert!(
+                            split.is_some_and(|(k, s)| (lo + 1..=hi + 1).contains(&k)
+                                && (of_k(k) - apart.0).abs() <= tol(apart.0)
+                                && (f64::from(s) - apart.0).abs() <= tol(apart.0)),
+                            "n {n} bend {bend} turn {turn}: {split:?} against {apart:?}"
+                        );
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 200 && past_apex >= 8, "{checked} {past_apex}");
+    }
+
     /// The RMS bound 1.5 σ: residuals of ±1.4 σ pass, ±1.6 σ do not (σ 5 mm, a distance
     /// bound far away); at every normal angle, including 45° and the angle where sin α =
     /// −cos² α (an "along" coordinate built from other products stays constant there).

@@ -147,46 +147,55 @@ mod tests {
         corner_at(corner_x, 20)
     }
 
-    /// [`locate`] on the wall x = 1024 mm (y = 16 i − 512), its segment from 0, a break
-    /// detected at 20: the points before 20 that lie, as 20 does, 128 mm behind the reference
-    /// line (the wall through points 6 to 15; about 130 mm along the beam, far beyond
-    /// 2.5 σ_r) join the new segment; one in front of it does not; and when point 20 lies on
-    /// the reference line (exactly: on x = 1024 every prediction from it is exact in f32),
-    /// it has no side and none does.
-    #[test]
-    fn points_before_a_break_join_it_only_on_its_side() {
+    /// [`locate`] on the wall x = 1024 mm (y = 16 i − 512) with point i `off(i)` mm behind
+    /// it, its segment from 0, a break detected at 20: the boundary, and the predictions it
+    /// counted.
+    fn located_on_wall(off: &dyn Fn(usize) -> f32) -> Option<(usize, usize)> {
         use crate::extractor::Extractor;
         use crate::flags::VALID;
         use crate::output::Stats;
         use crate::scan::{Scan, ScanGeometry};
-        let located = |off: &dyn Fn(usize) -> f32| {
-            let at = |i: usize| Point::new(1024.0 + off(i), 16.0 * i as f32 - 512.0);
-            let points: [Point; 361] = core::array::from_fn(at);
-            let ranges: [f32; 361] = core::array::from_fn(|i| {
-                let p = at(i);
-                math::sqrt(p.x * p.x + p.y * p.y)
-            });
-            let mut flags = [VALID; 361];
-            let mut ex = Extractor::<361, 8>::new();
-            let config = crate::config::Config::default();
-            let loading = [1000.0f32; 361];
-            ex.with_pass(
-                &Scan::from_mm(ScanGeometry::LMS200_180_050, &loading),
-                &config,
-                |loaded, rule| {
-                    let mut stats = Stats::default();
-                    let mut pass = Pass::over(
-                        loaded.beams,
-                        (&points, &ranges, &mut flags),
-                        None,
-                        &mut stats,
-                    );
-                    let at_k = pass.predict(10, 20, 20);
-                    rule.noise()
-                        .map(|noise| locate(&mut pass, 0, 20, at_k, noise))
-                },
-            )
-        };
+        let at = |i: usize| Point::new(1024.0 + off(i), 16.0 * i as f32 - 512.0);
+        let points: [Point; 361] = core::array::from_fn(at);
+        let ranges: [f32; 361] = core::array::from_fn(|i| {
+            let p = at(i);
+            math::sqrt(p.x * p.x + p.y * p.y)
+        });
+        let mut flags = [VALID; 361];
+        let mut ex = Extractor::<361, 8>::new();
+        let config = crate::config::Config::default();
+        let loading = [1000.0f32; 361];
+        ex.with_pass(
+            &Scan::from_mm(ScanGeometry::LMS200_180_050, &loading),
+            &config,
+            |loaded, rule| {
+                let mut stats = Stats::default();
+                let mut pass = Pass::over(
+                    loaded.beams,
+                    (&points, &ranges, &mut flags),
+                    None,
+                    &mut stats,
+                );
+                let at_k = pass.predict(10, 20, 20);
+                let before = pass.stats.predictions;
+                let b = locate(&mut pass, 0, 20, at_k, rule.noise()?);
+                Some((b, pass.stats.predictions - before))
+            },
+        )
+    }
+
+    /// The boundary only of [`located_on_wall`].
+    fn located(off: &dyn Fn(usize) -> f32) -> Option<usize> {
+        located_on_wall(off).map(|(b, _)| b)
+    }
+
+    /// [`locate`] on the wall of [`located_on_wall`]: the points before 20 that lie, as 20
+    /// does, 128 mm behind the reference line (the wall through points 6 to 15; about 130 mm
+    /// along the beam, far beyond 2.5 σ_r) join the new segment; one in front of it does not;
+    /// and when point 20 lies on the reference line (exactly: on x = 1024 every prediction from
+    /// it is exact in f32), it has no side and none does.
+    #[test]
+    fn points_before_a_break_join_it_only_on_its_side() {
         let behind =
             |set: &'static [usize]| move |i: usize| f32::from(u8::from(set.contains(&i))) * 128.0;
         assert_eq!(located(&behind(&[19, 20])), Some(19));
@@ -202,6 +211,21 @@ mod tests {
         // 20 back on the wall: no side to share.
         assert_eq!(located(&behind(&[19])), Some(20));
         assert_eq!(located(&behind(&[17, 18, 19])), Some(20));
+    }
+
+    /// Every point [`locate`] predicts counts as a prediction, and so does its reference line:
+    /// with 19 and 18 behind the wall it predicts 19, 18 and 17 (which stops it), with 16 to 19
+    /// all four points it may reach back to; with 20 on the wall (no side), 19, which stops it.
+    #[test]
+    fn each_point_located_counts_a_prediction() {
+        let behind =
+            |set: &'static [usize]| move |i: usize| f32::from(u8::from(set.contains(&i))) * 128.0;
+        assert_eq!(located_on_wall(&behind(&[18, 19, 20])), Some((18, 4)));
+        assert_eq!(
+            located_on_wall(&behind(&[16, 17, 18, 19, 20])),
+            Some((16, 5))
+        );
+        assert_eq!(located_on_wall(&behind(&[19])), Some((20, 2)));
     }
 
     /// The boundary settles where the two fixed lines split the contested points best: at 20
