@@ -1004,5 +1004,36 @@ mod tests {
 }
 
 #[cfg(test)]
+mod many {
+    extern crate std;
+    use super::*;
+
+    /// Beyond `u16::MAX` points a two-byte bin could overflow: [`Scatter::of_blocks`] then
+    /// counts as [`Scatter::of_stream`] does. 70 000 points 3 mm apart on an arc of 3 m radius
+    /// around the scanner (every beam square to it; the arc run over again every 3 000
+    /// points), every other one 4.3 mm behind it, the last 3 000 of them 10.3 mm: over 65 536
+    /// one-beam residuals in one bin, about 3 000 in another, where an overflowed count would
+    /// put the median.
+    #[test]
+    fn more_points_than_a_bin_holds_count_as_the_stream() {
+        let wall: std::vec::Vec<Point> = (0..70_000)
+            .map(|i| {
+                let zig = if i < 67_000 { 4.3 } else { 10.3 };
+                let r = 3_000.0 + zig * (i % 2) as f32;
+                let (s, c) = math::sin_cos(0.001 * (i % 3000) as f32 - 1.5);
+                Point::new(r * c, r * s)
+            })
+            .collect();
+        let bits = |s: Scatter| (s.one.map(f32::to_bits), s.two.map(f32::to_bits));
+        let (blocks, stream) = (
+            Scatter::of_blocks(&wall, 2.0),
+            Scatter::of_stream(&wall, 2.0),
+        );
+        assert!(stream.one.is_some(), "{stream:?}");
+        assert_eq!(bits(blocks), bits(stream));
+    }
+}
+
+#[cfg(test)]
 #[path = "scatter_sign.rs"]
 mod sign;
