@@ -181,3 +181,79 @@ fn a_wall_at_80_degrees_is_a_line() {
         assert_eq!(ex.stats().veils, 0);
     }
 }
+
+/// An object's centre covariance turns with the scene: the same post (radius 40 mm, 2 m away,
+/// nothing else in view, no noise) seen at three bearings 30° and 55° apart (the ranges moved
+/// by 60 and 110 beams) gives covariances that are the first one rotated, element by element
+/// within 0.1 % of its largest; and its spread lies along the beam to the centre (the depth
+/// terms), not across it.
+#[test]
+fn an_object_s_covariance_turns_with_it() {
+    let g = ScanGeometry::LMS200_180_050;
+    let (start, step) = (f64::from(g.start_angle), f64::from(g.angle_step));
+    let (r, dist, at) = (40.0f64, 2000.0f64, 80usize);
+    let bearing = start + step * at as f64;
+    let (cx, cy) = (dist * bearing.cos(), dist * bearing.sin());
+    let exact: Vec<f32> = (0..361)
+        .map(|i| {
+            let b = start + step * i as f64;
+            let (dx, dy) = (b.cos(), b.sin());
+            // |t d − c|² = r²: t² − 2 t (d·c) + |c|² − r² = 0, the nearer root.
+            let dc = dx * cx + dy * cy;
+            let disc = dc * dc - (cx * cx + cy * cy - r * r);
+            if disc >= 0.0 {
+                (dc - disc.sqrt()) as f32
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let config = Config::default();
+    let mut ex = Extractor::<361, 16>::new();
+    let mut object_at = |shift: usize| {
+        let mut ranges = vec![0.0f32; 361];
+        ranges[shift..].copy_from_slice(&exact[..361 - shift]);
+        ex.extract(&Scan::from_mm(g, &ranges), &config).unwrap();
+        match ex.features() {
+            [Feature::Object(o)] => *o,
+            f => panic!("shift {shift}: {f:?}"),
+        }
+    };
+    let first = object_at(0);
+    let c0 = first.cov.map(|row| row.map(f64::from));
+    let scale = c0[0][0].abs().max(c0[1][1].abs()).max(c0[0][1].abs());
+    for shift in [60usize, 110] {
+        let o = object_at(shift);
+        let turn = step * shift as f64;
+        let (s, c) = turn.sin_cos();
+        let rot = [[c, -s], [s, c]];
+        // R C Rᵀ.
+        let mut want = [[0.0f64; 2]; 2];
+        for (i, row) in want.iter_mut().enumerate() {
+            for (j, w) in row.iter_mut().enumerate() {
+                *w = (0..2)
+                    .flat_map(|k| (0..2).map(move |l| (k, l)))
+                    .map(|(k, l)| rot[i][k] * c0[k][l] * rot[j][l])
+                    .sum();
+            }
+        }
+        for i in 0..2 {
+            for j in 0..2 {
+                let got = f64::from(o.cov[i][j]);
+                assert!(
+                    (got - want[i][j]).abs() <= 1e-3 * scale,
+                    "shift {shift}: cov {:?} against {want:?}",
+                    o.cov
+                );
+            }
+        }
+        // Along the beam to the centre against across it.
+        let n = f64::from(o.center.x.hypot(o.center.y));
+        let u = [f64::from(o.center.x) / n, f64::from(o.center.y) / n];
+        let q = |v: [f64; 2]| {
+            let cv = |i: usize| f64::from(o.cov[i][0]) * v[0] + f64::from(o.cov[i][1]) * v[1];
+            v[0] * cv(0) + v[1] * cv(1)
+        };
+        assert!(q(u) > 2.0 * q([-u[1], u[0]]), "shift {shift}: {:?}", o.cov);
+    }
+}

@@ -7,7 +7,7 @@ use super::super::join::join_collinear;
 use super::super::{emit, JOINS_MAX};
 use crate::config::Config;
 use crate::extractor::Extractor;
-use crate::feature::Feature;
+use crate::feature::{Feature, LineFeature};
 use crate::geometry::Point;
 use crate::scan::{Scan, ScanGeometry};
 
@@ -94,4 +94,32 @@ fn a_four_beam_face_keeps_its_beams() {
     assert_eq!(spans(&out), [(79, 82), (83, 100)].as_slice(), "{out:?}");
     let out = segments_of(&scene(&g, 79, true), (80, 97), (98, 101));
     assert_eq!(spans(&out), [(80, 97), (98, 101)].as_slice(), "{out:?}");
+}
+
+/// [`closer`]'s distance to a line counts the line's own uncertainty where the point lies:
+/// the wall's beam 100 (10° off the x axis, 529 mm from the line's foot) lies 15 mm beyond
+/// the line x = wall − 15 mm, 3 σ_r; with σ_α = 0.01 rad the line itself is uncertain by
+/// 529 σ_α = 5.3 mm there, and the residual's σ √(5² + 5.3²) mm puts the point within
+/// χ²₁ 99 % (4.2 of 6.63); without σ_α it would not be (9); far off the face's line. The
+/// same line seen with ρ's uncertainty only (σ_ρ 5.3 mm) agrees.
+#[test]
+fn a_line_s_own_uncertainty_counts_where_the_point_lies() {
+    use super::{closer, OFF_LINE_CHI2};
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let ranges = scene(&g, 80, false);
+    let config = Config::default();
+    let mut ex = Extractor::<181, 8>::new();
+    let judged = ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+        let Some(noise) = rule.noise() else {
+            panic!("the default rule")
+        };
+        let p = pass.point(100);
+        assert!((p.y - 529.0).abs() < 1.0, "{p:?}");
+        let line = |var_alpha: f32, var_rho: f32| {
+            LineFeature::new(83, 99, 17, 0.0, p.x - 15.0, var_alpha, var_rho, 0.0, p, p)
+        };
+        [line(1e-4, 0.0), line(0.0, 0.0), line(0.0, 28.0)]
+            .map(|l| closer(pass, noise, &l, 100, 80..=82, OFF_LINE_CHI2))
+    });
+    assert_eq!(judged, [true, false, true]);
 }
