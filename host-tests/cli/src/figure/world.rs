@@ -66,6 +66,8 @@ pub struct OdometryTrack {
     pub map: Vec<MapFeature>,
     /// The drawn scans' line segments placed by the odometry's pose.
     pub segments: Vec<((f64, f64), (f64, f64))>,
+    /// Whether the scans' own points helped (`pfe plot --points`), not the features alone.
+    pub points: bool,
 }
 
 /// What [`svg`] draws.
@@ -398,7 +400,11 @@ pub fn svg(w: &World) -> String {
                 ly + 110.0,
                 lx + 24.0
             ),
-            format!("odometry ({} scans)", o.poses.len()),
+            format!(
+                "odometry{} ({} scans)",
+                if o.points { " with points" } else { ", features" },
+                o.poses.len()
+            ),
         ));
         entries.push((
             String::new(),
