@@ -5,7 +5,7 @@
 //! pfe decode  FILE                                                              # raw LMS200 telegrams
 //! pfe plot FILE --format F [--config C] --scan K -o out.svg                     # Fig. 7-style SVG
 //! pfe plot FILE --format F --scans A..B --html page.html|--sheet grid.svg       # several scans, one scale
-//! pfe plot LOG --format carmen --world world.svg [--odometry]                   # the log in the world frame
+//! pfe plot LOG --format carmen --world world.svg [--odometry [--points]]        # the log in the world frame
 //! pfe odometry --format F FILE [--mcap run.mcap]                                # poses (JSON), Foxglove
 //! pfe eval|bench|emulate|record ...                                             # see their --help
 //! pfe completions bash|zsh|fish|elvish|powershell                               # shell completions

@@ -53,6 +53,10 @@ pub struct Args {
     /// map; a log without poses is then drawn in the odometry's frame.
     #[arg(long, requires = "world")]
     odometry: bool,
+    /// With --world --odometry: the odometry also uses the scans' own points, as `pfe
+    /// odometry --points` does (host only; the firmware registers features alone).
+    #[arg(long, requires = "odometry")]
+    points: bool,
     /// With --world: draw the points and features of every Nth scan (default: at most 200
     /// scans drawn); the trajectories keep every scan.
     #[arg(long, value_name = "N", requires = "world", value_parser = clap::value_parser!(u64).range(1..))]

@@ -199,6 +199,75 @@ fn world_plot_puts_the_points_on_the_walls() {
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
+/// `pfe plot --world --odometry --points` draws the odometry `pfe odometry --points` prints
+/// (its trajectory, placed at the log's first pose, within 5 mm of those poses; named "with
+/// points" in the legend; without `--points` "features"); `--points` without `--odometry` is
+/// refused.
+#[test]
+fn world_plot_draws_the_odometry_with_points_when_asked() {
+    let dir = TempDir::new("odometry-world-points");
+    let poses = turned();
+    let log = write(&dir, "room.log", &carmen(&poses, &poses));
+    for points in [false, true] {
+        let svg_path = dir.0.join(format!("world-{points}.svg"));
+        let mut args = vec!["plot", "--format", "carmen", arg(&log), "--world"];
+        args.extend([arg(&svg_path), "--odometry"]);
+        let mut odometry = vec!["odometry", "--format", "carmen", arg(&log)];
+        if points {
+            args.push("--points");
+            odometry.push("--points");
+        }
+        let out = pfe(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let svg = std::fs::read_to_string(&svg_path).unwrap();
+        let label = if points {
+            "odometry with points (40 scans)"
+        } else {
+            "odometry, features (40 scans)"
+        };
+        assert!(svg.contains(label), "{points}: no {label:?}");
+        let ((ax, bx), (ay, by)) = axes_of(&svg);
+        let tag = svg
+            .split("<polyline ")
+            .find(|t| t.contains(r#"class="odometry-trajectory""#))
+            .unwrap();
+        let drawn: Vec<(f64, f64)> = pixels(attr(&format!(" {tag}"), "points").unwrap())
+            .into_iter()
+            .map(|(px, py)| ((px - ax) / bx, (py - ay) / by))
+            .collect();
+        let out = pfe(&odometry);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let printed: Vec<[f64; 3]> = json_lines(&out)
+            .iter()
+            .map(|l| pose_of(&l["pose"]).0)
+            .collect();
+        assert_eq!((drawn.len(), printed.len()), (40, 40));
+        let (s, c) = poses[0][2].sin_cos();
+        for (d, p) in drawn.iter().zip(&printed) {
+            let w = (
+                poses[0][0] + c * p[0] - s * p[1],
+                poses[0][1] + s * p[0] + c * p[1],
+            );
+            assert!(
+                (d.0 - w.0).hypot(d.1 - w.1) < 5.0,
+                "{points}: drawn {d:?}, printed {w:?}"
+            );
+        }
+    }
+    let svg_path = dir.0.join("alone.svg");
+    let out = pfe(&[
+        "plot",
+        "--format",
+        "carmen",
+        arg(&log),
+        "--world",
+        arg(&svg_path),
+        "--points",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(!svg_path.exists());
+}
+
 /// `pfe odometry --mcap` on the analytic drive, read back by Python's `mcap`: per scan the
 /// scan, its features, the frames (odom → laser: the pose printed on stdout; world → odom:
 /// the log's first pose), the pose, the map and the trajectories; the map's lines lie on the

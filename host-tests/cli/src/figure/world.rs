@@ -66,6 +66,8 @@ pub struct OdometryTrack {
     pub map: Vec<MapFeature>,
     /// The drawn scans' line segments placed by the odometry's pose.
     pub segments: Vec<((f64, f64), (f64, f64))>,
+    /// Whether the scans' own points helped (`pfe plot --points`), not the features alone.
+    pub points: bool,
 }
 
 /// What [`svg`] draws.
@@ -398,7 +400,11 @@ pub fn svg(w: &World) -> String {
                 ly + 110.0,
                 lx + 24.0
             ),
-            format!("odometry ({} scans)", o.poses.len()),
+            format!(
+                "odometry{} ({} scans)",
+                if o.points { " with points" } else { ", features" },
+                o.poses.len()
+            ),
         ));
         entries.push((
             String::new(),
@@ -462,5 +468,86 @@ pub fn svg(w: &World) -> String {
         );
     }
     s.push_str("</svg>\n");
+    // The legend's longest text (DejaVu Sans at 12 px: about 7 px a character) widens the
+    // figure rather than run off its edge (a long log's counts, "odometry with points").
+    let chars = entries
+        .iter()
+        .map(|(_, t)| t.chars().count())
+        .max()
+        .unwrap_or(0);
+    let need = (lx + 32.0 + LEGEND_CHAR_W * chars as f64 + 12.0).ceil();
+    if need > c.width.round() {
+        let (w, h) = (c.width, c.height);
+        s = s.replacen(
+            &format!(r#"width="{w:.0}" height="{h:.0}" viewBox="0 0 {w:.0} {h:.0}""#),
+            &format!(r#"width="{need:.0}" height="{h:.0}" viewBox="0 0 {need:.0} {h:.0}""#),
+            1,
+        );
+    }
     s
+}
+
+/// Width allowed a character of the legend's text (DejaVu Sans, 12 px: 7 px on average), px.
+pub const LEGEND_CHAR_W: f64 = 7.2;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A long log's legend ("1839 ok, 115 degenerate, 54 none (×)") fits in the figure: every
+    /// text right of the plot ends, at [`LEGEND_CHAR_W`] a character, before its right edge.
+    #[test]
+    fn a_long_legend_widens_the_figure() {
+        let poses: Vec<Pose> = (0..2008).map(|i| [50.0 * f64::from(i), 0.0, 0.0]).collect();
+        let w = World {
+            title: "freiburg-campus-corrected.log.gz".into(),
+            placed_by: "the log's poses".into(),
+            frame: "world".into(),
+            scans: Vec::new(),
+            read: 2008,
+            every: 11,
+            log: poses.clone(),
+            odometry: Some(OdometryTrack {
+                covs: vec![[[1.0, 0.0], [0.0, 1.0]]; poses.len()],
+                poses,
+                degenerate: (0..115).collect(),
+                none: (200..254).collect(),
+                map: Vec::new(),
+                segments: Vec::new(),
+                points: true,
+            }),
+        };
+        let svg = svg(&w);
+        let number = |tag: &str, key: &str| -> f64 {
+            let at = tag.find(&format!(" {key}=\"")).map(|i| i + key.len() + 3);
+            at.and_then(|i| tag[i..].split('"').next())
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(f64::NAN)
+        };
+        let width = number(&svg[..svg.find('>').unwrap_or(0)], "width");
+        let mut checked = 0;
+        for part in svg.split("<text").skip(1) {
+            let (Some(end), Some(close)) = (part.find('>'), part.find("</text>")) else {
+                continue;
+            };
+            let x = number(&part[..end], "x");
+            let text = &part[end + 1..close];
+            if x > LEFT + 820.0 {
+                let chars = text
+                    .replace("&apos;", "'")
+                    .replace("&amp;", "&")
+                    .chars()
+                    .count();
+                assert!(
+                    x + LEGEND_CHAR_W * chars as f64 <= width,
+                    "{text:?} at {x} runs past {width}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(
+            svg.contains("1839 ok, 115 degenerate, 54 none") && checked >= 8,
+            "{checked}"
+        );
+    }
 }

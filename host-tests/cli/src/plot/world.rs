@@ -75,9 +75,7 @@ pub(super) fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
         .map(|n| usize::try_from(n).unwrap_or(usize::MAX))
         .unwrap_or_else(|| scans.len().div_ceil(WORLD_DRAWN).max(1));
     let odometry_poses: Option<(Vec<Pose>, OdometryTrack)> = a.odometry.then(|| {
-        let mut odo = Box::new(pfe_pose::Odometry::<{ crate::odometry::MAP }>::new(
-            pfe_pose::Config::default(),
-        ));
+        let mut odo = Box::new(pfe_pose::PointOdometry::new_default());
         let mut track = OdometryTrack {
             poses: Vec::with_capacity(scans.len()),
             covs: Vec::with_capacity(scans.len()),
@@ -85,14 +83,15 @@ pub(super) fn run_world(a: &Args, output: &Path) -> Result<(), Failure> {
             none: Vec::new(),
             map: Vec::new(),
             segments: Vec::new(),
+            points: a.points,
         };
         let mut raw: Vec<(Pose, [[f64; 2]; 2])> = Vec::with_capacity(scans.len());
-        for (k, (_, features)) in scans.iter().enumerate() {
-            let obs: Vec<pfe_pose::Observation> = features
-                .iter()
-                .filter_map(pfe_pose::Observation::from_feature)
-                .collect();
-            let step = odo.update(&obs, None);
+        for (k, (record, features)) in scans.iter().enumerate() {
+            let step = if a.points {
+                odo.update_scan(features, &record.geometry, &record.ranges_mm, None)
+            } else {
+                odo.update_features(features, None)
+            };
             match step.status {
                 pfe_pose::Status::Ok => {}
                 pfe_pose::Status::Degenerate { .. } => track.degenerate.push(k),
