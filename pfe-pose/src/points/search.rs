@@ -55,7 +55,7 @@ const SEARCH_DISTINCT: f32 = 0.05;
 const SEARCH_RESOLVE: f32 = 0.9;
 /// ...or when the profile has one clear maximum: it agrees this much better than every other
 /// local maximum (or end of the profile) at least 0.3 m from it...
-const SEARCH_CLEAR: f32 = 0.1;
+const SEARCH_CLEAR: f32 = 0.08;
 /// ...and the ICP's answer from it agrees at least this well, and at most this much less
 /// than the degenerate answer (the ICP fits the surfaces, not the agreement: a few
 /// hundredths either way are its tolerance's, not the pose's).
