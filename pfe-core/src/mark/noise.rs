@@ -48,13 +48,16 @@ impl Walk {
     }
 }
 
-/// The walk's points and their ranges, of one length, and whether they are unevenly spaced in
-/// bearing (see [`super::mark`]).
+/// The walk's points and their ranges, of one length, whether they are unevenly spaced in
+/// bearing (see [`super::mark`]), and whether a step within every jump limit is taken for no
+/// jump before its limit is computed ([`never_jumps2`]; not on the slow path alone, which
+/// the tests hold the others to).
 #[derive(Clone, Copy)]
 struct Cloud<'a> {
     points: &'a [Point],
     ranges: &'a [f32],
     uneven: bool,
+    near_first: bool,
 }
 
 /// Marks the points of `pass` in the default mode (`uneven`: see [`super::mark`]); returns the
@@ -110,6 +113,7 @@ fn walk<const FAST: bool>(
         points,
         ranges,
         uneven,
+        near_first: tight != Tight::Off,
     };
     // Unevenly spaced points without de-skewing: the stale line's run has a tight loop too.
     let steady = tight != Tight::Off && uneven && pass.motion.is_none();
@@ -183,6 +187,7 @@ fn step<const FAST: bool>(
         points,
         ranges,
         uneven,
+        near_first,
     } = cloud;
     if !pass.valid(k) {
         *walk = Walk::default();
@@ -208,7 +213,8 @@ fn step<const FAST: bool>(
         // limit (`prev` is valid: its range is too).
         let o = pass.origin(k);
         let seen = |q: Point| Point::new(q.x - o.x, q.y - o.y);
-        !(d2 <= never_jumps2(rule)) && d2 > sq(rule.jump_limit_between(seen(prev), seen(p), prev_r))
+        let near = near_first && d2 <= never_jumps2(rule);
+        !near && d2 > sq(rule.jump_limit_between(seen(prev), seen(p), prev_r))
     } else {
         d2 > sq(rule.jump_limit(prev_r))
     };
