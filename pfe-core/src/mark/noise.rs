@@ -48,13 +48,16 @@ impl Walk {
     }
 }
 
-/// The walk's points and their ranges, of one length, and whether they are unevenly spaced in
-/// bearing (see [`super::mark`]).
+/// The walk's points and their ranges, of one length, whether they are unevenly spaced in
+/// bearing (see [`super::mark`]), and whether a step within every jump limit is taken for no
+/// jump before its limit is computed ([`never_jumps2`]; not on the slow path alone, which
+/// the tests hold the others to).
 #[derive(Clone, Copy)]
 struct Cloud<'a> {
     points: &'a [Point],
     ranges: &'a [f32],
     uneven: bool,
+    near_first: bool,
 }
 
 /// Marks the points of `pass` in the default mode (`uneven`: see [`super::mark`]); returns the
@@ -68,21 +71,37 @@ pub(crate) fn mark(pass: &mut Pass<'_>, rule: &NoiseRule, uneven: bool) -> Neigh
         && !uneven
         && floor * floor <= WindowLine::FLOOR2_WITHIN * rule.k_sigma2;
     if fast {
-        walk::<true>(pass, rule, uneven, true)
+        walk::<true>(pass, rule, uneven, TIGHT)
     } else {
-        walk::<false>(pass, rule, uneven, true)
+        walk::<false>(pass, rule, uneven, TIGHT)
     }
 }
 
+/// How the walk without its fast path tests the stale line's run over unevenly spaced points
+/// seen from the origin: each point on its own (`Off`), or in a tight loop, one point at a
+/// time (`Serial`, [`accepted_run_after_serial`]) or [`LANES`] at once (`Lanes`,
+/// [`accepted_run_after_lanes`]): the same marks and counts.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Tight {
+    Off,
+    Serial,
+    Lanes,
+}
+
+/// [`Tight::Lanes`] on the host (`std`: a vector unit), [`Tight::Serial`] on the board.
+const TIGHT: Tight = match cfg!(feature = "std") {
+    true => Tight::Lanes,
+    false => Tight::Serial,
+};
+
 /// The walk over every point, with the fast path (`FAST`: the scanner at the origin, points
-/// evenly spaced: the uneven cases' tests compile out) or without; without it, `tight` runs
-/// the stale line's tests of unevenly spaced points without de-skewing in a tight loop
-/// ([`accepted_run_after`]: the same marks and counts as testing each point on its own).
+/// evenly spaced: the uneven cases' tests compile out) or without, then testing unevenly
+/// spaced points seen from the origin as `tight` says.
 fn walk<const FAST: bool>(
     pass: &mut Pass<'_>,
     rule: &NoiseRule,
     uneven: bool,
-    tight: bool,
+    tight: Tight,
 ) -> Neighbours {
     let mut noted = Some(Vec::new());
     // Points and ranges cut to the number of readings once: one bounds check for both.
@@ -94,9 +113,10 @@ fn walk<const FAST: bool>(
         points,
         ranges,
         uneven,
+        near_first: tight != Tight::Off,
     };
     // Unevenly spaced points without de-skewing: the stale line's run has a tight loop too.
-    let steady = tight && uneven && pass.motion.is_none();
+    let steady = tight != Tight::Off && uneven && pass.motion.is_none();
     let mut walk = Walk::default();
     let mut k = 0usize;
     while k < n {
@@ -118,7 +138,13 @@ fn walk<const FAST: bool>(
             // in a tight loop. The point it stops at is tested again by `step` (and counted
             // there), as the slow path alone would.
             let stop = walk.next_check(k, until + 1).min(n);
-            let next = accepted_run_after(points, ranges, k, stop, line, rule);
+            // (The board's build leaves the lanes out.)
+            let next = match tight {
+                Tight::Lanes if cfg!(any(feature = "std", test)) => {
+                    accepted_run_after_lanes(points, ranges, k, stop, line, rule)
+                }
+                _ => accepted_run_after_serial(points, ranges, k, stop, line, rule),
+            };
             pass.stats.predictions += next - k;
             k = next;
             if k >= n {
@@ -161,6 +187,7 @@ fn step<const FAST: bool>(
         points,
         ranges,
         uneven,
+        near_first,
     } = cloud;
     if !pass.valid(k) {
         *walk = Walk::default();
@@ -179,15 +206,18 @@ fn step<const FAST: bool>(
     else {
         return;
     };
-    let limit = if !FAST && uneven {
+    let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+    let d2 = ex * ex + ey * ey;
+    let jump = if !FAST && uneven {
+        // No limit between points of their own angle apart is needed for a step within every
+        // limit (`prev` is valid: its range is too).
         let o = pass.origin(k);
         let seen = |q: Point| Point::new(q.x - o.x, q.y - o.y);
-        rule.jump_limit_between(seen(prev), seen(p), prev_r)
+        let near = near_first && d2 <= never_jumps2(rule);
+        !near && d2 > sq(rule.jump_limit_between(seen(prev), seen(p), prev_r))
     } else {
-        rule.jump_limit(prev_r)
+        d2 > sq(rule.jump_limit(prev_r))
     };
-    let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-    let jump = ex * ex + ey * ey > limit * limit;
     let boundary = if jump {
         // A jump no surface explains (also where the window's line runs along the beam and
         // the prediction says nothing).
@@ -269,6 +299,23 @@ fn step<const FAST: bool>(
             walk.pending = None;
         }
     }
+}
+
+/// The square of a step no jump limit is below (`NoiseRule::jump_add`, which each adds to a
+/// share of the gap that is not negative for a predecessor at a finite range that is not
+/// negative: a valid point's); below 0, none, when `jump_add` is negative.
+#[inline(always)]
+fn never_jumps2(rule: &NoiseRule) -> f32 {
+    match rule.jump_add >= 0.0 {
+        true => sq(rule.jump_add),
+        false => -1.0,
+    }
+}
+
+/// `x²`.
+#[inline(always)]
+fn sq(x: f32) -> f32 {
+    x * x
 }
 
 /// Whether `line` accepts point `k` ([`WindowLine::accepts`]: the lever of the beam after the
@@ -389,27 +436,6 @@ fn accepted_run(
     }
 }
 
-/// [`accepted_run_after_serial`], or with the `std` feature (the host)
-/// [`accepted_run_after_lanes`]: the same point.
-#[inline(always)]
-fn accepted_run_after(
-    points: &[Point],
-    ranges: &[f32],
-    from: usize,
-    to: usize,
-    line: &WindowLine,
-    rule: &NoiseRule,
-) -> usize {
-    #[cfg(feature = "std")]
-    {
-        accepted_run_after_lanes(points, ranges, from, to, line, rule)
-    }
-    #[cfg(not(feature = "std"))]
-    {
-        accepted_run_after_serial(points, ranges, from, to, line, rule)
-    }
-}
-
 /// Points [`accepted_run_after_lanes`] tests at once.
 const LANES: usize = 8;
 
@@ -418,7 +444,7 @@ const LANES: usize = 8;
 /// same tests of the same points (a point's test reads only it and its predecessor), so the
 /// same answer; past it, the tests are wasted (at most `LANES − 1`). For a vector unit (the
 /// host).
-#[cfg_attr(not(feature = "std"), allow(dead_code))]
+#[cfg_attr(not(any(feature = "std", test)), allow(dead_code))]
 fn accepted_run_after_lanes(
     points: &[Point],
     ranges: &[f32],
@@ -457,8 +483,14 @@ fn accepted_run_after_lanes(
             *ok = (ex * ex + ey * ey <= limit * limit)
                 & seen.accepts_after_lanes(&sprev, (sp.x, sp.y), r, k_sigma2, floor);
         }
-        if let Some(j) = fit.iter().take(end - at).position(|ok| !ok) {
-            return at + j;
+        // The lanes that failed as the bits of a mask (those past `end` are left `true`): its
+        // lowest bit is the first point that fails.
+        let failed = fit
+            .iter()
+            .enumerate()
+            .fold(0u32, |m, (j, &ok)| m | u32::from(!ok) << j);
+        if failed != 0 {
+            return at + failed.trailing_zeros() as usize;
         }
         at = end;
     }
@@ -495,7 +527,6 @@ fn jump_limit_between_lanes(
 /// ([`crate::rule::NoiseRule::jump_limit_between`]), or not accepted with the lever of its own
 /// step ([`WindowLine::accepts_after`]); the same arithmetic as [`step`] and [`line_accepts`]
 /// with the scanner at the origin.
-#[cfg_attr(feature = "std", allow(dead_code))]
 fn accepted_run_after_serial(
     points: &[Point],
     ranges: &[f32],
@@ -510,17 +541,19 @@ fn accepted_run_after_serial(
     let o = Point::new(0.0, 0.0);
     let seen = line.seen_from(o);
     let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
+    let near2 = never_jumps2(rule);
     for (at, (p, &r)) in (from..).zip(pts.iter().zip(rs)) {
         // An invalid point is NaN (`Point::INVALID`): it fails the jump test.
         let (sp, sprev) = (
             Point::new(p.x - o.x, p.y - o.y),
             Point::new(prev.x - o.x, prev.y - o.y),
         );
-        let limit = rule.jump_limit_between(sprev, sp, prev_r);
+        // A step within every limit needs none at the points' own angle apart (`prev_r` is
+        // a valid point's range).
         let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-        if !(ex * ex + ey * ey <= limit * limit)
-            || !seen.accepts_after(&sprev, (sp.x, sp.y), r, k_sigma2, floor)
-        {
+        let d2 = ex * ex + ey * ey;
+        let near = d2 <= near2 || d2 <= sq(rule.jump_limit_between(sprev, sp, prev_r));
+        if !near || !seen.accepts_after(&sprev, (sp.x, sp.y), r, k_sigma2, floor) {
             return at;
         }
         (prev, prev_r) = (*p, r);
