@@ -4,11 +4,14 @@
 //! of both surfaces), and a segment that starts at an occlusion edge can take one point of the
 //! surface before it. The marks are then one beam off, and a face seen over three beams comes
 //! out as a four-point line, which no surface is: three beams are too few for a feature.
+//! Near the corner the point lies within the noise of both lines; then where the two lines
+//! meet tells which surface its beam hit ([`beyond_corner`]).
 
 use crate::config::Config;
 use crate::feature::LineFeature;
-use crate::fit::line::fit_line;
+use crate::fit::line::{fit_line, LineFit};
 use crate::flags::JUMP;
+use crate::geometry::Point;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
 use crate::rule::NoiseRule;
@@ -21,6 +24,9 @@ const ON_LINE_CHI2: f32 = 6.63;
 /// 95 % of χ²₁: a point this far from the line of its segment's other points (in its
 /// residual's σ) may be another surface's.
 const OFF_LINE_CHI2: f32 = 3.84;
+/// σ of the corner's position by which it must pass a point's beam for the point to be the
+/// other surface's ([`beyond_corner`]).
+const CORNER_SIGMAS: f32 = 1.0;
 /// Most points of a segment whose end point may move (its other points are fitted again).
 const REST_MAX: usize = 32;
 
@@ -28,8 +34,9 @@ const REST_MAX: usize = 32;
 /// between them), the end point of one (of at most [`REST_MAX`] points) next to the other
 /// (longer than `min_points`) moves to the other when it lies on the other's line (within
 /// [`ON_LINE_CHI2`] of its residual's variance: the range noise's and the line's own there),
-/// off the line of its segment's other points (beyond [`OFF_LINE_CHI2`], or [`ON_LINE_CHI2`]
-/// when the rest is too short for a feature) and nearer the other's. Both are emitted again.
+/// and off the line of its segment's other points (beyond [`OFF_LINE_CHI2`], or [`ON_LINE_CHI2`]
+/// when the rest is too short for a feature, and nearer the other's) or beyond the corner where
+/// the two lines meet ([`beyond_corner`]). Both are emitted again.
 /// Returns whether it moved. Each move takes one of `moves` (the scan's joins): the work is
 /// bounded.
 pub(super) fn give_corner_point(
@@ -73,9 +80,10 @@ pub(super) fn give_corner_point(
     true
 }
 
-/// Whether point `i` lies on the line `l` (within [`ON_LINE_CHI2`]) and closer to it than to
-/// the line of the points `rest` (the short segment's others), each distance in its own σ: the
-/// range noise's plus that of the line there.
+/// Whether point `i` lies on the line `l` (within [`ON_LINE_CHI2`]) and either closer to it
+/// than to the line of the points `rest` (the short segment's others), each distance in its own
+/// σ (the range noise's plus that of the line there), or beyond the corner of the two lines
+/// ([`beyond_corner`]).
 fn closer(
     pass: &Pass<'_>,
     rule: &NoiseRule,
@@ -98,6 +106,12 @@ fn closer(
     if !(on <= ON_LINE_CHI2) {
         return false;
     }
+    // The rest's point next to `i`.
+    let next = if *rest.start() > i {
+        *rest.start()
+    } else {
+        *rest.end()
+    };
     // The other line, fitted to `rest` and carried to the point: its variance there is
     // σ_r² (1/n + u²/Σu²), u the point's position along it from the centroid.
     let Some(f) = pass.points.get(rest).and_then(|r| fit_line(r).ok()) else {
@@ -109,7 +123,47 @@ fn closer(
     let var_f = var_r * (1.0 + 1.0 / f.n as f32 + u * u / suu);
     let off = f.signed_distance(&p);
     let off = off * off / var_f;
-    off >= off_chi2 && on < off
+    (off >= off_chi2 && on < off) || beyond_corner(l, &f, var_r, p, pass.point(next))
+}
+
+/// Whether the corner where the lines `l` and `f` meet lies between the beams of the points
+/// `p` and `q` (in front of the scanner), off `p`'s beam by more than [`CORNER_SIGMAS`] times
+/// its σ there: then `p`'s beam passes the corner on `l`'s side and hits `l`'s surface, `q`'s
+/// (and those beyond it) `f`'s. Which surface a beam near the corner hits does not show in its
+/// range (within the noise of both lines) but in where the lines, fitted to the other points,
+/// meet. The corner's σ across the beam is that of each line there (`f`'s from `var_r` and its
+/// points' moments, `l`'s from its covariance) carried along the other line.
+fn beyond_corner(l: &LineFeature, f: &LineFit, var_r: f32, p: Point, q: Point) -> bool {
+    let (s1, c1) = crate::math::sin_cos(l.alpha);
+    let (s2, c2) = (f.sin_alpha, f.cos_alpha);
+    // n₁·x = ρ₁, n₂·x = ρ₂ by Cramer's rule.
+    let det = c1 * s2 - s1 * c2;
+    let c = Point::new(
+        (l.rho * s2 - f.rho * s1) / det,
+        (c1 * f.rho - c2 * l.rho) / det,
+    );
+    let cross = |a: Point, b: Point| a.x * b.y - a.y * b.x;
+    let turn = cross(p, q);
+    // Each line's variance at the corner: f's σ_r² (1/n + u²/Σu²), l's from its covariance.
+    let u = (c.y - f.centroid.y) * c2 - (c.x - f.centroid.x) * s2;
+    let suu = s2 * s2 * f.sxx + c2 * c2 * f.syy - 2.0 * s2 * c2 * f.sxy;
+    let var_f = var_r * (1.0 / f.n as f32 + u * u / suu);
+    let t = c1 * c.y - s1 * c.x;
+    let var_l = t * t * l.var_alpha + l.var_rho - 2.0 * t * l.cov_alpha_rho;
+    // A shift of one line by δ moves the corner along the other by δ / |det|; across the beam
+    // (unit u) that is δ |u·n| / |det|, n the normal of the line it moves along.
+    let norm = p.norm();
+    let (ux, uy) = (p.x / norm, p.y / norm);
+    let across_l = ux * c1 + uy * s1;
+    let across_f = ux * c2 + uy * s2;
+    let var_c = (var_f * across_l * across_l + var_l * across_f * across_f) / (det * det);
+    // The corner's distance from p's beam, signed towards q's.
+    let off = cross(p, c) / norm * turn.signum();
+    // Non-finite values fail every test.
+    p.x * c.x + p.y * c.y > 0.0
+        && off > 0.0
+        && off * off > CORNER_SIGMAS * CORNER_SIGMAS * var_c
+        && cross(c, q) * turn > 0.0
 }
 
 #[cfg(test)]

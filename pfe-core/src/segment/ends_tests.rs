@@ -16,8 +16,14 @@ use crate::scan::{Scan, ScanGeometry};
 /// 0.25° past beam 82, so beam 83 is 28 mm off the face's line. No noise; other beams see
 /// nothing. `mirrored`: the same scene seen upside down (beam i at 180 − i).
 fn scene(g: &ScanGeometry, face: usize, mirrored: bool) -> [f32; 181] {
+    scene_at(g, (face, 82), 0.25, mirrored)
+}
+
+/// [`scene`] with the face over the beams `face.0..=face.1` and the corner `past`° past beam
+/// `face.1`, the wall from beam `face.1 + 1` to 100.
+fn scene_at(g: &ScanGeometry, face: (usize, usize), past: f32, mirrored: bool) -> [f32; 181] {
     let d2r = core::f32::consts::PI / 180.0;
-    let corner_bearing = g.bearing(82) + 0.25 * d2r;
+    let corner_bearing = g.bearing(face.1) + past * d2r;
     let c = Point::new(
         3000.0,
         3000.0 * crate::math::sin_cos(corner_bearing).0 / crate::math::sin_cos(corner_bearing).1,
@@ -29,8 +35,8 @@ fn scene(g: &ScanGeometry, face: usize, mirrored: bool) -> [f32; 181] {
         let i = if mirrored { 180 - j } else { j };
         let (s, co) = crate::math::sin_cos(g.bearing(i));
         match i {
-            83..=100 => 3000.0 / co,
-            _ if (face..=82).contains(&i) => rho_a / (h * (co - s)),
+            _ if (face.1 + 1..=100).contains(&i) => 3000.0 / co,
+            _ if (face.0..=face.1).contains(&i) => rho_a / (h * (co - s)),
             _ => f32::NAN,
         }
     })
@@ -122,4 +128,30 @@ fn a_line_s_own_uncertainty_counts_where_the_point_lies() {
             .map(|l| closer(pass, noise, &l, 100, 80..=82, OFF_LINE_CHI2))
     });
     assert_eq!(judged, [true, false, true]);
+}
+
+/// A face seen over three beams (80..=82) whose corner with the wall is 0.6° past beam 82 (0.4°
+/// before beam 83): beam 83 hits the wall 21 mm past the corner, 15 mm off the face's line, within
+/// the noise of the line of the face's three beams carried there, so its range does not tell;
+/// where the two lines meet, between beams 82 and 83, does: beam 83 goes to the wall and the
+/// face's three beams are too few for a feature. Seen upside down the same.
+#[test]
+fn a_beam_past_the_corner_of_two_lines_is_the_far_line_s() {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let out = segments_of(&scene_at(&g, (80, 82), 0.6, false), (80, 83), (84, 100));
+    assert_eq!(spans(&out), [(83, 100)].as_slice(), "{out:?}");
+    let out = segments_of(&scene_at(&g, (80, 82), 0.6, true), (80, 96), (97, 100));
+    assert_eq!(spans(&out), [(80, 97)].as_slice(), "{out:?}");
+}
+
+/// A face seen over four beams (80..=83) whose corner with the wall is 0.3° past beam 83: beam 83
+/// lies within the noise of the wall's line too (11 mm off it), but the corner lies past its beam
+/// on the wall's side, so it stays with the face. Seen upside down the same.
+#[test]
+fn a_beam_before_the_corner_of_two_lines_stays() {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let out = segments_of(&scene_at(&g, (80, 83), 0.3, false), (80, 83), (84, 100));
+    assert_eq!(spans(&out), [(80, 83), (84, 100)].as_slice(), "{out:?}");
+    let out = segments_of(&scene_at(&g, (80, 83), 0.3, true), (80, 96), (97, 100));
+    assert_eq!(spans(&out), [(80, 96), (97, 100)].as_slice(), "{out:?}");
 }
