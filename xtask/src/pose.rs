@@ -1,7 +1,7 @@
 //! `cargo xtask pose`: the pose benchmark (`pfe posebench`, issue 40) on the shared CARMEN
 //! logs (every CARMEN log in `../shared/data/carmen`); writes docs/POSE.md's generated
 //! section, pfe-pose beside the PL-ICP baseline (`--baseline`), and its pictures
-//! (docs/pose-intel.svg, -fhw.svg, -freiburg-campus.svg: `pfe plot --world --odometry`). `--quick` is CI's short run (the first 100 pairs of each log, printed, no
+//! (docs/pose-intel.svg, -fhw.svg, -freiburg-campus.svg: `pfe plot --world --odometry --points`). `--quick` is CI's short run (the first 100 pairs of each log, printed, no
 //! document); other arguments (`--odometry`, `--force`) pass through. Skips loudly, exit 0,
 //! when the shared data is absent.
 
@@ -31,8 +31,9 @@ pub fn run(args: &[String]) -> Result<()> {
 /// hall (fhw), an outdoor campus (freiburg-campus).
 const PICTURED: [&str; 3] = ["intel", "fhw", "freiburg-campus"];
 
-/// `pfe plot --world --odometry` of the [`PICTURED`] logs: the feature odometry's trajectory
-/// and map beside the log's corrected poses.
+/// `pfe plot --world --odometry --points` of the [`PICTURED`] logs: the host's odometry (the
+/// features and the scans' own points, as the table measures it) beside the log's corrected
+/// poses.
 fn pictures(logs: &[String], args: &[String]) -> Result<()> {
     for name in PICTURED {
         let Some(log) = logs.iter().find(|l| {
@@ -43,7 +44,7 @@ fn pictures(logs: &[String], args: &[String]) -> Result<()> {
             continue;
         };
         let mut cmd = util::pfe();
-        cmd.args(["plot", "--format", "carmen", log, "--odometry", "--world"])
+        cmd.args(["plot", "--format", "carmen", log, "--odometry", "--points", "--world"])
             .arg(format!("docs/pose-{name}.svg"))
             .args(args.iter().filter(|a| *a == "--force"));
         util::run(&mut cmd)?;
