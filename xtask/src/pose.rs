@@ -44,9 +44,17 @@ fn pictures(logs: &[String], args: &[String]) -> Result<()> {
             continue;
         };
         let mut cmd = util::pfe();
-        cmd.args(["plot", "--format", "carmen", log, "--odometry", "--points", "--world"])
-            .arg(format!("docs/pose-{name}.svg"))
-            .args(args.iter().filter(|a| *a == "--force"));
+        cmd.args([
+            "plot",
+            "--format",
+            "carmen",
+            log,
+            "--odometry",
+            "--points",
+            "--world",
+        ])
+        .arg(format!("docs/pose-{name}.svg"))
+        .args(args.iter().filter(|a| *a == "--force"));
         util::run(&mut cmd)?;
     }
     Ok(())
