@@ -87,6 +87,20 @@ fn pixels(data: &str) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Runs `pfe plot --format FORMAT FILE --world SVG` with `extra` arguments.
+fn world_plot(
+    format: &str,
+    file: &std::path::Path,
+    svg: &std::path::Path,
+    extra: &[&str],
+) -> std::process::Output {
+    pfe(&[
+        &["plot", "--format", format, arg(file), "--world", arg(svg)],
+        extra,
+    ]
+    .concat())
+}
+
 /// `pfe plot --world --odometry` on the analytic drive (a CARMEN log with the true poses):
 /// every drawn point lands on the room's walls and pillars (read back through the figure's
 /// own tick labels), the log's trajectory is the truth, the odometry's within 50 mm of it;
@@ -98,15 +112,7 @@ fn world_plot_puts_the_points_on_the_walls() {
     let poses = turned();
     let log = write(&dir, "room.log", &carmen(&poses, &poses));
     let svg_path = dir.0.join("world.svg");
-    let out = pfe(&[
-        "plot",
-        "--format",
-        "carmen",
-        arg(&log),
-        "--world",
-        arg(&svg_path),
-        "--odometry",
-    ]);
+    let out = world_plot("carmen", &log, &svg_path, &["--odometry"]);
     assert!(out.status.success(), "{}", stderr(&out));
     let svg = std::fs::read_to_string(&svg_path).unwrap();
     let ((ax, bx), (ay, by)) = axes_of(&svg);
@@ -151,7 +157,7 @@ fn world_plot_puts_the_points_on_the_walls() {
     // No poses: refused alone, in the odometry's frame with --odometry.
     let csv = write(&dir, "room.csv", &csv(&poses));
     let other = dir.0.join("csv.svg");
-    let out = pfe(&["plot", "--format", "csv", arg(&csv), "--world", arg(&other)]);
+    let out = world_plot("csv", &csv, &other, &[]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(
         stderr(&out).contains("no scan has a pose"),
@@ -159,15 +165,7 @@ fn world_plot_puts_the_points_on_the_walls() {
         stderr(&out)
     );
     assert!(!other.exists());
-    let out = pfe(&[
-        "plot",
-        "--format",
-        "csv",
-        arg(&csv),
-        "--world",
-        arg(&other),
-        "--odometry",
-    ]);
+    let out = world_plot("csv", &csv, &other, &["--odometry"]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(std::fs::read_to_string(&other)
         .unwrap()
@@ -175,27 +173,12 @@ fn world_plot_puts_the_points_on_the_walls() {
 
     // A file of the user's: left alone (exit 2), replaced with --force; pfe's own: replaced.
     let mine = write(&dir, "mine.svg", "<svg>mine</svg>");
-    let args = [
-        "plot",
-        "--format",
-        "carmen",
-        arg(&log),
-        "--world",
-        arg(&mine),
-    ];
-    let out = pfe(&args);
+    let out = world_plot("carmen", &log, &mine, &[]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert_eq!(std::fs::read_to_string(&mine).unwrap(), "<svg>mine</svg>");
-    let out = pfe(&[
-        "plot",
-        "--format",
-        "carmen",
-        arg(&log),
-        "--world",
-        arg(&svg_path),
-    ]);
+    let out = world_plot("carmen", &log, &svg_path, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let out = pfe(&[&args[..], &["--force"]].concat());
+    let out = world_plot("carmen", &log, &mine, &["--force"]);
     assert!(out.status.success(), "{}", stderr(&out));
 }
 
@@ -210,14 +193,14 @@ fn world_plot_draws_the_odometry_with_points_when_asked() {
     let log = write(&dir, "room.log", &carmen(&poses, &poses));
     for points in [false, true] {
         let svg_path = dir.0.join(format!("world-{points}.svg"));
-        let mut args = vec!["plot", "--format", "carmen", arg(&log), "--world"];
-        args.extend([arg(&svg_path), "--odometry"]);
         let mut odometry = vec!["odometry", "--format", "carmen", arg(&log)];
-        if points {
-            args.push("--points");
+        let extra: &[&str] = if points {
             odometry.push("--points");
-        }
-        let out = pfe(&args);
+            &["--odometry", "--points"]
+        } else {
+            &["--odometry"]
+        };
+        let out = world_plot("carmen", &log, &svg_path, extra);
         assert!(out.status.success(), "{}", stderr(&out));
         let svg = std::fs::read_to_string(&svg_path).unwrap();
         let label = if points {
@@ -255,15 +238,7 @@ fn world_plot_draws_the_odometry_with_points_when_asked() {
         }
     }
     let svg_path = dir.0.join("alone.svg");
-    let out = pfe(&[
-        "plot",
-        "--format",
-        "carmen",
-        arg(&log),
-        "--world",
-        arg(&svg_path),
-        "--points",
-    ]);
+    let out = world_plot("carmen", &log, &svg_path, &["--points"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(!svg_path.exists());
 }
