@@ -133,6 +133,29 @@ fn lcg(seed: &mut u32) -> f32 {
     (*seed >> 8) as f32 / (1u32 << 24) as f32
 }
 
+/// Range noise of σ `sigma` (the sum of three uniform draws, scaled).
+fn noise_of(seed: &mut u32, sigma: f32) -> f32 {
+    (lcg(seed) + lcg(seed) + lcg(seed) - 1.5) * 2.0 * sigma
+}
+
+/// Point `i` of range `r` seen from `o` along the unit direction `(c, s)`, when it is a return
+/// within 8 m (else left invalid).
+fn seen(
+    points: &mut [Point; 361],
+    ranges: &mut [f32; 361],
+    i: usize,
+    (o, (c, s)): (Point, (f32, f32)),
+    r: f32,
+) {
+    if let (true, Some(p), Some(slot)) = (
+        r.is_finite() && r < 8000.0,
+        points.get_mut(i),
+        ranges.get_mut(i),
+    ) {
+        (*p, *slot) = (Point::new(o.x + r * c, o.y + r * s), r);
+    }
+}
+
 fn room(seed: &mut u32) -> Room {
     let mut walls = heapless::Vec::new();
     let mut pillars = heapless::Vec::new();
@@ -321,7 +344,7 @@ fn the_fast_path_marks_what_the_slow_path_marks() {
                 (Point::new(0.0, 0.0), 0.0)
             };
             let (s, c) = crate::math::sin_cos(g.bearing(i) + turn);
-            let noise = (lcg(&mut seed) + lcg(&mut seed) + lcg(&mut seed) - 1.5) * 2.0 * sigma;
+            let noise = noise_of(&mut seed, sigma);
             let u = lcg(&mut seed);
             let r = if u < 0.01 {
                 f32::NAN
@@ -330,9 +353,7 @@ fn the_fast_path_marks_what_the_slow_path_marks() {
             } else {
                 cast(o, (c, s), &scene) + noise
             };
-            if r.is_finite() && r < 8000.0 {
-                (points[i], ranges[i]) = (Point::new(o.x + r * c, o.y + r * s), r);
-            }
+            seen(&mut points, &mut ranges, i, (o, (c, s)), r);
         }
         let cloud = (&points[..], &ranges[..]);
         let (slow, slow_n) = walked_counted(cloud, (None, uneven), &config, How::Slow);
@@ -393,7 +414,7 @@ fn the_tight_loops_over_uneven_points_mark_what_the_slow_path_marks() {
                 _ => (Point::new(0.0, 0.0), 0.0),
             };
             let (s, c) = crate::math::sin_cos(g.bearing(i) + turn);
-            let noise = (lcg(&mut seed) + lcg(&mut seed) + lcg(&mut seed) - 1.5) * 2.0 * sigma;
+            let noise = noise_of(&mut seed, sigma);
             let u = lcg(&mut seed);
             if u < 0.005 {
                 dropout = 1 + (20.0 * lcg(&mut seed)) as usize;
@@ -406,9 +427,7 @@ fn the_tight_loops_over_uneven_points_mark_what_the_slow_path_marks() {
             } else {
                 cast(o, (c, s), &scene) + noise
             };
-            if r.is_finite() && r < 8000.0 {
-                (points[i], ranges[i]) = (Point::new(o.x + r * c, o.y + r * s), r);
-            }
+            seen(&mut points, &mut ranges, i, (o, (c, s)), r);
         }
         let cloud = (&points[..], &ranges[..]);
         let (slow, slow_n) = walked_counted(cloud, (None, true), &config, How::Slow);
