@@ -544,7 +544,7 @@ mod tests {
 
     /// A walk is suspect of sweeps out of place when it did not note its starts, or when more
     /// than one valid point in `SUSPECT_EVERY` starts a segment: 361 valid points with 20
-    /// starts (one in 18.05) are not, with 21 they are.
+    /// starts (one in 18.05) are not, with 21 they are; 360 with 20 (exactly one in 18) are not.
     #[test]
     fn a_walk_with_more_starts_than_sweeps_in_place_make_is_suspect() {
         use crate::flags::START;
@@ -553,6 +553,7 @@ mod tests {
         };
         assert!(!super::suspect(&flags(20), true, 361));
         assert!(super::suspect(&flags(21), true, 361));
+        assert!(!super::suspect(&flags(20), true, 360));
         assert!(super::suspect(&flags(0), false, 361));
     }
 

@@ -257,3 +257,26 @@ fn an_object_s_covariance_turns_with_it() {
         assert!(q(u) > 2.0 * q([-u[1], u[0]]), "shift {shift}: {:?}", o.cov);
     }
 }
+
+/// A thing 250 mm from the scanner over four beams, nothing else in view: one object over
+/// exactly its beams. The beams without a return beside it (range 0 in the pass, within the
+/// object jump of 250 mm) end its run; they are no part of it.
+#[test]
+fn a_close_object_ends_at_its_last_return() {
+    let g = ScanGeometry::LMS200_180_050;
+    let mut ex = Extractor::<361, 16>::new();
+    for at in [20usize, 180, 300] {
+        let mut ranges = vec![0.0f32; 361];
+        ranges[at..at + 4].copy_from_slice(&[250.0, 251.0, 250.0, 249.0]);
+        ex.extract(&Scan::from_mm(g, &ranges), &Config::default())
+            .unwrap();
+        match ex.features() {
+            [Feature::Object(o)] => {
+                assert_eq!((o.first, o.last), (at as u16, at as u16 + 3), "{o:?}");
+                let dist = o.center.x.hypot(o.center.y);
+                assert!((245.0..=262.0).contains(&dist), "{o:?}");
+            }
+            f => panic!("at {at}: {f:?}"),
+        }
+    }
+}
