@@ -260,7 +260,7 @@ fn an_object_s_covariance_turns_with_it() {
 
 /// A thing 250 mm from the scanner over four beams, nothing else in view: one object over
 /// exactly its beams. The beams without a return beside it (range 0 in the pass, within the
-/// object jump of 250 mm) end its run; they are no part of it.
+/// 300 mm object jump of the thing) end its run; they are no part of it.
 #[test]
 fn a_close_object_ends_at_its_last_return() {
     let g = ScanGeometry::LMS200_180_050;
