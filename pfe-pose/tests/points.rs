@@ -4,7 +4,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use pfe_core::ScanGeometry;
-use pfe_pose::points::{agreement, icp, recheck, register_scans, RangeScan, SCAN_BEAMS};
+use pfe_pose::points::{agreement, bridge, icp, recheck, register_scans, RangeScan, SCAN_BEAMS};
 use pfe_pose::{
     wrap, Config, Cov3, LineObs, Observation, PointOdometry, Pose, Status, UNOBSERVABLE_VARIANCE,
 };
@@ -515,6 +515,31 @@ fn recheck_replaces_a_step_the_points_contradict() {
         );
     }
     assert!(recheck(&a, &b, &truth, &last).is_none());
+}
+
+/// A turn of 65° in one step, with the last motion 0.4 rad the other way (CARMEN csail's step
+/// 53): beyond `recheck`'s fan of ±40° around the last motion's heading, found by `bridge`'s
+/// whole circle within 30 mm and 0.6°, with a covariance as wide as its distance from the last
+/// motion; a bridge the points already agree with is left alone.
+#[test]
+fn bridge_finds_a_turn_beyond_the_last_motions_fan() {
+    let world = room();
+    let mut rng = Rng(53);
+    let p0 = Pose::new(-1800.0, -200.0, 0.1);
+    let truth = Pose::new(500.0, 250.0, 1.13);
+    let a = ranges(&scan(&world, &p0, &mut rng));
+    let b = ranges(&scan(&world, &p0.compose(&truth), &mut rng));
+    let last = Pose::new(1000.0, -300.0, -0.4);
+    let far = |p: &Pose| wrap(p.theta - truth.theta).abs() > 0.1;
+    assert!(recheck(&a, &b, &last, &last).is_none_or(|r| far(&r.pose)));
+    let (pose, cov) = bridge(&a, &b, &last).expect("bridged");
+    let e = error(&pose, &truth);
+    assert!(e[0].hypot(e[1]) < 30.0 && e[2].abs() < 0.0105, "{pose:?}");
+    assert!(
+        cov[0][0] >= 700.0f32.powi(2) && cov[2][2] >= 1.5f32.powi(2),
+        "{cov:?}"
+    );
+    assert!(bridge(&a, &b, &truth).is_none());
 }
 
 /// Eight people walking through the room (pillars of 0.15 m that move 50–150 mm between the

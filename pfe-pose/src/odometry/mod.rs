@@ -23,7 +23,11 @@
 //! points, one they agree with less than [`Config::verify_accept`]; then the scan is not
 //! registered ([`Status::None`]): its pose is the prediction (the last motion again, turned by
 //! the heading the directions of its lines and the map's agree on, when at least two do) and
-//! the map is **kept**, so that the next scan re-localises against it.
+//! the map is **kept**, so that the next scan re-localises against it. With the scans'
+//! points, a bridge they support (no motion, or any heading, refined by their ICP:
+//! [`crate::points::bridge`]) replaces the prediction, still [`Status::None`], with a
+//! covariance as wide as its distance from the last motion; the next scan is still predicted
+//! by the last motion.
 //!
 //! Lines are kept as a normal angle and an anchor point near the segment's middle, with the
 //! covariance of (angle, normal offset at the anchor): (α, ρ) about an origin far away would

@@ -3,7 +3,7 @@
 
 use super::{Odometry, Step};
 use crate::geom::{compose_covariance, Cov3, Pose};
-use crate::points::{recheck, refine_on_key, RangeScan};
+use crate::points::{bridge, recheck, refine_on_key, RangeScan};
 use crate::register::{Assoc, Config, Status};
 use crate::set::Set;
 
@@ -44,6 +44,21 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                     let curr = self.last.clone();
                     self.n = 0;
                     self.insert_all(&curr, &Assoc::new(), &step.pose, scan);
+                } else if let Some((rel, cov)) =
+                    (scan > 0 && motion.is_none() && matches!(step.status, Status::None(_)))
+                        .then(|| bridge(&self.pts, c, &step.rel))
+                        .flatten()
+                {
+                    // Nothing registered the scan: the bridge the points support replaces
+                    // the last motion again; it stays "none", the map is kept and so is the
+                    // motion the next scan is predicted by (one step the features could not
+                    // register says little about the next).
+                    step.rel = rel;
+                    step.rel_cov = cov;
+                    step.pose = old.compose(&rel);
+                    step.cov = compose_covariance(&old, &old_cov, &rel, &cov);
+                    self.pose = step.pose;
+                    self.cov = step.cov;
                 }
                 // The pose refined against the key scan's points; the key moves on to this
                 // scan when they no longer refine it.

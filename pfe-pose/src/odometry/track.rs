@@ -140,7 +140,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
         // The map, in the predicted pose's frame, as the "previous scan".
         self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
-        let reg = register_sets(
+        let mut reg = register_sets(
             &map,
             &curr,
             Some((Pose::IDENTITY, prior_cov)),
@@ -150,6 +150,13 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             // only without one.
             !pair.is_registered(),
         );
+        if let (Status::Degenerate { direction }, true, true) =
+            (reg.status, pair.is_registered(), points.is_some())
+        {
+            // Along what the map cannot tell its answer is not a measurement (the pair's
+            // covariance there does not hold it): it stays at the pair's, the prediction.
+            reg.rel = along_last(&reg.rel, &Pose::IDENTITY, &direction);
+        }
         let old = self.pose;
         // The map's answer must agree with the pair's (χ²₃ 99.9 %): otherwise a map feature
         // was matched wrongly, and the pair's answer is kept.

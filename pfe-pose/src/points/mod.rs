@@ -12,7 +12,7 @@ mod recover;
 mod search;
 
 pub use icp::{icp, IcpResult, ICP_CORRELATION};
-pub use recover::{recheck, RECHECK_BELOW};
+pub use recover::{bridge, recheck, RECHECK_BELOW};
 pub use search::refine_on_key;
 
 use crate::geom::{hypot, sin_cos, Pose};

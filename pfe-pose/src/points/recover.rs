@@ -98,3 +98,89 @@ pub fn recheck<const N: usize>(
     best.filter(|(r, s)| *s >= RECHECK_ACCEPT && *s > own + RECHECK_MARGIN && r.pose.is_finite())
         .map(|(r, _)| r)
 }
+
+/// A bridge is taken when its points agree at least this well...
+const BRIDGE_ACCEPT: f32 = 0.3;
+/// ...and this much better than under the last motion's bridge.
+const BRIDGE_MARGIN: f32 = 0.1;
+/// The bridge's fan: the whole circle in this many headings (10° apart).
+const FAN: i32 = 36;
+/// The fan's motions (best first) refined by ICP.
+const FAN_REFINED: usize = 4;
+/// Smallest standard deviation of a bridge, mm and rad.
+const BRIDGE_SIGMA: (f32, f32) = (100.0, 0.05);
+
+/// A bridge over a step nothing registered (the features, the pair's ICP and [`recheck`]
+/// failed): `rel` (the last motion again) is compared with no motion and the whole circle of
+/// headings 10° apart (at no motion's and at the last motion's translation), the best 4 of
+/// those and both `rel` and no motion refined by [`icp`]; the answer whose points agree best
+/// (one of `rel` and no motion unless another agrees 0.02 better) replaces `rel` when its
+/// points agree at least 0.3 and 0.1 better than under `rel`. Its covariance says how unsure
+/// the bridge is: the ICP's widened by the distance to `rel`, the other guess, at least
+/// 0.1 m and 0.05 rad (σ). `None`: keep `rel`.
+pub fn bridge<const N: usize>(
+    prev: &RangeScan<N>,
+    curr: &RangeScan<N>,
+    rel: &Pose,
+) -> Option<(Pose, crate::geom::Cov3)> {
+    if prev.is_empty() || curr.is_empty() || !rel.is_finite() {
+        return None;
+    }
+    let own = agreement(prev, curr, rel).score();
+    let mut top = [(f32::NEG_INFINITY, Pose::IDENTITY); FAN_REFINED];
+    for arc in [false, true] {
+        for k in 0..FAN {
+            let theta = crate::geom::wrap(k as f32 * (core::f32::consts::TAU / FAN as f32));
+            // No translation, or the last motion's turned by half the change of heading
+            // (the chord of an arc).
+            let g = if arc {
+                let (s, c) = crate::geom::sin_cos(0.5 * crate::geom::wrap(theta - rel.theta));
+                Pose::new(c * rel.x - s * rel.y, s * rel.x + c * rel.y, theta)
+            } else {
+                Pose::new(0.0, 0.0, theta)
+            };
+            let s = agreement(prev, curr, &g).score();
+            if let Some(k) = top.iter().position(|(b, _)| s > *b) {
+                top.copy_within(k..FAN_REFINED - 1, k + 1);
+                if let Some(slot) = top.get_mut(k) {
+                    *slot = (s, g);
+                }
+            }
+        }
+    }
+    let starts = [*rel, Pose::IDENTITY]
+        .into_iter()
+        .chain(top.iter().filter(|(s, _)| s.is_finite()).map(|(_, g)| *g));
+    let mut best: Option<(Pose, crate::geom::Cov3, f32)> = None;
+    for start in starts {
+        let Some(r) = icp(prev, curr, &start) else {
+            continue;
+        };
+        let moved = crate::geom::hypot(r.pose.x - start.x, r.pose.y - start.y);
+        let turned = crate::geom::wrap(r.pose.theta - start.theta).abs();
+        if moved > RECHECK_REACH.0 || turned > RECHECK_REACH.1 || !r.pose.is_finite() {
+            continue;
+        }
+        let s = r.agreement.score();
+        if best
+            .as_ref()
+            .is_none_or(|(_, _, b)| s > *b + RECHECK_PREFER)
+        {
+            best = Some((r.pose, r.cov, s));
+        }
+    }
+    let (pose, mut cov, s) = best?;
+    if !(s >= BRIDGE_ACCEPT && s > own + BRIDGE_MARGIN) {
+        return None;
+    }
+    let d = crate::geom::hypot(pose.x - rel.x, pose.y - rel.y).max(BRIDGE_SIGMA.0);
+    let t = crate::geom::wrap(pose.theta - rel.theta)
+        .abs()
+        .max(BRIDGE_SIGMA.1);
+    for (i, v) in [d * d, d * d, t * t].into_iter().enumerate() {
+        if let Some(c) = cov.get_mut(i).and_then(|row| row.get_mut(i)) {
+            *c = (*c).min(crate::register::UNOBSERVABLE_VARIANCE) + v;
+        }
+    }
+    Some((pose, cov))
+}
