@@ -68,22 +68,102 @@ impl Table {
 }
 
 impl Rows<'_> {
-    /// Every row, and the largest range of their beams.
+    /// Every row, and the largest range of their beams: [`Self::table_lanes`] where the square
+    /// root vectorises (`std`), [`Self::table_each`] elsewhere (the same rows).
     fn table(&self) -> Table {
+        #[cfg(feature = "std")]
+        {
+            self.table_lanes()
+        }
+        #[cfg(not(feature = "std"))]
+        {
+            self.table_each()
+        }
+    }
+
+    /// [`Self::table`] one candidate beam at a time ([`row`]).
+    #[cfg_attr(feature = "std", allow(dead_code))]
+    fn table_each(&self) -> Table {
         let mut t = Table {
             rows: heapless::Vec::new(),
             far: 0.0,
         };
-        self.each(|row, range| {
-            if t.rows.push(*row).is_ok() {
-                t.far = t.far.max(range);
+        let Plan {
+            triples,
+            stride,
+            curve,
+            reach,
+        } = self.plan();
+        for j in (0..triples).step_by(stride) {
+            let [a, q, b, c] = self.beams(j);
+            if let Some((row, range)) = row(a, q, b, c, curve, reach) {
+                if t.rows.push(row).is_ok() {
+                    t.far = t.far.max(range);
+                }
             }
-        });
+        }
         t
     }
 
-    /// Calls `f` with every row (at most [`MAX_ROWS`]) and the range of its beam, mm.
-    fn each(&self, mut f: impl FnMut(&Row, f32)) {
+    /// [`Self::table`] [`LANES`] candidate beams at a time, each one's arithmetic without a
+    /// branch ([`Block`]), so that LLVM computes a few at once; then the rows of those
+    /// that pass, in order: the rows of [`Self::table_each`], bit for bit.
+    #[cfg_attr(not(feature = "std"), allow(dead_code))]
+    fn table_lanes(&self) -> Table {
+        let mut t = Table {
+            rows: heapless::Vec::new(),
+            far: 0.0,
+        };
+        let Plan {
+            triples,
+            stride,
+            curve,
+            reach,
+        } = self.plan();
+        // Candidate j's beams a, q, b, c are the first, the `sweep`-th, the `sweeps`-th and the
+        // last of the 2·`sweeps` + 1 points from `sweeps`·j.
+        let (sweeps, s) = (self.sweeps, self.sweep);
+        let mut candidates = self
+            .points
+            .windows(2 * sweeps + 1)
+            .step_by(sweeps * stride)
+            .take(triples.div_ceil(stride))
+            .peekable();
+        while candidates.peek().is_some() {
+            // The block's beams, coordinate by coordinate: a.x, a.y, q.x, q.y, b.x, b.y, c.x,
+            // c.y (invalid past the last candidate).
+            let mut xy = [[f32::NAN; LANES]; 8];
+            let mut n = 0;
+            for (l, w) in candidates.by_ref().take(LANES).enumerate() {
+                let at = |k: usize| w.get(k).copied().unwrap_or(Point::INVALID);
+                let (a, q, b, c) = (at(0), at(s), at(sweeps), at(2 * sweeps));
+                let [ax, ay, qx, qy, bx, by, cx, cy] = &mut xy;
+                for (lane, v) in [ax, ay, qx, qy, bx, by, cx, cy]
+                    .into_iter()
+                    .zip([a.x, a.y, q.x, q.y, b.x, b.y, c.x, c.y])
+                {
+                    if let Some(slot) = lane.get_mut(l) {
+                        *slot = v;
+                    }
+                }
+                n = l + 1;
+            }
+            let block = Block::of(&xy, curve, reach);
+            for l in 0..n {
+                if let Some((row, range)) = block.row(l) {
+                    if t.rows.push(row).is_ok() {
+                        t.far = t.far.max(range);
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    /// The candidate beams of the sweep: every `stride`-th of the `triples`, at most
+    /// [`MAX_ROWS`]; `curve`, the sagitta's factor at the sweep's fraction; `reach`, the jump
+    /// bound of the chord against the beam's range.
+    fn plan(&self) -> Plan {
         let (points, sweeps, s) = (self.points, self.sweeps, self.sweep);
         let pairs = points
             .len()
@@ -92,21 +172,40 @@ impl Rows<'_> {
             .unwrap_or(0);
         // Sweep-0 triples (a, b, c) need c = S·(j + 2): `pairs − 1` of them.
         let triples = pairs.saturating_sub(1);
-        let stride = triples.div_ceil(MAX_ROWS).max(1);
         let f_s = s as f32 / sweeps as f32;
-        let curve = f_s * (2.0 - f_s);
-        // A chord longer than this many times its length at normal incidence is a jump.
-        let reach = 16.0 * math::abs(self.step) * sweeps as f32;
-        let at = |k: usize| points.get(k).copied().unwrap_or(Point::INVALID);
-        for j in (0..triples).step_by(stride) {
-            let (a, q) = (at(sweeps * j), at(sweeps * j + s));
-            let (b, c) = (at(sweeps * (j + 1)), at(sweeps * (j + 2)));
-            if let Some((row, range)) = row(a, q, b, c, curve, reach) {
-                f(&row, range);
-            }
+        Plan {
+            triples,
+            stride: triples.div_ceil(MAX_ROWS).max(1),
+            curve: f_s * (2.0 - f_s),
+            // A chord longer than this many times its length at normal incidence is a jump.
+            reach: 16.0 * math::abs(self.step) * sweeps as f32,
         }
     }
+
+    /// The points `a`, `q`, `b`, `c` of triple `j` ([`row`]), invalid beyond the scan.
+    #[inline(always)]
+    fn beams(&self, j: usize) -> [Point; 4] {
+        let (sweeps, s) = (self.sweeps, self.sweep);
+        let at = |k: usize| self.points.get(k).copied().unwrap_or(Point::INVALID);
+        [
+            at(sweeps * j),
+            at(sweeps * j + s),
+            at(sweeps * (j + 1)),
+            at(sweeps * (j + 2)),
+        ]
+    }
 }
+
+/// What [`Rows::plan`] gives.
+struct Plan {
+    triples: usize,
+    stride: usize,
+    curve: f32,
+    reach: f32,
+}
+
+/// Candidate beams [`Rows::table_lanes`] takes at a time.
+const LANES: usize = 8;
 
 /// The row of beam `q` between sweep-0 beams `a` and `b` (and `c` after `b`), when the
 /// surface there is smooth: distances from the chord `ac` (unit normal `n`), `e` of `q` and
@@ -130,6 +229,93 @@ fn row(a: Point, q: Point, b: Point, c: Point, curve: f32, reach: f32) -> Option
     }
     let j3 = (ny * q.x - nx * q.y) / ROT_SCALE;
     Some(([nx, ny, j3, rhs, nx * q.x + ny * q.y], rq))
+}
+
+/// [`LANES`] candidates' rows ([`row`]) computed lane by lane without a branch: the same tests
+/// and the same arithmetic, so the same bits where a candidate gives a row.
+struct Block {
+    /// nx, ny, j3, rhs, n·q: a row's columns.
+    row: [[f32; LANES]; 5],
+    /// The range of `q`.
+    range: [f32; LANES],
+    /// Whether the candidate gives a row.
+    ok: [bool; LANES],
+}
+
+impl Block {
+    /// The rows of the candidates whose `a`, `q`, `b`, `c` are in `xy` coordinate by coordinate
+    /// ([`Rows::table_lanes`]).
+    #[inline(always)]
+    fn of(xy: &[[f32; LANES]; 8], curve: f32, reach: f32) -> Self {
+        let [ax, ay, qx, qy, bx, by, cx, cy] = xy;
+        let mut out = Block {
+            row: [[0.0; LANES]; 5],
+            range: [0.0; LANES],
+            ok: [false; LANES],
+        };
+        let [nxs, nys, j3s, rhss, nqs] = &mut out.row;
+        for l in 0..LANES {
+            // In bounds (l < LANES): the tests compile away.
+            let (Some(&ax), Some(&ay), Some(&qx), Some(&qy)) =
+                (ax.get(l), ay.get(l), qx.get(l), qy.get(l))
+            else {
+                continue;
+            };
+            let (Some(&bx), Some(&by), Some(&cx), Some(&cy)) =
+                (bx.get(l), by.get(l), cx.get(l), cy.get(l))
+            else {
+                continue;
+            };
+            let (dx, dy) = (cx - ax, cy - ay);
+            let len = math::sqrt_lanes(dx * dx + dy * dy);
+            let rq = math::sqrt_lanes(qx * qx + qy * qy);
+            let (nx, ny) = (-dy / len, dx / len);
+            let e = (qx - ax) * nx + (qy - ay) * ny;
+            let e0 = (bx - ax) * nx + (by - ay) * ny;
+            let rhs = e - curve * e0;
+            let row = [
+                nx,
+                ny,
+                (ny * qx - nx * qy) / ROT_SCALE,
+                rhs,
+                nx * qx + ny * qy,
+            ];
+            for (column, v) in [&mut *nxs, &mut *nys, &mut *j3s, &mut *rhss, &mut *nqs]
+                .into_iter()
+                .zip(row)
+            {
+                if let Some(slot) = column.get_mut(l) {
+                    *slot = v;
+                }
+            }
+            if let (Some(range), Some(ok)) = (out.range.get_mut(l), out.ok.get_mut(l)) {
+                *range = rq;
+                *ok = (len > 0.0)
+                    & (len < reach * rq)
+                    & (math::abs(e0) < 0.15 * len + 30.0)
+                    & (math::abs(rhs) < 0.25 * len + 40.0);
+            }
+        }
+        out
+    }
+
+    /// Candidate `l`'s row and range, when it gives one.
+    fn row(&self, l: usize) -> Option<(Row, f32)> {
+        let [nx, ny, j3, rhs, nq] = &self.row;
+        match self.ok.get(l) {
+            Some(true) => Some((
+                [
+                    *nx.get(l)?,
+                    *ny.get(l)?,
+                    *j3.get(l)?,
+                    *rhs.get(l)?,
+                    *nq.get(l)?,
+                ],
+                *self.range.get(l)?,
+            )),
+            _ => None,
+        }
+    }
 }
 
 /// The offset of a solution; `far` is the largest range of the sweep's rows, mm.
@@ -523,5 +709,35 @@ mod tests {
             some > 3_000 && none > 100 && cut > 1_000,
             "{some} {none} {cut}"
         );
+    }
+
+    /// The rows taken eight candidate beams at a time are those taken one at a time, bit for
+    /// bit, with the same farthest range, over 3 000 scans of 2 to 4 sweeps (uneven beams,
+    /// outliers, invalid returns) and scans cut short of a block of eight.
+    #[test]
+    fn the_rows_in_lanes_are_the_rows_one_at_a_time() {
+        let bits =
+            |t: &Table| -> Vec<[u32; 5]> { t.rows().iter().map(|r| r.map(f32::to_bits)).collect() };
+        let (mut rows, mut tables) = (0, 0);
+        for seed in 0..3_000 {
+            let (points, sweeps, step) = scan(seed);
+            let cut = points.len() - (seed as usize % 40);
+            for points in [&points[..], &points[..cut]] {
+                for sweep in 1..sweeps {
+                    let r = Rows {
+                        points,
+                        sweeps,
+                        sweep,
+                        step,
+                    };
+                    let (lanes, each) = (r.table_lanes(), r.table_each());
+                    assert_eq!(bits(&lanes), bits(&each), "scan {seed}, sweep {sweep}");
+                    assert_eq!(lanes.far.to_bits(), each.far.to_bits(), "scan {seed}");
+                    rows += each.rows().len();
+                    tables += 1;
+                }
+            }
+        }
+        assert!(rows > 15 * tables, "{rows} rows in {tables} tables");
     }
 }
