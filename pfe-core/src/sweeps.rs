@@ -26,6 +26,8 @@ use crate::flags::{START, VALID};
 use crate::geometry::Point;
 use crate::math;
 
+mod solve;
+
 /// Most rows (beams) one sweep's estimate uses: longer sweeps are subsampled evenly.
 pub(crate) const MAX_ROWS: usize = 64;
 
@@ -76,10 +78,6 @@ impl SweepOffset {
     }
 }
 
-/// One row of the least-squares problem `J·x = −e`, `x = (dx, dy, sin dθ · 1000 mm)`: `J`,
-/// `e`, and `n·q` (for the second-order term of the rotation).
-type Row = [f32; 5];
-
 /// The offset of sweep `sweep` (1 ≤ `sweep` < `sweeps`) of `points` (one per beam, invalid
 /// ones not finite) against sweep 0; `angle_step` is the bearing step between beams, rad.
 /// `None` when too few beams are on smooth surfaces or the geometry does not fix the offset.
@@ -110,17 +108,7 @@ pub fn estimate(
     if sweep == 0 || sweep >= sweeps || !math::finite(angle_step) {
         return None;
     }
-    let rows = Rows {
-        points,
-        sweeps,
-        sweep,
-        step: angle_step,
-    }
-    .table();
-    let first = normal(&rows, None, 0.0)?;
-    let cut = 3.0 * first.sigma.max(SIGMA_FLOOR);
-    let sol = normal(&rows, Some((&first.x, cut)), first.x[2] / ROT_SCALE)?;
-    Some(offset(&sol, first.far))
+    solve::offset_of(points, (sweeps, sweep), angle_step)
 }
 
 /// Moves the points of every sweep `s ≥ 1` of a scan of `sweeps` interleaved sweeps onto
@@ -289,230 +277,9 @@ fn aligned_circle(cf: &mut CircleFeature, [xx, yy, tt]: [f32; 3]) {
     *cyx -= tt * c.x * c.y;
 }
 
-/// Residual floor, mm (the 1 mm range quantum's standard deviation, about 0.3 mm).
-const SIGMA_FLOOR: f32 = 0.3;
-/// Scale of the rotation unknown: `x₃ = dθ · ROT_SCALE` is in mm at 1 m.
-const ROT_SCALE: f32 = 1000.0;
-
-/// The equations of sweep `sweep`'s beams on smooth surfaces, evenly subsampled to at most
-/// [`MAX_ROWS`] ([`Rows::table`]).
-#[derive(Clone, Copy)]
-struct Rows<'a> {
-    points: &'a [Point],
-    sweeps: usize,
-    sweep: usize,
-    step: f32,
-}
-
-/// The rows of a sweep, made once for the four passes over them (two solutions, each its sums
-/// and its residuals), and the largest range of their beams, mm.
-struct Table {
-    /// Not zeroed first (1.3 KB a sweep).
-    rows: heapless::Vec<Row, MAX_ROWS>,
-    far: f32,
-}
-
-impl Table {
-    /// The rows, in the order they were made.
-    fn rows(&self) -> &[Row] {
-        &self.rows
-    }
-}
-
-impl Rows<'_> {
-    /// Every row, and the largest range of their beams.
-    fn table(&self) -> Table {
-        let mut t = Table {
-            rows: heapless::Vec::new(),
-            far: 0.0,
-        };
-        self.each(|row, range| {
-            if t.rows.push(*row).is_ok() {
-                t.far = t.far.max(range);
-            }
-        });
-        t
-    }
-
-    /// Calls `f` with every row (at most [`MAX_ROWS`]) and the range of its beam, mm.
-    fn each(&self, mut f: impl FnMut(&Row, f32)) {
-        let (points, sweeps, s) = (self.points, self.sweeps, self.sweep);
-        let pairs = points
-            .len()
-            .saturating_sub(1)
-            .checked_div(sweeps)
-            .unwrap_or(0);
-        // Sweep-0 triples (a, b, c) need c = S·(j + 2): `pairs − 1` of them.
-        let triples = pairs.saturating_sub(1);
-        let stride = triples.div_ceil(MAX_ROWS).max(1);
-        let f_s = s as f32 / sweeps as f32;
-        let curve = f_s * (2.0 - f_s);
-        // A chord longer than this many times its length at normal incidence is a jump.
-        let reach = 16.0 * math::abs(self.step) * sweeps as f32;
-        let at = |k: usize| points.get(k).copied().unwrap_or(Point::INVALID);
-        for j in (0..triples).step_by(stride) {
-            let (a, q) = (at(sweeps * j), at(sweeps * j + s));
-            let (b, c) = (at(sweeps * (j + 1)), at(sweeps * (j + 2)));
-            if let Some((row, range)) = row(a, q, b, c, curve, reach) {
-                f(&row, range);
-            }
-        }
-    }
-}
-
-/// The row of beam `q` between sweep-0 beams `a` and `b` (and `c` after `b`), when the
-/// surface there is smooth: distances from the chord `ac` (unit normal `n`), `e` of `q` and
-/// `e₀` of `b`. On a circle through `a`, `b`, `c`, `q` at fraction `f / 2` of the chord lies
-/// `f(2 − f)·e₀` from it, which the row removes.
-#[inline]
-fn row(a: Point, q: Point, b: Point, c: Point, curve: f32, reach: f32) -> Option<(Row, f32)> {
-    let (cx, cy) = (c.x - a.x, c.y - a.y);
-    let len = math::hypot(cx, cy);
-    let rq = math::hypot(q.x, q.y);
-    // NaN (an invalid point) fails every comparison.
-    if !(len > 0.0 && len < reach * rq) {
-        return None;
-    }
-    let (nx, ny) = (-cy / len, cx / len);
-    let e = (q.x - a.x) * nx + (q.y - a.y) * ny;
-    let e0 = (b.x - a.x) * nx + (b.y - a.y) * ny;
-    let rhs = e - curve * e0;
-    if !(math::abs(e0) < 0.15 * len + 30.0 && math::abs(rhs) < 0.25 * len + 40.0) {
-        return None;
-    }
-    let j3 = (ny * q.x - nx * q.y) / ROT_SCALE;
-    Some(([nx, ny, j3, rhs, nx * q.x + ny * q.y], rq))
-}
-
-/// The offset of a solution; `far` is the largest range of the sweep's rows, mm.
-fn offset(sol: &Solution, far: f32) -> SweepOffset {
-    let [dx, dy, t] = sol.x;
-    let sigma = sol.sigma.max(SIGMA_FLOOR);
-    let [i00, _, _, i11, _, i22] = sol.inv;
-    // χ² = xᵀ A x / σ².
-    let [a00, a01, a02, a11, a12, a22] = sol.a;
-    let quad = dx * (a00 * dx + a01 * dy + a02 * t)
-        + dy * (a01 * dx + a11 * dy + a12 * t)
-        + t * (a02 * dx + a12 * dy + a22 * t);
-    let dtheta = t / ROT_SCALE;
-    SweepOffset {
-        dx,
-        dy,
-        dtheta,
-        sd: [
-            sigma * math::sqrt(i00),
-            sigma * math::sqrt(i11),
-            sigma * math::sqrt(i22) / ROT_SCALE,
-        ],
-        sigma,
-        chi2: quad / (sigma * sigma),
-        rows: u16::try_from(sol.rows).unwrap_or(u16::MAX),
-        max_shift: math::hypot(dx, dy) + math::abs(dtheta) * far,
-    }
-}
-
-/// A least-squares solution: the unknowns, the normal matrix and its inverse (upper
-/// triangles, row by row: 00 01 02 11 12 22), the residual standard deviation, the rows used
-/// and the farthest beam of all.
-struct Solution {
-    x: [f32; 3],
-    a: [f32; 6],
-    inv: [f32; 6],
-    sigma: f32,
-    rows: usize,
-    /// The largest range among the rows' beams, mm (all of them, kept or not).
-    far: f32,
-}
-
-/// Residual of `row` at `x` (first order).
-#[inline]
-fn residual(row: &Row, x: &[f32; 3]) -> f32 {
-    let [j0, j1, j2, e, _] = *row;
-    e + j0 * x[0] + j1 * x[1] + j2 * x[2]
-}
-
-/// Solves the normal equations of `rows` (those within `cut` of the solution `x` when given),
-/// with the second-order term `(cos θ − 1)·n·q` of a rotation by about `theta` moved to `e`.
-fn normal(rows: &Table, keep: Option<(&[f32; 3], f32)>, theta: f32) -> Option<Solution> {
-    let bend = -0.5 * theta * theta;
-    let kept = |r: &Row| keep.is_none_or(|(x, cut)| math::abs(residual(r, x)) <= cut);
-    let mut a = [0.0f32; 6];
-    let mut g = [0.0f32; 3];
-    let mut used = 0usize;
-    for r in rows.rows() {
-        if !kept(r) {
-            continue;
-        }
-        let [j0, j1, j2, e, nq] = *r;
-        let e = e + bend * nq;
-        a = [
-            a[0] + j0 * j0,
-            a[1] + j0 * j1,
-            a[2] + j0 * j2,
-            a[3] + j1 * j1,
-            a[4] + j1 * j2,
-            a[5] + j2 * j2,
-        ];
-        g = [g[0] - j0 * e, g[1] - j1 * e, g[2] - j2 * e];
-        used += 1;
-    }
-    if used < 6 {
-        return None;
-    }
-    let inv = invert(&a)?;
-    let x = [
-        inv[0] * g[0] + inv[1] * g[1] + inv[2] * g[2],
-        inv[1] * g[0] + inv[3] * g[1] + inv[4] * g[2],
-        inv[2] * g[0] + inv[4] * g[1] + inv[5] * g[2],
-    ];
-    let mut ss = 0.0f32;
-    for r in rows.rows() {
-        if kept(r) {
-            let res = residual(r, &x) + bend * r[4];
-            ss += res * res;
-        }
-    }
-    let sigma = math::sqrt(ss / (used - 3) as f32);
-    Some(Solution {
-        x,
-        a,
-        inv,
-        sigma,
-        rows: used,
-        far: rows.far,
-    })
-}
-
-/// Inverse of the symmetric 3 × 3 matrix `a` (upper triangle, row by row), `None` when it is
-/// (nearly) singular: the geometry does not fix all three unknowns.
-fn invert(a: &[f32; 6]) -> Option<[f32; 6]> {
-    let [a00, a01, a02, a11, a12, a22] = *a;
-    let c00 = a11 * a22 - a12 * a12;
-    let c01 = a02 * a12 - a01 * a22;
-    let c02 = a01 * a12 - a02 * a11;
-    let det = a00 * c00 + a01 * c01 + a02 * c02;
-    if !(det > 1e-4 * a00 * a11 * a22) {
-        return None;
-    }
-    let c11 = a00 * a22 - a02 * a02;
-    let c12 = a01 * a02 - a00 * a12;
-    let c22 = a00 * a11 - a01 * a01;
-    Some([
-        c00 / det,
-        c01 / det,
-        c02 / det,
-        c11 / det,
-        c12 / det,
-        c22 / det,
-    ])
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{
-        aligned_circle, aligned_line, aligned_object, invert, offset, Offsets, Solution,
-        SweepOffset, ROT_SCALE,
-    };
+    use super::{aligned_circle, aligned_line, aligned_object, Offsets, SweepOffset};
     use crate::feature::{CircleFeature, LineFeature, ObjectFeature};
     use crate::geometry::Point;
 
@@ -608,74 +375,6 @@ mod tests {
         };
         assert_eq!(four.variance(), [5.0, 5.0, 1.0 / 1_048_576.0]);
         assert_eq!(Offsets::default().variance(), [0.0; 3]);
-    }
-
-    /// An offset's χ² is `xᵀ A x / σ²` with the full symmetric normal matrix A (every
-    /// off-diagonal term counted twice), its standard errors `σ √(A⁻¹)ᵢᵢ` (the rotation's in
-    /// rad), and its largest shift `|(dx, dy)| + |dθ| · far`: worked out in f64.
-    #[test]
-    fn an_offsets_chi2_is_the_quadratic_form_of_its_normal_matrix() {
-        let a = [4.0f32, 1.0, 0.5, 3.0, -0.25, 2.0];
-        let inv = invert(&a).unwrap_or([f32::NAN; 6]);
-        let sol = Solution {
-            x: [2.0, -3.0, 1.5],
-            a,
-            inv,
-            sigma: 2.0,
-            rows: 100,
-            far: 5000.0,
-        };
-        let off = offset(&sol, 5000.0);
-        let m = [[4.0, 1.0, 0.5], [1.0, 3.0, -0.25], [0.5, -0.25, 2.0f64]];
-        let x = [2.0, -3.0, 1.5f64];
-        let quad: f64 = (0..3)
-            .map(|i| (0..3).map(|j| x[i] * m[i][j] * x[j]).sum::<f64>())
-            .sum();
-        assert!(
-            (f64::from(off.chi2) - quad / 4.0).abs() < 1e-4,
-            "{} vs {}",
-            off.chi2,
-            quad / 4.0
-        );
-        let sd2 = 2.0 * f64::from(inv[5]).sqrt() / f64::from(ROT_SCALE);
-        assert!((f64::from(off.sd[2]) - sd2).abs() < 1e-9, "{:?}", off.sd);
-        assert!((f64::from(off.sd[0]) - 2.0 * f64::from(inv[0]).sqrt()).abs() < 1e-5);
-        assert!((f64::from(off.sd[1]) - 2.0 * f64::from(inv[3]).sqrt()).abs() < 1e-5);
-        let shift = 13f64.sqrt() + 1.5 / f64::from(ROT_SCALE) * 5000.0;
-        assert!(
-            (f64::from(off.max_shift) - shift).abs() < 1e-4,
-            "{}",
-            off.max_shift
-        );
-        assert_eq!((off.dx, off.dy, off.rows), (2.0, -3.0, 100));
-    }
-
-    /// The inverse of a symmetric 3 × 3 matrix, times the matrix, is the identity; a matrix
-    /// whose determinant is below 10⁻⁴ of its diagonal's product (unknowns 0 and 1 nearly the
-    /// same) has none. Diagonal 100, 100, 4: the bound is 4.
-    #[test]
-    fn invert_refuses_a_nearly_singular_matrix() {
-        let full = |u: &[f32; 6]| {
-            let [a, b, c, d, e, f] = *u;
-            [[a, b, c], [b, d, e], [c, e, f]]
-        };
-        let a = [4.0f32, 1.0, 0.5, 3.0, -0.25, 2.0];
-        let inv = invert(&a).unwrap_or([f32::NAN; 6]);
-        let (m, n) = (full(&a), full(&inv));
-        for (i, row) in m.iter().enumerate() {
-            for j in 0..3 {
-                let p: f32 = row.iter().zip(&n).map(|(a, col)| a * col[j]).sum();
-                let want = if i == j { 1.0 } else { 0.0 };
-                assert!((p - want).abs() < 1e-5, "({i}, {j}): {p}");
-            }
-        }
-        // det = 4 · 10⁴ (1 − ρ²) against the bound 4: 1 − ρ² = 5·10⁻⁵ gives 2, 2·10⁻⁴ gives 8.
-        let near = |one_minus_rho2: f32| {
-            let rho = (1.0 - one_minus_rho2).sqrt();
-            [100.0, 100.0 * rho, 0.0, 100.0, 0.0, 4.0]
-        };
-        assert!(invert(&near(5e-5)).is_none());
-        assert!(invert(&near(2e-4)).is_some());
     }
 
     /// The offsets that moved interleaved sweeps: ρ gets n·(x, y)'s variance, α the turn's; a
