@@ -2,7 +2,8 @@
 //! ([`give_corner_point`]). At a corner the walk keeps the first point of the next surface in
 //! the segment before it (the point lies near the corner, within the prediction's tolerance
 //! of both surfaces), and a segment that starts at an occlusion edge can take one point of the
-//! surface before it. The marks are then one beam off, and a face seen over three beams comes
+//! surface before it; at grazing incidence the walk also flags a range jump before a wall's
+//! last point and starts the next segment there. The marks are then one beam off, and a face seen over three beams comes
 //! out as a four-point line, which no surface is: three beams are too few for a feature.
 //! Near the corner the point lies within the noise of both lines; then where the two lines
 //! meet tells which surface its beam hit ([`beyond_corner`]).
@@ -10,7 +11,6 @@
 use crate::config::Config;
 use crate::feature::LineFeature;
 use crate::fit::line::{fit_line, LineFit};
-use crate::flags::JUMP;
 use crate::geometry::Point;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
@@ -30,8 +30,9 @@ const CORNER_SIGMAS: f32 = 1.0;
 /// Most points of a segment whose end point may move (its other points are fitted again).
 const REST_MAX: usize = 32;
 
-/// When the last two features in `out` are lines of neighbouring segments (no beam, no jump
-/// between them), the end point of one (of at most [`REST_MAX`] points) next to the other
+/// When the last two features in `out` are lines of neighbouring segments (no beam between
+/// them; a range jump between them may be a grazing wall's, and the tests below decide), the
+/// end point of one (of at most [`REST_MAX`] points) next to the other
 /// (longer than `min_points`) moves to the other when it lies on the other's line (within
 /// [`ON_LINE_CHI2`] of its residual's variance: the range noise's and the line's own there),
 /// and off the line of its segment's other points (beyond [`OFF_LINE_CHI2`], or [`ON_LINE_CHI2`]
@@ -58,7 +59,7 @@ pub(super) fn give_corner_point(
         usize::from(b.first),
         usize::from(b.last),
     );
-    if a1 + 1 != b0 || pass.flag(b0) & JUMP != 0 {
+    if a1 + 1 != b0 {
         return false;
     }
     let (na, nb) = (a1 + 1 - a0, b1 + 1 - b0);
@@ -169,3 +170,7 @@ fn beyond_corner(l: &LineFeature, f: &LineFit, var_r: f32, p: Point, q: Point) -
 #[cfg(test)]
 #[path = "ends_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "ends_jump_tests.rs"]
+mod jump_tests;

@@ -21,7 +21,12 @@ fn scene(g: &ScanGeometry, face: usize, mirrored: bool) -> [f32; 181] {
 
 /// [`scene`] with the face over the beams `face.0..=face.1` and the corner `past`° past beam
 /// `face.1`, the wall from beam `face.1 + 1` to 100.
-fn scene_at(g: &ScanGeometry, face: (usize, usize), past: f32, mirrored: bool) -> [f32; 181] {
+pub(super) fn scene_at(
+    g: &ScanGeometry,
+    face: (usize, usize),
+    past: f32,
+    mirrored: bool,
+) -> [f32; 181] {
     let d2r = core::f32::consts::PI / 180.0;
     let corner_bearing = g.bearing(face.1) + past * d2r;
     let c = Point::new(
