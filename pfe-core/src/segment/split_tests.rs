@@ -88,3 +88,26 @@ fn a_corner_whose_line_sum_equals_the_noises_is_not_split() {
     let below = f32::from_bits(sigma_r.to_bits() - 1);
     assert_eq!(at(below), Some(17), "σ_r {sigma_r}, sse {}", line.sse());
 }
+
+/// A segment that is one arc end to end (a pillar's front, radius 300 mm, 1.5 m ahead, 40
+/// points over ±60° of it) is no bump on a line: the whole run lies on the circle, and a bump
+/// is a strict part of its segment (the typing, not the split, makes it a circle). A pillar on
+/// a wall, the same arc with wall beside it, is one.
+#[test]
+fn an_arc_from_end_to_end_is_no_bump() {
+    let (r, d) = (300.0f32, 1500.0f32);
+    let arc: [Point; 40] = core::array::from_fn(|k| {
+        let a = (-60.0 + 120.0 * k as f32 / 39.0).to_radians();
+        let (s, c) = math::sin_cos(a);
+        Point::new(r * s, d - r * c)
+    });
+    let Ok(line) = fit_line(&arc) else {
+        panic!("the arc's line")
+    };
+    assert_eq!(bump_at(&arc, &line, 5.0), None);
+    let pts = pillar_on_wall(r);
+    let Ok(line) = fit_line(&pts) else {
+        panic!("the wall's line")
+    };
+    assert!(bump_at(&pts, &line, 5.0).is_some());
+}
