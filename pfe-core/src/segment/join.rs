@@ -66,8 +66,8 @@ pub(super) fn join_lines(
 /// (no beam between) whose points together lie on one line within the noise: a wall whose
 /// far, grazing part the walk cut off (its points grow apart faster than the prediction
 /// allows), or a wall split where its roughness fooled the walk once.
-/// At most [`JOINS_MAX`](super::JOINS_MAX) joins a scan, each of at most [`JOIN_MAX_POINTS`] points: the work
-/// they take is bounded.
+/// At most [`JOINS_MAX`](super::JOINS_MAX) joins a scan, each of at most
+/// [`JOIN_MAX_POINTS`] points: the work they take is bounded.
 /// When it does not, the corner point between them may move ([`give_corner_point`]).
 #[inline(never)]
 pub(super) fn join_collinear(
