@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::feature::{CircleFeature, LineFeature};
+use crate::fit::run::best_split_sse;
 
 /// `n` points on the circle of centre `c` and radius `r` from `from` over `span` rad.
 fn arc(n: usize, c: (f32, f32), r: f32, from: f32, span: f32) -> heapless::Vec<Point, 64> {

@@ -1,0 +1,97 @@
+//! Whether a circle fitted to a segment is an arc really there (default mode, with the checks
+//! for real scans): enough points and arc, a residual sum that a corner (two lines) does not
+//! beat, and no beam next to the run that sees through where the circle would be.
+
+use crate::fit::circle::Circle;
+use crate::fit::run::best_split_sse;
+use crate::geometry::Point;
+use crate::math;
+use crate::pass::Pass;
+
+/// Fewest points of a circle in the default mode.
+const CIRCLE_MIN_POINTS: usize = 6;
+/// Smallest arc a circle must cover in the default mode, as tan of its angle (30°): a short
+/// bent piece is not an arc.
+const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
+
+/// How much more residual sum than the best two-line split a circle may leave, in σ_r²: the
+/// split has one line parameter more and picks its meeting point, so on an arc it leaves about
+/// two noise variances less than the circle ([`allowance`]).
+const SPLIT_ALLOWANCE: f32 = 2.0;
+
+/// Largest distance from the circle's centre, as a fraction of its radius, at which a beam next
+/// to the run crosses the circle's face (incidence within 53°) for [`seen_through`] to count it.
+const FACE: f32 = 0.8;
+/// How far beyond the circle's far side (in σ_r) a neighbouring beam's return must lie to see
+/// through it.
+const THROUGH_SIGMA: f32 = 4.0;
+
+/// Whether `circle` (residual sum `sse_c`) is an arc really there: enough points, an arc of
+/// at least 30° between the first and the last point, and a residual sum below the best
+/// two-line (corner) split's by `margin` (a corner, door frame or bend is two lines).
+pub(super) fn is_arc(pts: &[Point], circle: &Circle, sse_c: f32, margin: f32) -> bool {
+    let Some((dot, cross)) = ends(pts, circle) else {
+        return false;
+    };
+    // Beyond 90° (dot < 0) this holds whatever the cross product.
+    let wide = math::abs(cross) >= CIRCLE_MIN_ARC_TAN * dot;
+    pts.len() >= CIRCLE_MIN_POINTS
+        && wide
+        && best_split_sse(pts).is_some_and(|split| split - sse_c > margin)
+}
+
+/// The margin of [`is_arc`] for `circle` over `pts`, noise variance `var`: −[`SPLIT_ALLOWANCE`]
+/// σ_r² for an arc of at most 120° between its ends, none beyond. The split's extra
+/// parameters earn it about two variances on any arc; but a right-angle corner seen over a
+/// few beams fits a circle of 130–170° (its legs the circle's tangents) as well as two lines,
+/// so a wider arc must beat the split outright.
+pub(super) fn allowance(pts: &[Point], circle: &Circle, var: f32) -> f32 {
+    // At most 120°: cos ≥ −1/2, i.e. dot ≥ 0 or 3 dot² ≤ cross².
+    match ends(pts, circle) {
+        Some((dot, cross)) if dot >= 0.0 || 3.0 * dot * dot <= cross * cross => {
+            -SPLIT_ALLOWANCE * var
+        }
+        _ => 0.0,
+    }
+}
+
+/// Dot and cross product of the first and the last point of `pts` about the circle's centre.
+fn ends(pts: &[Point], circle: &Circle) -> Option<(f32, f32)> {
+    let (a, b) = (pts.first()?, pts.last()?);
+    let c = circle.center;
+    let (ax, ay, bx, by) = (a.x - c.x, a.y - c.y, b.x - c.x, b.y - c.y);
+    Some((ax * bx + ay * by, ax * by - ay * bx))
+}
+
+/// Whether a beam next to the segment `s..=e` sees through `circle`: it crosses the circle
+/// well inside its outline (within [`FACE`] R of the centre, in front of the scanner) and
+/// returns nothing, or returns from more than [`THROUGH_SIGMA`] σ_r beyond the circle's far
+/// side (not merely beyond its face, which the fit extrapolates past the run's end). A pillar
+/// hides what is behind it; a corner's circle (a rounded-off wedge of two walls) reaches past
+/// the walls' ends, where the scanner sees the room behind. Not checked while de-skewing (the
+/// beams then leave from other origins) nor at the scan's ends.
+pub(super) fn seen_through(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    circle: &Circle,
+    sigma: f32,
+) -> bool {
+    if pass.motion.is_some() {
+        return false;
+    }
+    let (c, r) = (circle.center, circle.radius);
+    let face = (FACE * r).min(r - 2.0 * sigma);
+    let through = |k: usize| {
+        let Some(d) = pass.beams.dirs.get(k) else {
+            return false;
+        };
+        let (along, perp) = (d.x * c.x + d.y * c.y, d.x * c.y - d.y * c.x);
+        if !(along > 0.0 && math::abs(perp) < face) {
+            return false;
+        }
+        let exit = along + math::sqrt(r * r - perp * perp);
+        !pass.valid(k) || pass.range(k) > exit + THROUGH_SIGMA * sigma
+    };
+    s.checked_sub(1).is_some_and(through) || (e + 1 < pass.len() && through(e + 1))
+}
