@@ -65,8 +65,9 @@ fn ends(pts: &[Point], circle: &Circle) -> Option<(f32, f32)> {
 
 /// Whether a beam next to the segment `s..=e` sees through `circle`: it crosses the circle
 /// well inside its outline (within [`FACE`] R of the centre, in front of the scanner) and
-/// returns nothing, or returns from more than [`THROUGH_SIGMA`] σ_r beyond the circle's far
-/// side (not merely beyond its face, which the fit extrapolates past the run's end). A pillar
+/// returns from more than [`THROUGH_SIGMA`] σ_r beyond the circle's far side (not merely
+/// beyond its face, which the fit extrapolates past the run's end), or returns nothing and
+/// neither does the beam past it (one missing return, a dark spot, says nothing). A pillar
 /// hides what is behind it; a corner's circle (a rounded-off wedge of two walls) reaches past
 /// the walls' ends, where the scanner sees the room behind. Not checked while de-skewing (the
 /// beams then leave from other origins) nor at the scan's ends.
@@ -82,16 +83,28 @@ pub(super) fn seen_through(
     }
     let (c, r) = (circle.center, circle.radius);
     let face = (FACE * r).min(r - 2.0 * sigma);
-    let through = |k: usize| {
-        let Some(d) = pass.beams.dirs.get(k) else {
+    // Range at which beam k leaves the circle, when it crosses the circle's face.
+    let exit = |k: usize| {
+        let d = pass.beams.dirs.get(k)?;
+        let (along, perp) = (d.x * c.x + d.y * c.y, d.x * c.y - d.y * c.x);
+        (along > 0.0 && math::abs(perp) < face).then(|| along + math::sqrt(r * r - perp * perp))
+    };
+    let beyond = |k: usize, exit: f32| pass.range(k) > exit + THROUGH_SIGMA * sigma;
+    // Beam k next to the run, `past` the one after it.
+    let through = |k: usize, past: Option<usize>| {
+        let Some(x) = exit(k) else {
             return false;
         };
-        let (along, perp) = (d.x * c.x + d.y * c.y, d.x * c.y - d.y * c.x);
-        if !(along > 0.0 && math::abs(perp) < face) {
-            return false;
+        if pass.valid(k) {
+            return beyond(k, x);
         }
-        let exit = along + math::sqrt(r * r - perp * perp);
-        !pass.valid(k) || pass.range(k) > exit + THROUGH_SIGMA * sigma
+        match past.filter(|&p| p < pass.len()) {
+            Some(p) if pass.valid(p) => exit(p).is_some_and(|x| beyond(p, x)),
+            Some(_) => true,
+            None => false,
+        }
     };
-    s.checked_sub(1).is_some_and(through) || (e + 1 < pass.len() && through(e + 1))
+    s.checked_sub(1)
+        .is_some_and(|k| through(k, k.checked_sub(1)))
+        || (e + 1 < pass.len() && through(e + 1, Some(e + 2)))
 }

@@ -137,6 +137,25 @@ fn an_arc_needs_six_points_thirty_degrees_and_the_margin() {
     assert!(!is_arc(&six, &circle, split, 0.0));
 }
 
+/// The split allowance: −2 σ_r² for an arc of at most 120° between its ends (around a centre
+/// away from the origin, either way round), none beyond, nor without points.
+#[test]
+fn an_arc_up_to_120_degrees_gets_the_split_allowance() {
+    let (c, r) = ((3000.0, -1200.0), 400.0);
+    let circle = Circle {
+        center: Point::new(c.0, c.1),
+        radius: r,
+    };
+    let deg = core::f32::consts::PI / 180.0;
+    for dir in [1.0f32, -1.0] {
+        for (span, want) in [(31.0, -50.0), (119.0, -50.0), (121.0, 0.0), (200.0, 0.0)] {
+            let pts = arc(8, c, r, 1.0, dir * span * deg);
+            assert_eq!(arc::allowance(&pts, &circle, 25.0), want, "{span}° {dir}");
+        }
+    }
+    assert_eq!(arc::allowance(&[], &circle, 25.0), 0.0);
+}
+
 /// σ_sys on a line of length 2 m whose middle lies 1 m along it from the foot of its normal:
 /// var_ρ + s² + tilt·1000², var_α + tilt, cov + tilt·1000, tilt = 2s²/L². A line of no length
 /// or no σ_sys is left as it is.
