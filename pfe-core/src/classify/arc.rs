@@ -19,6 +19,12 @@ const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
 /// two noise variances less than the circle ([`allowance`]).
 const SPLIT_ALLOWANCE: f32 = 2.0;
 
+/// Fewest points of a circle that may use the split allowance. Below it one of the best
+/// split's two lines holds at most three points, one residual degree of freedom: the split
+/// then hardly tests the corner, and on real scans such few-beam bends (clutter, furniture
+/// far away) are circles the next scan does not confirm.
+const ALLOWANCE_MIN_POINTS: usize = 8;
+
 /// Largest distance from the circle's centre, as a fraction of its radius, at which a beam next
 /// to the run crosses the circle's face (incidence within 53°) for [`seen_through`] to count it.
 const FACE: f32 = 0.8;
@@ -29,26 +35,48 @@ const THROUGH_SIGMA: f32 = 4.0;
 /// Whether `circle` (residual sum `sse_c`) is an arc really there: enough points, an arc of
 /// at least 30° between the first and the last point, and a residual sum below the best
 /// two-line (corner) split's by `margin` (a corner, door frame or bend is two lines).
+#[cfg(test)]
 pub(super) fn is_arc(pts: &[Point], circle: &Circle, sse_c: f32, margin: f32) -> bool {
-    let Some((dot, cross)) = ends(pts, circle) else {
-        return false;
-    };
+    lead_over_split(pts, circle, sse_c).is_some_and(|lead| lead > margin)
+}
+
+/// How `circle` (residual sum `sse_c`, noise variance `var`) passes as an arc: `Some(false)`
+/// when it beats the best two-line split outright, `Some(true)` when only within the split
+/// allowance ([`allowance`]), `None` when it is no arc ([`is_arc`]).
+pub(super) fn arc_test(pts: &[Point], circle: &Circle, sse_c: f32, var: f32) -> Option<bool> {
+    let lead = lead_over_split(pts, circle, sse_c)?;
+    if lead > 0.0 {
+        Some(false)
+    } else {
+        (lead > allowance(pts, circle, var)).then_some(true)
+    }
+}
+
+/// The best two-line split's residual sum less the circle's, when the points are enough and
+/// the arc wide enough for a circle (`None` otherwise).
+fn lead_over_split(pts: &[Point], circle: &Circle, sse_c: f32) -> Option<f32> {
+    let (dot, cross) = ends(pts, circle)?;
     // Beyond 90° (dot < 0) this holds whatever the cross product.
     let wide = math::abs(cross) >= CIRCLE_MIN_ARC_TAN * dot;
-    pts.len() >= CIRCLE_MIN_POINTS
-        && wide
-        && best_split_sse(pts).is_some_and(|split| split - sse_c > margin)
+    if pts.len() < CIRCLE_MIN_POINTS || !wide {
+        return None;
+    }
+    best_split_sse(pts).map(|split| split - sse_c)
 }
 
 /// The margin of [`is_arc`] for `circle` over `pts`, noise variance `var`: −[`SPLIT_ALLOWANCE`]
-/// σ_r² for an arc of at most 120° between its ends, none beyond. The split's extra
-/// parameters earn it about two variances on any arc; but a right-angle corner seen over a
-/// few beams fits a circle of 130–170° (its legs the circle's tangents) as well as two lines,
-/// so a wider arc must beat the split outright.
+/// σ_r² for an arc of at most 120° between its ends over at least [`ALLOWANCE_MIN_POINTS`]
+/// points, none otherwise. The split's extra parameters earn it about two variances on any
+/// arc; but a right-angle corner seen over a few beams fits a circle of 130–170° (its legs the
+/// circle's tangents) as well as two lines, so a wider arc must beat the split outright; and
+/// over fewer points one of the split's lines has at most three, whose fit says little.
 pub(super) fn allowance(pts: &[Point], circle: &Circle, var: f32) -> f32 {
     // At most 120°: cos ≥ −1/2, i.e. dot ≥ 0 or 3 dot² ≤ cross².
     match ends(pts, circle) {
-        Some((dot, cross)) if dot >= 0.0 || 3.0 * dot * dot <= cross * cross => {
+        Some((dot, cross))
+            if pts.len() >= ALLOWANCE_MIN_POINTS
+                && (dot >= 0.0 || 3.0 * dot * dot <= cross * cross) =>
+        {
             -SPLIT_ALLOWANCE * var
         }
         _ => 0.0,

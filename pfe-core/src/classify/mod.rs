@@ -18,7 +18,9 @@ use crate::fit::line::{fit_line, LineFit};
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
-use arc::{allowance, is_arc, seen_through};
+#[cfg(test)]
+use arc::is_arc;
+use arc::{arc_test, seen_through};
 use covariance::{correlated_scale, mean_cos2, scatter_scale, systematic_circle, systematic_line};
 
 /// Drop of the residual sum a circle must give over the line, in units of σ_r², for a short
@@ -107,11 +109,12 @@ fn feature_of<const SCRUTINY: bool>(
     let origin = pass.origin((s + e) / 2);
     let honest = honest(config, SCRUTINY);
     let var = config.sigma_r * config.sigma_r;
+    // A circle the split allowance let through must also hide what lies behind it.
     let circle = circle_of::<SCRUTINY>(pts, line.as_ref(), config)
-        .filter(|(c, _)| !honest || !seen_through(pass, s, e, c, config.sigma_r));
+        .filter(|&(c, _, allowed)| !allowed || !seen_through(pass, s, e, &c, config.sigma_r));
     match circle {
-        Some((c, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
-        Some((c, sse)) => {
+        Some((c, _, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
+        Some((c, sse, _)) => {
             let mut f = circle_feature(pts, s, e, &c, origin, config.sigma_r)?;
             if let Feature::Circle(cf) = &mut f {
                 let c2 = mean_cos2(pass, s, pts, |p| {
@@ -166,12 +169,13 @@ fn feature_of<const SCRUTINY: bool>(
 }
 
 /// The circle of `pts` when the configured typing says they are one (`line`: their line fit,
-/// if any), with its residual sum (NaN where not computed).
+/// if any), with its residual sum (NaN where not computed) and whether only the split
+/// allowance made it an arc ([`arc::arc_test`]).
 fn circle_of<const SCRUTINY: bool>(
     pts: &[Point],
     line: Option<&LineFit>,
     config: &Config,
-) -> Option<(Circle, f32)> {
+) -> Option<(Circle, f32, bool)> {
     let circle = || {
         let c = fit_circle(pts, config.circle_method).ok()?;
         if config.circle_refine > 0 {
@@ -179,7 +183,7 @@ fn circle_of<const SCRUTINY: bool>(
         } else {
             Some(c)
         }
-        .map(|c| (c, f32::NAN))
+        .map(|c| (c, f32::NAN, false))
     };
     let Some(l) = line else { return circle() };
     match config.typing {
@@ -222,7 +226,14 @@ fn circle_of<const SCRUTINY: bool>(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| !SCRUTINY || is_arc(pts, c, *sse_c, allowance(pts, c, var)))
+                .and_then(|(c, sse_c)| {
+                    let allowed = if SCRUTINY {
+                        arc_test(pts, &c, sse_c, var)?
+                    } else {
+                        false
+                    };
+                    Some((c, sse_c, allowed))
+                })
         }
     }
 }

@@ -350,7 +350,7 @@ fn a_circle_must_beat_the_line_by_chi2_noise_variances() {
     let pts = bumpy_arc(10, 1000.0, 20.0);
     let config = Config::default().with_sigma_r(6.0);
     let line = fit_line(&pts).ok();
-    let (_, sse_c) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
+    let (_, sse_c, _) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
     let s = line_sse64(&pts);
     assert!(f64::from(sse_c) > 0.15 * s, "{sse_c} vs {s}");
     let flip = libm::sqrt((s - f64::from(sse_c)) / 25.0) as f32;
@@ -375,7 +375,7 @@ fn the_default_circle_is_refined_to_the_geometric_optimum() {
         .collect();
     let config = Config::default().with_sigma_r(12.0);
     let line = fit_line(&pts).ok();
-    let (circle, sse) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
+    let (circle, sse, _) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
     let hyper = NormalEquations::at(&pts, &fit_circle(&pts, config.circle_method).unwrap());
     let own = NormalEquations::at(&pts, &circle);
     let norm = |g: [f32; 3]| libm::sqrtf(g.iter().map(|v| v * v).sum());
