@@ -154,6 +154,29 @@ fn an_arc_up_to_120_degrees_gets_the_split_allowance() {
         }
     }
     assert_eq!(arc::allowance(&[], &circle, 25.0), 0.0);
+    // Fewer than eight points: none.
+    let seven = arc(7, c, r, 1.0, 60.0 * deg);
+    assert_eq!(arc::allowance(&seven, &circle, 25.0), 0.0);
+}
+
+/// `arc_test` tells a circle that beats the best split outright (`Some(false)`) from one
+/// only within the allowance (`Some(true)`) and from no arc (`None`), by its residual sum
+/// against the split's, on eight points of a 60° arc.
+#[test]
+fn arc_test_tells_an_outright_arc_from_an_allowed_one() {
+    let (c, r) = ((3000.0, -1200.0), 400.0);
+    let circle = Circle {
+        center: Point::new(c.0, c.1),
+        radius: r,
+    };
+    let deg = core::f32::consts::PI / 180.0;
+    let pts = arc(8, c, r, 1.0, 60.0 * deg);
+    let split = best_split_sse(&pts).unwrap();
+    let var = 25.0;
+    assert_eq!(arc::arc_test(&pts, &circle, split - 1.0, var), Some(false));
+    assert_eq!(arc::arc_test(&pts, &circle, split + 1.0, var), Some(true));
+    assert_eq!(arc::arc_test(&pts, &circle, split + 49.0, var), Some(true));
+    assert_eq!(arc::arc_test(&pts, &circle, split + 51.0, var), None);
 }
 
 /// σ_sys on a line of length 2 m whose middle lies 1 m along it from the foot of its normal:
