@@ -1,6 +1,6 @@
 //! Whether a circle fitted to a segment is an arc really there (default mode, with the checks
 //! for real scans): enough points and arc, a residual sum that a corner (two lines) does not
-//! beat, and no beam next to the run that sees through where the circle would be.
+//! beat, or one within the split allowance that no beam next to the run sees through.
 
 use crate::fit::circle::Circle;
 use crate::fit::run::best_split_sse;

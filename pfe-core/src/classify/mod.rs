@@ -1,9 +1,9 @@
 //! Type and parameters of a segment (§3.5): a line or a circle, by the paper's mean distance
 //! to the fitted line or (default mode) by comparing the two fits; then the feature with its
 //! covariance. In the default mode a circle must also
-//! beat the best two-line (corner) split (on an arc of at most 120°, come within 2 σ_r² of
-//! it), cover enough points and arc angle, and not be seen through by the beams next to its
-//! run ([`arc`]); and every
+//! beat the best two-line (corner) split, cover enough points and arc angle; an arc of at
+//! most 120° over at least 8 points may come within 2 σ_r² of the split instead, if the
+//! beams next to its run do not see through it ([`arc`]); and every
 //! feature's covariance is scaled up by the reduced χ² of its fit when that shows more scatter
 //! than σ_r explains, and further when that scatter is correlated from beam to beam
 //! ([`covariance`]).
