@@ -1,28 +1,27 @@
 //! Type and parameters of a segment (§3.5): a line or a circle, by the paper's mean distance
 //! to the fitted line or (default mode) by comparing the two fits; then the feature with its
 //! covariance. In the default mode a circle must also
-//! beat the best two-line (corner) split, cover enough points and arc angle, and every
+//! beat the best two-line (corner) split, cover enough points and arc angle; an arc of at
+//! most 120° over at least 8 points may come within 2 σ_r² of the split instead, if the
+//! beams next to its run do not see through it ([`arc`]); and every
 //! feature's covariance is scaled up by the reduced χ² of its fit when that shows more scatter
 //! than σ_r explains, and further when that scatter is correlated from beam to beam
 //! ([`covariance`]).
 
+mod arc;
 mod covariance;
 
 use crate::config::{Config, Typing};
 use crate::feature::{circle_feature, line_feature, line_feature_with, Feature};
 use crate::fit::circle::{fit_circle, refine_circle, refine_from, Circle, NormalEquations};
 use crate::fit::line::{fit_line, LineFit};
-use crate::fit::run::best_split_sse;
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
+#[cfg(test)]
+use arc::is_arc;
+use arc::{arc_test, seen_through};
 use covariance::{correlated_scale, mean_cos2, scatter_scale, systematic_circle, systematic_line};
-
-/// Fewest points of a circle in the default mode.
-const CIRCLE_MIN_POINTS: usize = 6;
-/// Smallest arc a circle must cover in the default mode, as tan of its angle (30°): a short
-/// bent piece is not an arc.
-const CIRCLE_MIN_ARC_TAN: f32 = 0.577_350_3;
 
 /// Drop of the residual sum a circle must give over the line, in units of σ_r², for a short
 /// run's points to be curved (99 % of χ²₁: the circle's one more parameter).
@@ -110,9 +109,12 @@ fn feature_of<const SCRUTINY: bool>(
     let origin = pass.origin((s + e) / 2);
     let honest = honest(config, SCRUTINY);
     let var = config.sigma_r * config.sigma_r;
-    match circle_of::<SCRUTINY>(pts, line.as_ref(), config) {
-        Some((c, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
-        Some((c, sse)) => {
+    // A circle the split allowance let through must also hide what lies behind it.
+    let circle = circle_of::<SCRUTINY>(pts, line.as_ref(), config)
+        .filter(|&(c, _, allowed)| !allowed || !seen_through(pass, s, e, &c, config.sigma_r));
+    match circle {
+        Some((c, _, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
+        Some((c, sse, _)) => {
             let mut f = circle_feature(pts, s, e, &c, origin, config.sigma_r)?;
             if let Feature::Circle(cf) = &mut f {
                 let c2 = mean_cos2(pass, s, pts, |p| {
@@ -167,12 +169,13 @@ fn feature_of<const SCRUTINY: bool>(
 }
 
 /// The circle of `pts` when the configured typing says they are one (`line`: their line fit,
-/// if any), with its residual sum (NaN where not computed).
+/// if any), with its residual sum (NaN where not computed) and whether only the split
+/// allowance made it an arc ([`arc::arc_test`]).
 fn circle_of<const SCRUTINY: bool>(
     pts: &[Point],
     line: Option<&LineFit>,
     config: &Config,
-) -> Option<(Circle, f32)> {
+) -> Option<(Circle, f32, bool)> {
     let circle = || {
         let c = fit_circle(pts, config.circle_method).ok()?;
         if config.circle_refine > 0 {
@@ -180,7 +183,7 @@ fn circle_of<const SCRUTINY: bool>(
         } else {
             Some(c)
         }
-        .map(|c| (c, f32::NAN))
+        .map(|c| (c, f32::NAN, false))
     };
     let Some(l) = line else { return circle() };
     match config.typing {
@@ -223,26 +226,16 @@ fn circle_of<const SCRUTINY: bool>(
                         && *sse_c < ratio * sse_l
                         && *sse_c <= 4.0 * var * pts.len() as f32
                 })
-                .filter(|(c, sse_c)| !SCRUTINY || is_arc(pts, c, *sse_c, 0.0))
+                .and_then(|(c, sse_c)| {
+                    let allowed = if SCRUTINY {
+                        arc_test(pts, &c, sse_c, var)?
+                    } else {
+                        false
+                    };
+                    Some((c, sse_c, allowed))
+                })
         }
     }
-}
-
-/// Whether `circle` (residual sum `sse_c`) is an arc really there: enough points, an arc of
-/// at least 30° between the first and the last point, and a residual sum below the best
-/// two-line (corner) split's by `margin` (a corner, door frame or bend is two lines).
-fn is_arc(pts: &[Point], circle: &Circle, sse_c: f32, margin: f32) -> bool {
-    let (Some(a), Some(b)) = (pts.first(), pts.last()) else {
-        return false;
-    };
-    let c = circle.center;
-    let (ax, ay, bx, by) = (a.x - c.x, a.y - c.y, b.x - c.x, b.y - c.y);
-    let (dot, cross) = (ax * bx + ay * by, ax * by - ay * bx);
-    // Beyond 90° (dot < 0) this holds whatever the cross product.
-    let wide = math::abs(cross) >= CIRCLE_MIN_ARC_TAN * dot;
-    pts.len() >= CIRCLE_MIN_POINTS
-        && wide
-        && best_split_sse(pts).is_some_and(|split| split - sse_c > margin)
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::feature::{CircleFeature, LineFeature};
+use crate::fit::run::best_split_sse;
 
 /// `n` points on the circle of centre `c` and radius `r` from `from` over `span` rad.
 fn arc(n: usize, c: (f32, f32), r: f32, from: f32, span: f32) -> heapless::Vec<Point, 64> {
@@ -134,6 +135,48 @@ fn an_arc_needs_six_points_thirty_degrees_and_the_margin() {
     assert!(is_arc(&six, &circle, sse_c, gain * 0.99));
     assert!(!is_arc(&six, &circle, sse_c, gain));
     assert!(!is_arc(&six, &circle, split, 0.0));
+}
+
+/// The split allowance: −2 σ_r² for an arc of at most 120° between its ends (around a centre
+/// away from the origin, either way round), none beyond, nor without points.
+#[test]
+fn an_arc_up_to_120_degrees_gets_the_split_allowance() {
+    let (c, r) = ((3000.0, -1200.0), 400.0);
+    let circle = Circle {
+        center: Point::new(c.0, c.1),
+        radius: r,
+    };
+    let deg = core::f32::consts::PI / 180.0;
+    for dir in [1.0f32, -1.0] {
+        for (span, want) in [(31.0, -50.0), (119.0, -50.0), (121.0, 0.0), (200.0, 0.0)] {
+            let pts = arc(8, c, r, 1.0, dir * span * deg);
+            assert_eq!(arc::allowance(&pts, &circle, 25.0), want, "{span}° {dir}");
+        }
+    }
+    assert_eq!(arc::allowance(&[], &circle, 25.0), 0.0);
+    // Fewer than eight points: none.
+    let seven = arc(7, c, r, 1.0, 60.0 * deg);
+    assert_eq!(arc::allowance(&seven, &circle, 25.0), 0.0);
+}
+
+/// `arc_test` tells a circle that beats the best split outright (`Some(false)`) from one
+/// only within the allowance (`Some(true)`) and from no arc (`None`), by its residual sum
+/// against the split's, on eight points of a 60° arc.
+#[test]
+fn arc_test_tells_an_outright_arc_from_an_allowed_one() {
+    let (c, r) = ((3000.0, -1200.0), 400.0);
+    let circle = Circle {
+        center: Point::new(c.0, c.1),
+        radius: r,
+    };
+    let deg = core::f32::consts::PI / 180.0;
+    let pts = arc(8, c, r, 1.0, 60.0 * deg);
+    let split = best_split_sse(&pts).unwrap();
+    let var = 25.0;
+    assert_eq!(arc::arc_test(&pts, &circle, split - 1.0, var), Some(false));
+    assert_eq!(arc::arc_test(&pts, &circle, split + 1.0, var), Some(true));
+    assert_eq!(arc::arc_test(&pts, &circle, split + 49.0, var), Some(true));
+    assert_eq!(arc::arc_test(&pts, &circle, split + 51.0, var), None);
 }
 
 /// σ_sys on a line of length 2 m whose middle lies 1 m along it from the foot of its normal:
@@ -330,7 +373,7 @@ fn a_circle_must_beat_the_line_by_chi2_noise_variances() {
     let pts = bumpy_arc(10, 1000.0, 20.0);
     let config = Config::default().with_sigma_r(6.0);
     let line = fit_line(&pts).ok();
-    let (_, sse_c) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
+    let (_, sse_c, _) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
     let s = line_sse64(&pts);
     assert!(f64::from(sse_c) > 0.15 * s, "{sse_c} vs {s}");
     let flip = libm::sqrt((s - f64::from(sse_c)) / 25.0) as f32;
@@ -355,7 +398,7 @@ fn the_default_circle_is_refined_to_the_geometric_optimum() {
         .collect();
     let config = Config::default().with_sigma_r(12.0);
     let line = fit_line(&pts).ok();
-    let (circle, sse) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
+    let (circle, sse, _) = circle_of::<false>(&pts, line.as_ref(), &config).unwrap();
     let hyper = NormalEquations::at(&pts, &fit_circle(&pts, config.circle_method).unwrap());
     let own = NormalEquations::at(&pts, &circle);
     let norm = |g: [f32; 3]| libm::sqrtf(g.iter().map(|v| v * v).sum());
