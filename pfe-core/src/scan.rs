@@ -570,7 +570,8 @@ mod tests {
     }
 
     /// `max_code` against the definition (a code is a return when `code_mm` and `valid_mm`
-    /// accept it), for unit sizes and range limits that do and do not divide evenly.
+    /// accept it), for unit sizes and range limits that do and do not divide evenly, and for
+    /// limits no range meets (0, negative, NaN: code 0, without a step below it).
     #[test]
     fn max_code_is_the_last_valid_code() {
         let units = [
@@ -585,7 +586,17 @@ mod tests {
             f32::INFINITY,
         ];
         let limits = [
-            8000.0f32, 8182.0, 8183.0, 80_000.0, 0.05, 1.0, 4.45, 655_350.0,
+            8000.0f32,
+            8182.0,
+            8183.0,
+            80_000.0,
+            0.05,
+            1.0,
+            4.45,
+            655_350.0,
+            0.0,
+            -5.0,
+            f32::NAN,
         ];
         for &mm in &units {
             for &r_max in &limits {

@@ -2,7 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::indexing_slicing)]
 
 use pfe_core::{
-    BeamTiming, Config, Extractor, Feature, LineFeature, Motion, RangeCorrection, Scan,
+    BeamTiming, Config, Extractor, Feature, FitError, LineFeature, Motion, RangeCorrection, Scan,
     ScanGeometry,
 };
 
@@ -64,6 +64,21 @@ fn calibration_rejects_bad_input() {
         .collect();
     pairs[3].0 = f32::NAN;
     assert!(RangeCorrection::calibrate(&pairs).is_err());
+    // One non-finite value of a pair, measured or true, is the error that says so.
+    for (k, bad) in [(3usize, f32::NAN), (7, f32::INFINITY)] {
+        let mut measured = pairs.clone();
+        measured[3].0 = 400.0;
+        measured[k].0 = bad;
+        let mut truth = measured.clone();
+        truth[k] = (measured[k].1, bad);
+        for p in [measured, truth] {
+            assert!(
+                matches!(RangeCorrection::calibrate(&p), Err(FitError::NonFinite)),
+                "{:?}",
+                RangeCorrection::calibrate(&p)
+            );
+        }
+    }
 }
 
 #[test]
