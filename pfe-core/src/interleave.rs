@@ -592,6 +592,25 @@ mod leverage;
 mod tests {
     use super::*;
 
+    /// A chunk's evidence is each estimate squared over its variance (σ² times the fit's
+    /// factor), capped: the half offset's 2² / (0.25 · 2²) = 4 for 2 sweeps; the quarter
+    /// offsets' 3² / (0.5 · 2²) + 1² / (0.125 · 2²) = 4.5 + 2 = 6.5 for 4 (a remainder in place
+    /// of the first quotient gives 1 + 2), and a large one capped at 2 · CAP.
+    #[test]
+    fn a_chunk_s_evidence_is_its_estimates_over_their_variances() {
+        let fit = |est: [f32; 3]| ChunkFit {
+            est,
+            var: [0.25, 0.5, 0.125],
+            ..ChunkFit::ZERO
+        };
+        let mut e = Evidence::default();
+        e.add(&fit([2.0, 3.0, 1.0]), 2.0);
+        assert_eq!((e.chi2_2, e.chi2_4, e.chunks), (4.0, 6.5, 1));
+        assert_eq!(e.offset_sq, 4.0);
+        e.add(&fit([0.0, 30.0, 0.0]), 2.0);
+        assert_eq!((e.chi2_2, e.chi2_4, e.chunks), (4.0, 6.5 + 2.0 * CAP, 2));
+    }
+
     /// σ from the differences' sum of squares: each difference of two two-beam differences
     /// has 4 σ² of variance; the rounding's q/√12 and the floor bound it below.
     #[test]
