@@ -180,3 +180,7 @@ pub(super) fn same_line(a: &LineFeature, b: &LineFeature) -> f32 {
     }
     (srr * da * da - 2.0 * sar * da * dr + saa * dr * dr) / det
 }
+
+#[cfg(test)]
+#[path = "join_tests.rs"]
+mod tests;
