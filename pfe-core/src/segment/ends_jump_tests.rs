@@ -4,11 +4,9 @@
 
 use heapless::Vec;
 
-use super::super::join::join_collinear;
-use super::super::{emit, JOINS_MAX};
+use super::super::emitted::emitted_after;
 use crate::config::Config;
 use crate::extractor::Extractor;
-use crate::feature::Feature;
 use crate::flags::JUMP;
 use crate::math;
 use crate::scan::{Scan, ScanGeometry};
@@ -39,22 +37,13 @@ fn grazing_wall_and_face(g: &ScanGeometry) -> [f32; 181] {
 fn a_grazing_wall_s_last_beam_across_a_jump_goes_back_to_the_wall() {
     let g = ScanGeometry::lms200(180.0, 1.0);
     let ranges = grazing_wall_and_face(&g);
-    let config = Config::default();
-    let mut ex = Extractor::<181, 8>::new();
     let spans: Vec<(usize, usize), 8> =
-        ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
-            let Some(noise) = rule.noise() else {
-                panic!("the default rule")
-            };
-            pass.set(160, JUMP);
-            let mut out: Vec<Feature, 8> = Vec::new();
-            let mut joins = JOINS_MAX;
-            for (s, e) in [(150, 159), (160, 163)] {
-                emit::<true>(pass, s, e, None, &config, &mut out);
-                join_collinear(pass, noise, &config, &mut out, &mut joins);
-            }
-            out.iter().map(|f| (f.first(), f.last())).collect()
-        });
+        emitted_after(g, &ranges, [(150, 159), (160, 163)], |pass| {
+            pass.set(160, JUMP)
+        })
+        .iter()
+        .map(|f| (f.first(), f.last()))
+        .collect();
     assert_eq!(spans[..], [(150, 160)]);
 }
 

@@ -3,8 +3,6 @@
 
 use heapless::Vec;
 
-use super::super::join::join_collinear;
-use super::super::{emit, JOINS_MAX};
 use crate::config::Config;
 use crate::extractor::Extractor;
 use crate::feature::{Feature, LineFeature};
@@ -48,27 +46,13 @@ pub(super) fn scene_at(
 }
 
 /// The features of the scene after its two segments (`first`, `second`) are emitted as the
-/// segment step does (each followed by [`join_collinear`]).
+/// segment step does.
 fn segments_of(
     ranges: &[f32; 181],
     first: (usize, usize),
     second: (usize, usize),
 ) -> Vec<Feature, 8> {
-    let g = ScanGeometry::lms200(180.0, 1.0);
-    let config = Config::default();
-    let mut ex = Extractor::<181, 8>::new();
-    ex.with_pass(&Scan::from_mm(g, ranges), &config, |pass, rule| {
-        let Some(noise) = rule.noise() else {
-            panic!("the default rule")
-        };
-        let mut out: Vec<Feature, 8> = Vec::new();
-        let mut joins = JOINS_MAX;
-        for (s, e) in [first, second] {
-            emit::<true>(pass, s, e, None, &config, &mut out);
-            join_collinear(pass, noise, &config, &mut out, &mut joins);
-        }
-        out
-    })
+    super::super::emitted::emitted(ScanGeometry::lms200(180.0, 1.0), ranges, [first, second])
 }
 
 /// The first and last beam of each line of `out`.

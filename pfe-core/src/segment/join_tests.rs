@@ -3,12 +3,10 @@
 
 use heapless::Vec;
 
-use super::super::{emit, JOINS_MAX};
-use super::{join_collinear, JOIN_MAX_POINTS};
-use crate::config::Config;
-use crate::extractor::Extractor;
+use super::super::emitted::emitted;
+use super::JOIN_MAX_POINTS;
 use crate::feature::Feature;
-use crate::scan::{Scan, ScanGeometry};
+use crate::scan::ScanGeometry;
 
 /// The first and last beam of each line after two segments of one straight wall (x = 3 m,
 /// seen at 0.25° without noise) are emitted as the segment step does, each followed by
@@ -23,25 +21,13 @@ fn joined(first: (usize, usize), second: (usize, usize)) -> Vec<(u16, u16), 4> {
             f32::NAN
         }
     });
-    let config = Config::default();
-    let mut ex = Extractor::<721, 8>::new();
-    ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
-        let Some(noise) = rule.noise() else {
-            panic!("the default rule")
-        };
-        let mut out: Vec<Feature, 8> = Vec::new();
-        let mut joins = JOINS_MAX;
-        for (s, e) in [first, second] {
-            emit::<true>(pass, s, e, None, &config, &mut out);
-            join_collinear(pass, noise, &config, &mut out, &mut joins);
-        }
-        out.iter()
-            .filter_map(|f| match f {
-                Feature::Line(l) => Some((l.first, l.last)),
-                _ => None,
-            })
-            .collect()
-    })
+    emitted(g, &ranges, [first, second])
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Line(l) => Some((l.first, l.last)),
+            _ => None,
+        })
+        .collect()
 }
 
 /// Two pieces of one wall are joined into one line of up to [`JOIN_MAX_POINTS`] (400)

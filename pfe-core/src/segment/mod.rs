@@ -464,3 +464,6 @@ mod tests;
 
 #[cfg(test)]
 mod pieces_tests;
+
+#[cfg(test)]
+mod emitted;
