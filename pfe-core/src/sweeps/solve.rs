@@ -61,6 +61,14 @@ struct Table {
 }
 
 impl Table {
+    /// No rows yet.
+    fn empty() -> Self {
+        Table {
+            rows: heapless::Vec::new(),
+            far: 0.0,
+        }
+    }
+
     /// The rows, in the order they were made.
     fn rows(&self) -> &[Row] {
         &self.rows
@@ -84,10 +92,7 @@ impl Rows<'_> {
     /// [`Self::table`] one candidate beam at a time ([`row`]).
     #[cfg_attr(feature = "std", allow(dead_code))]
     fn table_each(&self) -> Table {
-        let mut t = Table {
-            rows: heapless::Vec::new(),
-            far: 0.0,
-        };
+        let mut t = Table::empty();
         let Plan {
             triples,
             stride,
@@ -110,10 +115,7 @@ impl Rows<'_> {
     /// that pass, in order: the rows of [`Self::table_each`], bit for bit.
     #[cfg_attr(not(feature = "std"), allow(dead_code))]
     fn table_lanes(&self) -> Table {
-        let mut t = Table {
-            rows: heapless::Vec::new(),
-            far: 0.0,
-        };
+        let mut t = Table::empty();
         let Plan {
             triples,
             stride,
