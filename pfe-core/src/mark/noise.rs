@@ -456,8 +456,6 @@ fn accepted_run_after_lanes(
     if run_from(points, ranges, from, to).is_none() {
         return from;
     }
-    let o = Point::new(0.0, 0.0);
-    let seen = line.seen_from(o);
     let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
     let incidence = math::sin_cos(MIN_INCIDENCE);
     let mut at = from;
@@ -474,14 +472,10 @@ fn accepted_run_after_lanes(
                 continue;
             };
             // As `accepted_run_after_serial`, with `&` for `||` (no branch).
-            let (sp, sprev) = (
-                Point::new(p.x - o.x, p.y - o.y),
-                Point::new(prev.x - o.x, prev.y - o.y),
-            );
-            let limit = jump_limit_between_lanes(rule, incidence, sprev, sp, prev_r);
+            let limit = jump_limit_between_lanes(rule, incidence, prev, p, prev_r);
             let (ex, ey) = (p.x - prev.x, p.y - prev.y);
             *ok = (ex * ex + ey * ey <= limit * limit)
-                & seen.accepts_after_lanes(&sprev, (sp.x, sp.y), r, k_sigma2, floor);
+                & line.accepts_after_lanes(&prev, (p.x, p.y), r, k_sigma2, floor);
         }
         // The lanes that failed as the bits of a mask (those past `end` are left `true`): its
         // lowest bit is the first point that fails.
@@ -538,22 +532,16 @@ fn accepted_run_after_serial(
     let Some((pts, rs, mut prev, mut prev_r)) = run_from(points, ranges, from, to) else {
         return from;
     };
-    let o = Point::new(0.0, 0.0);
-    let seen = line.seen_from(o);
     let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
     let near2 = never_jumps2(rule);
     for (at, (p, &r)) in (from..).zip(pts.iter().zip(rs)) {
         // An invalid point is NaN (`Point::INVALID`): it fails the jump test.
-        let (sp, sprev) = (
-            Point::new(p.x - o.x, p.y - o.y),
-            Point::new(prev.x - o.x, prev.y - o.y),
-        );
         // A step within every limit needs none at the points' own angle apart (`prev_r` is
         // a valid point's range).
         let (ex, ey) = (p.x - prev.x, p.y - prev.y);
         let d2 = ex * ex + ey * ey;
-        let near = d2 <= near2 || d2 <= sq(rule.jump_limit_between(sprev, sp, prev_r));
-        if !near || !seen.accepts_after(&sprev, (sp.x, sp.y), r, k_sigma2, floor) {
+        let near = d2 <= near2 || d2 <= sq(rule.jump_limit_between(prev, *p, prev_r));
+        if !near || !line.accepts_after(&prev, (p.x, p.y), r, k_sigma2, floor) {
             return at;
         }
         (prev, prev_r) = (*p, r);
