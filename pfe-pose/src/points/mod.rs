@@ -241,8 +241,11 @@ fn one_way<const N: usize>(onto: &RangeScan<N>, from: &RangeScan<N>, pose: &Pose
 /// ICP ([`icp`]) from that answer, from `guess` (the last motion, say) and from no motion is
 /// tried, and its best answer is taken if its points agree at least
 /// [`crate::Config::verify_accept`] and better than the features' answer by
-/// [`crate::Config::verify_margin`] (else the features' answer stays, however low its
-/// points' score). `prev_pts` and `curr_pts` are the two scans' ranges; empty
+/// [`crate::Config::verify_margin`]. An answer whose points then still agree less than
+/// [`crate::Config::verify_accept`] (or none) is looked at again over the whole circle of
+/// headings (within [`crate::Config::max_rotation`]) and replaced by an ICP answer that agrees
+/// at least that well and 0.25 better; otherwise it stays, however low its points' score.
+/// `prev_pts` and `curr_pts` are the two scans' ranges; empty
 /// ones give [`crate::register_with`]'s answer.
 ///
 /// ```
@@ -297,8 +300,8 @@ pub fn register_scans<const N: usize>(
 }
 
 /// The registration `reg` of two scans kept when its points agree well enough, else the best
-/// ICP answer from it, from `guess` and from no motion when that agrees well enough and
-/// better (see [`register_scans`]). `replaced`: the features' winner when the points'
+/// ICP answer from it, from `guess` and from no motion, or from the second look over the
+/// circle of headings, when that agrees well enough and better (see [`register_scans`]). `replaced`: the features' winner when the points'
 /// verification preferred another hypothesis (see [`rejudge`]).
 pub(crate) fn complete<const N: usize>(
     reg: crate::Registration,
@@ -318,7 +321,17 @@ pub(crate) fn complete<const N: usize>(
         Some(winner) => rejudge(reg, &winner, prev_pts, curr_pts),
         None => reg,
     };
-    let reg = complete_from(reg, prev_pts, curr_pts, guess, cfg);
+    let mut reg = complete_from(reg, prev_pts, curr_pts, guess, cfg);
+    // An answer the points agree with less than an ICP answer must (or none): the second look
+    // over the circle of headings.
+    let low = !reg.is_registered()
+        || !(agreement(prev_pts, curr_pts, &reg.rel).score() >= cfg.verify_accept);
+    if low {
+        let rel = reg.is_registered().then_some(reg.rel);
+        if let Some(r) = recover::second_look(prev_pts, curr_pts, rel.as_ref(), guess, cfg) {
+            reg = from_icp(reg, &r);
+        }
+    }
     if reg.is_registered() {
         let reg = polish(
             search_along(reg, hint, prev_pts, curr_pts),

@@ -1,7 +1,7 @@
-//! The odometry's second look at a step whose points contradict it: the points' agreement
-//! screened over a grid of motions (headings 5° apart up to ±40° from the last motion's,
-//! translations 0.5 m apart),
-//! the best few refined by ICP, so that a wrong answer of the features (a 90° turn where the
+//! The second look at a step whose points contradict it (the odometry's [`recheck`] and
+//! [`bridge`], the pair's `second_look`): the points' agreement screened over a grid of
+//! motions (headings 5° apart up to ±40° from the last motion's, translations 0.5 m apart;
+//! or the circle of headings), the best few refined by ICP, so that a wrong answer of the features (a 90° turn where the
 //! robot went on straight, a corridor's length off by metres) is replaced by what the points
 //! show.
 
@@ -183,4 +183,73 @@ pub fn bridge<const N: usize>(
         }
     }
     Some((pose, cov))
+}
+
+/// The second look's fan: the whole circle in this many headings (5° apart).
+const LOOK_FAN: i32 = 72;
+/// The second look's screened motions (best first) refined by ICP.
+const LOOK_REFINED: usize = 8;
+
+/// A pair's answer `rel` (or none) whose points agree less than
+/// [`crate::Config::verify_accept`] looked at again over the whole circle: the points'
+/// agreement screened at headings 5° apart, at no translation, at `guess`'s (the last motion,
+/// say) and at its translation turned by half the change of heading (an arc's chord); `guess`
+/// and the best 8 refined by [`icp`] (each within a grid cell and a half and three headings of
+/// its start). The best answer (`guess`'s unless another agrees 0.02 better) when its points
+/// agree at least 0.5 and 0.25 better than under `rel`; `None` otherwise.
+pub(super) fn second_look<const N: usize>(
+    prev: &RangeScan<N>,
+    curr: &RangeScan<N>,
+    rel: Option<&Pose>,
+    guess: Option<Pose>,
+    cfg: &crate::Config,
+) -> Option<IcpResult> {
+    if prev.is_empty() || curr.is_empty() {
+        return None;
+    }
+    let own = rel
+        .filter(|r| r.is_finite())
+        .map_or(f32::NEG_INFINITY, |r| agreement(prev, curr, r).score());
+    let guess = guess.filter(Pose::is_finite);
+    let t = guess.unwrap_or(Pose::IDENTITY);
+    let mut top = [(f32::NEG_INFINITY, Pose::IDENTITY); LOOK_REFINED];
+    for k in 0..LOOK_FAN {
+        let theta = crate::geom::wrap(k as f32 * (core::f32::consts::TAU / LOOK_FAN as f32));
+        if !(theta.abs() <= cfg.max_rotation) {
+            continue;
+        }
+        let (s, c) = crate::geom::sin_cos(0.5 * crate::geom::wrap(theta - t.theta));
+        let arc = Pose::new(c * t.x - s * t.y, s * t.x + c * t.y, theta);
+        for g in [Pose::new(0.0, 0.0, theta), Pose::new(t.x, t.y, theta), arc] {
+            let s = agreement(prev, curr, &g).score();
+            if let Some(k) = top.iter().position(|(b, _)| s > *b) {
+                top.copy_within(k..LOOK_REFINED - 1, k + 1);
+                if let Some(slot) = top.get_mut(k) {
+                    *slot = (s, g);
+                }
+            }
+        }
+    }
+    let starts = guess
+        .into_iter()
+        .chain(top.iter().filter(|(s, _)| s.is_finite()).map(|(_, g)| *g));
+    let mut best: Option<(IcpResult, f32)> = None;
+    for start in starts {
+        let Some(r) = icp(prev, curr, &start) else {
+            continue;
+        };
+        let moved = crate::geom::hypot(r.pose.x - start.x, r.pose.y - start.y);
+        let turned = crate::geom::wrap(r.pose.theta - start.theta).abs();
+        let inside = crate::geom::hypot(r.pose.x, r.pose.y) <= cfg.max_translation
+            && crate::geom::wrap(r.pose.theta).abs() <= cfg.max_rotation;
+        if moved > RECHECK_REACH.0 || turned > RECHECK_REACH.1 || !inside {
+            continue;
+        }
+        let s = r.agreement.score();
+        if best.as_ref().is_none_or(|(_, b)| s > *b + RECHECK_PREFER) {
+            best = Some((r, s));
+        }
+    }
+    best.filter(|(_, s)| *s >= cfg.verify_accept && *s > own + RECHECK_MARGIN)
+        .map(|(r, _)| r)
 }

@@ -71,7 +71,8 @@ pub struct Config {
     /// a features' winner reaching it is not ambiguous with a close runner-up; the odometry's
     /// search of the map, when the pair did not register, is refused below it. A pair's
     /// features' registration below it is not refused: the ICP's answer replaces it only when
-    /// that agrees better ([`Config::verify_keep`]).
+    /// that agrees better ([`Config::verify_keep`]); an answer still below it is looked at
+    /// again over the circle of headings ([`crate::points::register_scans`]).
     pub verify_accept: f32,
     /// With the scans' points: a registration whose points' score reaches this is kept
     /// without trying the ICP; below it, an ICP answer whose points agree better by
