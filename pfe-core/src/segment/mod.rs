@@ -97,6 +97,15 @@ fn segments_with<const SCRUTINY: bool>(
                 pending = Some((ps, e));
                 continue;
             }
+            if SCRUTINY && pe + 1 == s && pass.flag(s) & JUMP == 0 {
+                if let Some(t) = tail_arc(pass, ps, pe, e, rule, config) {
+                    // The arc runs from the tail of the segment before into this one.
+                    emitter.emit::<SCRUTINY>(pass, ps, pe - t, config, out);
+                    pass.clear(s, START);
+                    pending = Some((pe + 1 - t, e));
+                    continue;
+                }
+            }
         }
         if let Some((ps, pe)) = pending {
             emitter.emit::<SCRUTINY>(pass, ps, pe, config, out);
@@ -109,6 +118,43 @@ fn segments_with<const SCRUTINY: bool>(
     if emitter.join.is_some() {
         emitter.flush(pass, config, out);
     }
+}
+
+/// Points at the end of a segment tried, longest first, for an arc that runs on into the next
+/// segment ([`tail_arc`]).
+const TAIL_RUNS: [usize; 2] = [16, 8];
+
+/// How many of the last points of the segment `ps..=pe` make one arc with the next segment
+/// `pe + 1..=e` (no range jump between them) when the two together do not, typed a circle: a
+/// pillar in front of a wall whose arc the walk marked inside (the wall and the arc's first
+/// points one segment, the rest the next, which ends at the pillar's far edge: a range jump or
+/// no return). Both segments keep at least `min_points` points: the arc's piece in the next
+/// segment is long enough for a feature of its own (a line that is no surface).
+fn tail_arc(
+    pass: &Pass<'_>,
+    ps: usize,
+    pe: usize,
+    e: usize,
+    rule: &NoiseRule,
+    config: &Config,
+) -> Option<usize> {
+    let edge = e + 1 >= pass.len() || !pass.valid(e + 1) || pass.flag(e + 1) & JUMP != 0;
+    if !edge || e < pe + config.min_points {
+        return None;
+    }
+    TAIL_RUNS.iter().copied().find(|&t| {
+        pe + 1 >= ps + t + config.min_points
+            && MERGE_SIZES.contains(&(e + t - pe))
+            && pass
+                .points
+                .get(pe + 1 - t..e + 1)
+                .and_then(|pts| arc_fit(pts, rule))
+                .is_some()
+            && matches!(
+                classify::feature::<true>(pass, pe + 1 - t, e, config),
+                Some(Feature::Circle(_))
+            )
+    })
 }
 
 /// Emits segments in order, noting the last run of consecutive short ones (default mode) to
