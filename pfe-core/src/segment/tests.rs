@@ -723,3 +723,52 @@ fn a_pillar_in_front_of_a_wall_split_by_the_walk_is_one_circle() {
     assert_eq!(beams, 18);
     assert!(circles >= 160, "one circle in {circles} of 300 draws");
 }
+
+/// A wall running away from the scanner whose far end comes first in the scan (500 mm to its
+/// left, 0.25° beams from 0.5° to 75°): seen at more than 85° incidence at its midpoint, its segment
+/// becomes the line over its visible near part and, before it, the far part as a segment of
+/// its own without a feature, from the segment's first beam to the one before the line.
+#[test]
+fn a_wall_s_far_part_before_its_visible_part_is_a_segment_of_its_own() {
+    use crate::extractor::Extractor;
+    use crate::flags::{END, START};
+    use crate::scan::{Scan, ScanGeometry};
+    let mut g = ScanGeometry::lms200(180.0, 0.25);
+    g.r_max = 80_000.0;
+    let (s, e) = (362usize, 660usize);
+    let ranges: [f32; 721] = core::array::from_fn(|i| {
+        if (s..=e).contains(&i) {
+            libm::roundf(500.0 / crate::math::sin_cos(g.bearing(i)).0)
+        } else {
+            0.0
+        }
+    });
+    let config = Config::default();
+    let mut ex = Extractor::<721, 8>::new();
+    let (out, stats, starts, ends) =
+        ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+            pass.set(s, START);
+            pass.set(e, END);
+            let mut out: Vec<Feature, 8> = Vec::new();
+            segments(pass, rule, &config, &mut out);
+            let flagged = |f: u8| -> Vec<usize, 8> {
+                (s..=e)
+                    .filter(|&i| pass.flags[i] & f != 0)
+                    .take(8)
+                    .collect()
+            };
+            let counts = (pass.stats.segments, pass.stats.short_segments);
+            (out, counts, flagged(START), flagged(END))
+        });
+    let [Feature::Line(l)] = out.as_slice() else {
+        panic!("{out:?}");
+    };
+    let a = usize::from(l.first);
+    assert!(
+        a > s + config.min_points && usize::from(l.last) == e,
+        "{l:?}"
+    );
+    assert_eq!(stats, (2, 0), "segments, short segments");
+    assert_eq!(starts.as_slice(), [s, a], "{starts:?}");
+    assert_eq!(ends.as_slice(), [a - 1, e], "{ends:?}");
+}
