@@ -291,3 +291,90 @@ fn the_corner_test_agrees_with_the_geometry() {
     assert!(judged > 3000 && yes > 400, "{judged} judged, {yes} beyond");
     assert!(near[0] > 100 && near[1] > 100, "near the margin: {near:?}");
 }
+
+/// [`closer`]'s distance from a point to the line of the short segment's other points counts
+/// that line's uncertainty carried to the point, σ_r² (1/n + u²/Σu²) beside the point's own
+/// σ_r²: against the same question worked out in f64 (the three points' total least-squares
+/// line, u along it from their centroid) for faces at 10–80° and the point 0–60 mm off the
+/// face's line along its beam, on a line parallel to the face (so no corner decides), every
+/// case more than 2 % off the χ² threshold is judged alike, and the threshold is crossed.
+#[test]
+fn the_distance_to_the_short_line_counts_its_uncertainty_at_the_point() {
+    use super::{closer, OFF_LINE_CHI2};
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let config = Config::default();
+    let d2r = core::f64::consts::PI / 180.0;
+    let (mut alike, mut on_each_side) = (0usize, [0usize; 2]);
+    for deg in (10..=80).step_by(5) {
+        let alpha = f64::from(deg) * d2r - 10.0 * d2r;
+        let rho = 2000.0f64;
+        let range = |i: usize, off: f64| (rho + off) / (f64::from(g.bearing(i)) - alpha).cos();
+        for step in 0..=60 {
+            let off = f64::from(step);
+            let ranges: [f32; 181] = core::array::from_fn(|i| match i {
+                80..=82 => range(i, 0.0) as f32,
+                83 => range(83, off) as f32,
+                _ => 0.0,
+            });
+            let mut ex = Extractor::<181, 8>::new();
+            let (judged, sigma_r, pts) =
+                ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+                    let Some(noise) = rule.noise() else {
+                        panic!("the default rule")
+                    };
+                    let p = pass.point(83);
+                    let l = LineFeature::new(
+                        83,
+                        99,
+                        17,
+                        alpha as f32,
+                        (rho + off) as f32,
+                        0.0,
+                        0.0,
+                        0.0,
+                        p,
+                        p,
+                    );
+                    let pts: [[f64; 2]; 4] =
+                        [80, 81, 82, 83].map(|i| [pass.point(i).x, pass.point(i).y].map(f64::from));
+                    let judged = closer(pass, noise, &l, 83, 80..=82, OFF_LINE_CHI2);
+                    (judged, f64::from(noise.sigma_r), pts)
+                });
+            // The rest's line in f64: centroid, direction by the principal axis.
+            let n = 3.0;
+            let (cx, cy) = (
+                (pts[0][0] + pts[1][0] + pts[2][0]) / n,
+                (pts[0][1] + pts[1][1] + pts[2][1]) / n,
+            );
+            let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+            for q in &pts[..3] {
+                let (dx, dy) = (q[0] - cx, q[1] - cy);
+                sxx += dx * dx;
+                syy += dy * dy;
+                sxy += dx * dy;
+            }
+            let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+            let (tx, ty) = (theta.cos(), theta.sin());
+            let along = |q: &[f64; 2]| (q[0] - cx) * tx + (q[1] - cy) * ty;
+            let across = |q: &[f64; 2]| -(q[0] - cx) * ty + (q[1] - cy) * tx;
+            let suu: f64 = pts[..3].iter().map(|q| along(q).powi(2)).sum();
+            let u = along(&pts[3]);
+            let var_f = sigma_r * sigma_r * (1.0 + 1.0 / n + u * u / suu);
+            let chi2 = across(&pts[3]).powi(2) / var_f;
+            let margin = chi2 / f64::from(OFF_LINE_CHI2);
+            if (margin - 1.0).abs() > 0.02 {
+                let expected = chi2 >= f64::from(OFF_LINE_CHI2);
+                assert_eq!(
+                    judged, expected,
+                    "{deg}° off {off} mm: χ² {chi2:.3}, u {u:.1}, Σu² {suu:.1}"
+                );
+                alike += 1;
+                on_each_side[usize::from(expected)] += 1;
+            }
+        }
+    }
+    assert!(
+        alike > 800 && on_each_side.iter().all(|&k| k > 100),
+        "{alike} {on_each_side:?}"
+    );
+}
