@@ -472,3 +472,79 @@ fn mean_cos2_takes_the_finite_shares_in_order() {
         }
     }
 }
+
+/// On the move (3 m/s, 2 rad/s: beams tens of millimetres apart in pose), each point's share
+/// of noise along a wall's normal is taken from the pose of its own beam: `mean_cos2` over
+/// the points of beams `s..s + n` equals the mean worked out in f64 from beam `s + i`'s pose,
+/// for runs from the scan's first beam and from later ones.
+#[test]
+fn mean_cos2_on_the_move_takes_each_beam_from_its_own_pose() {
+    use crate::extractor::Extractor;
+    use crate::motion::{BeamTiming, Motion};
+    use crate::output::Stats;
+    use crate::scan::{Scan, ScanGeometry};
+    let g = ScanGeometry::LMS200_180_050;
+    let motion = Motion {
+        v: 3000.0,
+        omega: 2.0,
+        timing: BeamTiming::lms2xx(0.5),
+    };
+    // The wall x cos α + y sin α = ρ, α = −45°, each point cast from its beam's pose.
+    let (alpha, rho) = (-core::f64::consts::FRAC_PI_4, 1800.0f64);
+    let (sa, ca) = (alpha.sin(), alpha.cos());
+    let (mut points, mut ranges) = ([Point::INVALID; 361], [f32::NAN; 361]);
+    for i in 0..361 {
+        let pose = motion.pose(i);
+        let b = f64::from(g.bearing(i) + pose.theta);
+        let (ox, oy) = (f64::from(pose.origin.x), f64::from(pose.origin.y));
+        let dn = b.cos() * ca + b.sin() * sa;
+        if dn > 0.3 {
+            let r = (rho - ox * ca - oy * sa) / dn;
+            points[i] = Point::new((ox + r * b.cos()) as f32, (oy + r * b.sin()) as f32);
+            ranges[i] = r as f32;
+        }
+    }
+    let mut flags: [u8; 361] = core::array::from_fn(|i| match ranges[i].is_finite() {
+        true => crate::flags::VALID,
+        false => 0,
+    });
+    let normal = Point::new(ca as f32, sa as f32);
+    let mut ex = Extractor::<361, 8>::new();
+    let loading = [1000.0f32; 361];
+    let mut tested = 0;
+    ex.with_pass(
+        &Scan::from_mm(g, &loading),
+        &Config::default(),
+        |loaded, _| {
+            let mut stats = Stats::default();
+            let pass = Pass::over(
+                loaded.beams,
+                (&points, &ranges, &mut flags),
+                Some(motion),
+                &mut stats,
+            );
+            for s in [0usize, 1, 2, 40, 100] {
+                let n = 60;
+                let pts = &points[s..s + n];
+                if pts.iter().any(|p| !p.x.is_finite()) {
+                    continue;
+                }
+                let mut sum = 0.0f64;
+                for (i, p) in pts.iter().enumerate() {
+                    let o = motion.pose(s + i).origin;
+                    let (dx, dy) = (f64::from(p.x - o.x), f64::from(p.y - o.y));
+                    let c = (dx * ca + dy * sa) / dx.hypot(dy);
+                    sum += c * c;
+                }
+                let want = sum / n as f64;
+                let got = f64::from(mean_cos2(&pass, s, pts, |_| normal));
+                assert!(
+                    (got - want).abs() < 1e-5,
+                    "beams {s}..: {got} against {want}"
+                );
+                tested += 1;
+            }
+        },
+    );
+    assert_eq!(tested, 5);
+}

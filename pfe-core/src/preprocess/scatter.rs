@@ -965,6 +965,34 @@ mod tests {
         }
     }
 
+    /// At the sine's bound the one-pass residual and the branch-free one agree: a chord whose
+    /// sine to the beam is MIN_SINE to the last bit (|m × c| = MIN_SINE · r · |c| in f32) gives
+    /// no residual from either; one bit steeper, both give the residual (0: the point lies on
+    /// the chord).
+    #[test]
+    fn a_chord_at_the_sine_bound_gives_no_residual_in_either_path() {
+        let m = Point::new(0.0, 1000.0);
+        // The chord from (−h, 950) to (h, 1050), its x extent 2h, near 0.1005 of its y extent.
+        let tie = f32::from_bits(0x40a0_ce59);
+        for (h, at_bound) in [(tie, true), (f32::from_bits(tie.to_bits() + 1), false)] {
+            let (a, b) = (Point::new(-h, 950.0), Point::new(h, 1050.0));
+            let (cx, cy) = (b.x - a.x, b.y - a.y);
+            let den = math::abs(m.x * cy - m.y * cx);
+            let bound = MIN_SINE * 1000.0 * math::sqrt(cx * cx + cy * cy);
+            assert_eq!(den == bound, at_bound, "{den} {bound}");
+            assert!(den >= bound, "{den} {bound}");
+            let one = chord_residual(a, m, b);
+            let lanes = residual_or_nan(a, m, b, 1000.0);
+            match at_bound {
+                true => assert!(one.is_none() && lanes.is_nan(), "{one:?} {lanes}"),
+                false => assert!(
+                    one.is_some_and(|e| math::abs(e) < 1e-3) && math::abs(lanes) < 1e-3,
+                    "{one:?} {lanes}"
+                ),
+            }
+        }
+    }
+
     #[test]
     fn roughness_correlated_over_two_beams_shows_at_the_wider_chord() {
         // Each pair of beams shares one offset (σ 20 mm): the one-beam chords see it only

@@ -111,3 +111,33 @@ fn an_arc_from_end_to_end_is_no_bump() {
     };
     assert!(bump_at(&pts, &line, 5.0).is_some());
 }
+
+/// [`peak`] fits the wall again from the far half of the bump's longer side, when that half
+/// holds `min_points` points. A wall (y = 1000 mm, a point every 100 mm) with a bump of three
+/// points 100 mm out (2..=4) and one point 15 mm out beside it (5): the fit of all the points,
+/// pulled by the bump, leaves that point on its other side, so the first run is 2..=4; the
+/// wall fitted again from the exact points of the far half finds 2..=5 (15 mm beyond 2 σ_r).
+/// With 6 points on the longer side its far half is 3 points, too few to fit (2..=4 stays);
+/// with 8, 4 points: 2..=5.
+#[test]
+fn a_bump_s_wall_is_fitted_again_from_the_far_half_of_its_longer_side() {
+    let config = Config {
+        min_points: 4,
+        ..Config::default()
+    }
+    .with_sigma_r(5.0);
+    for (n, want) in [(11usize, (2usize, 4usize)), (12, (2, 5)), (13, (2, 5))] {
+        let pts: heapless::Vec<Point, 16> = (0..n)
+            .map(|k| {
+                let out = match k {
+                    2..=4 => 100.0,
+                    5 => 15.0,
+                    _ => 0.0,
+                };
+                Point::new(100.0 * k as f32, 1000.0 - out)
+            })
+            .collect();
+        let line = fit_line(&pts).unwrap();
+        assert_eq!(peak(&pts, line, &config), Some(want), "{n} points");
+    }
+}

@@ -4,7 +4,8 @@
 extern crate std;
 
 use super::{
-    invert, math, offset, residual, Row, Rows, Solution, SweepOffset, Table, ROT_SCALE, SIGMA_FLOOR,
+    invert, math, offset, residual, row, Block, Row, Rows, Solution, SweepOffset, Table, LANES,
+    ROT_SCALE, SIGMA_FLOOR,
 };
 use crate::geometry::Point;
 use std::vec::Vec;
@@ -297,4 +298,29 @@ fn the_rows_in_lanes_are_the_rows_one_at_a_time() {
         }
     }
     assert!(rows > 15 * tables, "{rows} rows in {tables} tables");
+}
+
+/// At the reach's bound a candidate gives no row, in lanes as one at a time: a chord `ac`
+/// exactly `reach` times the range of `q` long (`q` and `b` on it, so its other tests pass)
+/// gives none; a bit shorter at each end, both give the same row.
+#[test]
+fn a_chord_as_long_as_the_reach_gives_no_row_in_either_path() {
+    let reach = 16.0 * 0.5f32.to_radians() * 2.0;
+    let (q, b) = (Point::new(0.0, 3000.0), Point::new(0.0, 3000.0));
+    let half = 0.5 * reach * 3000.0;
+    for (h, at_bound) in [(half, true), (f32::from_bits(half.to_bits() - 1), false)] {
+        let (a, c) = (Point::new(-h, 3000.0), Point::new(h, 3000.0));
+        let len = math::hypot(c.x - a.x, c.y - a.y);
+        assert_eq!(len == reach * 3000.0, at_bound, "{len}");
+        assert!(len <= reach * 3000.0, "{len}");
+        let one = row(a, q, b, c, 0.25, reach);
+        let mut xy = [[0.0f32; LANES]; 8];
+        for (column, v) in xy.iter_mut().zip([a.x, a.y, q.x, q.y, b.x, b.y, c.x, c.y]) {
+            column[3] = v;
+        }
+        let lanes = Block::of(&xy, 0.25, reach).row(3);
+        let bits = |r: Option<(Row, f32)>| r.map(|(r, q)| (r.map(f32::to_bits), q.to_bits()));
+        assert_eq!(one.is_none(), at_bound, "{one:?}");
+        assert_eq!(bits(lanes), bits(one), "{lanes:?} {one:?}");
+    }
 }
