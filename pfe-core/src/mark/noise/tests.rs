@@ -78,7 +78,8 @@ fn the_jump_limit_in_lanes_is_the_rules() {
 }
 
 /// The tight loop over unevenly spaced points testing several at once stops where the
-/// serial one does: interleaved sweeps moved apart (odd beams from 8–30 mm further and 6–15
+/// serial one does, and both where the serial loop seeing the points from the origin (0, 0)
+/// stopped ([`seen_from_origin`]): interleaved sweeps moved apart (odd beams from 8–30 mm further and 6–15
 /// mrad turned) in 200 rooms with spikes and dropouts, the lines of windows of 10 points
 /// anywhere, runs from every point to 1–120 points on, floors of 0, 3 and 60 mm.
 #[test]
@@ -111,9 +112,10 @@ fn the_run_after_in_lanes_stops_where_the_serial_run_stops() {
             };
             let line = line.capped(&points[k - 10], &points[k - 1], 10);
             let to = (k + 1 + (lcg(&mut seed) * 120.0) as usize).min(361);
+            let want = seen_from_origin(&points, &ranges, (k, to), &line, noise);
             let serial = accepted_run_after_serial(&points, &ranges, k, to, &line, noise);
             let lanes = accepted_run_after_lanes(&points, &ranges, k, to, &line, noise);
-            assert_eq!(lanes, serial, "room {t}, from {k} to {to}");
+            assert_eq!((serial, lanes), (want, want), "room {t}, from {k} to {to}");
             runs += 1;
             long += usize::from(serial >= k + 2 * LANES);
         }
@@ -121,77 +123,36 @@ fn the_run_after_in_lanes_stops_where_the_serial_run_stops() {
     assert!(runs > 50_000 && long > 1_000, "{runs} runs, {long} long");
 }
 
-/// The tight loops over unevenly spaced points take the points and the line as they are:
-/// the same runs as the serial loop seeing them from the origin (0, 0) (kept here as it was),
-/// over the scans of [`the_run_after_in_lanes_stops_where_the_serial_run_stops`].
-#[test]
-fn the_runs_are_the_runs_seen_from_the_origin() {
-    fn seen_from_origin(
-        points: &[Point],
-        ranges: &[f32],
-        (from, to): (usize, usize),
-        line: &WindowLine,
-        rule: &NoiseRule,
-    ) -> usize {
-        let Some((pts, rs, mut prev, mut prev_r)) = run_from(points, ranges, from, to) else {
-            return from;
-        };
-        let o = Point::new(0.0, 0.0);
-        let seen = line.seen_from(o);
-        let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
-        let near2 = never_jumps2(rule);
-        for (at, (p, &r)) in (from..).zip(pts.iter().zip(rs)) {
-            let (sp, sprev) = (
-                Point::new(p.x - o.x, p.y - o.y),
-                Point::new(prev.x - o.x, prev.y - o.y),
-            );
-            let (ex, ey) = (p.x - prev.x, p.y - prev.y);
-            let d2 = ex * ex + ey * ey;
-            let near = d2 <= near2 || d2 <= sq(rule.jump_limit_between(sprev, sp, prev_r));
-            if !near || !seen.accepts_after(&sprev, (sp.x, sp.y), r, k_sigma2, floor) {
-                return at;
-            }
-            (prev, prev_r) = (*p, r);
+/// The run after `from` as the serial loop found it when it saw the points from an origin
+/// `o` = (0, 0), kept as it was: the tight loops take the points and the line as they are.
+fn seen_from_origin(
+    points: &[Point],
+    ranges: &[f32],
+    (from, to): (usize, usize),
+    line: &WindowLine,
+    rule: &NoiseRule,
+) -> usize {
+    let Some((pts, rs, mut prev, mut prev_r)) = run_from(points, ranges, from, to) else {
+        return from;
+    };
+    let o = Point::new(0.0, 0.0);
+    let seen = line.seen_from(o);
+    let (k_sigma2, floor) = (rule.k_sigma2, rule.model.floor);
+    let near2 = never_jumps2(rule);
+    for (at, (p, &r)) in (from..).zip(pts.iter().zip(rs)) {
+        let (sp, sprev) = (
+            Point::new(p.x - o.x, p.y - o.y),
+            Point::new(prev.x - o.x, prev.y - o.y),
+        );
+        let (ex, ey) = (p.x - prev.x, p.y - prev.y);
+        let d2 = ex * ex + ey * ey;
+        let near = d2 <= near2 || d2 <= sq(rule.jump_limit_between(sprev, sp, prev_r));
+        if !near || !seen.accepts_after(&sprev, (sp.x, sp.y), r, k_sigma2, floor) {
+            return at;
         }
-        to
+        (prev, prev_r) = (*p, r);
     }
-    let (mut seed, mut runs, mut long) = (37u32, 0usize, 0usize);
-    for t in 0..200u32 {
-        let scene = room(&mut seed);
-        let mut config = Config::default().with_sigma_r(5.0);
-        if let crate::config::Threshold::Noise(m) = &mut config.threshold {
-            m.floor = [3.0, 0.0, 60.0][t as usize % 3];
-        }
-        let rule = Rule::new(&config, 8000.0, 0.05);
-        let Some(noise) = rule.noise() else {
-            panic!("the default rule")
-        };
-        let (shift, turn) = [(8.0, 0.006), (30.0, 0.015)][t as usize % 2];
-        let odd = move |i: usize| match i % 2 {
-            1 => (Point::new(shift, 0.0), turn),
-            _ => (Point::new(0.0, 0.0), 0.0),
-        };
-        let (mut points, mut ranges, _) = scanned(&scene, odd, &mut seed);
-        for i in 0..361 {
-            if lcg(&mut seed) < 0.01 {
-                (points[i], ranges[i]) = (Point::INVALID, 0.0);
-            }
-        }
-        for k in 10..361 {
-            let Some(line) = WindowLine::fit(&points[k - 10..k], Point::new(0.0, 0.0)) else {
-                continue;
-            };
-            let line = line.capped(&points[k - 10], &points[k - 1], 10);
-            let to = (k + 1 + (lcg(&mut seed) * 120.0) as usize).min(361);
-            let want = seen_from_origin(&points, &ranges, (k, to), &line, noise);
-            let serial = accepted_run_after_serial(&points, &ranges, k, to, &line, noise);
-            let lanes = accepted_run_after_lanes(&points, &ranges, k, to, &line, noise);
-            assert_eq!((serial, lanes), (want, want), "room {t}, from {k} to {to}");
-            runs += 1;
-            long += usize::from(want >= k + 2 * LANES);
-        }
-    }
-    assert!(runs > 50_000 && long > 1_000, "{runs} runs, {long} long");
+    to
 }
 
 /// A room of `seed`: four walls 1.5–6 m away (corners and door gaps), up to three pillars
