@@ -67,35 +67,14 @@ pub fn recheck<const N: usize>(
                     crate::geom::wrap(last.theta + ti as f32 * HEADING_STEP),
                 );
                 let s = agreement(prev, curr, &g).score();
-                if let Some(k) = top.iter().position(|(b, _)| s > *b) {
-                    top.copy_within(k..REFINED - 1, k + 1);
-                    if let Some(slot) = top.get_mut(k) {
-                        *slot = (s, g);
-                    }
-                }
+                ranked(&mut top, s, g);
             }
         }
     }
     let starts =
         core::iter::once(*last).chain(top.iter().filter(|(s, _)| s.is_finite()).map(|(_, g)| *g));
-    let mut best: Option<(IcpResult, f32)> = None;
-    for start in starts {
-        let Some(r) = icp(prev, curr, &start) else {
-            continue;
-        };
-        // An answer far from its start left the start's basin: a wrong one, typically a
-        // scene's symmetry (a corridor turned by half a turn).
-        let moved = crate::geom::hypot(r.pose.x - start.x, r.pose.y - start.y);
-        let turned = crate::geom::wrap(r.pose.theta - start.theta).abs();
-        if moved > RECHECK_REACH.0 || turned > RECHECK_REACH.1 {
-            continue;
-        }
-        let s = r.agreement.score();
-        if best.as_ref().is_none_or(|(_, b)| s > *b + RECHECK_PREFER) {
-            best = Some((r, s));
-        }
-    }
-    best.filter(|(r, s)| *s >= RECHECK_ACCEPT && *s > own + RECHECK_MARGIN && r.pose.is_finite())
+    refined(prev, curr, starts, |_| true)
+        .filter(|(r, s)| *s >= RECHECK_ACCEPT && *s > own + RECHECK_MARGIN && r.pose.is_finite())
         .map(|(r, _)| r)
 }
 
@@ -140,36 +119,13 @@ pub fn bridge<const N: usize>(
                 Pose::new(0.0, 0.0, theta)
             };
             let s = agreement(prev, curr, &g).score();
-            if let Some(k) = top.iter().position(|(b, _)| s > *b) {
-                top.copy_within(k..FAN_REFINED - 1, k + 1);
-                if let Some(slot) = top.get_mut(k) {
-                    *slot = (s, g);
-                }
-            }
+            ranked(&mut top, s, g);
         }
     }
     let starts = [*rel, Pose::IDENTITY]
         .into_iter()
         .chain(top.iter().filter(|(s, _)| s.is_finite()).map(|(_, g)| *g));
-    let mut best: Option<(Pose, crate::geom::Cov3, f32)> = None;
-    for start in starts {
-        let Some(r) = icp(prev, curr, &start) else {
-            continue;
-        };
-        let moved = crate::geom::hypot(r.pose.x - start.x, r.pose.y - start.y);
-        let turned = crate::geom::wrap(r.pose.theta - start.theta).abs();
-        if moved > RECHECK_REACH.0 || turned > RECHECK_REACH.1 || !r.pose.is_finite() {
-            continue;
-        }
-        let s = r.agreement.score();
-        if best
-            .as_ref()
-            .is_none_or(|(_, _, b)| s > *b + RECHECK_PREFER)
-        {
-            best = Some((r.pose, r.cov, s));
-        }
-    }
-    let (pose, mut cov, s) = best?;
+    let (IcpResult { pose, mut cov, .. }, s) = refined(prev, curr, starts, Pose::is_finite)?;
     if !(s >= BRIDGE_ACCEPT && s > own + BRIDGE_MARGIN) {
         return None;
     }
@@ -196,7 +152,8 @@ const LOOK_REFINED: usize = 8;
 /// say) and at its translation turned by half the change of heading (an arc's chord); `guess`
 /// and the best 8 refined by [`icp`] (each within a grid cell and a half and three headings of
 /// its start). The best answer (`guess`'s unless another agrees 0.02 better) when its points
-/// agree at least 0.5 and 0.25 better than under `rel`; `None` otherwise.
+/// agree at least [`crate::Config::verify_accept`] and 0.25 better than under `rel`; `None`
+/// otherwise.
 pub(super) fn second_look<const N: usize>(
     prev: &RangeScan<N>,
     curr: &RangeScan<N>,
@@ -222,17 +179,41 @@ pub(super) fn second_look<const N: usize>(
         let arc = Pose::new(c * t.x - s * t.y, s * t.x + c * t.y, theta);
         for g in [Pose::new(0.0, 0.0, theta), Pose::new(t.x, t.y, theta), arc] {
             let s = agreement(prev, curr, &g).score();
-            if let Some(k) = top.iter().position(|(b, _)| s > *b) {
-                top.copy_within(k..LOOK_REFINED - 1, k + 1);
-                if let Some(slot) = top.get_mut(k) {
-                    *slot = (s, g);
-                }
-            }
+            ranked(&mut top, s, g);
         }
     }
     let starts = guess
         .into_iter()
         .chain(top.iter().filter(|(s, _)| s.is_finite()).map(|(_, g)| *g));
+    let inside = |p: &Pose| {
+        crate::geom::hypot(p.x, p.y) <= cfg.max_translation
+            && crate::geom::wrap(p.theta).abs() <= cfg.max_rotation
+    };
+    refined(prev, curr, starts, inside)
+        .filter(|(_, s)| *s >= cfg.verify_accept && *s > own + RECHECK_MARGIN)
+        .map(|(r, _)| r)
+}
+
+/// Puts the motion `g` whose points agree `s` into `top` (best first) when it beats the last.
+fn ranked(top: &mut [(f32, Pose)], s: f32, g: Pose) {
+    if let Some(k) = top.iter().position(|(b, _)| s > *b) {
+        top.copy_within(k..top.len() - 1, k + 1);
+        if let Some(slot) = top.get_mut(k) {
+            *slot = (s, g);
+        }
+    }
+}
+
+/// [`icp`] from each of `starts` and the best answer with its points' agreement: the first
+/// start's unless a later one agrees [`RECHECK_PREFER`] better. An answer farther than
+/// [`RECHECK_REACH`] from its start left the start's basin (typically a scene's symmetry: a
+/// corridor turned by half a turn) and is dropped, as is one whose pose `keep` refuses.
+fn refined<const N: usize>(
+    prev: &RangeScan<N>,
+    curr: &RangeScan<N>,
+    starts: impl Iterator<Item = Pose>,
+    keep: impl Fn(&Pose) -> bool,
+) -> Option<(IcpResult, f32)> {
     let mut best: Option<(IcpResult, f32)> = None;
     for start in starts {
         let Some(r) = icp(prev, curr, &start) else {
@@ -240,9 +221,7 @@ pub(super) fn second_look<const N: usize>(
         };
         let moved = crate::geom::hypot(r.pose.x - start.x, r.pose.y - start.y);
         let turned = crate::geom::wrap(r.pose.theta - start.theta).abs();
-        let inside = crate::geom::hypot(r.pose.x, r.pose.y) <= cfg.max_translation
-            && crate::geom::wrap(r.pose.theta).abs() <= cfg.max_rotation;
-        if moved > RECHECK_REACH.0 || turned > RECHECK_REACH.1 || !inside {
+        if moved > RECHECK_REACH.0 || turned > RECHECK_REACH.1 || !keep(&r.pose) {
             continue;
         }
         let s = r.agreement.score();
@@ -250,6 +229,5 @@ pub(super) fn second_look<const N: usize>(
             best = Some((r, s));
         }
     }
-    best.filter(|(_, s)| *s >= cfg.verify_accept && *s > own + RECHECK_MARGIN)
-        .map(|(r, _)| r)
+    best
 }
