@@ -67,7 +67,7 @@ const QUARTILE_TO_SIGMA: f32 = 1.0 / (0.318_64 * RESIDUAL_PER_SIGMA);
 const MEDIAN_TO_SIGMA: f32 = 1.0 / (0.674_49 * RESIDUAL_PER_SIGMA);
 /// Inliers: residuals within this many residual σ.
 const INLIER: f32 = 3.0;
-/// Beams meeting the chord at less than this sine of the angle between them (grazing beyond
+/// Beams meeting the chord at this sine of the angle between them or less (grazing beyond
 /// about 84°) give no residual: the intersection is ill-conditioned.
 const MIN_SINE: f32 = 0.1;
 
