@@ -7,7 +7,7 @@
 //! the map cannot tell (a corridor's length) then keeps the prediction, with the prior's
 //! variance along it, or without a prior [`crate::UNOBSERVABLE_VARIANCE`] (the last motion
 //! again is a guess, not a measurement). Otherwise the scan is registered
-//! against the previous scan ([`crate::register`], gated by the motion prior when one is
+//! against the previous scan ([`crate::register()`], gated by the motion prior when one is
 //! given); without a prior, a direction that pair cannot tell takes the last motion's value
 //! (not "no motion"). That result, widened to three standard deviations, starts the
 //! refinement against the map. The map: at

@@ -1,5 +1,5 @@
 //! The scans' own points: a compact copy of a scan's ranges ([`RangeScan`]), the check of a
-//! pose against them ([`agreement`]) and a point-to-line ICP ([`icp`], Censi 2008) for when
+//! pose against them ([`agreement`]) and a point-to-line ICP ([`icp()`], Censi 2008) for when
 //! the features cannot register a pair.
 //!
 //! Features alone cannot tell some wrong poses from the right one (a corridor's pillars 0.7 m
@@ -238,7 +238,7 @@ fn one_way<const N: usize>(onto: &RangeScan<N>, from: &RangeScan<N>, pose: &Pose
 /// hypotheses the one whose points agree best wins when the features' winner's agree clearly
 /// less ([`crate::Config::verify_margin`]); when the features do not register the pair, or
 /// their answer's points agree less than [`crate::Config::verify_keep`], a point-to-line
-/// ICP ([`icp`]) from that answer, from `guess` (the last motion, say) and from no motion is
+/// ICP ([`icp()`]) from that answer, from `guess` (the last motion, say) and from no motion is
 /// tried, and its best answer is taken if its points agree at least
 /// [`crate::Config::verify_accept`] and better than the features' answer by
 /// [`crate::Config::verify_margin`]. An answer whose points then still agree less than

@@ -32,7 +32,7 @@ const RECHECK_REACH: (f32, f32) = (750.0, 0.26);
 const REFINED: usize = 8;
 
 /// The step `rel` (the current scan's pose in the previous scan's frame) looked at again when
-/// the two scans' points agree less than [`RECHECK_BELOW`] under it: [`icp`] from `last` (the
+/// the two scans' points agree less than [`RECHECK_BELOW`] under it: [`icp()`] from `last` (the
 /// last motion) and from the best 8 (`REFINED`) motions of a grid (headings 5° apart up to ±40°
 /// from the last motion's,
 /// translations 0.5 m apart from 0.5 m back to 2 m forward and 1 m either side) under which
@@ -92,7 +92,7 @@ const BRIDGE_SIGMA: (f32, f32) = (100.0, 0.05);
 /// A bridge over a step nothing registered (the features, the pair's ICP and [`recheck`]
 /// failed): `rel` (the last motion again) is compared with no motion and the whole circle of
 /// headings 10° apart (at no motion's and at the last motion's translation), the best 4 of
-/// those and both `rel` and no motion refined by [`icp`]; the answer whose points agree best
+/// those and both `rel` and no motion refined by [`icp()`]; the answer whose points agree best
 /// (one of `rel` and no motion unless another agrees 0.02 better) replaces `rel` when its
 /// points agree at least 0.3 and 0.1 better than under `rel`. Its covariance says how unsure
 /// the bridge is: the ICP's widened by the distance to `rel`, the other guess, at least
@@ -150,7 +150,7 @@ const LOOK_REFINED: usize = 8;
 /// [`crate::Config::verify_accept`] looked at again over the whole circle: the points'
 /// agreement screened at headings 5° apart, at no translation, at `guess`'s (the last motion,
 /// say) and at its translation turned by half the change of heading (an arc's chord); `guess`
-/// and the best 8 refined by [`icp`] (each within a grid cell and a half and three headings of
+/// and the best 8 refined by [`icp()`] (each within a grid cell and a half and three headings of
 /// its start). The best answer (`guess`'s unless another agrees 0.02 better) when its points
 /// agree at least [`crate::Config::verify_accept`] and 0.25 better than under `rel`; `None`
 /// otherwise.
@@ -204,7 +204,7 @@ fn ranked(top: &mut [(f32, Pose)], s: f32, g: Pose) {
     }
 }
 
-/// [`icp`] from each of `starts` and the best answer with its points' agreement: the first
+/// [`icp()`] from each of `starts` and the best answer with its points' agreement: the first
 /// start's unless a later one agrees [`RECHECK_PREFER`] better. An answer farther than
 /// [`RECHECK_REACH`] from its start left the start's basin (typically a scene's symmetry: a
 /// corridor turned by half a turn) and is dropped, as is one whose pose `keep` refuses.

@@ -9,7 +9,7 @@ use crate::register::ROTATION_SCALE;
 /// units of [`ROTATION_SCALE`]).
 const POLISH_REACH: f32 = 150.0;
 
-/// An "ok" answer of the features refined by [`icp`] on the points (the features' fits leave
+/// An "ok" answer of the features refined by [`icp()`] on the points (the features' fits leave
 /// a few cm the raw points resolve), taken when the points determine every direction, agree at
 /// least as well and the ICP moved it less than [`POLISH_REACH`]; the covariance stays the
 /// features' (the ICP's own is no better calibrated).
@@ -65,7 +65,7 @@ const SEARCH_CLEAR_SLACK: f32 = 0.05;
 /// `reg` (registered) checked along the direction its covariance determines least (a
 /// corridor's length, periodic pillars; `hint`, the features' unobservable direction, when
 /// they had one): the points' agreement at offsets of up to
-/// [`SEARCH_OFFSETS`] × [`SEARCH_STEP`] either way, the best local maxima refined by [`icp`]; the best ICP answer
+/// [`SEARCH_OFFSETS`] × [`SEARCH_STEP`] either way, the best local maxima refined by [`icp()`]; the best ICP answer
 /// replaces `reg` when its points agree clearly better, or, for a degenerate `reg`, when it
 /// determines every direction and agrees at least as well.
 pub(super) fn search_along<const N: usize>(
@@ -224,7 +224,7 @@ const KEY_AGREE: f32 = 0.9;
 /// ...and the ICP moved the pose less than this, mm (θ in units of [`ROTATION_SCALE`]).
 const KEY_REACH: f32 = 80.0;
 
-/// `pose` (of the scan `curr`, in the odometry frame) refined by [`icp`] against the key scan
+/// `pose` (of the scan `curr`, in the odometry frame) refined by [`icp()`] against the key scan
 /// `key` at `key_pose`: registering against one key scan for many scans keeps their errors from
 /// adding up as chained pairs do. `None` (the caller then takes `curr` as the new key) when the
 /// points do not determine every direction, agree less than 0.9 ([`agreement`]) or the ICP
