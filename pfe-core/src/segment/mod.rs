@@ -509,6 +509,10 @@ fn store(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
 mod tests;
 
 #[cfg(test)]
+#[cfg(feature = "libm")]
+mod beside_tests;
+
+#[cfg(test)]
 mod pieces_tests;
 
 #[cfg(test)]
