@@ -46,7 +46,9 @@ pub(super) struct Scratch {
     /// Sine and cosine of each previous line's α.
     prev_sc: [[f32; 2]; MAX_OBS],
     /// The angle index: for each of [`BUCKETS`] equal ranges of α over the circle, the
-    /// previous lines (bit `i`: line `i`) within [`Work::reach`] of it.
+    /// previous lines (bit `i`: line `i`) within their own reach of it: the widest angle
+    /// gate of a pair with their own variance, `√(gate (σ²_i + σ²_c + slack_α²))` (`σ²_c`:
+    /// [`Work::curr_var`]).
     buckets: [u64; BUCKETS],
 }
 
@@ -54,6 +56,8 @@ pub(super) struct Scratch {
 const BUCKETS: usize = 64;
 /// Widest angle gate the index serves, rad (wider gates look at every line).
 const MAX_REACH: f32 = 0.6;
+/// Largest variance of a current line's α the index serves, rad² (σ 0.05 rad).
+const MAX_CURR_VAR: f32 = 0.0025;
 
 /// The bucket of angle `x` (any finite value).
 #[inline(always)]
@@ -83,11 +87,11 @@ pub(super) struct Work<'a> {
     #[allow(dead_code)]
     prior: Option<&'a Prior>,
     nc: usize,
-    /// The angle gate the index serves, rad: every previous line within it of a bucket's
-    /// range is in the bucket.
-    reach: f32,
-    /// The largest variance of α among the previous lines.
-    max_var_a: f32,
+    /// The previous lines in every bucket (a reach beyond [`MAX_REACH`], or not finite).
+    wide: u64,
+    /// The largest variance of α among the current lines, at most [`MAX_CURR_VAR`]: the
+    /// index serves the current lines within it (the others try every previous line).
+    curr_var: f32,
     s: &'a mut Scratch,
     /// Tests only: every previous line a candidate (the reference the index is held to).
     #[cfg(test)]
@@ -110,18 +114,29 @@ impl<'a> Work<'a> {
             let (sn, c) = sin_cos(l.a);
             *sc = [sn, c];
         }
-        // The angle index, for the widest gate of any pair (slack at most 1).
-        let var = |l: &[crate::set::Line]| l.iter().fold(0.0f32, |m, l| m.max(l.cov.a));
-        let max_var_a = var(prev.lines());
-        let widest = cfg.gate * (max_var_a + var(curr.lines()) + cfg.slack[0] * cfg.slack[0]);
-        let reach = (crate::geom::sqrt(widest) * 1.001 + 1e-4).min(MAX_REACH);
+        // The angle index, each line by its own reach (slack at most 1) for any current line
+        // whose variance is at most `curr_var`.
+        let curr_var = curr
+            .lines()
+            .iter()
+            .map(|l| l.cov.a)
+            .filter(|&v| v <= MAX_CURR_VAR)
+            .fold(0.0f32, |m, v| if v > m { v } else { m });
         s.buckets = [0; BUCKETS];
+        let mut wide = 0u64;
         let width = 2.0 * PI / BUCKETS as f32;
+        let sa2 = cfg.slack[0] * cfg.slack[0];
         for (i, l) in prev.lines().iter().enumerate().take(64) {
             let bit = 1u64 << i;
+            let reach = crate::geom::sqrt(cfg.gate * (l.cov.a + curr_var + sa2)) * 1.001 + 1e-4;
+            if !(reach <= MAX_REACH) {
+                wide |= bit;
+                continue;
+            }
             let from = crate::geom::floor((l.a - reach + PI) / width);
             let to = crate::geom::floor((l.a + reach + PI) / width);
             if !(from.is_finite() && to.is_finite()) {
+                wide |= bit;
                 continue;
             }
             // Within a turn either side (α is in (−π, π], but the index must not overflow).
@@ -140,8 +155,8 @@ impl<'a> Work<'a> {
             cfg,
             prior,
             nc: 0,
-            reach,
-            max_var_a,
+            wide,
+            curr_var,
             s,
             #[cfg(test)]
             brute: false,
@@ -158,22 +173,22 @@ impl<'a> Work<'a> {
         self.s.curr_sc.get(k).copied().unwrap_or([0.0, 1.0])
     }
 
-    /// The previous lines whose α may lie within `half` of `centre` or of `centre + π`
-    /// (angles modulo 2π), as bits (bit `i`: line `i`): all of them when `half` exceeds what
-    /// the index serves.
+    /// The previous lines whose α may lie within their reach of `centre` or of `centre + π`
+    /// (angles modulo 2π), as bits (bit `i`: line `i`), for a current line of α variance
+    /// `var` at a slack at most 1: all of them otherwise.
     #[inline(always)]
-    fn candidates(&self, centre: f32, half: f32) -> u64 {
+    fn candidates(&self, centre: f32, var: f32, slack: f32) -> u64 {
         let nl = self.prev.lines().len().min(64);
         let all = if nl >= 64 { u64::MAX } else { (1u64 << nl) - 1 };
         #[cfg(test)]
         if self.brute {
             return all;
         }
-        if !(half <= self.reach) || !centre.is_finite() {
+        if !(var <= self.curr_var && slack <= 1.0 && centre.is_finite()) {
             return all;
         }
         let at = |x: f32| self.s.buckets.get(bucket(x)).copied().unwrap_or(u64::MAX);
-        (at(centre) | at(centre + PI)) & all
+        (at(centre) | at(centre + PI) | self.wide) & all
     }
 
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
@@ -232,8 +247,7 @@ impl<'a> Work<'a> {
             let mut ext_prev = None;
             let mut best: Option<(f32, u8, [f32; 2], Sym2, f32, f32)> = None;
             // Only the previous lines within the angle gate (either orientation) can match.
-            let half = crate::geom::sqrt(gate * (ct_.a + self.max_var_a + sa2)) * 1.001 + 1e-5;
-            let bits = self.candidates(a, half);
+            let bits = self.candidates(a, ct_.a, slack);
             // As two 32-bit words: the Cortex-M4 has no 64-bit bit scan.
             let (mut lo, mut hi) = (bits as u32, (bits >> 32) as u32);
             loop {

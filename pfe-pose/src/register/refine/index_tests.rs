@@ -176,3 +176,43 @@ fn indices_change_nothing() {
     // The cases must include matches, many of them.
     assert!(matched > 20_000, "{matched}");
 }
+
+/// Each previous line is indexed by its own reach: a query near one well-determined line
+/// finds the lines near its angle (and a line too uncertain for the index), not every line
+/// because one previous line's angle is uncertain.
+#[test]
+fn index_reach_is_per_line() {
+    let cfg = Config::default();
+    let mut p = Set::new();
+    let sharp = Sym2 {
+        a: 1e-6,
+        b: 0.0,
+        c: 100.0,
+    };
+    // Lines every 0.1 rad over a half turn, and one whose α is uncertain (σ 0.7 rad).
+    for k in 0..16 {
+        p.push_line(k as f32 * 0.1, 2000.0, sharp, None, 1.0, Some(&cfg));
+    }
+    let vague = Sym2 {
+        a: 0.5,
+        b: 0.0,
+        c: 100.0,
+    };
+    p.push_line(-1.0, 2000.0, vague, None, 1.0, Some(&cfg));
+    let c = p.clone();
+    let mut s = Scratch::new();
+    let w = Work::new(&p, &c, &cfg, None, &mut s);
+    let var = c.lines().get(8).map_or(0.0, |l| l.cov.a);
+    let bits = w.candidates(0.8, var, 1.0);
+    // Every line within the widest gate of a pair (√(9.21 (2 σ² + 0.05²)) = 0.156 rad with
+    // the floor's σ of 0.008 rad) of 0.8 rad, and the vague one.
+    for k in (7..=9).chain([16]) {
+        assert!(bits & (1 << k) != 0, "{k}: {bits:b}");
+    }
+    // Not the lines more than a bucket (0.098 rad) beyond that.
+    for k in (0..=4).chain(12..16) {
+        assert!(bits & (1 << k) == 0, "{k}: {bits:b}");
+    }
+    // A current line as vague as that one tries every line.
+    assert_eq!(w.candidates(0.8, 0.5, 1.0), (1 << 17) - 1);
+}
