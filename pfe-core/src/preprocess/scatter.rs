@@ -341,8 +341,10 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
     let triples = windows.filter_map(|w| Some((*w.first()?, *w.get(span)?, *w.last()?)));
     if scale > 0.0 && math::finite(scale) {
         for (a, m, b) in triples {
-            let r = math::sqrt(m.x * m.x + m.y * m.y);
-            if let Some(e) = residual_or_not_finite(a, m, b, r) {
+            // The point's range and the chord's length in one call ([`math::sqrt2`]).
+            let (cx, cy) = chord(a, b);
+            let [r, len] = math::sqrt2(m.x * m.x + m.y * m.y, cx * cx + cy * cy);
+            if let Some(e) = residual_of_chord(a, m, b, r, len) {
                 count_finite(&mut hist, &mut total, e, scale);
             }
         }
