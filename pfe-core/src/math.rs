@@ -100,6 +100,35 @@ pub(crate) fn sqrt(x: f32) -> f32 {
     }
 }
 
+/// `[√a, √b, √c]`, each [`sqrt`] (the same bits): on hard-float Arm one call of three
+/// `vsqrt.f32` (arguments and results in s0–s2), where three calls of [`sqrt`] take six
+/// instructions more (a call and a return each).
+#[inline]
+pub(crate) fn sqrt3(a: f32, b: f32, c: f32) -> [f32; 3] {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        vfp::sqrt3(a, b, c)
+    }
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    {
+        [sqrt(a), sqrt(b), sqrt(c)]
+    }
+}
+
+/// `[√a, √b]`, each [`sqrt`] (the same bits): on hard-float Arm one call of two `vsqrt.f32`
+/// (arguments and results in s0–s1), where two calls of [`sqrt`] take two instructions more.
+#[inline]
+pub(crate) fn sqrt2(a: f32, b: f32) -> [f32; 2] {
+    #[cfg(all(target_arch = "arm", target_abi = "eabihf"))]
+    {
+        vfp::sqrt2(a, b)
+    }
+    #[cfg(not(all(target_arch = "arm", target_abi = "eabihf")))]
+    {
+        [sqrt(a), sqrt(b)]
+    }
+}
+
 /// [`sqrt`] for loops meant to vectorise: with the `std` feature, std's (LLVM's square root,
 /// which it can compute a few lanes at once; libm's is an opaque `sqrtss`), else [`sqrt`]. Both
 /// round correctly: the same results. Only there: LLVM also moves its own square roots out of
@@ -136,10 +165,61 @@ mod vfp {
         "bx lr",
         ".size pfe_core_vsqrt, . - pfe_core_vsqrt",
         ".popsection",
+        ".pushsection .text.pfe_core_vsqrt3,\"ax\",%progbits",
+        ".p2align 2",
+        ".fpu fpv4-sp-d16",
+        ".global pfe_core_vsqrt3",
+        ".type pfe_core_vsqrt3,%function",
+        "pfe_core_vsqrt3:",
+        "vsqrt.f32 s0, s0",
+        "vsqrt.f32 s1, s1",
+        "vsqrt.f32 s2, s2",
+        "bx lr",
+        ".size pfe_core_vsqrt3, . - pfe_core_vsqrt3",
+        ".popsection",
+        ".pushsection .text.pfe_core_vsqrt2,\"ax\",%progbits",
+        ".p2align 2",
+        ".fpu fpv4-sp-d16",
+        ".global pfe_core_vsqrt2",
+        ".type pfe_core_vsqrt2,%function",
+        "pfe_core_vsqrt2:",
+        "vsqrt.f32 s0, s0",
+        "vsqrt.f32 s1, s1",
+        "bx lr",
+        ".size pfe_core_vsqrt2, . - pfe_core_vsqrt2",
+        ".popsection",
     );
+
+    /// Two f32 (returned in s0–s1, as [`Three`]).
+    #[repr(C)]
+    struct Two(f32, f32);
+
+    /// Three f32 (AAPCS-VFP returns a homogeneous aggregate of up to four in s0–s3).
+    #[repr(C)]
+    struct Three(f32, f32, f32);
 
     extern "C" {
         fn pfe_core_vsqrt(x: f32) -> f32;
+        fn pfe_core_vsqrt3(a: f32, b: f32, c: f32) -> Three;
+        fn pfe_core_vsqrt2(a: f32, b: f32) -> Two;
+    }
+
+    #[inline]
+    pub(super) fn sqrt2(a: f32, b: f32) -> [f32; 2] {
+        // SAFETY: `pfe_core_vsqrt2` (above) executes two FPU instructions on s0–s1 and
+        // returns; it reads and writes no memory and follows the C ABI the declaration names
+        // (arguments in s0–s1, the aggregate of two f32 returned in s0–s1).
+        let Two(x, y) = unsafe { pfe_core_vsqrt2(a, b) };
+        [x, y]
+    }
+
+    #[inline]
+    pub(super) fn sqrt3(a: f32, b: f32, c: f32) -> [f32; 3] {
+        // SAFETY: `pfe_core_vsqrt3` (above) executes three FPU instructions on s0–s2 and
+        // returns; it reads and writes no memory and follows the C ABI the declaration names
+        // (arguments in s0–s2, the aggregate of three f32 returned in s0–s2).
+        let Three(x, y, z) = unsafe { pfe_core_vsqrt3(a, b, c) };
+        [x, y, z]
     }
 
     #[inline]
@@ -275,5 +355,63 @@ mod tests {
         assert_eq!(super::sqrt(0.0), 0.0);
         assert!(super::sqrt(-1.0).is_nan() && super::sqrt(f32::NAN).is_nan());
         assert_eq!(super::sqrt(f32::INFINITY), f32::INFINITY);
+    }
+
+    /// Each of the three (and two) roots is the correctly rounded one, whichever place it
+    /// takes: normal and subnormal values, zeros, negatives, NaN and infinity.
+    #[test]
+    fn sqrt3_and_sqrt2_are_correctly_rounded_roots() {
+        let exact = |v: f32| (f64::from(v)).sqrt() as f32;
+        let bits = |r: [f32; 3]| r.map(f32::to_bits);
+        let mut values = std::vec![0.0f32, -0.0, 1e-45, 3e-39, 2.0, 1e38, f32::MAX];
+        let mut x = 1e-30f32;
+        while x < 1e30 {
+            values.extend([x, x * 1.3, x * 2.9]);
+            x *= 7.3;
+        }
+        for (i, &a) in values.iter().enumerate() {
+            let (b, c) = (
+                values[(i * 7 + 3) % values.len()],
+                values[(i * 13 + 5) % values.len()],
+            );
+            assert_eq!(
+                bits(super::sqrt3(a, b, c)),
+                bits([exact(a), exact(b), exact(c)]),
+                "sqrt3({a}, {b}, {c})"
+            );
+        }
+        for odd in [-1.0, f32::NAN, f32::NEG_INFINITY] {
+            for place in 0..3 {
+                let mut v = [4.0f32, 9.0, 16.0];
+                v[place] = odd;
+                let [a, b, c] = v;
+                let r = super::sqrt3(a, b, c);
+                let want = v.map(|x| {
+                    if x == odd || x.is_nan() {
+                        f32::NAN
+                    } else {
+                        exact(x)
+                    }
+                });
+                for (got, want) in r.iter().zip(want) {
+                    assert!(got.to_bits() == want.to_bits() || got.is_nan() && want.is_nan());
+                }
+            }
+        }
+        assert_eq!(
+            super::sqrt3(f32::INFINITY, 0.0, 1.0),
+            [f32::INFINITY, 0.0, 1.0]
+        );
+        for (i, &a) in values.iter().enumerate() {
+            let b = values[(i * 11 + 2) % values.len()];
+            assert_eq!(
+                super::sqrt2(a, b).map(f32::to_bits),
+                [exact(a), exact(b)].map(f32::to_bits),
+                "sqrt2({a}, {b})"
+            );
+        }
+        let [x, y] = super::sqrt2(f32::NAN, -4.0);
+        assert!(x.is_nan() && y.is_nan());
+        assert_eq!(super::sqrt2(f32::INFINITY, 9.0), [f32::INFINITY, 3.0]);
     }
 }

@@ -115,31 +115,48 @@ impl Scatter {
     fn of_windows(points: &[Point], sigma_r: f32) -> Self {
         let n = points.len();
         let scale = PER_SIGMA / sigma_r;
-        if !(scale > 0.0 && math::finite(scale)) {
+        // Up to `u16::MAX` points the count of no residual does not saturate.
+        if !(scale > 0.0 && math::finite(scale)) || n > usize::from(u16::MAX) {
             return Self::of_stream(points, sigma_r);
         }
-        let (mut one, mut two) = ([0u16; BINS], [0u16; BINS]);
-        let (mut n1, mut n2) = (0usize, 0usize);
-        // The middle of every window of five, then the one-beam residuals of the second and
-        // the last but one point (one point when they are the same, none below three points).
+        // One bin more than [`count`] fills, where the windows that give no residual count.
+        let (mut one, mut two) = ([0u16; BINS + 1], [0u16; BINS + 1]);
+        // The middle of every window of five.
         for w in points.windows(5) {
             let &[a, b, m, c, d] = w else {
                 continue;
             };
-            let r = math::sqrt(m.x * m.x + m.y * m.y);
-            if let Some(e) = residual_or_not_finite(b, m, c, r) {
-                count_finite(&mut one, &mut n1, e, scale);
-            }
-            if let Some(e) = residual_or_not_finite(a, m, d, r) {
-                count_finite(&mut two, &mut n2, e, scale);
-            }
+            // The point's range and both chords' lengths, in one call ([`math::sqrt3`]).
+            let (one_x, one_y) = chord(b, c);
+            let (two_x, two_y) = chord(a, d);
+            let [r, one_len, two_len] = math::sqrt3(
+                m.x * m.x + m.y * m.y,
+                one_x * one_x + one_y * one_y,
+                two_x * two_x + two_y * two_y,
+            );
+            let bin = residual_of_chord(b, m, c, r, one_len).and_then(|e| bin_finite(e, scale));
+            add_or_none(&mut one, bin);
+            let bin = residual_of_chord(a, m, d, r, two_len).and_then(|e| bin_finite(e, scale));
+            add_or_none(&mut two, bin);
         }
+        // Every window gave a bin or none (below `u16::MAX` points the count is exact).
+        let windows = n.saturating_sub(4);
+        let residuals =
+            |h: &[u16; BINS + 1]| windows - usize::from(h.get(BINS).copied().unwrap_or(0));
+        let (mut n1, n2) = (residuals(&one), residuals(&two));
+        let (Some(one), Some(two)) = (one.first_chunk_mut::<BINS>(), two.first_chunk::<BINS>())
+        else {
+            // Not reached: both have BINS + 1 bins.
+            return Self::of_stream(points, sigma_r);
+        };
+        // Then the one-beam residuals of the second and the last but one point (one point
+        // when they are the same, none below three points).
         let mut edge = |i: usize| {
             if let (Some(&a), Some(&m), Some(&b)) =
                 (points.get(i - 1), points.get(i), points.get(i + 1))
             {
                 if let Some(e) = chord_residual(a, m, b) {
-                    count(&mut one, &mut n1, e, scale);
+                    count(one, &mut n1, e, scale);
                 }
             }
         };
@@ -148,8 +165,8 @@ impl Scatter {
             edge(n - 2);
         }
         Self {
-            one: estimate(&one, n1, sigma_r),
-            two: estimate(&two, n2, sigma_r),
+            one: estimate(one, n1, sigma_r),
+            two: estimate(two, n2, sigma_r),
         }
     }
 
@@ -324,8 +341,10 @@ fn at_span(points: &[Point], span: usize, sigma_r: f32) -> Option<f32> {
     let triples = windows.filter_map(|w| Some((*w.first()?, *w.get(span)?, *w.last()?)));
     if scale > 0.0 && math::finite(scale) {
         for (a, m, b) in triples {
-            let r = math::sqrt(m.x * m.x + m.y * m.y);
-            if let Some(e) = residual_or_not_finite(a, m, b, r) {
+            // The point's range and the chord's length in one call ([`math::sqrt2`]).
+            let (cx, cy) = chord(a, b);
+            let [r, len] = math::sqrt2(m.x * m.x + m.y * m.y, cx * cx + cy * cy);
+            if let Some(e) = residual_of_chord(a, m, b, r, len) {
                 count_finite(&mut hist, &mut total, e, scale);
             }
         }
@@ -357,18 +376,31 @@ fn count(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
 /// [`residual_at`] tests `e` for finiteness and clamps the bin.
 #[inline(always)]
 fn count_finite(hist: &mut [u16; BINS], total: &mut usize, e: f32, scale: f32) {
-    let x = math::abs(e) * scale;
-    let bin = if x < BINS as f32 {
-        // 0 ≤ x < BINS: the mask changes nothing (it bounds the index for the compiler).
-        (x as usize) & (BINS - 1)
-    } else if math::finite(e) {
-        BINS - 1
-    } else {
-        return;
-    };
-    if let Some(h) = hist.get_mut(bin) {
+    if let Some(h) = bin_finite(e, scale).and_then(|bin| hist.get_mut(bin)) {
         *h = h.saturating_add(1);
         *total += 1;
+    }
+}
+
+/// The bin [`count_finite`] counts `e` in, `None` where it does not count it.
+#[inline(always)]
+fn bin_finite(e: f32, scale: f32) -> Option<usize> {
+    let x = math::abs(e) * scale;
+    if x < BINS as f32 {
+        // 0 ≤ x < BINS: the mask changes nothing (it bounds the index for the compiler).
+        Some((x as usize) & (BINS - 1))
+    } else if math::finite(e) {
+        Some(BINS - 1)
+    } else {
+        None
+    }
+}
+
+/// One more count in `bin` of `hist`, or in its last for no bin (saturating).
+#[inline(always)]
+fn add_or_none(hist: &mut [u16; BINS + 1], bin: Option<usize>) {
+    if let Some(h) = hist.get_mut(bin.unwrap_or(BINS)) {
+        *h = h.saturating_add(1);
     }
 }
 
@@ -427,8 +459,21 @@ fn residual_at(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
 /// when [`residual_at`] gives `None` for a reason other than the sine test.
 #[inline(always)]
 fn residual_or_not_finite(a: Point, m: Point, b: Point, r: f32) -> Option<f32> {
-    let (cx, cy) = (b.x - a.x, b.y - a.y);
-    let chord = math::sqrt(cx * cx + cy * cy);
+    let (cx, cy) = chord(a, b);
+    residual_of_chord(a, m, b, r, math::sqrt(cx * cx + cy * cy))
+}
+
+/// The chord from `a` to `b`.
+#[inline(always)]
+fn chord(a: Point, b: Point) -> (f32, f32) {
+    (b.x - a.x, b.y - a.y)
+}
+
+/// [`residual_or_not_finite`] with the chord's length `chord` given (the square root of the
+/// sum of its squared coordinates, as that computes it).
+#[inline(always)]
+fn residual_of_chord(a: Point, m: Point, b: Point, r: f32, chord: f32) -> Option<f32> {
+    let (cx, cy) = self::chord(a, b);
     // The sine of the beam's angle to the chord, times r·chord.
     let den = m.x * cy - m.y * cx;
     if !(math::abs(den) > MIN_SINE * r * chord) {
