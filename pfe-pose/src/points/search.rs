@@ -111,7 +111,11 @@ pub(super) fn search_along<const N: usize>(
         // A degenerate answer is resolved by a distinct maximum only: on a broad one the
         // points cannot tell where along it either.
         if rival(&scores, k0 + n, best, !degenerate, &peak) {
-            return reg;
+            return if degenerate {
+                refined_rivals(reg, own, k0, best, axis, &scores, prev_pts, curr_pts)
+            } else {
+                reg
+            };
         }
         clear = margin(&scores, k0 + n, best, &peak) >= SEARCH_CLEAR;
     }
@@ -144,6 +148,70 @@ pub(super) fn search_along<const N: usize>(
             }
         }
         _ => reg,
+    }
+}
+
+/// Rivals of a degenerate answer's best maximum refined by the ICP, at most this many (more
+/// leave the answer as it was).
+const RIVALS_REFINED: usize = 4;
+
+/// The degenerate `reg` (its points agree `own`) whose profile `scores` along `axis` has
+/// rivals to its best maximum (`k0`, agreeing `best`), judged after the ICP refined them: the
+/// ICP's answer from the best maximum replaces `reg` ("ok") when it determines every
+/// direction, agrees at least [`SEARCH_RESOLVE`] and within [`RESOLVE_SLACK`] of `own`, and
+/// the ICP's answer from every rival (at most [`RIVALS_REFINED`] of them) agrees
+/// [`SEARCH_DISTINCT`] less or lands within 0.3 m of it, determining every direction and
+/// agreeing no better; `reg` otherwise. Unrefined, the profile's offsets keep the degenerate
+/// answer's heading and sideways position: bumps on one broad maximum, or a maximum the wrong
+/// heading spreads, make rivals that the ICP takes apart.
+#[allow(clippy::too_many_arguments)]
+fn refined_rivals<const N: usize>(
+    reg: crate::Registration,
+    own: f32,
+    k0: i32,
+    best: f32,
+    axis: f32,
+    scores: &[f32],
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+) -> crate::Registration {
+    let at = along(&reg.rel, axis);
+    let Some(r0) = icp(prev_pts, curr_pts, &at(k0)) else {
+        return reg;
+    };
+    let s0 = r0.agreement.score();
+    if r0.unobservable.is_some() || !(s0 >= SEARCH_RESOLVE && s0 >= own - RESOLVE_SLACK) {
+        return reg;
+    }
+    let n = SEARCH_OFFSETS as i32;
+    let apart = (300.0 / SEARCH_STEP) as i32;
+    let mut count = 0usize;
+    for (i, &s) in scores.iter().enumerate() {
+        let k = i as i32 - n;
+        if (k - k0).abs() < apart || !(s > best - SEARCH_DISTINCT) || !is_peak(scores, i) {
+            continue;
+        }
+        count += 1;
+        if count > RIVALS_REFINED {
+            return reg;
+        }
+        let Some(r) = icp(prev_pts, curr_pts, &at(k)) else {
+            return reg;
+        };
+        let same = crate::geom::hypot(r.pose.x - r0.pose.x, r.pose.y - r0.pose.y) < 300.0
+            && r.unobservable.is_none()
+            && r.agreement.score() <= s0;
+        if !same && r.agreement.score() > s0 - SEARCH_DISTINCT {
+            return reg;
+        }
+    }
+    crate::Registration {
+        rel: r0.pose,
+        cov: r0.cov,
+        status: crate::Status::Ok,
+        matches: (0, 0),
+        chi2: 0.0,
+        ..reg
     }
 }
 
