@@ -16,7 +16,8 @@
 //!
 //! Diagnostics (environment): `PFE_POSE_CFG="name=value,..."` overrides registration
 //! settings; `BENCH_VERBOSE=1` prints each failing pair with the registration seeded at the
-//! reference; `BENCH_DUMP=K` dumps pair K's features and ranges; `BENCH_ODO=1` and
+//! reference, its stated covariance, χ² and the points' agreement at the reference and at
+//! the answer; `BENCH_DUMP=K` dumps pair K's features and ranges; `BENCH_ODO=1` and
 //! `BENCH_ODO_STEP=1` compare odometry steps with the pairs; `BENCH_TRACK=DIR` writes each
 //! log's odometry track (`DIR/LOG.tsv`: scan, odometry pose, reference pose, status, the
 //! pair's registration and its status) for the analysis of its windows; `BENCH_NIS=1` prints
@@ -463,6 +464,13 @@ pub fn run_log_with(
                     reg.rel.x, reg.rel.y, reg.rel.theta.to_degrees(), reg.status, reg.matches,
                     prev.as_ref().map_or(0, |p| p.0.len()), obs.len(),
                     reg.cov[0][0].sqrt(), reg.cov[1][1].sqrt(), reg.cov[2][2].sqrt().to_degrees()
+                );
+                eprintln!(
+                    "   cov {:?} own chi2 {:.2} points at truth {:.3} at answer {:.3}",
+                    reg.cov,
+                    nis(&to_f64(&reg.cov), &e).unwrap_or(f64::INFINITY),
+                    agreement(&curr_pts, &prev_pts, &truth).score(),
+                    agreement(&curr_pts, &prev_pts, &reg.rel).score()
                 );
             }
             match reg.status {

@@ -111,7 +111,11 @@ pub(super) fn search_along<const N: usize>(
         // A degenerate answer is resolved by a distinct maximum only: on a broad one the
         // points cannot tell where along it either.
         if rival(&scores, k0 + n, best, !degenerate, &peak) {
-            return reg;
+            return if degenerate {
+                refined_rivals(reg, own, k0, best, axis, &scores, prev_pts, curr_pts)
+            } else {
+                reg
+            };
         }
         clear = margin(&scores, k0 + n, best, &peak) >= SEARCH_CLEAR;
     }
@@ -144,6 +148,70 @@ pub(super) fn search_along<const N: usize>(
             }
         }
         _ => reg,
+    }
+}
+
+/// Rivals of a degenerate answer's best maximum refined by the ICP, at most this many (more
+/// leave the answer as it was).
+const RIVALS_REFINED: usize = 4;
+
+/// The degenerate `reg` (its points agree `own`) whose profile `scores` along `axis` has
+/// rivals to its best maximum (`k0`, agreeing `best`), judged after the ICP refined them: the
+/// ICP's answer from the best maximum replaces `reg` ("ok") when it determines every
+/// direction, agrees at least [`SEARCH_RESOLVE`] and within [`RESOLVE_SLACK`] of `own`, and
+/// the ICP's answer from every rival (at most [`RIVALS_REFINED`] of them) agrees
+/// [`SEARCH_DISTINCT`] less or lands within 0.3 m of it, determining every direction and
+/// agreeing no better; `reg` otherwise. Unrefined, the profile's offsets keep the degenerate
+/// answer's heading and sideways position: bumps on one broad maximum, or a maximum the wrong
+/// heading spreads, make rivals that the ICP takes apart.
+#[allow(clippy::too_many_arguments)]
+fn refined_rivals<const N: usize>(
+    reg: crate::Registration,
+    own: f32,
+    k0: i32,
+    best: f32,
+    axis: f32,
+    scores: &[f32],
+    prev_pts: &RangeScan<N>,
+    curr_pts: &RangeScan<N>,
+) -> crate::Registration {
+    let at = along(&reg.rel, axis);
+    let Some(r0) = icp(prev_pts, curr_pts, &at(k0)) else {
+        return reg;
+    };
+    let s0 = r0.agreement.score();
+    if r0.unobservable.is_some() || !(s0 >= SEARCH_RESOLVE && s0 >= own - RESOLVE_SLACK) {
+        return reg;
+    }
+    let n = SEARCH_OFFSETS as i32;
+    let apart = (300.0 / SEARCH_STEP) as i32;
+    let mut count = 0usize;
+    for (i, &s) in scores.iter().enumerate() {
+        let k = i as i32 - n;
+        if (k - k0).abs() < apart || !(s > best - SEARCH_DISTINCT) || !is_peak(scores, i) {
+            continue;
+        }
+        count += 1;
+        if count > RIVALS_REFINED {
+            return reg;
+        }
+        let Some(r) = icp(prev_pts, curr_pts, &at(k)) else {
+            return reg;
+        };
+        let same = crate::geom::hypot(r.pose.x - r0.pose.x, r.pose.y - r0.pose.y) < 300.0
+            && r.unobservable.is_none()
+            && r.agreement.score() <= s0;
+        if !same && r.agreement.score() > s0 - SEARCH_DISTINCT {
+            return reg;
+        }
+    }
+    crate::Registration {
+        rel: r0.pose,
+        cov: r0.cov,
+        status: crate::Status::Ok,
+        matches: (0, 0),
+        chi2: 0.0,
+        ..reg
     }
 }
 
@@ -252,133 +320,5 @@ pub fn refine_on_key<const N: usize>(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn peaks(scores: &[f32]) -> impl Fn(usize) -> bool + '_ {
-        move |i| {
-            let s = scores.get(i).copied().unwrap_or(f32::NEG_INFINITY);
-            let left = i.checked_sub(1).and_then(|j| scores.get(j)).copied();
-            let right = scores.get(i + 1).copied();
-            left.is_none_or(|l| l <= s) && right.is_none_or(|r| r < s)
-        }
-    }
-
-    /// Range along a ray from `o` with heading `b` to a circle (centre `c`, radius `r`), mm.
-    fn to_circle(o: [f32; 2], b: f32, c: [f32; 2], r: f32) -> f32 {
-        let (s, cs) = sin_cos(b);
-        let v = [c[0] - o[0], c[1] - o[1]];
-        let along = v[0] * cs + v[1] * s;
-        let off2 = v[0] * v[0] + v[1] * v[1] - along * along;
-        if along > 0.0 && off2 < r * r {
-            along - crate::geom::sqrt(r * r - off2)
-        } else {
-            f32::INFINITY
-        }
-    }
-
-    /// An LMS200's scan (180° at 0.5°) from `pose` in a room (x −2.5…4 m, y −1.5…1.5 m) with
-    /// a pillar (0.2 m across) at (1.5 m, 0.8 m) and, when `walker`, a person (0.5 m across)
-    /// at (2 m, −0.6 m).
-    fn room_scan(pose: &Pose, walker: bool) -> RangeScan<361> {
-        let o = [pose.x, pose.y];
-        let mut r = [0.0f32; 361];
-        for (i, slot) in r.iter_mut().enumerate() {
-            let b = pose.theta + (-90.0 + 0.5 * i as f32).to_radians();
-            let (s, c) = sin_cos(b);
-            let mut t = f32::INFINITY;
-            for (dir, lo, hi) in [
-                (c, -2500.0 - o[0], 4000.0 - o[0]),
-                (s, -1500.0 - o[1], 1500.0 - o[1]),
-            ] {
-                if dir > 1e-6 {
-                    t = t.min(hi / dir);
-                } else if dir < -1e-6 {
-                    t = t.min(lo / dir);
-                }
-            }
-            t = t.min(to_circle(o, b, [1500.0, 800.0], 100.0));
-            if walker {
-                t = t.min(to_circle(o, b, [2000.0, -600.0], 250.0));
-            }
-            *slot = t;
-        }
-        let mut scan = RangeScan::new();
-        assert!(scan.set(-core::f32::consts::FRAC_PI_2, 0.5f32.to_radians(), &r));
-        scan
-    }
-
-    /// A degenerate answer near the truth (40 mm off along its unobservable direction, so
-    /// the points agree about as well there), in a scene whose points tell that direction
-    /// (one clear maximum of their agreement) but agree less than 0.9 (a person walked in:
-    /// infinite-corridor's pairs agreeing 0.7–0.9), is resolved to the truth; without the
-    /// walker it was resolved before too.
-    #[test]
-    fn one_clear_maximum_resolves_a_degenerate_answer() {
-        let truth = Pose::new(400.0, 50.0, 0.05);
-        for walker in [true, false] {
-            let (a, b) = (room_scan(&Pose::IDENTITY, false), room_scan(&truth, walker));
-            let at_truth = agreement(&a, &b, &truth).score();
-            assert!(walker == (at_truth < SEARCH_RESOLVE), "{at_truth}");
-            let off = Pose::new(truth.x + 40.0, truth.y, truth.theta);
-            let reg = crate::Registration {
-                rel: off,
-                cov: [[1e12, 0.0, 0.0], [0.0, 400.0, 0.0], [0.0, 0.0, 1e-4]],
-                status: crate::Status::Degenerate {
-                    direction: [1.0, 0.0, 0.0],
-                },
-                matches: (3, 0),
-                hypotheses: 10,
-                dropped: 0,
-                invalid: 0,
-                chi2: 1.0,
-            };
-            let r = search_along(reg, Some([1.0, 0.0, 0.0]), &a, &b);
-            assert_eq!(r.status, crate::Status::Ok, "walker {walker}, {at_truth}");
-            assert!(
-                crate::geom::hypot(r.rel.x - truth.x, r.rel.y - truth.y) < 30.0
-                    && crate::geom::wrap(r.rel.theta - truth.theta).abs() < 0.01,
-                "{:?}",
-                r.rel
-            );
-        }
-    }
-
-    /// Two maxima as high 1 m apart along the direction (pillars along a corridor) leave a
-    /// degenerate answer as it was; one clear maximum does not.
-    #[test]
-    fn margin_of_the_best_maximum() {
-        let mut two = [0.2f32; 41];
-        two[10] = 0.8;
-        two[30] = 0.75;
-        assert!(margin(&two, 10, 0.8, &peaks(&two)) < SEARCH_CLEAR);
-        two[30] = 0.6;
-        assert!(margin(&two, 10, 0.8, &peaks(&two)) >= SEARCH_CLEAR);
-        let mut one = [0.2f32; 41];
-        one[20] = 0.7;
-        assert!((margin(&one, 20, 0.7, &peaks(&one)) - 0.5).abs() < 1e-6);
-    }
-
-    /// A broad maximum with bumps on it (aces pair 253: 0.93–0.95 over 0.5 m) has no rival for
-    /// an "ok" answer, which only moves to a better agreement; for a degenerate one, which
-    /// the search would declare determined, the bumps still count. Two maxima set apart by a
-    /// dip (pillars along a corridor) are rivals either way.
-    #[test]
-    fn bumps_on_one_maximum_are_no_rivals() {
-        let mut broad = [0.2f32; 41];
-        for (i, s) in broad.iter_mut().enumerate().skip(10).take(20) {
-            *s = if i % 3 == 0 { 0.95 } else { 0.92 };
-        }
-        let peak = peaks(&broad);
-        let best = broad.iter().position(|s| *s == 0.95).unwrap_or(0) as i32;
-        assert!(!rival(&broad, best, 0.95, true, &peak));
-        assert!(rival(&broad, best, 0.95, false, &peak));
-        let mut two = [0.2f32; 41];
-        two[10] = 0.95;
-        two[30] = 0.93;
-        assert!(rival(&two, 10, 0.95, true, &peaks(&two)));
-        assert!(rival(&two, 10, 0.95, false, &peaks(&two)));
-        two[30] = 0.85;
-        assert!(!rival(&two, 10, 0.95, true, &peaks(&two)));
-    }
-}
+#[path = "search_tests.rs"]
+mod tests;
