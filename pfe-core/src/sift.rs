@@ -12,12 +12,18 @@
 //!   least [`OBJECT_JUMP_MM`] or no return on both sides, at most [`OBJECT_MAX_MM`] across)
 //!   that no feature holds, or that only a line of undetermined direction (σ_α above
 //!   [`MAX_SIGMA_ALPHA`]) holds, is reported as an [`ObjectFeature`]: a chair leg, a person's
-//!   leg, a post. Its arc, where its points show one, was a circle and stays one.
+//!   leg, a post. Its arc, where its points show one, was a circle and stays one. A run that
+//!   is a straight face of at least `min_points` beams and one beam off it at an end (the
+//!   surface round a corner: a door jamb's face seen with one beam of the wall) is that
+//!   face's line instead ([`corner_face`]).
 //! - The points of a line not reported that are no small object are flagged as mixed pixels
 //!   ([`VEIL`]) and counted in [`Stats::veils`](crate::Stats).
 
+use crate::classify;
 use crate::config::Config;
 use crate::feature::{Feature, LineFeature, ObjectFeature};
+use crate::fit::circle::{fit_circle, refine_from, NormalEquations};
+use crate::fit::line::fit_line;
 use crate::flags::{END, START, VALID, VEIL};
 use crate::geometry::Point;
 use crate::math;
@@ -37,6 +43,19 @@ pub(crate) const OBJECT_MIN_POINTS: usize = 3;
 pub(crate) const OBJECT_JUMP_MM: f32 = 300.0;
 /// Widest small object, mm.
 pub(crate) const OBJECT_MAX_MM: f32 = 300.0;
+/// 99 % of χ²₁: an end beam further than this (in its residual's σ) from the line of the
+/// run's other points is not on it ([`corner_face`]).
+const OFF_CHI2: f32 = 6.63;
+/// 95 % of χ²₁: a face's end beam this near the line of its other points (in its residual's
+/// σ) is on it ([`corner_face`]).
+const ON_CHI2: f32 = 3.84;
+/// Largest residual sum of a face's line per degree of freedom, in σ_r² ([`corner_face`]).
+const FACE_SSE: f32 = 3.0;
+/// 95 % of χ²₁: how much more residual sum (in σ_r²) the circle through all of a run's points
+/// must leave than the line of all but its end beam ([`corner_face`]): a pillar's end beam
+/// lies on the circle of its others, a corner's on neither.
+const CIRCLE_CHI2: f32 = 3.84;
+
 /// σ_α beyond which a line's direction is undetermined, rad (a line over a small object with
 /// it is reported as the object).
 const MAX_SIGMA_ALPHA: f32 = 0.1;
@@ -81,7 +100,21 @@ pub(crate) fn sift(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSi
             .then(|| segment_bounds(pass, i, e, config.min_points))
             .flatten();
         if let Some((a, b)) = whole {
-            if let Some(o) = object(pass, i, e, config) {
+            if let Some((fa, fb, line)) = corner_face(pass, i, e, config) {
+                // The face a line, the beam round its corner a short segment of its own.
+                one_segment(pass, i, e, a, b, config.min_points);
+                let (end, start) = if fa > i { (i, fa) } else { (fb, e) };
+                pass.set(end, END);
+                pass.set(start, START);
+                pass.stats.segments += 1;
+                pass.stats.short_segments += 1;
+                if out.push(line) {
+                    pass.stats.features += 1;
+                    added = true;
+                } else {
+                    pass.stats.dropped += 1;
+                }
+            } else if let Some(o) = object(pass, i, e, config) {
                 one_segment(pass, i, e, a, b, config.min_points);
                 if out.push(Feature::Object(o)) {
                     pass.stats.features += 1;
@@ -371,3 +404,64 @@ pub(crate) fn object(
     );
     Feature::Object(o).is_well_formed().then_some(o)
 }
+
+/// For the run `s..=e` between range jumps (a small object's): the face `a..=b` without one
+/// end beam and its line, when that beam lies off the line of the others (beyond [`OFF_CHI2`]
+/// of its residual's variance: the range noise's and the line's own there), the others, at
+/// least `min_points`, are straight (typed a line, not [`classify::curved`]), and their line
+/// fits them better than a circle fits the whole run, by [`CIRCLE_CHI2`] σ_r². At a door
+/// jamb or a box's corner the walk may keep the beam that hit the surface round the corner
+/// with the face's few beams; the run, bent at that beam, is then no object but a face.
+fn corner_face(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> Option<(usize, usize, Feature)> {
+    if e < s + config.min_points || !(s..=e).all(|k| pass.valid(k)) {
+        return None;
+    }
+    let var_r = config.sigma_r * config.sigma_r;
+    let all = pass.points.get(s..=e)?;
+    let (_, sse_c) = fit_circle(all, config.circle_method).ok().and_then(|c| {
+        refine_from(all, c, NormalEquations::at(all, &c), config.circle_refine).ok()
+    })?;
+    [(s + 1, e, s), (s, e - 1, e)]
+        .into_iter()
+        .find_map(|(a, b, k)| {
+            let pts = pass.points.get(a..=b)?;
+            let f = fit_line(pts).ok()?;
+            // The face's own end beams lie on the line of its other points.
+            if !(off_line(pass, a + 1, b, a, var_r)? <= ON_CHI2)
+                || !(off_line(pass, a, b - 1, b, var_r)? <= ON_CHI2)
+                || !(f.sse() <= FACE_SSE * var_r * f.n.saturating_sub(2) as f32)
+                || !(off_line(pass, a, b, k, var_r)? > OFF_CHI2)
+                || !(sse_c - f.sse() > CIRCLE_CHI2 * var_r)
+                || classify::curved(pass, a, pts, config)
+            {
+                return None;
+            }
+            match classify::feature::<true>(pass, a, b, config) {
+                Some(line @ Feature::Line(_)) => Some((a, b, line)),
+                _ => None,
+            }
+        })
+}
+
+/// How far the valid beam `k` lies from the line of the points `a..=b`, in its residual's
+/// variance: the range noise's (`var_r`) and the line's own there, σ_r² (1/n + u²/Σu²), u its
+/// position along the line (`None` when the fit fails).
+fn off_line(pass: &Pass<'_>, a: usize, b: usize, k: usize, var_r: f32) -> Option<f32> {
+    let f = fit_line(pass.points.get(a..=b)?).ok()?;
+    let p = pass.point(k);
+    let u = (p.y - f.centroid.y) * f.cos_alpha - (p.x - f.centroid.x) * f.sin_alpha;
+    let (sn, cs) = (f.sin_alpha, f.cos_alpha);
+    let suu = sn * sn * f.sxx + cs * cs * f.syy - 2.0 * sn * cs * f.sxy;
+    let d = f.signed_distance(&p);
+    Some(d * d / (var_r * (1.0 + 1.0 / f.n as f32 + u * u / suu)))
+}
+
+#[cfg(test)]
+#[cfg(feature = "libm")]
+#[path = "sift_tests.rs"]
+mod tests;
