@@ -408,10 +408,11 @@ pub(crate) fn object(
 /// For the run `s..=e` between range jumps (a small object's): the face `a..=b` without one
 /// end beam and its line, when that beam lies off the line of the others (beyond [`OFF_CHI2`]
 /// of its residual's variance: the range noise's and the line's own there), the others, at
-/// least `min_points`, are straight (typed a line, not [`classify::curved`]), and their line
-/// fits them better than a circle fits the whole run, by [`CIRCLE_CHI2`] σ_r². At a door
-/// jamb or a box's corner the walk may keep the beam that hit the surface round the corner
-/// with the face's few beams; the run, bent at that beam, is then no object but a face.
+/// least `min_points`, are straight (typed a line, not [`classify::curved`], one this step
+/// reports: seen within 85°), and their line fits them better than a circle fits the whole
+/// run, by [`CIRCLE_CHI2`] σ_r². At a door jamb or a box's corner the walk may keep the beam
+/// that hit the surface round the corner with the face's few beams; the run, bent at that
+/// beam, is then no object but a face.
 fn corner_face(
     pass: &Pass<'_>,
     s: usize,
@@ -442,7 +443,9 @@ fn corner_face(
                 return None;
             }
             match classify::feature::<true>(pass, a, b, config) {
-                Some(line @ Feature::Line(_)) => Some((a, b, line)),
+                Some(line @ Feature::Line(_)) if unreported(pass, &line).is_none() => {
+                    Some((a, b, line))
+                }
                 _ => None,
             }
         })
