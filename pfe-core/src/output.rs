@@ -153,3 +153,22 @@ impl StageObserver for Unobserved {
     #[inline(always)]
     fn ended(&mut self, _: Stage) {}
 }
+
+#[cfg(test)]
+mod tests {
+    use super::Stage;
+
+    /// The stages' names are an interface (the board bench's per-stage rows read them): one
+    /// each, distinct, in [`Stage::ALL`]'s order, and each stage at its own index.
+    #[test]
+    fn each_stage_has_its_own_name_and_index() {
+        let names = Stage::ALL.map(Stage::name);
+        assert_eq!(
+            names,
+            ["load", "scatter", "mark", "sweeps", "check", "segments", "reach", "sift"]
+        );
+        for (i, s) in Stage::ALL.into_iter().enumerate() {
+            assert_eq!(s.index(), i);
+        }
+    }
+}
