@@ -66,18 +66,7 @@ fn one_clear_maximum_resolves_a_degenerate_answer() {
         let at_truth = agreement(&a, &b, &truth).score();
         assert!(walker == (at_truth < SEARCH_RESOLVE), "{at_truth}");
         let off = Pose::new(truth.x + 40.0, truth.y, truth.theta);
-        let reg = crate::Registration {
-            rel: off,
-            cov: [[1e12, 0.0, 0.0], [0.0, 400.0, 0.0], [0.0, 0.0, 1e-4]],
-            status: crate::Status::Degenerate {
-                direction: [1.0, 0.0, 0.0],
-            },
-            matches: (3, 0),
-            hypotheses: 10,
-            dropped: 0,
-            invalid: 0,
-            chi2: 1.0,
-        };
+        let reg = degenerate_along_x(off);
         let r = search_along(reg, Some([1.0, 0.0, 0.0]), &a, &b);
         assert_eq!(r.status, crate::Status::Ok, "walker {walker}, {at_truth}");
         assert!(
@@ -140,18 +129,11 @@ fn rivals_the_icp_takes_apart_leave_one_answer() {
     let p1 = Pose::new(600.0, 60.0, 0.03);
     let truth = p0.inverse().compose(&p1);
     let (a, b) = (opening_scan(&p0), opening_scan(&p1));
-    let reg = crate::Registration {
-        rel: Pose::new(truth.x - 1200.0, truth.y + 30.0, truth.theta + 0.02),
-        cov: [[1e12, 0.0, 0.0], [0.0, 400.0, 0.0], [0.0, 0.0, 1e-4]],
-        status: crate::Status::Degenerate {
-            direction: [1.0, 0.0, 0.0],
-        },
-        matches: (3, 0),
-        hypotheses: 10,
-        dropped: 0,
-        invalid: 0,
-        chi2: 1.0,
-    };
+    let reg = degenerate_along_x(Pose::new(
+        truth.x - 1200.0,
+        truth.y + 30.0,
+        truth.theta + 0.02,
+    ));
     let scores = profile(&reg.rel, 0.0, &a, &b);
     let peak = |i: usize| is_peak(&scores, i);
     let (k0, best) =
@@ -206,4 +188,21 @@ fn bumps_on_one_maximum_are_no_rivals() {
     assert!(rival(&two, 10, 0.95, false, &peaks(&two)));
     two[30] = 0.85;
     assert!(!rival(&two, 10, 0.95, true, &peaks(&two)));
+}
+
+/// A features' answer `rel` that cannot tell x (a corridor along x): the sentinel variance
+/// along it, y and the heading measured.
+fn degenerate_along_x(rel: Pose) -> crate::Registration {
+    crate::Registration {
+        rel,
+        cov: [[1e12, 0.0, 0.0], [0.0, 400.0, 0.0], [0.0, 0.0, 1e-4]],
+        status: crate::Status::Degenerate {
+            direction: [1.0, 0.0, 0.0],
+        },
+        matches: (3, 0),
+        hypotheses: 10,
+        dropped: 0,
+        invalid: 0,
+        chi2: 1.0,
+    }
 }
