@@ -10,14 +10,25 @@ fn wall(rho: f32, off: impl Fn(usize) -> f32) -> [Point; 181] {
     })
 }
 
-/// Deterministic standard normal samples (Box–Muller over an LCG).
-fn normals(seed: u32) -> impl FnMut() -> f32 {
+/// Deterministic 24-bit integers from an LCG seeded with `seed`.
+fn lcg24(seed: u32) -> impl FnMut() -> u32 {
     let mut s = seed;
     move || {
-        let mut u = || {
-            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            ((s >> 8) as f32 + 0.5) / 16_777_216.0
-        };
+        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        s >> 8
+    }
+}
+
+/// Deterministic uniform samples in (0, 1) from [`lcg24`].
+fn uniforms(seed: u32) -> impl FnMut() -> f32 {
+    let mut u = lcg24(seed);
+    move || (u() as f32 + 0.5) / 16_777_216.0
+}
+
+/// Deterministic standard normal samples (Box–Muller over an LCG).
+fn normals(seed: u32) -> impl FnMut() -> f32 {
+    let mut u = uniforms(seed);
+    move || {
         let (u1, u2) = (u(), u());
         libm::sqrtf(-2.0 * libm::logf(u1)) * libm::cosf(core::f32::consts::TAU * u2)
     }
@@ -29,11 +40,7 @@ fn normals(seed: u32) -> impl FnMut() -> f32 {
 #[test]
 fn the_one_pass_scatter_skips_every_triple_with_a_point_not_finite() {
     let mut n = normals(3);
-    let mut s = 17u32;
-    let mut u = move || {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        s >> 8
-    };
+    let mut u = lcg24(17);
     let bad = [
         Point::INVALID,
         Point::new(f32::INFINITY, 100.0),
@@ -78,11 +85,7 @@ fn the_one_pass_scatter_skips_every_triple_with_a_point_not_finite() {
 #[test]
 fn the_scatter_by_blocks_is_the_one_pass_scatter() {
     let mut n = normals(23);
-    let mut s = 29u32;
-    let mut u = move || {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        s >> 8
-    };
+    let mut u = lcg24(29);
     let bad = [
         Point::INVALID,
         Point::new(f32::INFINITY, 100.0),
@@ -185,11 +188,7 @@ fn the_count_of_finite_residuals_bins_as_count_does() {
 /// residuals, sparse and dense, with empty bins first, at every quarter and half count.
 #[test]
 fn the_quantile_in_integers_is_the_quantile() {
-    let mut s = 41u32;
-    let mut u = move || {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        s >> 8
-    };
+    let mut u = lcg24(41);
     for t in 0..150u32 {
         let mut hist = [0u16; BINS];
         let (spread, count) = (1 + u() % 500, u() % 1500);
@@ -278,11 +277,7 @@ fn the_lower_quartile_start_resists_clutter() {
     // 100 walls at 3 m with uniform noise of σ 3 mm (σ_r 2.5) and 15 % of the beams
     // 15–40 mm off either way (clutter within the histogram). Starting the cut from the
     // lower quartile keeps σ_r on 31 of them; from all residuals (the median's), on 16.
-    let mut s = 11u32;
-    let mut u = move || {
-        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        ((s >> 8) as f32 + 0.5) / 16_777_216.0
-    };
+    let mut u = uniforms(11);
     let mut kept = 0;
     for _ in 0..100 {
         let off: [f32; 181] = core::array::from_fn(|_| {
