@@ -356,6 +356,25 @@ fn window(points: &[Point], k: usize, c: usize, rule: &NoiseRule) -> usize {
     let limit = c.min(m.max_window.max(m.window));
     let span = m.min_span * rule.sigma_r;
     let last = point_at(points, k - 1);
+    // The candidates' far ends `k − limit + 1 ..= k − w`, nearest first, without a bounds test
+    // a point (the loop below reads a point past the scan's end as invalid).
+    let far = match w < limit {
+        true => k
+            .checked_sub(limit - 1)
+            .and_then(|a| points.get(a..=k.checked_sub(w)?)),
+        false => None,
+    };
+    if let Some(far) = far {
+        let span2 = span * span;
+        for p in far.iter().rev() {
+            let (dx, dy) = (p.x - last.x, p.y - last.y);
+            if dx * dx + dy * dy >= span2 {
+                return w;
+            }
+            w += 1;
+        }
+        return w;
+    }
     while w < limit {
         let p = point_at(points, k - w);
         let (dx, dy) = (p.x - last.x, p.y - last.y);

@@ -41,6 +41,62 @@ fn the_window_grows_until_it_spans_min_span_sigmas() {
     assert_eq!(window(&pts, 35, 12, noise), 12);
 }
 
+/// The window's growth over a slice is the point-by-point loop it replaced: the same size for
+/// random walks of points (steps of 0 to 8 mm, NaN points among them), every segment length
+/// and every `k`, including `k` past the scan's end (its points read as invalid).
+#[test]
+fn the_window_over_a_slice_is_the_point_by_point_loop() {
+    let config = Config::default().with_sigma_r(5.0);
+    let rule = Rule::new(&config, 8000.0, 1.0);
+    let Some(noise) = rule.noise() else {
+        panic!("the default rule")
+    };
+    // The loop as it was.
+    let reference = |points: &[Point], k: usize, c: usize| {
+        let m = &noise.model;
+        let mut w = c.min(m.window);
+        let limit = c.min(m.max_window.max(m.window));
+        let span = m.min_span * noise.sigma_r;
+        let last = point_at(points, k - 1);
+        while w < limit {
+            let p = point_at(points, k - w);
+            let (dx, dy) = (p.x - last.x, p.y - last.y);
+            if dx * dx + dy * dy >= span * span {
+                break;
+            }
+            w += 1;
+        }
+        w
+    };
+    let mut seed = 7u32;
+    let (mut grown, mut outside) = (0usize, 0usize);
+    for _ in 0..200 {
+        let mut at = Point::new(1000.0, 0.0);
+        let step = 8.0 * lcg(&mut seed);
+        let pts: heapless::Vec<Point, 64> = (0..60)
+            .map(|_| {
+                at = Point::new(
+                    at.x + step * (lcg(&mut seed) - 0.3),
+                    at.y + step * lcg(&mut seed),
+                );
+                match lcg(&mut seed) < 0.03 {
+                    true => Point::INVALID,
+                    false => at,
+                }
+            })
+            .collect();
+        for k in 1..70 {
+            for c in 0..=k {
+                let want = reference(&pts, k, c);
+                assert_eq!(window(&pts, k, c, noise), want, "k {k} c {c}");
+                grown += usize::from(want > c.min(noise.model.window));
+                outside += usize::from(k >= pts.len() && want > 0);
+            }
+        }
+    }
+    assert!(grown > 10_000 && outside > 1000, "{grown} {outside}");
+}
+
 /// The jump limit without a branch is the rule's, bit for bit: pairs of points at random
 /// (near, far, on one beam, opposite, at the origin, NaN and infinite coordinates).
 #[test]
