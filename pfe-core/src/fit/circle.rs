@@ -374,20 +374,18 @@ pub(crate) struct NormalEquations {
 }
 
 impl NormalEquations {
-    /// The equations of `points` at the circle `c` (not inlined: its sums stay in registers).
+    /// The equations of `points` at the circle `c` (not inlined, its sums locals written out
+    /// once: they stay in registers, where sums in the answer's slot are stored at every point
+    /// around the square root's call).
     #[inline(never)]
     pub(crate) fn at(points: &[Point], c: &Circle) -> Self {
-        let mut eq = NormalEquations {
-            jtj: [[0.0; 3]; 3],
-            jtr: [0.0; 3],
-            sse: 0.0,
-        };
+        let (mut sse, mut jtr) = (0.0f32, [0.0f32; 3]);
         let mut jtj = OuterSum::default();
         for p in points {
             let (dx, dy) = (p.x - c.center.x, p.y - c.center.y);
             let d = math::hypot(dx, dy);
             let r = d - c.radius;
-            eq.sse += r * r;
+            sse += r * r;
             if !(d > 0.0) {
                 continue;
             }
@@ -395,12 +393,14 @@ impl NormalEquations {
             let inv_d = 1.0 / d;
             let (a, b) = (-dx * inv_d, -dy * inv_d);
             jtj.add([a, b, -1.0]);
-            eq.jtr[0] += a * r;
-            eq.jtr[1] += b * r;
-            eq.jtr[2] -= r;
+            let [j0, j1, j2] = jtr;
+            jtr = [j0 + a * r, j1 + b * r, j2 - r];
         }
-        eq.jtj = jtj.matrix();
-        eq
+        NormalEquations {
+            jtj: jtj.matrix(),
+            jtr,
+            sse,
+        }
     }
 }
 

@@ -110,3 +110,73 @@ fn inverse3_judges_singularity_relative_to_scale() {
     assert!(!det3(&big).is_finite());
     assert_eq!(inverse3(&big), None);
 }
+
+/// The normal equations with their sums in locals are the sums kept in the answer, bit for
+/// bit: arcs of random centres, radii and noise, at circles off the truth, with a point at the
+/// centre (no direction: only its residual counts) and non-finite points among them.
+#[test]
+fn the_normal_equations_are_the_sums_in_their_slot() {
+    // The sums as they were, in the answer's slot.
+    let reference = |points: &[Point], c: &Circle| {
+        let mut eq = NormalEquations {
+            jtj: [[0.0; 3]; 3],
+            jtr: [0.0; 3],
+            sse: 0.0,
+        };
+        let mut jtj = OuterSum::default();
+        for p in points {
+            let (dx, dy) = (p.x - c.center.x, p.y - c.center.y);
+            let d = math::hypot(dx, dy);
+            let r = d - c.radius;
+            eq.sse += r * r;
+            if !(d > 0.0) {
+                continue;
+            }
+            let inv_d = 1.0 / d;
+            let (a, b) = (-dx * inv_d, -dy * inv_d);
+            jtj.add([a, b, -1.0]);
+            eq.jtr[0] += a * r;
+            eq.jtr[1] += b * r;
+            eq.jtr[2] -= r;
+        }
+        eq.jtj = jtj.matrix();
+        eq
+    };
+    let mut seed = 5u32;
+    let mut u = move || {
+        seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (seed >> 8) as f32 / (1u32 << 24) as f32
+    };
+    let bits = |eq: &NormalEquations| {
+        let mut v: Vec<u32> = eq.jtj.iter().flatten().map(|x| x.to_bits()).collect();
+        v.extend(eq.jtr.iter().map(|x| x.to_bits()));
+        v.push(eq.sse.to_bits());
+        v
+    };
+    for t in 0..500 {
+        let (cx, cy, r) = (8000.0 * u() - 4000.0, 8000.0 * u(), 50.0 + 2000.0 * u());
+        let n = 3 + (t % 40);
+        let mut pts: Vec<Point> = (0..n)
+            .map(|_| {
+                let a = 6.0 * u();
+                let rr = r + 20.0 * (u() - 0.5);
+                Point::new(cx + rr * a.cos(), cy + rr * a.sin())
+            })
+            .collect();
+        let c = Circle {
+            center: Point::new(cx + 30.0 * (u() - 0.5), cy + 30.0 * (u() - 0.5)),
+            radius: r * (0.9 + 0.2 * u()),
+        };
+        match t % 10 {
+            0 => pts.push(c.center),
+            1 => pts.push(Point::INVALID),
+            2 => pts.push(Point::new(f32::INFINITY, cy)),
+            _ => {}
+        }
+        assert_eq!(
+            bits(&NormalEquations::at(&pts, &c)),
+            bits(&reference(&pts, &c)),
+            "{t}"
+        );
+    }
+}
