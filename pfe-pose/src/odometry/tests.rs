@@ -132,7 +132,7 @@ fn corridor<const N: usize>(side: [(f32, f32); N], tracked: bool) {
         let along = if matches!(step.status, Status::None(_)) {
             1e6
         } else {
-            1e11
+            0.1 * crate::UNOBSERVABLE_VARIANCE
         };
         assert!(
             step.rel_cov[0][0] >= along,
