@@ -5,7 +5,7 @@
 
 use pfe_pose::{
     register, register_with, wrap, Config, Cov3, Failure, LineObs, Observation, Odometry, PointObs,
-    Pose, Status, UNOBSERVABLE_VARIANCE,
+    Pose, Status, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
 };
 
 mod common;
@@ -301,6 +301,86 @@ fn corridor_is_degenerate_never_ok() {
         let e_across = e[0] * f64::from(across[0]) + e[1] * f64::from(across[1]);
         assert!(e_across.abs() < 60.0 && e[2].abs() < 0.02, "{e:?}");
     }
+}
+
+/// Issue 40: a corridor seen at headings tilted from the scanner's axes (±0.5 rad) puts the
+/// unobservable variance into every entry of the covariance; across the unobservable
+/// `direction` (the two directions completing it, x and y in mm and θ·[`ROTATION_SCALE`])
+/// the stated covariance must still be positive definite and hold the errors: 80–99 % of
+/// them inside its 95 % ellipse (χ²₂ 5.991).
+#[test]
+fn degenerate_covariance_keeps_the_measured_directions() {
+    let world = corridor();
+    let mut rng = Rng(40);
+    let cfg = exact();
+    let scale = [1.0, 1.0, f64::from(ROTATION_SCALE)];
+    let (mut n, mut inside) = (0usize, 0usize);
+    for k in 0..200 {
+        let heading = if k % 2 == 0 { 0.5 } else { -0.5 };
+        let p0 = Pose::new(
+            rng.range(-2000.0, 2000.0),
+            rng.range(-500.0, 500.0),
+            heading,
+        );
+        let rel = Pose::new(
+            rng.range(-1000.0, 1000.0),
+            rng.range(-200.0, 200.0),
+            rng.range(-0.1, 0.1),
+        );
+        let a = observe(&world, &p0, &mut rng);
+        let b = observe(&world, &p0.compose(&rel), &mut rng);
+        let reg = register_with(&a, &b, None, &cfg);
+        let Status::Degenerate { direction } = reg.status else {
+            panic!("corridor registered as {:?} (truth {rel:?})", reg.status);
+        };
+        let d = direction.map(f64::from);
+        // Two unit directions completing `d`: the axis least along it, orthogonalised, and
+        // their cross product.
+        let m = (0..3)
+            .min_by(|&i, &j| d[i].abs().total_cmp(&d[j].abs()))
+            .unwrap_or(0);
+        let mut u = [0.0f64; 3];
+        u[m] = 1.0;
+        let dot = d[m];
+        let u = [u[0] - dot * d[0], u[1] - dot * d[1], u[2] - dot * d[2]];
+        let nu = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+        let u = u.map(|x| x / nu);
+        let w = [
+            d[1] * u[2] - d[2] * u[1],
+            d[2] * u[0] - d[0] * u[2],
+            d[0] * u[1] - d[1] * u[0],
+        ];
+        let basis = [u, w];
+        // The stated covariance and the error in scaled units, projected on (u, w).
+        let c = |i: usize, j: usize| f64::from(reg.cov[i][j]) * scale[i] * scale[j];
+        let mut b2 = [[0.0f64; 2]; 2];
+        for (p, bp) in basis.iter().enumerate() {
+            for (q, bq) in basis.iter().enumerate() {
+                for i in 0..3 {
+                    for j in 0..3 {
+                        b2[p][q] += bp[i] * c(i, j) * bq[j];
+                    }
+                }
+            }
+        }
+        let det = b2[0][0] * b2[1][1] - b2[0][1] * b2[1][0];
+        assert!(
+            b2[0][0] > 0.0 && det > 0.0,
+            "pair {k}: not positive definite across {direction:?}: {b2:?} from {:?}",
+            reg.cov
+        );
+        let e = error(&reg.rel, &rel);
+        let es = [e[0] * scale[0], e[1] * scale[1], e[2] * scale[2]];
+        let y = basis.map(|b| b[0] * es[0] + b[1] * es[1] + b[2] * es[2]);
+        let q =
+            (b2[1][1] * y[0] * y[0] - 2.0 * b2[0][1] * y[0] * y[1] + b2[0][0] * y[1] * y[1]) / det;
+        n += 1;
+        inside += usize::from(q < 5.991);
+    }
+    assert!(
+        inside * 100 >= n * 80 && inside * 100 <= n * 99,
+        "{inside} of {n} inside the 95 % ellipse across the unobservable direction"
+    );
 }
 
 #[test]

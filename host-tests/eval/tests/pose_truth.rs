@@ -152,7 +152,7 @@ fn corridor_drive_is_flagged_along_the_corridor() {
                     + c(1, 1) * e[2] * e[2])
                     / det;
                 across_inside += usize::from(det > 0.0 && q < 13.82);
-                unbounded += usize::from(f64::from(r.cov[0][0]) >= 1e11);
+                unbounded += usize::from(r.cov[0][0] >= 0.1 * pfe_pose::UNOBSERVABLE_VARIANCE);
                 if with_prior {
                     let (_, c) =
                         drive::wheel_odometry(scans[k].pose, scans[k + 1].pose, 78 + k as u64);
@@ -161,7 +161,7 @@ fn corridor_drive_is_flagged_along_the_corridor() {
             }
         }
         eprintln!(
-            "corridor, prior {with_prior}: {} pairs, {flagged} degenerate ({along} along x, {across_inside} with (y, θ) inside their 99.9 % ellipse, {unbounded} with a variance along x ≥ 10¹¹ mm²), {none} none, {bad_ok} failures reported ok, {overconfident} ok outside their 99.9 % ellipsoid, {prior_like} with the prior's variance along x",
+            "corridor, prior {with_prior}: {} pairs, {flagged} degenerate ({along} along x, {across_inside} with (y, θ) inside their 99.9 % ellipse, {unbounded} with a variance along x ≥ a tenth of UNOBSERVABLE_VARIANCE), {none} none, {bad_ok} failures reported ok, {overconfident} ok outside their 99.9 % ellipsoid, {prior_like} with the prior's variance along x",
             p.len()
         );
         assert_eq!(bad_ok, 0, "a failure reported as ok");

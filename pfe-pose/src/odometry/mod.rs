@@ -17,7 +17,9 @@
 //! union), unmatched ones are added, and when the map is full the one seen least recently
 //! (then least often) is replaced. When the map cannot register the scan, or its answer
 //! disagrees with the pair's beyond both covariances (χ²₃ 99.9 %: a wrong map match), the
-//! pair's result is taken and the map restarts from this scan. When the pair did not register
+//! pair's result is taken and the map restarts from this scan; so too, without a motion
+//! prior, when the pair cannot tell a direction (it would be a prior without information
+//! along it). When the pair did not register
 //! either, the map is searched from the last motion; an answer that leaves a direction
 //! undetermined is refused (from so wide a search it is a guess), and so is, with the scans'
 //! points, one they agree with less than [`Config::verify_accept`]; then the scan is not

@@ -138,18 +138,30 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
         let (s, c) = sin_cos(-guess.theta);
         let prior_cov =
             crate::geom::sandwich3(&[[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], &guess_cov);
-        // The map, in the predicted pose's frame, as the "previous scan".
-        self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
-        let mut reg = register_sets(
-            &map,
-            &curr,
-            Some((Pose::IDENTITY, prior_cov)),
-            &cfg,
-            &mut assoc,
-            // The pair's registration is a good guess: refine it against the map; search
-            // only without one.
-            !pair.is_registered(),
-        );
+        // Without a motion prior, a pair that cannot tell a direction has no information
+        // along it: as a prior it would leave the map's registration free along that
+        // direction, where the map, seen from the same corridor, cannot tell it either. The
+        // pair's answer is taken and the map restarts from this scan (below).
+        let unbounded_pair = motion.is_none() && matches!(pair.status, Status::Degenerate { .. });
+        let mut reg = if unbounded_pair {
+            crate::Registration {
+                status: Status::None(crate::Failure::InvalidPrior),
+                ..pair
+            }
+        } else {
+            // The map, in the predicted pose's frame, as the "previous scan".
+            self.map_in(&predicted, scan, &mut map, &mut line_of, &mut pt_of);
+            register_sets(
+                &map,
+                &curr,
+                Some((Pose::IDENTITY, prior_cov)),
+                &cfg,
+                &mut assoc,
+                // The pair's registration is a good guess: refine it against the map; search
+                // only without one.
+                !pair.is_registered(),
+            )
+        };
         if let (Status::Degenerate { direction }, true, true) =
             (reg.status, pair.is_registered(), points.is_some())
         {

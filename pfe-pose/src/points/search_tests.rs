@@ -195,7 +195,11 @@ fn bumps_on_one_maximum_are_no_rivals() {
 fn degenerate_along_x(rel: Pose) -> crate::Registration {
     crate::Registration {
         rel,
-        cov: [[1e12, 0.0, 0.0], [0.0, 400.0, 0.0], [0.0, 0.0, 1e-4]],
+        cov: [
+            [crate::UNOBSERVABLE_VARIANCE, 0.0, 0.0],
+            [0.0, 400.0, 0.0],
+            [0.0, 0.0, 1e-4],
+        ],
         status: crate::Status::Degenerate {
             direction: [1.0, 0.0, 0.0],
         },

@@ -55,10 +55,12 @@ use hypotheses::{hypothesise, Top};
 use refine::{converge, finish, refine, Refined, Scratch, Work};
 use visibility::visibility_penalty;
 
-/// Variance given to a direction the scene cannot tell when there is no prior: 10¹² mm² (a
-/// standard deviation of 1000 km) for translation; a rotation's part is in units of 1 m
-/// (10⁶ rad²). Finite, so sums and products stay finite; invert such a covariance in f64.
-pub const UNOBSERVABLE_VARIANCE: f32 = 1e12;
+/// Variance given to a direction the scene cannot tell when there is no prior: 10⁸ mm² (a
+/// standard deviation of 10 km) for translation; a rotation's part is in units of 1 m
+/// (10² rad²). Small enough that f32's rounding of it along a direction tilted from the axes
+/// (a few mm² an entry) leaves the measured variances across it standing; invert such a
+/// covariance in f64, or across the direction only.
+pub const UNOBSERVABLE_VARIANCE: f32 = 1e8;
 
 /// Length that puts rotation in the units of translation for the eigen-analysis, mm per rad.
 pub const ROTATION_SCALE: f32 = 1000.0;
