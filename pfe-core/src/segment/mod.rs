@@ -10,6 +10,7 @@
 
 mod ends;
 mod join;
+mod own;
 mod split;
 
 use heapless::Vec;
@@ -107,7 +108,20 @@ fn segments_with<const SCRUTINY: bool>(
                 }
             }
         }
-        if let Some((ps, pe)) = pending {
+        let mut s = s;
+        if let Some((ps, mut pe)) = pending {
+            if SCRUTINY && pe + 1 == s && pass.flag(s) & JUMP == 0 {
+                // A corner beam counted into a short line is the neighbour's ([`own`]).
+                if own::hands_over(pass, ps, pe, true, config) {
+                    pass.clear(pe, END);
+                    pass.clear(s, START);
+                    (pe, s) = (pe - 1, pe);
+                } else if own::hands_over(pass, s, e, false, config) {
+                    pass.clear(pe, END);
+                    pass.clear(s, START);
+                    (pe, s) = (s, s + 1);
+                }
+            }
             emitter.emit::<SCRUTINY>(pass, ps, pe, config, out);
         }
         pending = Some((s, e));
