@@ -249,28 +249,30 @@ mod tests {
         );
     }
 
-    /// A wall grazed by the beams (10° off them) meets at a corner a wall the beams hit head on;
-    /// exact points, σ_r 5 mm. The corner's σ across the beam is that of each line there
+    /// A wall grazed by the beams (10° off them) meets at a corner a wall the beams hit head on
+    /// (the scene turned 0.5 rad about the scanner); exact points, σ_r 5 mm. The corner's σ across the beam is that of each line there
     /// carried along the other (`line_var` (u·n_other)² / det²): 0.49 σ_r here, where the
     /// grazed wall's own σ along the beam would give 0.91 σ_r. A beam of the second wall
-    /// 3.5 mm past the corner is past it by more than half that σ; one 1.5 mm past is not.
+    /// 2.65 or 3.5 mm past the corner is past it by more than half that σ (2.43 mm); one
+    /// 1.5 mm past is not.
     #[test]
     fn the_corner_is_passed_by_half_its_sigma_across_the_beam() {
         use super::{fit_line, past_corner, Point};
-        let corner = Point::new(3000.0, 0.0);
+        let (sf, cf) = 0.5f32.sin_cos();
+        let turn = |x: f32, y: f32| Point::new(cf * x - sf * y, sf * x + cf * y);
         let (s10, c10) = 10f32.to_radians().sin_cos();
         // The grazed wall before the corner (8 points, 100..450 mm from it) and 3 points of
         // the head-on wall after it (30, 60, 90 mm).
         let grazed: [Point; 8] = core::array::from_fn(|k| {
             let t = 100.0 + 50.0 * k as f32;
-            Point::new(corner.x - t * c10, corner.y - t * s10)
+            turn(3000.0 - t * c10, -t * s10)
         });
-        let head_on: [Point; 3] =
-            core::array::from_fn(|k| Point::new(corner.x, corner.y + 30.0 * (k + 1) as f32));
+        let head_on: [Point; 3] = core::array::from_fn(|k| turn(3000.0, 30.0 * (k + 1) as f32));
         let (r, n) = (fit_line(&grazed).unwrap(), fit_line(&head_on).unwrap());
         let var = 25.0;
-        let past = |d: f32| past_corner(&r, &n, Point::new(corner.x, d), grazed[0], var);
+        let past = |d: f32| past_corner(&r, &n, turn(3000.0, d), grazed[0], var);
         assert!(past(3.5));
+        assert!(past(2.65));
         assert!(!past(1.5));
         assert!(!past(-3.5));
     }
