@@ -276,4 +276,61 @@ mod tests {
         assert!(!past(1.5));
         assert!(!past(-3.5));
     }
+
+    /// Ranges at 1° of a wall 3 m ahead (x = 3000 mm) over beams 80..=97 and, from a corner
+    /// `past`° past beam 97's bearing, a face at 45° running from the wall towards the scanner
+    /// over beams 98..=100; exact, other beams see nothing.
+    fn wall_then_face(past: f32) -> [f32; 181] {
+        let g = ScanGeometry::lms200(180.0, 1.0);
+        let (sc, cc) = (g.bearing(97) + past.to_radians()).sin_cos();
+        let (cx, cy) = (3000.0, 3000.0 * sc / cc);
+        let h = core::f32::consts::FRAC_1_SQRT_2;
+        // The face's normal (1, 1)/√2 and distance from the scanner.
+        let rho = h * (cx + cy);
+        core::array::from_fn(|i| {
+            let (s, c) = g.bearing(i).sin_cos();
+            match i {
+                80..=97 => 3000.0 / c,
+                98..=100 => rho / (h * (c + s)),
+                _ => f32::NAN,
+            }
+        })
+    }
+
+    /// The features (first beam, last beam) of [`wall_then_face`] after the segment step, the
+    /// walk's marks starting segments at beams 80 and 97 (the wall's last beam counted into the
+    /// face's segment), and whether the face's segment 97..=100 has its first beam shared.
+    fn after_segments(past: f32) -> (Option<bool>, heapless::Vec<(usize, usize), 8>) {
+        use crate::flags::START;
+        let config = Config::default();
+        let ranges = wall_then_face(past);
+        let mut ex = Extractor::<181, 8>::new();
+        ex.with_pass(
+            &Scan::from_mm(ScanGeometry::lms200(180.0, 1.0), &ranges),
+            &config,
+            |pass, rule| {
+                let shared = super::shared_ends(pass, 97, 100, &config).map(|(b, _)| b);
+                pass.set(80, START);
+                pass.set(97, START);
+                let mut out: heapless::Vec<Feature, 8> = heapless::Vec::new();
+                super::super::segments(pass, rule, &config, &mut out);
+                (shared, out.iter().map(|f| (f.first(), f.last())).collect())
+            },
+        )
+    }
+
+    /// A segment's first beam is the previous surface's: a wall (beams 80..=97) meets a face
+    /// of three beams (98..=100) at a corner 0.15° or 0.5° past beam 97, exact ranges, and the
+    /// walk starts the face's segment at 97. Beam 97 lies on the wall's line, past the corner
+    /// of the wall's and the face's lines fitted to the other beams: it goes back to the wall,
+    /// and the face's three beams are no line. At 0.15° (7.9 mm across the beam at 3 m) only
+    /// the hand-over sees it; the corner point's move (1 σ) does not.
+    #[test]
+    fn a_segment_s_first_beam_goes_back_to_the_surface_before() {
+        for past in [0.15, 0.5] {
+            let (shared, lines) = after_segments(past);
+            assert_eq!(shared, Some(true), "{past}");
+            assert_eq!(lines.as_slice(), [(80, 97)], "{past}");
+        }
+    }
 }
