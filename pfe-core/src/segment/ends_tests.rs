@@ -378,3 +378,82 @@ fn the_distance_to_the_short_line_counts_its_uncertainty_at_the_point() {
         "{alike} {on_each_side:?}"
     );
 }
+
+/// [`closer`]'s distance from a point to the other segment's line counts that line's
+/// uncertainty at the point (its covariance in α, ρ carried along the line) beside the point's
+/// own σ_r²: against the same question worked out in f64 (the distance's change with α by a
+/// central difference, with ρ by −1) for lines at 30–70° either side of the point's beam (the
+/// point up to 2.8 m along them from their normal's foot), a correlation of α and ρ of −0.8, 0
+/// or 0.8, and the point 0–60 mm off the line (the other points' line 2 m away: only the
+/// distance decides), every case more than 2 % off the χ² threshold is judged alike, and the
+/// threshold is crossed.
+#[test]
+fn the_distance_to_the_long_line_counts_its_covariance_at_the_point() {
+    use super::{closer, ON_LINE_CHI2};
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let config = Config::default();
+    let d2r = core::f64::consts::PI / 180.0;
+    let ranges: [f32; 181] = core::array::from_fn(|i| match i {
+        80..=82 => 1000.0,
+        83 => 3000.0,
+        _ => 0.0,
+    });
+    let (var_alpha, var_rho) = (25.0f64 / (1500.0 * 1500.0), 25.0f64);
+    let (mut alike, mut on_each_side) = (0usize, [0usize; 2]);
+    for phi in [-70, -50, -30, 30, 50, 70] {
+        for corr in [-0.8f64, 0.0, 0.8] {
+            let cov = corr * (var_alpha * var_rho).sqrt();
+            for step in 0..=120 {
+                let off = 0.5 * f64::from(step);
+                let mut ex = Extractor::<181, 8>::new();
+                let (judged, sigma_r, p) =
+                    ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+                        let Some(noise) = rule.noise() else {
+                            panic!("the default rule")
+                        };
+                        let p = pass.point(83);
+                        let (px, py) = (f64::from(p.x), f64::from(p.y));
+                        let alpha = py.atan2(px) + f64::from(phi) * d2r;
+                        // The line `off` mm from the point along its normal.
+                        let rho = px * alpha.cos() + py * alpha.sin() - off;
+                        let l = LineFeature::new(
+                            90,
+                            120,
+                            31,
+                            alpha as f32,
+                            rho as f32,
+                            var_alpha as f32,
+                            var_rho as f32,
+                            cov as f32,
+                            p,
+                            p,
+                        );
+                        let judged = closer(pass, noise, &l, 83, 80..=82, ON_LINE_CHI2);
+                        (judged, f64::from(noise.sigma_r), [px, py, alpha, rho])
+                    });
+                let [px, py, alpha, rho] = p;
+                let d = |a: f64| px * a.cos() + py * a.sin() - rho;
+                let h = 1e-6;
+                let d_alpha = (d(alpha + h) - d(alpha - h)) / (2.0 * h);
+                // Var(d) = J Σ Jᵀ with J = (∂d/∂α, ∂d/∂ρ = −1).
+                let var = sigma_r * sigma_r + d_alpha * d_alpha * var_alpha + var_rho
+                    - 2.0 * d_alpha * cov;
+                let chi2 = d(alpha).powi(2) / var;
+                let margin = chi2 / f64::from(ON_LINE_CHI2);
+                if (margin - 1.0).abs() > 0.02 {
+                    let expected = chi2 <= f64::from(ON_LINE_CHI2);
+                    assert_eq!(
+                        judged, expected,
+                        "φ {phi}° ρα-correlation {corr} off {off} mm: χ² {chi2:.3}, ∂d/∂α {d_alpha:.0}"
+                    );
+                    alike += 1;
+                    on_each_side[usize::from(expected)] += 1;
+                }
+            }
+        }
+    }
+    assert!(
+        alike > 2000 && on_each_side.iter().all(|&k| k > 500),
+        "{alike} {on_each_side:?}"
+    );
+}
