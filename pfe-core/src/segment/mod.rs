@@ -8,6 +8,7 @@
 //! one line within the noise are joined into one segment. A segment typed a line that is a
 //! pillar against a wall (no jump at its edges) is split around the pillar's arc.
 
+mod arcs;
 mod ends;
 mod join;
 mod split;
@@ -117,6 +118,7 @@ fn segments_with<const SCRUTINY: bool>(
     }
     if emitter.join.is_some() {
         emitter.flush(pass, config, out);
+        arcs::join_arcs(pass, config, out);
     }
 }
 

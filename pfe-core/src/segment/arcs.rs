@@ -1,0 +1,116 @@
+//! Joins two neighbouring lines that are one arc ([`join_arcs`]): a pillar standing in a wall
+//! (no range jump at its edges) that the walk cut in two, each piece too flat for a circle,
+//! their union a clear one. The pillar's far side meets the wall in a kink, and the walk may
+//! keep a beam or two of the wall in the arc's last piece (or first, seen the other way):
+//! those are left out when the circle passes them by.
+
+use crate::classify;
+use crate::config::Config;
+use crate::feature::Feature;
+use crate::flags::{END, JUMP, START};
+use crate::math;
+use crate::output::FeatureSink;
+use crate::pass::Pass;
+
+use super::MERGE_SIZES;
+
+/// Most joins of two lines into an arc a scan: the work they take is bounded.
+const ARC_JOINS_MAX: usize = 4;
+/// The beams left out of the union at its first and last end, tried in this order.
+const DROPS: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0), (0, 2), (2, 0)];
+/// How far from the union's circle (in σ_r) a beam left out must lie: another surface's.
+const OFF_SIGMAS: f32 = 3.0;
+
+/// Makes each pair of neighbouring stored lines (no beam and no range jump between them)
+/// whose union, less at most two beams at one end that lie off its circle, the typing makes
+/// a circle ([`classify::feature`]) that circle; the beams left out become a segment of their
+/// own, too short for a feature (the surface they lie on is the neighbouring wall's).
+#[inline(never)]
+pub(super) fn join_arcs(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
+    let mut joins = ARC_JOINS_MAX;
+    let mut i = 0usize;
+    while joins > 0 {
+        let (a, b) = match out.features_mut().get(i..i + 2) {
+            Some([Feature::Line(a), Feature::Line(b)]) => (
+                (usize::from(a.first), usize::from(a.last)),
+                (usize::from(b.first), usize::from(b.last)),
+            ),
+            Some(_) => {
+                i += 1;
+                continue;
+            }
+            None => break,
+        };
+        let (s, e) = (a.0, b.1);
+        if a.1 + 1 == b.0 && pass.flag(b.0) & JUMP == 0 && MERGE_SIZES.contains(&(e + 1 - s)) {
+            if let Some((f, lead, trail)) = arc_of(pass, s, e, config) {
+                joins -= 1;
+                replace_pair(pass, out, i, f, (s, e), (a.1, b.0), (lead, trail));
+            }
+        }
+        i += 1;
+    }
+}
+
+/// The circle of the segment `s..=e` less `lead` beams at its start and `trail` at its end
+/// (the first of [`DROPS`] the typing makes a circle whose left-out beams are off it).
+fn arc_of(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<(Feature, usize, usize)> {
+    DROPS.iter().find_map(|&(lead, trail)| {
+        let (cs, ce) = (s + lead, e.checked_sub(trail)?);
+        if ce < cs + config.min_points.max(*MERGE_SIZES.start()) - 1 {
+            return None;
+        }
+        let Some(Feature::Circle(c)) = classify::feature::<true>(pass, cs, ce, config) else {
+            return None;
+        };
+        let off = |k: usize| {
+            pass.valid(k)
+                && math::abs(pass.point(k).distance(&c.center) - c.radius)
+                    > OFF_SIGMAS * config.sigma_r
+        };
+        ((s..cs).all(off) && (ce + 1..=e).all(off)).then_some((Feature::Circle(c), lead, trail))
+    })
+}
+
+/// Puts `f` (over `s + lead..=e - trail`) in place of the stored features `i` and `i + 1`
+/// (the segments `s..=a_last` and `b_first..=e`), the beams left out a short segment each.
+fn replace_pair(
+    pass: &mut Pass<'_>,
+    out: &mut dyn FeatureSink,
+    i: usize,
+    f: Feature,
+    (s, e): (usize, usize),
+    (a_last, b_first): (usize, usize),
+    (lead, trail): (usize, usize),
+) {
+    if let Some(slot) = out.features_mut().get_mut(i) {
+        *slot = f;
+    }
+    let mut k = 0usize;
+    out.retain(&mut |_| {
+        k += 1;
+        k != i + 2
+    });
+    pass.clear(a_last, END);
+    pass.clear(b_first, START);
+    let stats = &mut *pass.stats;
+    stats.features = stats.features.saturating_sub(1);
+    stats.segments = stats.segments.saturating_sub(1);
+    if lead > 0 {
+        pass.set(s + lead - 1, END);
+        pass.set(s + lead, START);
+    }
+    if trail > 0 {
+        pass.set(e - trail, END);
+        pass.set(e - trail + 1, START);
+    }
+    let short = usize::from(lead > 0) + usize::from(trail > 0);
+    let stats = &mut *pass.stats;
+    stats.segments += short;
+    stats.short_segments += short;
+}
+
+#[cfg(test)]
+#[cfg(feature = "libm")]
+#[path = "arcs_tests.rs"]
+mod tests;
