@@ -4,6 +4,7 @@
 //! keep a beam or two of the wall in the arc's last piece (or first, seen the other way):
 //! those are left out when the circle passes them by.
 
+use crate::arc::arc_fit;
 use crate::classify;
 use crate::config::Config;
 use crate::feature::Feature;
@@ -11,6 +12,7 @@ use crate::flags::{END, JUMP, START};
 use crate::math;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
+use crate::rule::NoiseRule;
 
 use super::MERGE_SIZES;
 
@@ -26,7 +28,12 @@ const OFF_SIGMAS: f32 = 3.0;
 /// a circle ([`classify::feature`]) that circle; the beams left out become a segment of their
 /// own, too short for a feature (the surface they lie on is the neighbouring wall's).
 #[inline(never)]
-pub(super) fn join_arcs(pass: &mut Pass<'_>, config: &Config, out: &mut dyn FeatureSink) {
+pub(super) fn join_arcs(
+    pass: &mut Pass<'_>,
+    rule: &NoiseRule,
+    config: &Config,
+    out: &mut dyn FeatureSink,
+) {
     let mut joins = ARC_JOINS_MAX;
     let mut i = 0usize;
     while joins > 0 {
@@ -43,7 +50,7 @@ pub(super) fn join_arcs(pass: &mut Pass<'_>, config: &Config, out: &mut dyn Feat
         };
         let (s, e) = (a.0, b.1);
         if a.1 + 1 == b.0 && pass.flag(b.0) & JUMP == 0 && MERGE_SIZES.contains(&(e + 1 - s)) {
-            if let Some((f, lead, trail)) = arc_of(pass, s, e, config) {
+            if let Some((f, lead, trail)) = arc_of(pass, s, e, rule, config) {
                 joins -= 1;
                 replace_pair(pass, out, i, f, (s, e), (a.1, b.0), (lead, trail));
             }
@@ -54,12 +61,20 @@ pub(super) fn join_arcs(pass: &mut Pass<'_>, config: &Config, out: &mut dyn Feat
 
 /// The circle of the segment `s..=e` less `lead` beams at its start and `trail` at its end
 /// (the first of [`DROPS`] the typing makes a circle whose left-out beams are off it).
-fn arc_of(pass: &Pass<'_>, s: usize, e: usize, config: &Config) -> Option<(Feature, usize, usize)> {
+fn arc_of(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    rule: &NoiseRule,
+    config: &Config,
+) -> Option<(Feature, usize, usize)> {
     DROPS.iter().find_map(|&(lead, trail)| {
         let (cs, ce) = (s + lead, e.checked_sub(trail)?);
         if ce < cs + config.min_points.max(*MERGE_SIZES.start()) - 1 {
             return None;
         }
+        // The walk's one-pass arc test screens the candidates before the typing.
+        arc_fit(pass.points.get(cs..=ce)?, rule)?;
         let Some(Feature::Circle(c)) = classify::feature::<true>(pass, cs, ce, config) else {
             return None;
         };

@@ -116,9 +116,9 @@ fn segments_with<const SCRUTINY: bool>(
     if let Some((ps, pe)) = pending {
         emitter.emit::<SCRUTINY>(pass, ps, pe, config, out);
     }
-    if emitter.join.is_some() {
+    if let Some(rule) = emitter.join {
         emitter.flush(pass, config, out);
-        arcs::join_arcs(pass, config, out);
+        arcs::join_arcs(pass, rule, config, out);
     }
 }
 
