@@ -7,8 +7,9 @@
 use crate::arc::arc_fit;
 use crate::classify;
 use crate::config::Config;
-use crate::feature::Feature;
+use crate::feature::{CircleFeature, Feature};
 use crate::flags::{END, JUMP, START};
+use crate::geometry::Point;
 use crate::math;
 use crate::output::FeatureSink;
 use crate::pass::Pass;
@@ -22,6 +23,11 @@ const ARC_JOINS_MAX: usize = 4;
 const DROPS: [(usize, usize); 5] = [(0, 0), (0, 1), (1, 0), (0, 2), (2, 0)];
 /// How far from the union's circle (in σ_r) a beam left out must lie: another surface's.
 const OFF_SIGMAS: f32 = 3.0;
+/// Largest standard deviation of the circle's radius, as a fraction of it: the beams must
+/// determine the radius.
+const RADIUS_SPREAD: f32 = 0.1;
+/// Largest radius of a pillar the join makes, mm.
+const PILLAR_MAX_RADIUS: f32 = 1000.0;
 
 /// Makes each pair of neighbouring stored lines (no beam and no range jump between them)
 /// whose union, less at most two beams at one end that lie off its circle, the typing makes
@@ -37,10 +43,11 @@ pub(super) fn join_arcs(
     let mut joins = ARC_JOINS_MAX;
     let mut i = 0usize;
     while joins > 0 {
-        let (a, b) = match out.features_mut().get(i..i + 2) {
+        let (a, b, bulge) = match out.features_mut().get(i..i + 2) {
             Some([Feature::Line(a), Feature::Line(b)]) => (
                 (usize::from(a.first), usize::from(a.last)),
                 (usize::from(b.first), usize::from(b.last)),
+                [a.start, a.end, b.start, b.end],
             ),
             Some(_) => {
                 i += 1;
@@ -49,7 +56,11 @@ pub(super) fn join_arcs(
             None => break,
         };
         let (s, e) = (a.0, b.1);
-        if a.1 + 1 == b.0 && pass.flag(b.0) & JUMP == 0 && MERGE_SIZES.contains(&(e + 1 - s)) {
+        if a.1 + 1 == b.0
+            && pass.flag(b.0) & JUMP == 0
+            && MERGE_SIZES.contains(&(e + 1 - s))
+            && bulges(bulge, pass.origin(b.0))
+        {
             if let Some((f, lead, trail)) = arc_of(pass, s, e, rule, config) {
                 joins -= 1;
                 replace_pair(pass, out, i, f, (s, e), (a.1, b.0), (lead, trail));
@@ -59,8 +70,21 @@ pub(super) fn join_arcs(
     }
 }
 
+/// Whether the two lines from `p[0]` to `p[1]` and from `p[2]` to `p[3]` bulge towards the
+/// scanner at `origin`: their meeting point lies on its side of the chord between their far
+/// ends, as on a pillar's face (a cheap screen before any fit: a circle that faces the scanner,
+/// [`faces`], needs it).
+fn bulges(p: [Point; 4], origin: Point) -> bool {
+    let [a, j0, j1, b] = p;
+    let j = Point::new(0.5 * (j0.x + j1.x), 0.5 * (j0.y + j1.y));
+    let (cx, cy) = (b.x - a.x, b.y - a.y);
+    let side = |q: Point| cx * (q.y - a.y) - cy * (q.x - a.x);
+    side(j) * side(origin) > 0.0
+}
+
 /// The circle of the segment `s..=e` less `lead` beams at its start and `trail` at its end
-/// (the first of [`DROPS`] the typing makes a circle whose left-out beams are off it).
+/// (the first of [`DROPS`] the typing makes a circle whose left-out beams are off it and that
+/// can be a pillar, [`pillar`]).
 fn arc_of(
     pass: &Pass<'_>,
     s: usize,
@@ -78,6 +102,10 @@ fn arc_of(
         let Some(Feature::Circle(c)) = classify::feature::<true>(pass, cs, ce, config) else {
             return None;
         };
+        let pts = pass.points.get(cs..=ce)?;
+        if !pillar(pts, pass.origin((cs + ce) / 2), &c) {
+            return None;
+        }
         let off = |k: usize| {
             pass.valid(k)
                 && math::abs(pass.point(k).distance(&c.center) - c.radius)
@@ -85,6 +113,46 @@ fn arc_of(
         };
         ((s..cs).all(off) && (ce + 1..=e).all(off)).then_some((Feature::Circle(c), lead, trail))
     })
+}
+
+/// Whether the circle `c` of the points `pts` can be a pillar standing in a wall, seen from
+/// `origin`: its points face the scanner ([`faces`]), its arc spans at most 120° ([`narrow`]),
+/// the beams determine its radius (a standard deviation of at most [`RADIUS_SPREAD`] of it),
+/// which is at most [`PILLAR_MAX_RADIUS`].
+fn pillar(pts: &[Point], origin: Point, c: &CircleFeature) -> bool {
+    let spread = RADIUS_SPREAD * c.radius;
+    faces(pts, origin, c)
+        && narrow(pts, c)
+        && c.cov[2][2] <= spread * spread
+        && c.radius <= PILLAR_MAX_RADIUS
+}
+
+/// Whether every point of `pts` lies on the side of the circle `c` that faces the scanner at
+/// `origin`: nearer than the tangent range √(d² − R²) (`d` the centre's distance), as every
+/// point of a pillar's visible face is. A hollow's circle (a corner's or a bay's seen from
+/// inside: the scanner inside the circle, or the points on its far side) is not.
+fn faces(pts: &[Point], origin: Point, c: &CircleFeature) -> bool {
+    let (dx, dy) = (c.center.x - origin.x, c.center.y - origin.y);
+    let (d2, r2) = (dx * dx + dy * dy, c.radius * c.radius);
+    if !(d2 > r2) {
+        return false;
+    }
+    let reach = math::sqrt(d2 - r2);
+    pts.iter().all(|p| p.distance(&origin) <= reach)
+}
+
+/// Whether the arc of `pts` about the centre of `c` spans at most 120° between its ends: the
+/// cap of a pillar standing in a wall; two short lines meeting in a corner fit a circle of
+/// 130–170° (their legs its tangents).
+fn narrow(pts: &[Point], c: &CircleFeature) -> bool {
+    let (Some(a), Some(b)) = (pts.first(), pts.last()) else {
+        return false;
+    };
+    let o = c.center;
+    let (ax, ay, bx, by) = (a.x - o.x, a.y - o.y, b.x - o.x, b.y - o.y);
+    let (dot, cross) = (ax * bx + ay * by, ax * by - ay * bx);
+    // cos ≥ −1/2.
+    dot >= 0.0 || 3.0 * dot * dot <= cross * cross
 }
 
 /// Puts `f` (over `s + lead..=e - trail`) in place of the stored features `i` and `i + 1`
