@@ -60,6 +60,7 @@ pub(super) fn join_arcs(
             && pass.flag(b.0) & JUMP == 0
             && MERGE_SIZES.contains(&(e + 1 - s))
             && bulges(bulge, pass.origin(b.0))
+            && spans_pillar(bulge)
         {
             if let Some((f, lead, trail)) = arc_of(pass, s, e, rule, config) {
                 joins -= 1;
@@ -80,6 +81,16 @@ fn bulges(p: [Point; 4], origin: Point) -> bool {
     let (cx, cy) = (b.x - a.x, b.y - a.y);
     let side = |q: Point| cx * (q.y - a.y) - cy * (q.x - a.x);
     side(j) * side(origin) > 0.0
+}
+
+/// Whether the chord from `p[0]` to `p[3]` (the two lines' far ends) is short enough for an
+/// arc of at most 120° of a circle of at most [`PILLAR_MAX_RADIUS`] (√3 R, with a tenth more
+/// for the beams the join may leave out): a cheap screen, as two long walls meeting in a
+/// corner fail it.
+fn spans_pillar(p: [Point; 4]) -> bool {
+    let (dx, dy) = (p[3].x - p[0].x, p[3].y - p[0].y);
+    let most = 1.1 * PILLAR_MAX_RADIUS;
+    dx * dx + dy * dy <= 3.0 * most * most
 }
 
 /// The circle of the segment `s..=e` less `lead` beams at its start and `trail` at its end
