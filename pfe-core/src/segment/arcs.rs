@@ -26,6 +26,8 @@ const OFF_SIGMAS: f32 = 3.0;
 /// Largest standard deviation of the circle's radius, as a fraction of it: the beams must
 /// determine the radius.
 const RADIUS_SPREAD: f32 = 0.1;
+/// Fewest points of the join's circle.
+const JOIN_MIN_POINTS: usize = 10;
 /// Largest radius of a pillar the join makes, mm.
 const PILLAR_MAX_RADIUS: f32 = 1000.0;
 
@@ -105,7 +107,7 @@ fn arc_of(
 ) -> Option<(Feature, usize, usize)> {
     DROPS.iter().find_map(|&(lead, trail)| {
         let (cs, ce) = (s + lead, e.checked_sub(trail)?);
-        if ce < cs + config.min_points.max(*MERGE_SIZES.start()) - 1 {
+        if ce < cs + config.min_points.max(JOIN_MIN_POINTS) - 1 {
             return None;
         }
         // The walk's one-pass arc test screens the candidates before the typing.
