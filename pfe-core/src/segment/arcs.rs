@@ -2,7 +2,8 @@
 //! (no range jump at its edges) that the walk cut in two, each piece too flat for a circle,
 //! their union a clear one. The pillar's far side meets the wall in a kink, and the walk may
 //! keep a beam or two of the wall in the arc's last piece (or first, seen the other way):
-//! those are left out when the circle passes them by.
+//! those are left out when the circle passes them by and they lie on the wall beyond (the
+//! neighbouring line), not on a straight leg of a convex corner that ends there.
 
 use crate::arc::arc_fit;
 use crate::classify;
@@ -32,9 +33,9 @@ const JOIN_MIN_POINTS: usize = 10;
 const PILLAR_MAX_RADIUS: f32 = 1000.0;
 
 /// Makes each pair of neighbouring stored lines (no beam and no range jump between them)
-/// whose union, less at most two beams at one end that lie off its circle, the typing makes
-/// a circle ([`classify::feature`]) that circle; the beams left out become a segment of their
-/// own, too short for a feature (the surface they lie on is the neighbouring wall's).
+/// whose union, less at most two beams at one end that lie off its circle and on the wall
+/// beyond ([`wall`]), the typing makes a circle ([`classify::feature`]) that circle; the beams
+/// left out become a segment of their own, too short for a feature.
 #[inline(never)]
 pub(super) fn join_arcs(
     pass: &mut Pass<'_>,
@@ -64,13 +65,40 @@ pub(super) fn join_arcs(
             && bulges(bulge, pass.origin(b.0))
             && spans_pillar(bulge)
         {
-            if let Some((f, lead, trail)) = arc_of(pass, s, e, rule, config) {
+            let walls = [
+                wall(pass, out, i.checked_sub(1), s),
+                wall(pass, out, Some(i + 2), e + 1),
+            ];
+            if let Some((f, lead, trail)) = arc_of(pass, s, e, walls, rule, config) {
                 joins -= 1;
                 replace_pair(pass, out, i, f, (s, e), (a.1, b.0), (lead, trail));
             }
         }
         i += 1;
     }
+}
+
+/// The line (normal angle, distance) of the stored feature `k` when it is a line whose first
+/// or last beam is `edge` with no range jump between it and the join's: the wall the join's
+/// pillar stands in, on which any beam the join leaves out at that end must lie.
+fn wall(
+    pass: &Pass<'_>,
+    out: &mut dyn FeatureSink,
+    k: Option<usize>,
+    edge: usize,
+) -> Option<(f32, f32)> {
+    let Some(Feature::Line(l)) = out.features_mut().get(k?) else {
+        return None;
+    };
+    let (first, last) = (usize::from(l.first), usize::from(l.last));
+    let next = if last + 1 == edge {
+        edge
+    } else if first == edge {
+        first
+    } else {
+        return None;
+    };
+    (pass.flag(next) & JUMP == 0).then_some((l.alpha, l.rho))
 }
 
 /// Whether the two lines from `p[0]` to `p[1]` and from `p[2]` to `p[3]` bulge towards the
@@ -102,12 +130,25 @@ fn arc_of(
     pass: &Pass<'_>,
     s: usize,
     e: usize,
+    walls: [Option<(f32, f32)>; 2],
     rule: &NoiseRule,
     config: &Config,
 ) -> Option<(Feature, usize, usize)> {
     DROPS.iter().find_map(|&(lead, trail)| {
         let (cs, ce) = (s + lead, e.checked_sub(trail)?);
         if ce < cs + config.min_points.max(JOIN_MIN_POINTS) - 1 {
+            return None;
+        }
+        // A beam left out lies on the wall beyond it, not on the far end of a straight leg.
+        let on = |w: Option<(f32, f32)>, k: usize| {
+            pass.valid(k)
+                && w.is_some_and(|(alpha, rho)| {
+                    let (sn, cn) = math::sin_cos(alpha);
+                    let p = pass.point(k);
+                    math::abs(p.x * cn + p.y * sn - rho) <= OFF_SIGMAS * config.sigma_r
+                })
+        };
+        if !((s..cs).all(|k| on(walls[0], k)) && (ce + 1..=e).all(|k| on(walls[1], k))) {
             return None;
         }
         // The walk's one-pass arc test screens the candidates before the typing.

@@ -172,3 +172,98 @@ fn a_hollow_corner_of_two_walls_never_joins_into_a_circle() {
         "circles {circles}, lines {lines}"
     );
 }
+
+/// Ranges of the LMS200 (180°, 0.5°) at `sigma` mm noise (draw `seed`) of two straight legs
+/// of `leg` mm meeting in a corner at `apex` that points at the scanner, each leg `out` rad
+/// off the line of sight back from the apex; with `wall`, a wall through the legs' far ends
+/// reaching `wall` mm on past each (the corner of a box standing in it), else nothing else.
+fn convex_corner<const N: usize>(
+    g: ScanGeometry,
+    apex: Point,
+    out: f32,
+    leg: f32,
+    wall: f32,
+    sigma: f32,
+    seed: u32,
+) -> [f32; N] {
+    let d = libm::sqrtf(apex.x * apex.x + apex.y * apex.y);
+    // Away from the scanner along the line of sight.
+    let (ux, uy) = (apex.x / d, apex.y / d);
+    let end = |sgn: f32| {
+        let (s, c) = crate::math::sin_cos(sgn * out);
+        Point::new(
+            apex.x + leg * (ux * c - uy * s),
+            apex.y + leg * (ux * s + uy * c),
+        )
+    };
+    let (l, r) = (end(1.0), end(-1.0));
+    let (wx, wy) = (
+        (r.x - l.x) / (2.0 * leg * libm::sinf(out)),
+        (r.y - l.y) / (2.0 * leg * libm::sinf(out)),
+    );
+    let mut segs = heapless::Vec::<(Point, Point), 4>::new();
+    let _ = segs.push((apex, l));
+    let _ = segs.push((apex, r));
+    if wall > 0.0 {
+        let _ = segs.push((l, Point::new(l.x - wall * wx, l.y - wall * wy)));
+        let _ = segs.push((r, Point::new(r.x + wall * wx, r.y + wall * wy)));
+    }
+    let mut noise = gaussian(seed + 1, sigma);
+    core::array::from_fn(|i| {
+        let (s, c) = crate::math::sin_cos(g.bearing(i));
+        let n = noise();
+        let hit = segs
+            .iter()
+            .filter_map(|&(a, b)| {
+                let (ex, ey) = (b.x - a.x, b.y - a.y);
+                let den = c * ey - s * ex;
+                let t = (a.x * ey - a.y * ex) / den;
+                let u = (a.x * s - a.y * c) / den;
+                (den.abs() > 1e-9 && t > 0.0 && (0.0..=1.0).contains(&u)).then_some(t)
+            })
+            .fold(f32::INFINITY, f32::min);
+        if hit.is_finite() {
+            libm::roundf(hit + n)
+        } else {
+            0.0
+        }
+    })
+}
+
+/// A wide (150°) convex corner of two straight legs of 400 mm, 3 m away in open space and
+/// pointing at the scanner (the LMS200 at 1°, σ_r = 10 mm: the scene of the integration test
+/// `a_wide_corner_in_front_of_open_space_is_no_circle`), at five bearings, 200 noise draws
+/// each. The walk cuts it at its apex into two lines, whose union less a leg's last beam or two
+/// can fit a circle that passes those beams by; but they lie on their straight leg, and there
+/// is no wall beyond them for them to lie on: no circle may leave out a leg's end beam. Without
+/// the check that a beam left out lies on the wall beyond ([`super::wall`]) 23 do.
+#[test]
+fn a_convex_corner_in_open_space_never_leaves_a_legs_end_out_of_a_circle() {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let config = Config::default().with_sigma_r(10.0);
+    let (mut circles, mut partial) = (0, 0);
+    for bearing in [-0.4f32, -0.2, 0.0, 0.2, 0.5] {
+        let apex = Point::new(3000.0 * libm::cosf(bearing), 3000.0 * libm::sinf(bearing));
+        let exact: [f32; 181] = convex_corner(g, apex, 1.309, 400.0, 0.0, 0.0, 0);
+        let on: heapless::Vec<usize, 181> = (0..181).filter(|&i| exact[i] > 0.0).collect();
+        let (a, z) = (on[0], on[on.len() - 1]);
+        assert!((13..=15).contains(&(z + 1 - a)), "corner beams {a}..={z}");
+        for seed in 0..200u32 {
+            let ranges: [f32; 181] = convex_corner(g, apex, 1.309, 400.0, 0.0, 10.0, seed);
+            let mut ex = Extractor::<181, 32>::new();
+            assert!(ex.extract(&Scan::from_mm(g, &ranges), &config).is_ok());
+            for f in ex.features() {
+                if let Feature::Circle(c) = f {
+                    circles += 1;
+                    let (f0, f1) = (usize::from(c.first), usize::from(c.last));
+                    partial +=
+                        usize::from((a + 1..=a + 2).contains(&f0) || (z - 2..z).contains(&f1));
+                }
+            }
+        }
+    }
+    assert!(
+        partial == 0,
+        "{partial} of {circles} circles leave out a leg's end"
+    );
+}
