@@ -8,6 +8,7 @@
 //! one line within the noise are joined into one segment. A segment typed a line that is a
 //! pillar against a wall (no jump at its edges) is split around the pillar's arc.
 
+mod arcs;
 mod ends;
 mod join;
 mod own;
@@ -129,8 +130,9 @@ fn segments_with<const SCRUTINY: bool>(
     if let Some((ps, pe)) = pending {
         emitter.emit::<SCRUTINY>(pass, ps, pe, config, out);
     }
-    if emitter.join.is_some() {
+    if let Some(rule) = emitter.join {
         emitter.flush(pass, config, out);
+        arcs::join_arcs(pass, rule, config, out);
     }
 }
 
