@@ -93,6 +93,20 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
     /// Fuses the matched features of `curr` (seen from `pose`) into their map entries and adds
     /// the others.
     pub(super) fn insert_all(&mut self, curr: &Set, ids: &Assoc, pose: &Pose, scan: u32) {
+        self.insert_with(curr, ids, pose, scan, false);
+    }
+
+    /// [`Odometry::insert_all`], or with `replace` the matched map entries replaced by the
+    /// scan's features rather than fused with them (the map's answer was refuted: what it
+    /// matched is suspect).
+    pub(super) fn insert_with(
+        &mut self,
+        curr: &Set,
+        ids: &Assoc,
+        pose: &Pose,
+        scan: u32,
+        replace: bool,
+    ) {
         let at = pose.transformer();
         for (k, l) in curr.lines().iter().enumerate() {
             let (sa, ca) = sin_cos(l.a);
@@ -122,6 +136,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                 last: scan,
             };
             match self.map.get_mut(usize::from(id)).filter(|_| id != NONE) {
+                Some(e) if e.line && usize::from(id) < self.n && replace => *e = new,
                 Some(e) if e.line && usize::from(id) < self.n => fuse_line(e, &new),
                 _ => self.add(new),
             }
@@ -139,6 +154,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             };
             let id = ids.pts.get(k).copied().unwrap_or(NONE);
             match self.map.get_mut(usize::from(id)).filter(|_| id != NONE) {
+                Some(e) if !e.line && usize::from(id) < self.n && replace => *e = new,
                 Some(e) if !e.line && usize::from(id) < self.n => fuse_2(e, &new),
                 _ => self.add(new),
             }

@@ -76,7 +76,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             if tracked(&reg, &curr, &cfg) && agrees && !(points.is_some() && degenerate) {
                 self.last = curr.clone();
                 return self.accept(
-                    &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
+                    &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan, false,
                 );
             }
             assoc = Assoc::new();
@@ -203,6 +203,18 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                 !(agreement(&self.pts, c, &guess.compose(&reg.rel)).score() >= cfg.verify_accept)
             });
         let map_only_refused = map_only_degenerate || map_only_refuted;
+        // With the scans' points, the map's answer must also agree with the previous scan's
+        // points nearly as well as the pair's: otherwise a map feature was fused wrongly (or
+        // has moved) and pulled the answer off within both covariances. Then the pair's
+        // answer is taken and the map entries it matched are replaced by this scan's features
+        // (restarting the whole map loses what the rest of it holds).
+        let refuted = pair.is_registered()
+            && reg.is_registered()
+            && points.is_some_and(|c| {
+                let by_map = agreement(&self.pts, c, &guess.compose(&reg.rel)).score();
+                let by_pair = agreement(&self.pts, c, &pair.rel).score();
+                by_pair > by_map + MAP_REFUTED_MARGIN
+            });
         if !reg.is_registered() || disagree || map_only_refused {
             // Not against the map: take the pair's registration (or the prediction) and
             // restart the map from this scan.
@@ -251,8 +263,17 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                 status,
             };
         }
+        if refuted {
+            // The pair's answer (the prediction, in the predicted pose's frame) with its
+            // covariance; the map's matches are kept but the features they matched replaced.
+            let (s, c) = sin_cos(-guess.theta);
+            let rot = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+            reg.rel = Pose::IDENTITY;
+            reg.cov = crate::geom::sandwich3(&rot, &pair.cov);
+            reg.status = pair.status;
+        }
         self.accept(
-            &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan,
+            &curr, &predicted, &guess, &reg, &assoc, &line_of, &pt_of, scan, refuted,
         )
     }
 
@@ -270,6 +291,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
         line_of: &[u8; MAX_OBS],
         pt_of: &[u8; MAX_OBS],
         scan: u32,
+        replace: bool,
     ) -> Step {
         let old = self.pose;
         let new = predicted.compose(&reg.rel);
@@ -290,7 +312,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
         for (slot, m) in ids.pts.iter_mut().zip(&assoc.pts) {
             *slot = pt_of.get(usize::from(*m)).copied().unwrap_or(NONE);
         }
-        self.insert_all(curr, &ids, &new, scan);
+        self.insert_with(curr, &ids, &new, scan, replace);
         Step {
             scan,
             rel,
@@ -306,6 +328,10 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
 /// without a motion prior: the refinement's reach (its first gates are about three times
 /// its slack), not a statement about the robot.
 const TRACK_SIGMA: (f32, f32) = (250.0, 0.1);
+
+/// The map's answer is refused for the pair's when the scans' points agree with the pair's
+/// better by more than this ([`crate::points::agreement`]'s score).
+const MAP_REFUTED_MARGIN: f32 = 0.1;
 
 /// A tracking registration is taken when it registered (a degenerate one keeps the
 /// prediction along what it cannot tell) and at least half of the scan's features (and the
