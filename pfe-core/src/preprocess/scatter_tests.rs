@@ -456,3 +456,72 @@ fn clutter_is_capped_or_refused_and_few_points_give_nothing() {
     let nan = [Point::new(f32::NAN, 0.0); 40];
     assert_eq!(sigma(&nan, 5.0), None);
 }
+
+/// [`Scatter::sweeps_apart`] answers as the full comparison with the scatter at `sweeps`
+/// beams (taken whether or not the scatter across already decides): walls with noise and
+/// sweeps offset by 0 to 40 mm, at 2, 3 and 4 sweeps and σ_r positive, zero, negative and
+/// not finite. Both sides of the shortcut are seen.
+#[test]
+fn sweeps_apart_without_the_scatter_within_is_the_full_comparison() {
+    let full = |s: &Scatter, points: &[Point], sweeps: usize, sigma_r: f32| {
+        let across = match sweeps {
+            0 | 1 => None,
+            2 => s.one,
+            _ => match (s.one, s.two) {
+                (Some(a), Some(b)) => Some(a.max(b)),
+                (a, b) => a.or(b),
+            },
+        };
+        let Some(across) = across else {
+            return false;
+        };
+        let within = match sweeps {
+            2 => s.two,
+            k => at_span(points, k, sigma_r),
+        };
+        match within {
+            Some(within) => across > APART * within,
+            None => across > APART * sigma_r,
+        }
+    };
+    let mut n = normals(17);
+    let (mut short, mut long, mut apart) = (0, 0, 0);
+    for case in 0..240 {
+        let noise: [f32; 181] = core::array::from_fn(|_| n());
+        let rough = [1.0, 5.0, 12.0, 30.0][case % 4];
+        let step = [0.0, 4.0, 10.0, 25.0, 40.0][(case / 4) % 5];
+        let drift = case % 3 == 0;
+        let p = wall(2000.0 + 50.0 * case as f32, |i| {
+            let k = (i % 4) as f32;
+            rough * noise[i]
+                + if drift {
+                    step * k
+                } else {
+                    step * (i % 2) as f32
+                }
+        });
+        for sigma_r in [5.0, 2.0, 10.0, 0.0, -5.0, f32::NAN, f32::INFINITY] {
+            let s = Scatter::of(&p, sigma_r);
+            for sweeps in 0..=4 {
+                let got = s.sweeps_apart(&p, sweeps, sigma_r);
+                assert_eq!(
+                    got,
+                    full(&s, &p, sweeps, sigma_r),
+                    "{case} {sigma_r} {sweeps}"
+                );
+                apart += usize::from(got);
+                let across = s.one.or(s.two);
+                if sweeps > 2 && sigma_r == 5.0 {
+                    match across.is_some_and(|a| a > APART * sigma_r) {
+                        true => long += 1,
+                        false => short += 1,
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        short > 50 && long > 50 && apart > 50,
+        "{short} {long} {apart}"
+    );
+}
