@@ -295,11 +295,6 @@ impl Scatter {
         let Some(across) = across else {
             return false;
         };
-        // A scatter `within` is above σ_r (`estimate`), none stands for σ_r: a scatter
-        // `across` within `APART` σ_r is apart from neither, without the four-sweep pass.
-        if sigma_r > 0.0 && math::finite(sigma_r) && !(across > APART * sigma_r) {
-            return false;
-        }
         let within = match sweeps {
             2 => self.two,
             s => at_span(points, s, sigma_r),
