@@ -328,7 +328,7 @@ pub(crate) fn line_feature_with(
     line: &LineFit,
     cov: LineCovariance,
 ) -> Option<Feature> {
-    let f = Feature::Line(LineFeature {
+    let l = LineFeature {
         first: u16::try_from(first).ok()?,
         last: u16::try_from(last).ok()?,
         points: u16::try_from(pts.len()).ok()?,
@@ -339,8 +339,9 @@ pub(crate) fn line_feature_with(
         cov_alpha_rho: cov.cov_alpha_rho,
         start: line.project(pts.first()?),
         end: line.project(pts.last()?),
-    });
-    f.is_well_formed().then_some(f)
+    };
+    // [`Feature::is_well_formed`] on the fields, the feature built once in its place.
+    (l.first <= l.last && math::all_finite(&l.values())).then_some(Feature::Line(l))
 }
 
 /// The circle feature of the points `pts` of beams `first..=last` fitted by `circle`, with the
