@@ -45,6 +45,8 @@ pub struct Stats {
 pub(crate) trait FeatureSink {
     /// Stores `f`; false when there is no room.
     fn push(&mut self, f: Feature) -> bool;
+    /// [`push`](Self::push) of a copy of `f`: the feature copied once, into its slot.
+    fn push_copy(&mut self, f: &Feature) -> bool;
     /// The features stored, in the order pushed.
     fn features_mut(&mut self) -> &mut [Feature];
     /// Keeps only the features `keep` says, in order (it asks each once, in order).
@@ -54,6 +56,9 @@ pub(crate) trait FeatureSink {
 impl<const M: usize> FeatureSink for Vec<Feature, M> {
     fn push(&mut self, f: Feature) -> bool {
         Vec::push(self, f).is_ok()
+    }
+    fn push_copy(&mut self, f: &Feature) -> bool {
+        Vec::push(self, *f).is_ok()
     }
     fn features_mut(&mut self) -> &mut [Feature] {
         self

@@ -328,7 +328,7 @@ pub(crate) fn line_feature_with(
     line: &LineFit,
     cov: LineCovariance,
 ) -> Option<Feature> {
-    let f = Feature::Line(LineFeature {
+    let l = LineFeature {
         first: u16::try_from(first).ok()?,
         last: u16::try_from(last).ok()?,
         points: u16::try_from(pts.len()).ok()?,
@@ -339,8 +339,9 @@ pub(crate) fn line_feature_with(
         cov_alpha_rho: cov.cov_alpha_rho,
         start: line.project(pts.first()?),
         end: line.project(pts.last()?),
-    });
-    f.is_well_formed().then_some(f)
+    };
+    // [`Feature::is_well_formed`] on the fields, the feature built once in its place.
+    (l.first <= l.last && math::all_finite(&l.values())).then_some(Feature::Line(l))
 }
 
 /// The circle feature of the points `pts` of beams `first..=last` fitted by `circle`, with the
@@ -366,4 +367,60 @@ pub fn circle_feature(
         end_angle: angle(pts.last()?),
     });
     f.is_well_formed().then_some(f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::line::fit_line;
+
+    /// [`line_feature_with`] checks the line's fields before it becomes a feature: it is the
+    /// feature built first and kept when [`Feature::is_well_formed`], for covariances finite,
+    /// NaN and infinite, beams in and out of order and indices past `u16`.
+    #[test]
+    fn the_line_checked_before_it_is_a_feature_is_the_well_formed_feature() {
+        let pts: [Point; 6] =
+            core::array::from_fn(|i| Point::new(1000.0 + 3.0 * i as f32, 20.0 * i as f32));
+        let line = fit_line(&pts).expect("a line");
+        let bad = [1e-6, f32::NAN, f32::INFINITY, -f32::INFINITY];
+        let (mut kept, mut refused) = (0, 0);
+        for (first, last) in [(3, 8), (8, 3), (5, 5), (70_000, 70_005), (0, 65_535)] {
+            for k in 0..bad.len() * 3 {
+                let v = |j: usize| {
+                    if k / bad.len() == j {
+                        bad[k % bad.len()]
+                    } else {
+                        1e-6
+                    }
+                };
+                let cov = LineCovariance {
+                    var_alpha: v(0),
+                    var_rho: v(1),
+                    cov_alpha_rho: v(2),
+                };
+                let built = (|| {
+                    let f = Feature::Line(LineFeature {
+                        first: u16::try_from(first).ok()?,
+                        last: u16::try_from(last).ok()?,
+                        points: u16::try_from(pts.len()).ok()?,
+                        alpha: line.alpha,
+                        rho: line.rho,
+                        var_alpha: cov.var_alpha,
+                        var_rho: cov.var_rho,
+                        cov_alpha_rho: cov.cov_alpha_rho,
+                        start: line.project(pts.first()?),
+                        end: line.project(pts.last()?),
+                    });
+                    f.is_well_formed().then_some(f)
+                })();
+                let got = line_feature_with(&pts, first, last, &line, cov);
+                assert_eq!(got, built, "{first} {last} {k}");
+                match got {
+                    Some(_) => kept += 1,
+                    None => refused += 1,
+                }
+            }
+        }
+        assert!(kept >= 3 && refused >= 10, "{kept} {refused}");
+    }
 }

@@ -268,7 +268,7 @@ fn emit<const SCRUTINY: bool>(
         if e + 1 - s < config.min_points {
             pass.stats.short_segments += 1;
         } else if let Some(f) = classify::feature::<false>(pass, s, e, config) {
-            store(pass, f, out);
+            store(pass, &f, out);
         } else {
             pass.stats.degenerate += 1;
         }
@@ -333,10 +333,12 @@ fn emit<const SCRUTINY: bool>(
                 continue;
             }
         }
-        let feature = match feature {
-            Some(Some(Feature::Line(_))) => curved_object(pass, s, e, config).or(feature),
-            _ => feature,
+        // The features by reference: each is copied once, into the sink.
+        let object = match feature {
+            Some(Some(Feature::Line(_))) => curved_object(pass, s, e, config),
+            _ => None,
         };
+        let feature = if object.is_some() { &object } else { &feature };
         match visible_part(pass, s, e, feature.as_ref(), config) {
             Some((a, b, line)) => place_visible(pass, s, e, (a, b), line, config, out),
             None => place(pass, s, e, feature, out),
@@ -400,19 +402,17 @@ fn place_visible(
 ) {
     let rest = if a > s { (s, a - 1) } else { (b + 1, e) };
     let short = (rest.1 + 1 - rest.0 < config.min_points).then_some(());
+    let (rest, line) = (
+        (rest.0, rest.1, short.map_or(Some(None), |()| None)),
+        (a, b, Some(Some(line))),
+    );
     let (first, second) = if a > s {
-        (
-            (rest.0, rest.1, short.map_or(Some(None), |()| None)),
-            (a, b, Some(Some(line))),
-        )
+        (&rest, &line)
     } else {
-        (
-            (a, b, Some(Some(line))),
-            (rest.0, rest.1, short.map_or(Some(None), |()| None)),
-        )
+        (&line, &rest)
     };
-    place(pass, first.0, first.1, first.2, out);
-    place(pass, second.0, second.1, second.2, out);
+    place(pass, first.0, first.1, &first.2, out);
+    place(pass, second.0, second.1, &second.2, out);
 }
 
 /// Most points of a curved run set apart on one side only that is an object: over more
@@ -471,7 +471,7 @@ fn place(
     pass: &mut Pass<'_>,
     s: usize,
     e: usize,
-    feature: Option<Option<Feature>>,
+    feature: &Option<Option<Feature>>,
     out: &mut dyn FeatureSink,
 ) {
     pass.set(s, START);
@@ -487,8 +487,8 @@ fn place(
 /// Stores `f` as [`store`] does; when there is no room, the stored lines the sift step will
 /// not report (the scanner cannot have seen them) give up their room first, so that the
 /// capacity holds features that are reported.
-fn store_making_room(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
-    if out.push(f) {
+fn store_making_room(pass: &mut Pass<'_>, f: &Feature, out: &mut dyn FeatureSink) {
+    if out.push_copy(f) {
         pass.stats.features += 1;
         return;
     }
@@ -511,8 +511,8 @@ fn store_making_room(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink)
 
 /// Stores `f`, counting it as stored or dropped.
 #[inline(always)]
-fn store(pass: &mut Pass<'_>, f: Feature, out: &mut dyn FeatureSink) {
-    if out.push(f) {
+fn store(pass: &mut Pass<'_>, f: &Feature, out: &mut dyn FeatureSink) {
+    if out.push_copy(f) {
         pass.stats.features += 1;
     } else {
         pass.stats.dropped += 1;
