@@ -91,6 +91,19 @@ fn a_four_beam_face_keeps_its_beams() {
     assert_eq!(spans(&out), [(80, 97), (98, 101)].as_slice(), "{out:?}");
 }
 
+/// The end point moves out of a segment of at most `REST_MAX` (32) points only: the face over
+/// beams 52..=82 with the wall's first beam 83 in its segment (32 points) gives beam 83 to the
+/// wall; the face from beam 51 (33 points in the segment) keeps it, the two lines as emitted.
+#[test]
+fn the_end_point_moves_out_of_a_segment_of_at_most_rest_max_points() {
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    assert_eq!(super::REST_MAX, 32);
+    let out = segments_of(&scene(&g, 52, false), (52, 83), (84, 100));
+    assert_eq!(spans(&out), [(52, 82), (83, 100)].as_slice(), "{out:?}");
+    let out = segments_of(&scene(&g, 51, false), (51, 83), (84, 100));
+    assert_eq!(spans(&out), [(51, 83), (84, 100)].as_slice(), "{out:?}");
+}
+
 /// [`closer`]'s distance to a line counts the line's own uncertainty where the point lies:
 /// the wall's beam 100 (10° off the x axis, 529 mm from the line's foot) lies 15 mm beyond
 /// the line x = wall − 15 mm, 3 σ_r; with σ_α = 0.01 rad the line itself is uncertain by
