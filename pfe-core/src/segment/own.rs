@@ -186,6 +186,43 @@ mod tests {
     use crate::feature::Feature;
     use crate::scan::{Scan, ScanGeometry};
 
+    /// [`super::chi2`] is the point's squared distance from the line in the σ of its residual,
+    /// σ_r² (1 + 1/n + u²/Σu²), u its position along the line from the centroid: points spaced
+    /// 100 mm on a line at 0.3 rad, a point 12 mm off it 250 mm along from their centroid,
+    /// against the same computed in f64 from the construction (3 and 10 points).
+    #[test]
+    fn chi2_is_the_distance_in_the_residual_s_sigma() {
+        let (theta, h, d, u, var) = (0.3f64, 100.0f64, 12.0f64, 250.0f64, 25.0f64);
+        let (t, nrm) = ((theta.cos(), theta.sin()), (-theta.sin(), theta.cos()));
+        for n in [3usize, 10] {
+            let pts: heapless::Vec<crate::geometry::Point, 16> = (0..n)
+                .map(|k| {
+                    let s = h * k as f64;
+                    crate::geometry::Point::new(
+                        (2000.0 + s * t.0) as f32,
+                        (500.0 + s * t.1) as f32,
+                    )
+                })
+                .collect();
+            let Ok(f) = crate::fit::line::fit_line(&pts) else {
+                panic!("a line of {n} points")
+            };
+            let mean = h * (n as f64 - 1.0) / 2.0;
+            let suu: f64 = (0..n).map(|k| (h * k as f64 - mean).powi(2)).sum();
+            let c = (2000.0 + mean * t.0, 500.0 + mean * t.1);
+            let p = crate::geometry::Point::new(
+                (c.0 + u * t.0 + d * nrm.0) as f32,
+                (c.1 + u * t.1 + d * nrm.1) as f32,
+            );
+            let expected = d * d / (var * (1.0 + 1.0 / n as f64 + u * u / suu));
+            let got = f64::from(super::chi2(&f, p, var as f32));
+            assert!(
+                (got - expected).abs() <= 1e-3 * expected,
+                "n {n}: {got} against {expected}"
+            );
+        }
+    }
+
     /// The features (kind, first beam, last beam) of an LMS200 scan (180°, 0.5°) whose beams
     /// from `first` have the ranges `run` and the others no return.
     fn lines(first: usize, run: &[f32]) -> heapless::Vec<(usize, usize), 16> {
