@@ -88,3 +88,38 @@ fn a_jamb_face_with_a_beam_of_the_wall_is_a_line() {
         libm::sqrtf(l.var_rho)
     );
 }
+
+/// [`super::one_segment`] counts the run as one segment and what lies outside it of the segment
+/// that held it as a short segment of its own: a degenerate segment over beams 3..=10 (8 points,
+/// `min_points` 4) whose run 5..=10 becomes the object's keeps beams 3..=4 as a short segment.
+/// Before: one segment, degenerate; after: two segments, one short, none degenerate, marked
+/// 3..=4 and 5..=10.
+#[test]
+fn the_segment_s_points_before_the_run_stay_a_short_segment() {
+    use crate::flags::{END, START};
+    let g = ScanGeometry::LMS200_180_050;
+    let ranges = [3000.0f32; 361];
+    let mut ex = Extractor::<361, 16>::new();
+    ex.with_pass(&Scan::from_mm(g, &ranges), &Config::default(), |pass, _| {
+        for k in 0..20 {
+            pass.clear(k, START | END);
+        }
+        pass.set(3, START);
+        pass.set(10, END);
+        *pass.stats = crate::output::Stats::default();
+        pass.stats.segments = 1;
+        pass.stats.degenerate = 1;
+        super::one_segment(pass, 5, 10, 3, 10, 4);
+        let s = &*pass.stats;
+        assert_eq!(
+            (s.segments, s.short_segments, s.degenerate),
+            (2, 1, 0),
+            "{s:?}"
+        );
+        let marks: heapless::Vec<(usize, u8), 8> = (0..20)
+            .filter(|&k| pass.flag(k) & (START | END) != 0)
+            .map(|k| (k, pass.flag(k) & (START | END)))
+            .collect();
+        assert_eq!(marks.as_slice(), &[(3, START), (4, END), (5, START), (10, END)]);
+    });
+}
