@@ -70,3 +70,48 @@ fn three_pillars_on_a_wall_are_three_circles() {
         "{f:?}"
     );
 }
+
+/// The scan's budget for pillar searches is [`PILLAR_SCANS`] (2) scans' lengths: the scene of
+/// [`three_pillars_on_a_wall_are_three_circles`], its valid beams one segment (no marks
+/// between them) that [`segments`] emits, searches the whole run (241 points) and then the
+/// piece before each pillar found (more than one scan's 361 points in all), and finds the
+/// three pillars.
+#[test]
+fn the_pillar_search_has_two_scans_lengths_of_points() {
+    const WALL: f32 = 2000.0;
+    let pillars = [(-1100.0f32, 150.0f32), (0.0, 200.0), (1100.0, 250.0)];
+    let g = ScanGeometry::LMS200_180_050;
+    let ranges: [f32; 361] = core::array::from_fn(|i| {
+        let (s, c) = math::sin_cos(g.bearing(i));
+        if c < 0.5 {
+            return 0.0;
+        }
+        pillars
+            .iter()
+            .filter_map(|&(y, r)| {
+                ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(WALL, y), r)
+            })
+            .fold(WALL / c, f32::min)
+    });
+    let config = Config::default();
+    let mut ex = Extractor::<361, 16>::new();
+    let f = ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+        for k in 0..pass.len() {
+            pass.clear(k, START | END);
+        }
+        let mut out: Vec<Feature, 16> = Vec::new();
+        segments(pass, rule, &config, &mut out);
+        out
+    });
+    let found = pillars
+        .iter()
+        .filter(|&&(y, radius)| {
+            f.iter().any(|x| {
+                matches!(x, Feature::Circle(c)
+                    if c.center.distance(&Point::new(WALL, y)) < 15.0
+                        && (c.radius - radius).abs() < 15.0)
+            })
+        })
+        .count();
+    assert_eq!(found, 3, "{f:?}");
+}
