@@ -141,3 +141,42 @@ fn a_bump_s_wall_is_fitted_again_from_the_far_half_of_its_longer_side() {
         assert_eq!(peak(&pts, line, &config), Some(want), "{n} points");
     }
 }
+
+/// A segment that starts on a pillar (radius 100 mm, centre on a wall 2 m ahead) 50 mm before
+/// its apex, a point every 10 mm, 20 in all: its largest residuals run from the segment's first
+/// point but are not the whole arc (the line is pulled by the pillar), and the arc at that end
+/// is found as one side of the segment's best two-line split. The bump holds every point of
+/// the pillar (x < 100 mm: the first 15) and only points within 3 σ_r of its circle. The scene
+/// seen the other way round (the pillar at the segment's end) gives the same bump reversed.
+#[test]
+fn a_pillar_at_the_segment_s_start_that_the_peak_misses_is_found() {
+    let (r, c) = (100.0f32, Point::new(0.0, 2000.0));
+    let pts: [Point; 20] = core::array::from_fn(|k| {
+        let x = -50.0 + 10.0 * k as f32;
+        let bulge = if x.abs() < r {
+            math::sqrt(r * r - x * x)
+        } else {
+            0.0
+        };
+        Point::new(x, 2000.0 - bulge)
+    });
+    let Ok(line) = fit_line(&pts) else {
+        panic!("the segment's line")
+    };
+    let Some((i, j)) = bump_at(&pts, &line, 5.0) else {
+        panic!("no bump")
+    };
+    assert!(i == 0 && (14..19).contains(&j), "{i}..={j}");
+    assert!(
+        pts[i..=j]
+            .iter()
+            .all(|p| (p.distance(&c) - r).abs() <= 15.0),
+        "{i}..={j}"
+    );
+    let mut rev = pts;
+    rev.reverse();
+    let Ok(line) = fit_line(&rev) else {
+        panic!("the segment's line")
+    };
+    assert_eq!(bump_at(&rev, &line, 5.0), Some((19 - j, 19)));
+}
