@@ -601,6 +601,46 @@ mod tests {
         Ok(())
     }
 
+    /// `seen_from(o)` is the same line in the frame moved by `o`, along the line as across it:
+    /// its prediction for a beam from the new frame's origin (the window's centroid carried
+    /// into that frame sets the lever, `1/n + u²/Σu²`) is that of the line fitted to the window
+    /// given relative to `o`, and that of the line itself for the beam from `o`. Beams to the
+    /// wall 175 to 400 mm along it, and 60 mm behind it.
+    #[test]
+    fn a_line_seen_from_its_scanner_predicts_as_one_fitted_there() -> Result<(), &'static str> {
+        let o = Point::new(40.0, -25.0);
+        let window: heapless::Vec<Point, 10> = (0..10)
+            .map(|i| {
+                let d = if i % 2 == 0 { 1.0 } else { -1.0 };
+                Point::new(2000.0 + d, 17.5 * i as f32)
+            })
+            .collect();
+        let moved: heapless::Vec<Point, 10> = window
+            .iter()
+            .map(|p| Point::new(p.x + o.x, p.y + o.y))
+            .collect();
+        let line = WindowLine::fit(&moved, o).ok_or("fit")?;
+        let there = WindowLine::fit(&window, Point::new(0.0, 0.0)).ok_or("fit")?;
+        let seen = line.seen_from(o);
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-3 * (1.0 + b.abs());
+        for y in [175.0f32, 250.0, 400.0] {
+            for off in [0.0f32, 60.0] {
+                let (bx, by, r) = beyond(y, off);
+                let got = seen.predict(Point::new(0.0, 0.0), bx, by, r);
+                for want in [
+                    there.predict(Point::new(0.0, 0.0), bx, by, r),
+                    line.predict(o, bx, by, r),
+                ] {
+                    assert!(
+                        close(got.var_factor, want.var_factor) && close(got.signed, want.signed),
+                        "{y} {off}: {got:?} against {want:?}"
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// `accepts_after` a point one mean step past the window's last point tests as `accepts`
     /// (the capped lever: the same bound); a point five mean steps past it gets its own larger
     /// lever: a point off the wall by between the two bounds is accepted after that long step,
