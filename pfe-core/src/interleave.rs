@@ -632,4 +632,23 @@ mod tests {
         assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
     }
+
+    /// `median` sorts its values (a value moves as far as it must, not one place) and takes
+    /// the middle one, or the mean of the middle two: values in descending order and a
+    /// shuffle, against the median of the values counted from their definition.
+    #[test]
+    fn median_sorts_values_that_move_far() {
+        let mut v = [3.0f32, 2.0, 1.0];
+        assert_eq!(median(&mut v), 2.0);
+        assert_eq!(v, [1.0, 2.0, 3.0]);
+        let mut v = [6.0f32, 5.0, 4.0, 3.0, 2.0, 1.0];
+        assert_eq!(median(&mut v), 3.5);
+        assert_eq!(v, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        let mut v = [9.0f32, 4.0, 7.0, 1.0, 8.0, 2.0, 6.0, 3.0, 5.0];
+        let want = v
+            .iter()
+            .copied()
+            .find(|&x| v.iter().filter(|&&y| y < x).count() == 4);
+        assert_eq!(Some(median(&mut v)), want);
+    }
 }
