@@ -120,6 +120,9 @@ fn the_segment_s_points_before_the_run_stay_a_short_segment() {
             .filter(|&k| pass.flag(k) & (START | END) != 0)
             .map(|k| (k, pass.flag(k) & (START | END)))
             .collect();
-        assert_eq!(marks.as_slice(), &[(3, START), (4, END), (5, START), (10, END)]);
+        assert_eq!(
+            marks.as_slice(),
+            &[(3, START), (4, END), (5, START), (10, END)]
+        );
     });
 }

@@ -198,10 +198,7 @@ mod tests {
             let pts: heapless::Vec<crate::geometry::Point, 16> = (0..n)
                 .map(|k| {
                     let s = h * k as f64;
-                    crate::geometry::Point::new(
-                        (2000.0 + s * t.0) as f32,
-                        (500.0 + s * t.1) as f32,
-                    )
+                    crate::geometry::Point::new((2000.0 + s * t.0) as f32, (500.0 + s * t.1) as f32)
                 })
                 .collect();
             let Ok(f) = crate::fit::line::fit_line(&pts) else {

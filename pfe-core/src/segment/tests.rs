@@ -556,3 +556,40 @@ fn a_long_chain_is_joined_64_points_at_a_time() {
     // Joined 64 points at a time, then the two lines, collinear, made one.
     assert_eq!(spans.as_slice(), [(40, 139)], "{out:?}");
 }
+
+/// A run of short segments is one chain only while each starts right after the last: a wall
+/// 3 m ahead seen over beams 150..=210 (0.5°) but for beam 180 (no return), marked in short
+/// segments of three beams either side of it, is joined into two lines, each over all the
+/// beams on its side of the gap (150..=179 and 181..=210), as the wall's beams are.
+#[test]
+fn short_segments_either_side_of_a_gap_are_joined_apart() {
+    use crate::extractor::Extractor;
+    use crate::scan::{Scan, ScanGeometry};
+    let g = ScanGeometry::LMS200_180_050;
+    let ranges: [f32; 361] = core::array::from_fn(|i| match i {
+        180 => 0.0,
+        150..=210 => 3000.0 / math::sin_cos(g.bearing(i)).1,
+        _ => 0.0,
+    });
+    let config = Config::default();
+    let mut ex = Extractor::<361, 16>::new();
+    let out = ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {
+        for k in 0..pass.len() {
+            pass.clear(k, START | END);
+        }
+        for k in (150..180).step_by(3).chain((181..211).step_by(3)) {
+            pass.set(k, START);
+        }
+        let mut out: Vec<Feature, 16> = Vec::new();
+        segments(pass, rule, &config, &mut out);
+        out
+    });
+    let spans: Vec<(u16, u16), 16> = out
+        .iter()
+        .filter_map(|f| match f {
+            Feature::Line(l) => Some((l.first, l.last)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(spans.as_slice(), &[(150, 179), (181, 210)], "{out:?}");
+}
