@@ -25,6 +25,28 @@ fn emitted(ranges: &[f32; 361]) -> Vec<Feature, 16> {
     })
 }
 
+/// The wall 2 m ahead of the pillar tests below.
+const WALL: f32 = 2000.0;
+/// Their pillars: centre's y on the wall and radius, mm.
+const PILLARS: [(f32, f32); 3] = [(-1100.0, 150.0), (0.0, 200.0), (1100.0, 250.0)];
+
+/// Exact ranges of [`PILLARS`] standing out of the wall [`WALL`] ahead, beams within 60° of
+/// the wall's normal (no return beyond).
+fn three_pillars_scene(g: ScanGeometry) -> [f32; 361] {
+    core::array::from_fn(|i| {
+        let (s, c) = math::sin_cos(g.bearing(i));
+        if c < 0.5 {
+            return 0.0;
+        }
+        PILLARS
+            .iter()
+            .filter_map(|&(y, r)| {
+                ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(WALL, y), r)
+            })
+            .fold(WALL / c, f32::min)
+    })
+}
+
 /// Three pillars standing out of a wall 2 m ahead (their centres on it, radii 250, 200 and
 /// 150 mm, the largest at the run's far end), no noise, one run over beams within 60° of the
 /// wall's normal: three circles on the pillars between four pieces of the wall. The largest
@@ -33,21 +55,9 @@ fn emitted(ranges: &[f32; 361]) -> Vec<Feature, 16> {
 /// beyond each pillar, each pillar's arc).
 #[test]
 fn three_pillars_on_a_wall_are_three_circles() {
-    const WALL: f32 = 2000.0;
-    let pillars = [(-1100.0f32, 150.0f32), (0.0, 200.0), (1100.0, 250.0)];
+    let pillars = PILLARS;
     let g = ScanGeometry::LMS200_180_050;
-    let ranges: [f32; 361] = core::array::from_fn(|i| {
-        let (s, c) = math::sin_cos(g.bearing(i));
-        if c < 0.5 {
-            return 0.0;
-        }
-        pillars
-            .iter()
-            .filter_map(|&(y, r)| {
-                ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(WALL, y), r)
-            })
-            .fold(WALL / c, f32::min)
-    });
+    let ranges = three_pillars_scene(g);
     let f = emitted(&ranges);
     let circles: Vec<_, 16> = f
         .iter()
@@ -78,21 +88,9 @@ fn three_pillars_on_a_wall_are_three_circles() {
 /// three pillars.
 #[test]
 fn the_pillar_search_has_two_scans_lengths_of_points() {
-    const WALL: f32 = 2000.0;
-    let pillars = [(-1100.0f32, 150.0f32), (0.0, 200.0), (1100.0, 250.0)];
+    let pillars = PILLARS;
     let g = ScanGeometry::LMS200_180_050;
-    let ranges: [f32; 361] = core::array::from_fn(|i| {
-        let (s, c) = math::sin_cos(g.bearing(i));
-        if c < 0.5 {
-            return 0.0;
-        }
-        pillars
-            .iter()
-            .filter_map(|&(y, r)| {
-                ray_circle_intersection(Point::new(0.0, 0.0), c, s, Point::new(WALL, y), r)
-            })
-            .fold(WALL / c, f32::min)
-    });
+    let ranges = three_pillars_scene(g);
     let config = Config::default();
     let mut ex = Extractor::<361, 16>::new();
     let f = ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, rule| {

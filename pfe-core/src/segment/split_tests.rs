@@ -9,8 +9,14 @@ use crate::rule::Rule;
 /// Points every 10 mm along a wall 2 m ahead, over 5 130 mm centred on the bearing 0, with a
 /// pillar of `radius` mm standing out of it (its centre on the wall line).
 fn pillar_on_wall(radius: f32) -> [Point; 514] {
+    wall_with_pillar(-2565.0, radius)
+}
+
+/// `N` points every 10 mm along a wall 2 m ahead from `x0`, with a pillar of `radius` mm
+/// centred on the wall line at x = 0.
+fn wall_with_pillar<const N: usize>(x0: f32, radius: f32) -> [Point; N] {
     core::array::from_fn(|k| {
-        let x = -2565.0 + 10.0 * k as f32;
+        let x = x0 + 10.0 * k as f32;
         let bulge = if x.abs() < radius {
             math::sqrt(radius * radius - x * x)
         } else {
@@ -151,15 +157,7 @@ fn a_bump_s_wall_is_fitted_again_from_the_far_half_of_its_longer_side() {
 #[test]
 fn a_pillar_at_the_segment_s_start_that_the_peak_misses_is_found() {
     let (r, c) = (100.0f32, Point::new(0.0, 2000.0));
-    let pts: [Point; 20] = core::array::from_fn(|k| {
-        let x = -50.0 + 10.0 * k as f32;
-        let bulge = if x.abs() < r {
-            math::sqrt(r * r - x * x)
-        } else {
-            0.0
-        };
-        Point::new(x, 2000.0 - bulge)
-    });
+    let pts: [Point; 20] = wall_with_pillar(-50.0, r);
     let Ok(line) = fit_line(&pts) else {
         panic!("the segment's line")
     };
