@@ -15,13 +15,14 @@ pub(super) struct Hyp {
 }
 
 /// The best hypotheses so far, distinct from one another (non-maximum suppression).
+#[derive(Clone, Debug)]
 pub(super) struct Top {
     items: [Hyp; REFINE],
     pub(super) n: usize,
 }
 
 impl Top {
-    pub(super) fn new() -> Self {
+    pub(super) const fn new() -> Self {
         Self {
             items: [Hyp {
                 pose: Pose::IDENTITY,
@@ -122,7 +123,43 @@ fn mod_pi(x: f32) -> f32 {
 /// `search` (and with a prior), the prior's pose alone. Not inlined: its tables are not
 /// on the stack during the refinement.
 #[inline(never)]
-pub(super) fn hypothesise<'s>(
+pub(super) fn hypothesise(
+    w: &mut Work,
+    prev: &Set,
+    curr: &Set,
+    prior: Option<&Prior>,
+    cfg: &Config,
+    top: &mut Top,
+    search: bool,
+) -> u32 {
+    let mut votes = Votes::new();
+    let count = vote(w, prev, curr, prior, cfg, top, search, &mut votes);
+    // Score the best-supported clusters only, each at the mean of its votes.
+    for _ in 0..cfg.scored {
+        if !score_next(w, &mut votes, top) {
+            break;
+        }
+    }
+    count
+}
+
+/// Scores the best-supported cluster left in `votes` at its mean into `top` (one
+/// association); false when none is left.
+pub(super) fn score_next(w: &mut Work, votes: &mut Votes, top: &mut Top) -> bool {
+    let Some(v) = votes.take_best() else {
+        return false;
+    };
+    let score = w.score(&v, 1.0);
+    top.offer(Hyp { pose: v, score });
+    true
+}
+
+/// The first part of [`hypothesise`]: the prior's pose (or no motion) scored into `top`, and
+/// the hypotheses from pairs of features voted into `votes` (none without `search` when there
+/// is a prior); returns how many hypotheses were formed.
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+pub(super) fn vote<'s>(
     w: &mut Work,
     prev: &'s Set,
     curr: &'s Set,
@@ -130,9 +167,9 @@ pub(super) fn hypothesise<'s>(
     cfg: &Config,
     top: &mut Top,
     search: bool,
+    votes: &mut Votes,
 ) -> u32 {
     let mut count = 0u32;
-    let mut votes = Votes::new();
     let square = squared_bounds(cfg.max_translation);
     let within = |pose: &Pose| match prior {
         Some(p) => {
@@ -257,7 +294,7 @@ pub(super) fn hypothesise<'s>(
                     for (th, s, c) in [(theta, sth, cth), (wrap(theta + PI), -sth, -cth)] {
                         if let Some(t) = solve_two_lines(li, lk, lj, ll, scs, [s, c]) {
                             pair_hyps += 1;
-                            consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
+                            consider(Pose::new(t[0], t[1], th), votes, &mut count);
                         }
                     }
                 }
@@ -313,7 +350,7 @@ pub(super) fn hypothesise<'s>(
                     pair_hyps += 1;
                     consider(
                         Pose::new(mid_p[0] - rc[0], mid_p[1] - rc[1], th),
-                        &mut votes,
+                        votes,
                         &mut count,
                     );
                 }
@@ -351,7 +388,7 @@ pub(super) fn hypothesise<'s>(
                             continue;
                         }
                         pair_hyps += 1;
-                        consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
+                        consider(Pose::new(t[0], t[1], th), votes, &mut count);
                     }
                 }
             }
@@ -377,16 +414,10 @@ pub(super) fn hypothesise<'s>(
                     }
                     let d = li.r - sign * lk.r;
                     let t = [d * ca - along * sa, d * sa + along * ca];
-                    consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
+                    consider(Pose::new(t[0], t[1], th), votes, &mut count);
                 }
             }
         }
-    }
-    // Score the best-supported clusters only, each at the mean of its votes.
-    for _ in 0..cfg.scored {
-        let Some(v) = votes.take_best() else { break };
-        let score = w.score(&v, 1.0);
-        top.offer(Hyp { pose: v, score });
     }
     count
 }
@@ -400,7 +431,8 @@ const VOTES: usize = 96;
 /// The hypotheses formed, clustered: how many pairs of features agree on each pose. Each
 /// cluster's mean (x, y, θ) and count in arrays of their own, so that the search for a
 /// vote's cluster runs down the x values alone.
-struct Votes {
+#[derive(Clone, Debug)]
+pub(super) struct Votes {
     x: [f32; VOTES],
     y: [f32; VOTES],
     theta: [f32; VOTES],
@@ -412,7 +444,7 @@ struct Votes {
 }
 
 impl Votes {
-    fn new() -> Self {
+    pub(super) const fn new() -> Self {
         Self {
             x: [0.0; VOTES],
             y: [0.0; VOTES],

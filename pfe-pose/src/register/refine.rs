@@ -525,13 +525,45 @@ pub(super) fn converge(
     prior: Option<&Prior>,
     done: &[Hyp],
 ) -> Option<Pose> {
-    let cfg = w.cfg;
-    let mut pose = start;
-    let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
-    let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
-    let mut stage = 0usize;
-    for _ in 0..ITERATIONS {
-        let slack = slacks.get(stage).copied().unwrap_or(0.0);
+    let mut gn = Converging::new(start);
+    loop {
+        if let Some(end) = gn.step(w, prior, done) {
+            return end;
+        }
+    }
+}
+
+/// A [`converge`] under way: the pose reached and the steps taken.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Converging {
+    pose: Pose,
+    stage: usize,
+}
+
+impl Converging {
+    pub(super) const fn new(start: Pose) -> Self {
+        Self {
+            pose: start,
+            stage: 0,
+        }
+    }
+
+    /// One Gauss–Newton step (one association): `None` while it goes on, else what
+    /// [`converge`] returns.
+    pub(super) fn step(
+        &mut self,
+        w: &mut Work,
+        prior: Option<&Prior>,
+        done: &[Hyp],
+    ) -> Option<Option<Pose>> {
+        if self.stage >= ITERATIONS {
+            return Some(Some(self.pose));
+        }
+        let cfg = w.cfg;
+        let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
+        let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
+        let pose = self.pose;
+        let slack = slacks.get(self.stage).copied().unwrap_or(0.0);
         let mut n = w.associate(&pose, slack, None);
         if let Some(p) = prior {
             add_prior(&mut n, &pose, p);
@@ -556,24 +588,25 @@ pub(super) fn converge(
         }
         let step_theta = step[2] / ROTATION_SCALE;
         if !(step[0].is_finite() && step[1].is_finite() && step_theta.is_finite()) {
-            break;
+            return Some(Some(pose));
         }
-        pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
+        let pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
+        self.pose = pose;
         let near = |d: &Hyp| {
             (d.pose.x - pose.x).abs() < CONVERGED_MM
                 && (d.pose.y - pose.y).abs() < CONVERGED_MM
                 && wrap(d.pose.theta - pose.theta).abs() < CONVERGED_RAD
         };
         if done.iter().any(near) {
-            return None;
+            return Some(None);
         }
         let small = crate::geom::hypot(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
         if small && slack == 0.0 {
-            break;
+            return Some(Some(pose));
         }
-        stage += 1;
+        self.stage += 1;
+        (self.stage >= ITERATIONS).then_some(Some(pose))
     }
-    Some(pose)
 }
 
 /// The final association at `pose` (its matches into `out`) and, when `full`, the
