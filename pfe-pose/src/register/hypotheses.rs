@@ -37,6 +37,11 @@ impl Top {
         &self.items
     }
 
+    /// The hypotheses (the first [`Top::n`] slots), to be ranked in place.
+    pub(super) fn hypotheses_mut(&mut self) -> &mut [Hyp] {
+        self.items.get_mut(..self.n).unwrap_or(&mut [])
+    }
+
     fn offer(&mut self, h: Hyp) {
         if !(h.score > 0.0) {
             return;

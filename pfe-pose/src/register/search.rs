@@ -4,11 +4,11 @@
 //! completion it is [`super::register_sets`], bit for bit: both run the same parts in the same
 //! order (the tables of [`Work`] are rebuilt each call, from the same sets).
 
-use super::hypotheses::{score_next, vote, Hyp, Top, Votes};
+use super::hypotheses::{score_next, vote, Top, Votes};
 use super::refine::{Converging, Scratch, Work};
 use super::{
     check_prior, conclude, fallback, is_corridor, Assoc, Config, Failure, Prior, Registration,
-    Verdict, REFINE, REFINE_RATIO,
+    Verdict, REFINE_RATIO,
 };
 use crate::geom::{Cov3, Pose};
 use crate::obs::Observation;
@@ -49,9 +49,8 @@ pub(crate) struct Search {
     search: bool,
     hypotheses: u32,
     votes: Votes,
+    /// The scored hypotheses, ranked best first in place before the refinement.
     top: Top,
-    /// The hypotheses best first once scored (the first `top.n`).
-    ranked: [Hyp; REFINE],
     first: f32,
     verdict: Verdict,
 }
@@ -73,7 +72,6 @@ impl Search {
             hypotheses: 0,
             votes: Votes::new(),
             top: Top::new(),
-            ranked: *Top::new().all(),
             first: 0.0,
             verdict: Verdict::new(
                 cfg.ambiguity >= 1.2,
@@ -162,8 +160,7 @@ impl Search {
                 self.hypotheses,
             ));
         }
-        self.ranked = *self.top.all();
-        let ranked = self.ranked.get_mut(..self.top.n).unwrap_or(&mut []);
+        let ranked = self.top.hypotheses_mut();
         ranked.sort_unstable_by(|a, b| b.score.total_cmp(&a.score));
         self.first = ranked.first().map_or(0.0, |h| h.score);
         Phase::Refine { i: 0, gn: None }
@@ -174,7 +171,7 @@ impl Search {
     fn refine(&mut self, w: &mut Work, i: usize, gn: Option<Converging>, left: &mut u32) -> Phase {
         let prior = self.prior;
         let prior = prior.as_ref();
-        let ranked = self.ranked.get_mut(..self.top.n).unwrap_or(&mut []);
+        let ranked = self.top.hypotheses_mut();
         let Some((done, rest)) = ranked.split_at_mut_checked(i) else {
             *left += 1;
             return Phase::Conclude;
@@ -298,5 +295,16 @@ impl Resumable {
                 Progress::Done(r)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod size {
+    /// What a pending search keeps between scans (the odometry's, on the board, in static
+    /// RAM): the clusters of votes are most of it.
+    #[test]
+    fn search_state_stays_small() {
+        let search = core::mem::size_of::<super::Search>();
+        assert!(search <= 2 * 1024, "{search}");
     }
 }
