@@ -4,7 +4,7 @@
 //! completion it is [`super::register_sets`], bit for bit: both run the same parts in the same
 //! order (the tables of [`Work`] are rebuilt each call, from the same sets).
 
-use super::hypotheses::{score_next, vote, Top, Votes};
+use super::hypotheses::{score_next, Top, Votes, Voting};
 use super::refine::{Converging, Scratch, Work};
 use super::{
     check_prior, conclude, fallback, is_corridor, Assoc, Config, Failure, Prior, Registration,
@@ -26,8 +26,8 @@ pub enum Progress {
 /// Where a [`Search`] is.
 #[derive(Clone, Copy, Debug)]
 enum Phase {
-    /// Nothing done yet: the prior's pose scored and the hypotheses voted next.
-    Vote,
+    /// Scoring the prior's pose and voting the hypotheses.
+    Vote(Voting),
     /// Scoring the clusters of votes, `scored` of them done.
     Score { scored: u32 },
     /// Refining the ranked hypotheses: the `i`-th next, or its Gauss–Newton under way.
@@ -66,7 +66,7 @@ impl Search {
         search: bool,
     ) -> Self {
         let mut s = Self {
-            phase: Phase::Vote,
+            phase: Phase::Vote(Voting::new()),
             prior: None,
             search,
             hypotheses: 0,
@@ -91,7 +91,7 @@ impl Search {
     }
 
     /// Advances the search by at most `budget` units of work (a unit: one association of the
-    /// scan's features; forming and voting the hypotheses with the prior's pose's score; the
+    /// scan's features; the hypotheses of one pair of the previous scan's features; the
     /// judgement of a converged hypothesis, one or two associations and the visibility check;
     /// a budget of 0 is taken as 1) and returns
     /// [`Progress::Done`] with the registration once it is complete (then again on every
@@ -115,8 +115,9 @@ impl Search {
         while left > 0 {
             left -= 1;
             self.phase = match self.phase {
-                Phase::Vote => {
-                    self.hypotheses = vote(
+                Phase::Vote(mut v) => {
+                    left += 1; // taken by the voting itself
+                    let done = v.step(
                         &mut w,
                         prev,
                         curr,
@@ -125,8 +126,14 @@ impl Search {
                         &mut self.top,
                         self.search,
                         &mut self.votes,
+                        &mut left,
                     );
-                    Phase::Score { scored: 0 }
+                    if done {
+                        self.hypotheses = v.count;
+                        Phase::Score { scored: 0 }
+                    } else {
+                        Phase::Vote(v)
+                    }
                 }
                 Phase::Score { scored } => {
                     if scored < cfg.scored && score_next(&mut w, &mut self.votes, &mut self.top) {
