@@ -38,6 +38,7 @@ impl Top {
     }
 
     /// The hypotheses (the first [`Top::n`] slots), to be ranked in place.
+    #[cfg(not(target_os = "none"))]
     pub(super) fn hypotheses_mut(&mut self) -> &mut [Hyp] {
         self.items.get_mut(..self.n).unwrap_or(&mut [])
     }
@@ -150,6 +151,7 @@ pub(super) fn hypothesise(
 
 /// Scores the best-supported cluster left in `votes` at its mean into `top` (one
 /// association); false when none is left.
+#[inline(always)]
 pub(super) fn score_next(w: &mut Work, votes: &mut Votes, top: &mut Top) -> bool {
     let Some(v) = votes.take_best() else {
         return false;
@@ -161,8 +163,9 @@ pub(super) fn score_next(w: &mut Work, votes: &mut Votes, top: &mut Top) -> bool
 
 /// The first part of [`hypothesise`]: the prior's pose (or no motion) scored into `top`, and
 /// the hypotheses from pairs of features voted into `votes` (none without `search` when there
-/// is a prior); returns how many hypotheses were formed.
+/// is a prior); returns how many hypotheses were formed. Inlined with its [`Voting::step`]: [`hypothesise`]'s frame is all the stack they take.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(super) fn vote(
     w: &mut Work,
     prev: &Set,
@@ -234,6 +237,7 @@ impl Voting {
     /// hypothesis is formed. The scans' best features and the current scan's pairs are found
     /// again at each call (from the same sets: the same).
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub(super) fn step<'s>(
         &mut self,
         w: &mut Work,

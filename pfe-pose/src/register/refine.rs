@@ -519,6 +519,8 @@ const CONVERGED_RAD: f32 = 0.01;
 /// The Gauss–Newton of [`refine`] from `start`: the pose it converges to, or `None` as soon
 /// as a step lands within [`CONVERGED_MM`] and [`CONVERGED_RAD`] of one of `done` (the
 /// poses other hypotheses were refined to: the same solution again).
+/// Not inlined (twice) into the registration's frame.
+#[inline(never)]
 pub(super) fn converge(
     w: &mut Work,
     start: Pose,
@@ -549,7 +551,8 @@ impl Converging {
     }
 
     /// One Gauss–Newton step (one association): `None` while it goes on, else what
-    /// [`converge`] returns.
+    /// [`converge`] returns. Inlined: [`converge`]'s frame is all the stack it takes.
+    #[inline(always)]
     pub(super) fn step(
         &mut self,
         w: &mut Work,

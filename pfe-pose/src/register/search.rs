@@ -2,17 +2,170 @@
 //! them (the clusters of votes, the ranked hypotheses, the Gauss–Newton under way, the best so
 //! far) and [`Search::step`] advances it by at most a budget of associations. Run to
 //! completion it is [`super::register_sets`], bit for bit: both run the same parts in the same
-//! order (the tables of [`Work`] are rebuilt each call, from the same sets).
+//! order (the tables of [`Work`] are rebuilt each call, from the same sets); the judgement of
+//! a refined hypothesis and the end are [`super::register_sets_verified`]'s, held to it by
+//! `tests/resumable.rs`.
 
 use super::hypotheses::{score_next, Top, Votes, Voting};
-use super::refine::{Converging, Scratch, Work};
+use super::refine::{finish, Converging, Refined, Scratch, Work};
+use super::visibility::visibility_penalty;
 use super::{
-    check_prior, conclude, fallback, is_corridor, Assoc, Config, Failure, Prior, Registration,
-    Verdict, REFINE_RATIO,
+    better, check_prior, close, is_corridor, Assoc, Config, Failure, Prior, Registration, Status,
+    REFINE_RATIO, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
 };
 use crate::geom::{Cov3, Pose};
 use crate::obs::Observation;
 use crate::set::Set;
+
+/// No registration: the prior's pose and covariance (no motion and
+/// [`UNOBSERVABLE_VARIANCE`] without one).
+fn fallback(failure: Failure, prior: Option<&Prior>, hypotheses: u32) -> Registration {
+    let (rel, cov) = match prior {
+        Some(p) => (p.pose, p.cov),
+        None => (
+            Pose::IDENTITY,
+            [
+                [UNOBSERVABLE_VARIANCE, 0.0, 0.0],
+                [0.0, UNOBSERVABLE_VARIANCE, 0.0],
+                [
+                    0.0,
+                    0.0,
+                    UNOBSERVABLE_VARIANCE / (ROTATION_SCALE * ROTATION_SCALE),
+                ],
+            ],
+        ),
+    };
+    Registration {
+        rel,
+        cov,
+        status: Status::None(failure),
+        matches: (0, 0),
+        hypotheses,
+        dropped: 0,
+        invalid: 0,
+        chi2: 0.0,
+    }
+}
+
+/// The refined hypotheses judged so far: the best and the best distinct runner-up's score.
+#[derive(Clone, Copy, Debug)]
+struct Verdict {
+    best: Option<Refined>,
+    second_score: f32,
+    /// The runner-up cannot make the result ambiguous (see [`super::register_sets_verified`]).
+    lazy: bool,
+    /// Both scans a corridor ([`is_corridor`]).
+    corridor: bool,
+}
+
+impl Verdict {
+    const fn new(lazy: bool, corridor: bool) -> Self {
+        Self {
+            best: None,
+            second_score: 0.0,
+            lazy,
+            corridor,
+        }
+    }
+
+    /// Judges the hypothesis that converged to `pose` (one or two associations and the
+    /// visibility check): its refinement, when it has enough matches to compete. Not
+    /// inlined, as [`conclude`].
+    #[inline(never)]
+    fn judge(
+        &mut self,
+        w: &mut Work,
+        prev: &Set,
+        curr: &Set,
+        pose: Pose,
+        prior: Option<&Prior>,
+        cfg: &Config,
+    ) -> Option<Refined> {
+        let lazy = self.lazy;
+        let mut r = finish(w, pose, prior, !lazy, None);
+        if usize::from(r.matches.0) + usize::from(r.matches.1) < cfg.min_matches {
+            // Fewer matches than asked for: in a corridor, enough for what its parallel walls
+            // tell (the heading and the offset across it), registered as degenerate.
+            if r.matches.0 < 2 || !self.corridor {
+                return None;
+            }
+            let full = finish(w, r.pose, prior, true, None);
+            if !full.scene_degenerate {
+                return None;
+            }
+            r = full;
+        }
+        // The visibility check lowers the score: a hypothesis that cannot beat the best even
+        // without it needs none.
+        let hopeless = lazy && self.best.as_ref().is_some_and(|b| b.score > r.score * 1.01);
+        if cfg.visibility_weight > 0.0 && !hopeless {
+            r.score -= cfg.visibility_weight * visibility_penalty(prev, curr, &r.pose);
+        }
+        match &self.best {
+            Some(b) if !better(&r, b) => {
+                if lazy || !close(&r.pose, &b.pose, &b.cov_scene_pinv) {
+                    self.second_score = self.second_score.max(r.score);
+                }
+            }
+            _ => {
+                if let Some(b) = &self.best {
+                    if lazy || !close(&r.pose, &b.pose, &r.cov_scene_pinv) {
+                        self.second_score = self.second_score.max(b.score);
+                    }
+                }
+                self.best = Some(r);
+            }
+        }
+        Some(r)
+    }
+}
+
+/// The end of a registration: the winner `best` checked (matches, score, ambiguity against
+/// `second_score` unless `resolved`), then its covariance, status and associations (into
+/// `assoc`, for the odometry's map); one association.
+/// Not inlined: its frame is taken only while it runs.
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+fn conclude(
+    w: &mut Work,
+    best: Refined,
+    second_score: f32,
+    resolved: bool,
+    corridor: bool,
+    prior: Option<&Prior>,
+    cfg: &Config,
+    assoc: &mut Assoc,
+    hypotheses: u32,
+) -> Result<Registration, Failure> {
+    let matched = usize::from(best.matches.0) + usize::from(best.matches.1);
+    if matched < cfg.min_matches && !(corridor && best.scene_degenerate && best.matches.0 >= 2) {
+        return Err(Failure::NoConsensus);
+    }
+    if !(best.score > cfg.min_score) {
+        return Err(Failure::NoConsensus);
+    }
+    if !resolved && second_score >= cfg.ambiguity * best.score {
+        return Err(Failure::Ambiguous);
+    }
+    let best = Refined {
+        score: best.score,
+        ..finish(w, best.pose, prior, true, Some(assoc))
+    };
+    let status = match best.unobservable {
+        Some(direction) => Status::Degenerate { direction },
+        None => Status::Ok,
+    };
+    Ok(Registration {
+        rel: best.pose,
+        cov: best.cov,
+        status,
+        matches: best.matches,
+        hypotheses,
+        dropped: 0,
+        invalid: 0,
+        chi2: best.chi2,
+    })
+}
 
 /// What a [`Search::step`] came to.
 #[derive(Clone, Copy, Debug, PartialEq)]
