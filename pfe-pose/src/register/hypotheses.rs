@@ -38,7 +38,6 @@ impl Top {
     }
 
     /// The hypotheses (the first [`Top::n`] slots), to be ranked in place.
-    #[cfg(not(target_os = "none"))]
     pub(super) fn hypotheses_mut(&mut self) -> &mut [Hyp] {
         self.items.get_mut(..self.n).unwrap_or(&mut [])
     }
