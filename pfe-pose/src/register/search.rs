@@ -167,12 +167,12 @@ fn conclude(
     })
 }
 
-/// What a [`Search::step`] came to.
+/// What a step of a resumable search ([`Resumable::step`]) came to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Progress {
-    /// Not done yet: call [`Search::step`] again.
+    /// Not done yet: step again.
     Pending,
-    /// The registration, the one [`super::register_sets`] gives.
+    /// The registration, the one [`crate::register_with`] gives.
     Done(Registration),
 }
 
@@ -386,7 +386,7 @@ impl Search {
 }
 
 /// [`crate::register_with`] spread over several calls: the sets of both scans, the
-/// configuration and a [`Search`] (about 13 KiB; the odometry keeps only the search's state).
+/// configuration and the search's state (about 13 KiB; the odometry keeps only the search's state).
 ///
 /// ```
 /// use pfe_pose::register::{Progress, Resumable};
