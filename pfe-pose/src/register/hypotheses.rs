@@ -15,13 +15,14 @@ pub(super) struct Hyp {
 }
 
 /// The best hypotheses so far, distinct from one another (non-maximum suppression).
+#[derive(Clone, Debug)]
 pub(super) struct Top {
     items: [Hyp; REFINE],
     pub(super) n: usize,
 }
 
 impl Top {
-    pub(super) fn new() -> Self {
+    pub(super) const fn new() -> Self {
         Self {
             items: [Hyp {
                 pose: Pose::IDENTITY,
@@ -34,6 +35,11 @@ impl Top {
     /// Every slot (only the first [`Top::n`] are hypotheses).
     pub(super) fn all(&self) -> &[Hyp; REFINE] {
         &self.items
+    }
+
+    /// The hypotheses (the first [`Top::n`] slots), to be ranked in place.
+    pub(super) fn hypotheses_mut(&mut self) -> &mut [Hyp] {
+        self.items.get_mut(..self.n).unwrap_or(&mut [])
     }
 
     fn offer(&mut self, h: Hyp) {
@@ -122,273 +128,426 @@ fn mod_pi(x: f32) -> f32 {
 /// `search` (and with a prior), the prior's pose alone. Not inlined: its tables are not
 /// on the stack during the refinement.
 #[inline(never)]
-pub(super) fn hypothesise<'s>(
+pub(super) fn hypothesise(
     w: &mut Work,
-    prev: &'s Set,
-    curr: &'s Set,
+    prev: &Set,
+    curr: &Set,
     prior: Option<&Prior>,
     cfg: &Config,
     top: &mut Top,
     search: bool,
 ) -> u32 {
-    let mut count = 0u32;
     let mut votes = Votes::new();
-    let square = squared_bounds(cfg.max_translation);
-    let within = |pose: &Pose| match prior {
-        Some(p) => {
-            let d = [
-                pose.x - p.pose.x,
-                pose.y - p.pose.y,
-                wrap(pose.theta - p.pose.theta),
-            ];
-            // The bounds hold around the prior too: a prior wider than them (the odometry's
-            // search after a scan nothing registered takes them as its σ, a 99.9 % gate of
-            // 12 m) does not reach beyond what one scan can move.
-            quad3(&p.gate_info, &d) < cfg.prior_gate
-                && within_translation(d[0], d[1], cfg.max_translation, square)
-                && d[2].abs() <= cfg.max_rotation
-        }
-        None => {
-            within_translation(pose.x, pose.y, cfg.max_translation, square)
-                && pose.theta.abs() <= cfg.max_rotation
-        }
-    };
-    // A hypothesis formed: a vote for its pose (the right pose comes from many pairs; each
-    // cluster of votes is scored once, below).
-    let consider = |pose: Pose, votes: &mut Votes, count: &mut u32| {
-        if !pose.is_finite() || *count >= cfg.max_hypotheses || !within(&pose) {
-            return;
-        }
-        *count = count.saturating_add(1);
-        votes.add(pose);
-    };
-    // The prior's pose (or no motion) is always scored.
-    let start = prior.map_or(Pose::IDENTITY, |p| p.pose);
-    if start.is_finite() && within(&start) {
-        count = count.saturating_add(1);
-        let score = w.score(&start, 1.0);
-        top.offer(Hyp { pose: start, score });
-    }
-    if !search && prior.is_some() {
-        return count;
-    }
-    let (pl, cl) = (prev.lines(), curr.lines());
-    let (hp, np) = top_k::<12>(pl.iter().map(|l| l.rank));
-    let (hc, nc) = top_k::<12>(cl.iter().map(|l| l.rank));
-    let hp = hp.get(..np).unwrap_or(&[]);
-    let hc = hc.get(..nc).unwrap_or(&[]);
-    let line = |s: &'s [Line], i: u8| s.get(usize::from(i));
-    let mut pair_hyps = 0u32;
-    // Pairs of non-parallel lines: the current scan's ordered pairs sorted by the angle between
-    // them, each pair of the previous scan looked up in it within its gate.
-    let mut cpairs = [(0.0f32, 0u8, 0u8); 12 * 11];
-    let mut ncp = 0usize;
-    let mut max_var_c = 0.0f32;
-    for &k in hc {
-        let Some(lk) = line(cl, k) else { continue };
-        max_var_c = max_var_c.max(lk.cov.a);
-        for &l in hc {
-            if l == k {
-                continue;
-            }
-            let Some(ll) = line(cl, l) else { continue };
-            let dc = undirected(lk.a, ll.a);
-            // Insertion into the sorted prefix.
-            let mut pos = ncp;
-            while pos > 0 && cpairs.get(pos - 1).is_some_and(|p| p.0 > dc) {
-                if let Some(&prev) = cpairs.get(pos - 1) {
-                    if let Some(slot) = cpairs.get_mut(pos) {
-                        *slot = prev;
-                    }
-                }
-                pos -= 1;
-            }
-            if let Some(slot) = cpairs.get_mut(pos) {
-                *slot = (dc, k, l);
-                ncp += 1;
-            }
-        }
-    }
-    let cpairs = cpairs.get(..ncp).unwrap_or(&[]);
-    for (ii, &i) in hp.iter().enumerate() {
-        let Some(li) = line(pl, i) else { continue };
-        for &j in hp.get(ii + 1..).unwrap_or(&[]) {
-            let Some(lj) = line(pl, j) else { continue };
-            let dp = undirected(li.a, lj.a);
-            if dp.min(PI - dp) < cfg.min_pair_angle {
-                continue;
-            }
-            // Every gate below is at most this wide; the angle between a pair is modulo π.
-            let widest =
-                3.0 * crate::geom::sqrt(li.cov.a + lj.cov.a + 2.0 * max_var_c) + cfg.slack[0];
-            let widest = widest * 1.001 + 1e-5;
-            let mut windows = [(0.0f32, -1.0f32); 3];
-            windows[0] = (dp - widest, dp + widest);
-            if !(widest < 0.5 * PI) {
-                windows[0] = (f32::NEG_INFINITY, f32::INFINITY);
-            } else if dp - widest < 0.0 {
-                windows[1] = (dp - widest + PI, PI);
-            }
-            if dp + widest > PI {
-                windows[2] = (0.0, dp + widest - PI);
-            }
-            for (lo, hi) in windows {
-                let from = cpairs.partition_point(|p| p.0 < lo);
-                let to = cpairs.partition_point(|p| p.0 <= hi);
-                for &(dc, k, l) in cpairs.get(from..to).unwrap_or(&[]) {
-                    let (Some(lk), Some(ll)) = (line(cl, k), line(cl, l)) else {
-                        continue;
-                    };
-                    let var = li.cov.a + lj.cov.a + lk.cov.a + ll.cov.a;
-                    let gate = 3.0 * crate::geom::sqrt(var) + cfg.slack[0];
-                    if mod_pi(dp - dc).abs() > gate {
-                        continue;
-                    }
-                    let t0 = li.a - lk.a;
-                    let t1 = t0 + mod_pi(lj.a - ll.a - t0);
-                    let theta = wrap(0.5 * (t0 + t1));
-                    let (sth, cth) = sin_cos(theta);
-                    let scs = [
-                        w.prev_sc(usize::from(i)),
-                        w.curr_sc(usize::from(k)),
-                        w.prev_sc(usize::from(j)),
-                        w.curr_sc(usize::from(l)),
-                    ];
-                    for (th, s, c) in [(theta, sth, cth), (wrap(theta + PI), -sth, -cth)] {
-                        if let Some(t) = solve_two_lines(li, lk, lj, ll, scs, [s, c]) {
-                            pair_hyps += 1;
-                            consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
-                        }
-                    }
-                }
-            }
-        }
-    }
-    // Pairs of points at the same distance.
-    let (pp, cp) = (prev.pts(), curr.pts());
-    let (qp, nqp) = top_k::<8>(pp.iter().map(|p| p.rank));
-    let (qc, nqc) = top_k::<8>(cp.iter().map(|p| p.rank));
-    let qp = qp.get(..nqp).unwrap_or(&[]);
-    let qc = qc.get(..nqc).unwrap_or(&[]);
-    let pt = |s: &'s [Pt], i: u8| s.get(usize::from(i));
-    // The current scan's ordered pairs of points: their distance and its variance.
-    let mut cdist = [[(0.0f32, 0.0f32); 8]; 8];
-    for (row, &c) in cdist.iter_mut().zip(qc) {
-        let Some(pc) = pt(cp, c) else { continue };
-        for (v, &d) in row.iter_mut().zip(qc) {
-            let Some(pd) = pt(cp, d) else { continue };
-            let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
-            *v = (
-                crate::geom::hypot(vc[0], vc[1]),
-                pc.cov.a + pc.cov.c + pd.cov.a + pd.cov.c,
-            );
-        }
-    }
-    for (ai, &a) in qp.iter().enumerate() {
-        let Some(pa) = pt(pp, a) else { continue };
-        for &b in qp.get(ai + 1..).unwrap_or(&[]) {
-            let Some(pb) = pt(pp, b) else { continue };
-            let vp = [pb.p[0] - pa.p[0], pb.p[1] - pa.p[1]];
-            let dp = crate::geom::hypot(vp[0], vp[1]);
-            if dp < 300.0 {
-                continue;
-            }
-            let var_p = pa.cov.a + pa.cov.c + pb.cov.a + pb.cov.c;
-            for (&c, row) in qc.iter().zip(&cdist) {
-                let Some(pc) = pt(cp, c) else { continue };
-                for (&d, &(dc, var_c)) in qc.iter().zip(row) {
-                    if d == c {
-                        continue;
-                    }
-                    let Some(pd) = pt(cp, d) else { continue };
-                    let var = var_p + var_c;
-                    if (dp - dc).abs() > 3.0 * crate::geom::sqrt(0.5 * var) + cfg.slack[1] {
-                        continue;
-                    }
-                    let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
-                    let th = wrap(libm::atan2f(vp[1], vp[0]) - libm::atan2f(vc[1], vc[0]));
-                    let mid_p = [0.5 * (pa.p[0] + pb.p[0]), 0.5 * (pa.p[1] + pb.p[1])];
-                    let mid_c = [0.5 * (pc.p[0] + pd.p[0]), 0.5 * (pc.p[1] + pd.p[1])];
-                    let rc = Pose::new(0.0, 0.0, th).transform_point(mid_c);
-                    pair_hyps += 1;
-                    consider(
-                        Pose::new(mid_p[0] - rc[0], mid_p[1] - rc[1], th),
-                        &mut votes,
-                        &mut count,
-                    );
-                }
-            }
-        }
-    }
-    // A line and a point.
-    let (hp6, hc6) = (hp.get(..6).unwrap_or(hp), hc.get(..6).unwrap_or(hc));
-    let (qp4, qc4) = (qp.get(..5).unwrap_or(qp), qc.get(..5).unwrap_or(qc));
-    for &i in hp6 {
-        let Some(li) = line(pl, i) else { continue };
-        for &k in hc6 {
-            let Some(lk) = line(cl, k) else { continue };
-            for th in [li.a - lk.a, li.a - lk.a + PI] {
-                let th = wrap(th);
-                let (s, c) = sin_cos(th);
-                let [sa, ca] = w.prev_sc(usize::from(i));
-                let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                for &a in qp4 {
-                    let Some(pa) = pt(pp, a) else { continue };
-                    for &b in qc4 {
-                        let Some(pb) = pt(cp, b) else { continue };
-                        let t = [
-                            pa.p[0] - (c * pb.p[0] - s * pb.p[1]),
-                            pa.p[1] - (s * pb.p[0] + c * pb.p[1]),
-                        ];
-                        // The line's ρ must agree.
-                        let e = li.r - sign * lk.r - (ca * t[0] + sa * t[1]);
-                        let sd = crate::geom::sqrt(li.cov.c + lk.cov.c + pa.cov.a + pb.cov.a);
-                        if e.abs() > 3.0 * sd + cfg.slack[1] + cfg.slack[2] * lk.reach {
-                            continue;
-                        }
-                        pair_hyps += 1;
-                        consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
-                    }
-                }
-            }
-        }
-    }
-    // A corridor: single lines, nothing along them.
-    if pair_hyps == 0 {
-        for &i in hp {
-            let Some(li) = line(pl, i) else { continue };
-            for &k in hc {
-                let Some(lk) = line(cl, k) else { continue };
-                for th in [li.a - lk.a, li.a - lk.a + PI] {
-                    let th = wrap(th);
-                    let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
-                        1.0
-                    } else {
-                        -1.0
-                    };
-                    let (sa, ca) = sin_cos(li.a);
-                    let mut along = 0.0;
-                    if let Some(p) = prior {
-                        along = -sa * p.pose.x + ca * p.pose.y;
-                    }
-                    let d = li.r - sign * lk.r;
-                    let t = [d * ca - along * sa, d * sa + along * ca];
-                    consider(Pose::new(t[0], t[1], th), &mut votes, &mut count);
-                }
-            }
-        }
-    }
+    let count = vote(w, prev, curr, prior, cfg, top, search, &mut votes);
     // Score the best-supported clusters only, each at the mean of its votes.
     for _ in 0..cfg.scored {
-        let Some(v) = votes.take_best() else { break };
-        let score = w.score(&v, 1.0);
-        top.offer(Hyp { pose: v, score });
+        if !score_next(w, &mut votes, top) {
+            break;
+        }
     }
     count
+}
+
+/// Scores the best-supported cluster left in `votes` at its mean into `top` (one
+/// association); false when none is left.
+#[inline(always)]
+pub(super) fn score_next(w: &mut Work, votes: &mut Votes, top: &mut Top) -> bool {
+    let Some(v) = votes.take_best() else {
+        return false;
+    };
+    let score = w.score(&v, 1.0);
+    top.offer(Hyp { pose: v, score });
+    true
+}
+
+/// The first part of [`hypothesise`]: the prior's pose (or no motion) scored into `top`, and
+/// the hypotheses from pairs of features voted into `votes` (none without `search` when there
+/// is a prior); returns how many hypotheses were formed. Inlined with its [`Voting::step`]: [`hypothesise`]'s frame is all the stack they take.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn vote(
+    w: &mut Work,
+    prev: &Set,
+    curr: &Set,
+    prior: Option<&Prior>,
+    cfg: &Config,
+    top: &mut Top,
+    search: bool,
+    votes: &mut Votes,
+) -> u32 {
+    let mut v = Voting::new();
+    let mut unlimited = u32::MAX;
+    v.step(
+        w,
+        prev,
+        curr,
+        prior,
+        cfg,
+        top,
+        search,
+        votes,
+        &mut unlimited,
+    );
+    v.count
+}
+
+/// The kinds of hypotheses, in the order they are formed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Part {
+    /// The prior's pose (or no motion), scored.
+    Start,
+    /// Pairs of non-parallel lines: a pair `(i, j)` of the previous scan's lines a step.
+    LinePairs,
+    /// Pairs of points at the same distance: a pair `(i, j)` of the previous scan's a step.
+    PointPairs,
+    /// A line and a point: a line `i` of the previous scan and `j` of the current a step.
+    LinePoint,
+    /// A corridor (no pair formed a hypothesis): a line `i` of the previous scan a step.
+    Corridor,
+    /// Every hypothesis formed.
+    Done,
+}
+
+/// A [`vote`] under way: which part, the indices of the next step in it, and the counts.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Voting {
+    part: Part,
+    i: usize,
+    j: usize,
+    /// Hypotheses formed within the bounds.
+    pub(super) count: u32,
+    /// Hypotheses formed from pairs of features.
+    pair_hyps: u32,
+}
+
+impl Voting {
+    pub(super) const fn new() -> Self {
+        Self {
+            part: Part::Start,
+            i: 0,
+            j: 0,
+            count: 0,
+            pair_hyps: 0,
+        }
+    }
+
+    /// At most `left` units of [`vote`] (a unit: the prior's pose's score, or the hypotheses
+    /// of one pair of the previous scan's features), each taken off `left`; true when every
+    /// hypothesis is formed. The scans' best features and the current scan's pairs are found
+    /// again at each call (from the same sets: the same).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn step<'s>(
+        &mut self,
+        w: &mut Work,
+        prev: &'s Set,
+        curr: &'s Set,
+        prior: Option<&Prior>,
+        cfg: &Config,
+        top: &mut Top,
+        search: bool,
+        votes: &mut Votes,
+        left: &mut u32,
+    ) -> bool {
+        let square = squared_bounds(cfg.max_translation);
+        let within = |pose: &Pose| match prior {
+            Some(p) => {
+                let d = [
+                    pose.x - p.pose.x,
+                    pose.y - p.pose.y,
+                    wrap(pose.theta - p.pose.theta),
+                ];
+                // The bounds hold around the prior too: a prior wider than them (the
+                // odometry's search after a scan nothing registered takes them as its σ, a
+                // 99.9 % gate of 12 m) does not reach beyond what one scan can move.
+                quad3(&p.gate_info, &d) < cfg.prior_gate
+                    && within_translation(d[0], d[1], cfg.max_translation, square)
+                    && d[2].abs() <= cfg.max_rotation
+            }
+            None => {
+                within_translation(pose.x, pose.y, cfg.max_translation, square)
+                    && pose.theta.abs() <= cfg.max_rotation
+            }
+        };
+        // A hypothesis formed: a vote for its pose (the right pose comes from many pairs;
+        // each cluster of votes is scored once, after).
+        let consider = |pose: Pose, votes: &mut Votes, count: &mut u32| {
+            if !pose.is_finite() || *count >= cfg.max_hypotheses || !within(&pose) {
+                return;
+            }
+            *count = count.saturating_add(1);
+            votes.add(pose);
+        };
+        if self.part == Part::Start && *left > 0 {
+            // The prior's pose (or no motion) is always scored.
+            let start = prior.map_or(Pose::IDENTITY, |p| p.pose);
+            if start.is_finite() && within(&start) {
+                self.count = self.count.saturating_add(1);
+                let score = w.score(&start, 1.0);
+                top.offer(Hyp { pose: start, score });
+            }
+            self.part = if !search && prior.is_some() {
+                Part::Done
+            } else {
+                Part::LinePairs
+            };
+            (self.i, self.j) = (0, 1);
+            *left -= 1;
+        }
+        if self.part == Part::Done || *left == 0 {
+            return self.part == Part::Done;
+        }
+        let (pl, cl) = (prev.lines(), curr.lines());
+        let (hp, np) = top_k::<12>(pl.iter().map(|l| l.rank));
+        let (hc, nc) = top_k::<12>(cl.iter().map(|l| l.rank));
+        let hp = hp.get(..np).unwrap_or(&[]);
+        let hc = hc.get(..nc).unwrap_or(&[]);
+        let line = |s: &'s [Line], i: u8| s.get(usize::from(i));
+        let (pp, cp) = (prev.pts(), curr.pts());
+        let (qp, nqp) = top_k::<8>(pp.iter().map(|p| p.rank));
+        let (qc, nqc) = top_k::<8>(cp.iter().map(|p| p.rank));
+        let qp = qp.get(..nqp).unwrap_or(&[]);
+        let qc = qc.get(..nqc).unwrap_or(&[]);
+        let pt = |s: &'s [Pt], i: u8| s.get(usize::from(i));
+        // The current scan's ordered pairs sorted by the angle between them (for the pairs of
+        // lines only).
+        let mut cpairs = [(0.0f32, 0u8, 0u8); 12 * 11];
+        let mut ncp = 0usize;
+        let mut max_var_c = 0.0f32;
+        let pairs = if self.part == Part::LinePairs {
+            hc
+        } else {
+            &[]
+        };
+        for &k in pairs {
+            let Some(lk) = line(cl, k) else { continue };
+            max_var_c = max_var_c.max(lk.cov.a);
+            for &l in hc {
+                if l == k {
+                    continue;
+                }
+                let Some(ll) = line(cl, l) else { continue };
+                let dc = undirected(lk.a, ll.a);
+                // Insertion into the sorted prefix.
+                let mut pos = ncp;
+                while pos > 0 && cpairs.get(pos - 1).is_some_and(|p| p.0 > dc) {
+                    if let Some(&prev) = cpairs.get(pos - 1) {
+                        if let Some(slot) = cpairs.get_mut(pos) {
+                            *slot = prev;
+                        }
+                    }
+                    pos -= 1;
+                }
+                if let Some(slot) = cpairs.get_mut(pos) {
+                    *slot = (dc, k, l);
+                    ncp += 1;
+                }
+            }
+        }
+        loop {
+            if *left == 0 {
+                return self.part == Part::Done;
+            }
+            match self.part {
+                // Done above (its own unit).
+                Part::Start => self.part = Part::LinePairs,
+                Part::LinePairs => {
+                    let (Some(&i), Some(&j)) = (hp.get(self.i), hp.get(self.j)) else {
+                        if self.i < hp.len() {
+                            (self.i, self.j) = (self.i + 1, self.i + 2);
+                        } else {
+                            (self.part, self.i, self.j) = (Part::PointPairs, 0, 1);
+                        }
+                        continue;
+                    };
+                    self.j += 1;
+                    let (Some(li), Some(lj)) = (line(pl, i), line(pl, j)) else {
+                        continue;
+                    };
+                    let dp = undirected(li.a, lj.a);
+                    if dp.min(PI - dp) < cfg.min_pair_angle {
+                        continue;
+                    }
+                    let cpairs = cpairs.get(..ncp).unwrap_or(&[]);
+                    // This pair of the previous scan looked up in them within its gate.
+                    // Every gate below is at most this wide; the angle between a pair is
+                    // modulo π.
+                    let widest = 3.0 * crate::geom::sqrt(li.cov.a + lj.cov.a + 2.0 * max_var_c)
+                        + cfg.slack[0];
+                    let widest = widest * 1.001 + 1e-5;
+                    let mut windows = [(0.0f32, -1.0f32); 3];
+                    windows[0] = (dp - widest, dp + widest);
+                    if !(widest < 0.5 * PI) {
+                        windows[0] = (f32::NEG_INFINITY, f32::INFINITY);
+                    } else if dp - widest < 0.0 {
+                        windows[1] = (dp - widest + PI, PI);
+                    }
+                    if dp + widest > PI {
+                        windows[2] = (0.0, dp + widest - PI);
+                    }
+                    for (lo, hi) in windows {
+                        let from = cpairs.partition_point(|p| p.0 < lo);
+                        let to = cpairs.partition_point(|p| p.0 <= hi);
+                        for &(dc, k, l) in cpairs.get(from..to).unwrap_or(&[]) {
+                            let (Some(lk), Some(ll)) = (line(cl, k), line(cl, l)) else {
+                                continue;
+                            };
+                            let var = li.cov.a + lj.cov.a + lk.cov.a + ll.cov.a;
+                            let gate = 3.0 * crate::geom::sqrt(var) + cfg.slack[0];
+                            if mod_pi(dp - dc).abs() > gate {
+                                continue;
+                            }
+                            let t0 = li.a - lk.a;
+                            let t1 = t0 + mod_pi(lj.a - ll.a - t0);
+                            let theta = wrap(0.5 * (t0 + t1));
+                            let (sth, cth) = sin_cos(theta);
+                            let scs = [
+                                w.prev_sc(usize::from(i)),
+                                w.curr_sc(usize::from(k)),
+                                w.prev_sc(usize::from(j)),
+                                w.curr_sc(usize::from(l)),
+                            ];
+                            for (th, s, c) in [(theta, sth, cth), (wrap(theta + PI), -sth, -cth)] {
+                                if let Some(t) = solve_two_lines(li, lk, lj, ll, scs, [s, c]) {
+                                    self.pair_hyps += 1;
+                                    consider(Pose::new(t[0], t[1], th), votes, &mut self.count);
+                                }
+                            }
+                        }
+                    }
+                    *left -= 1;
+                }
+                Part::PointPairs => {
+                    let (Some(&a), Some(&b)) = (qp.get(self.i), qp.get(self.j)) else {
+                        if self.i < qp.len() {
+                            (self.i, self.j) = (self.i + 1, self.i + 2);
+                        } else {
+                            (self.part, self.i, self.j) = (Part::LinePoint, 0, 0);
+                        }
+                        continue;
+                    };
+                    self.j += 1;
+                    let (Some(pa), Some(pb)) = (pt(pp, a), pt(pp, b)) else {
+                        continue;
+                    };
+                    let vp = [pb.p[0] - pa.p[0], pb.p[1] - pa.p[1]];
+                    let dp = crate::geom::hypot(vp[0], vp[1]);
+                    if dp < 300.0 {
+                        continue;
+                    }
+                    let var_p = pa.cov.a + pa.cov.c + pb.cov.a + pb.cov.c;
+                    for &c in qc {
+                        let Some(pc) = pt(cp, c) else { continue };
+                        for &d in qc {
+                            if d == c {
+                                continue;
+                            }
+                            let Some(pd) = pt(cp, d) else { continue };
+                            let vc = [pd.p[0] - pc.p[0], pd.p[1] - pc.p[1]];
+                            let dc = crate::geom::hypot(vc[0], vc[1]);
+                            let var_c = pc.cov.a + pc.cov.c + pd.cov.a + pd.cov.c;
+                            let var = var_p + var_c;
+                            if (dp - dc).abs() > 3.0 * crate::geom::sqrt(0.5 * var) + cfg.slack[1] {
+                                continue;
+                            }
+                            let th = wrap(libm::atan2f(vp[1], vp[0]) - libm::atan2f(vc[1], vc[0]));
+                            let mid_p = [0.5 * (pa.p[0] + pb.p[0]), 0.5 * (pa.p[1] + pb.p[1])];
+                            let mid_c = [0.5 * (pc.p[0] + pd.p[0]), 0.5 * (pc.p[1] + pd.p[1])];
+                            let rc = Pose::new(0.0, 0.0, th).transform_point(mid_c);
+                            self.pair_hyps += 1;
+                            consider(
+                                Pose::new(mid_p[0] - rc[0], mid_p[1] - rc[1], th),
+                                votes,
+                                &mut self.count,
+                            );
+                        }
+                    }
+                    *left -= 1;
+                }
+                Part::LinePoint => {
+                    let (hp6, hc6) = (hp.get(..6).unwrap_or(hp), hc.get(..6).unwrap_or(hc));
+                    let (qp4, qc4) = (qp.get(..5).unwrap_or(qp), qc.get(..5).unwrap_or(qc));
+                    let (Some(&i), Some(&k)) = (hp6.get(self.i), hc6.get(self.j)) else {
+                        if self.i < hp6.len() {
+                            (self.i, self.j) = (self.i + 1, 0);
+                        } else {
+                            self.part = if self.pair_hyps == 0 {
+                                Part::Corridor
+                            } else {
+                                Part::Done
+                            };
+                            (self.i, self.j) = (0, 0);
+                        }
+                        continue;
+                    };
+                    self.j += 1;
+                    let (Some(li), Some(lk)) = (line(pl, i), line(cl, k)) else {
+                        continue;
+                    };
+                    for th in [li.a - lk.a, li.a - lk.a + PI] {
+                        let th = wrap(th);
+                        let (s, c) = sin_cos(th);
+                        let [sa, ca] = w.prev_sc(usize::from(i));
+                        let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
+                            1.0
+                        } else {
+                            -1.0
+                        };
+                        for &a in qp4 {
+                            let Some(pa) = pt(pp, a) else { continue };
+                            for &b in qc4 {
+                                let Some(pb) = pt(cp, b) else { continue };
+                                let t = [
+                                    pa.p[0] - (c * pb.p[0] - s * pb.p[1]),
+                                    pa.p[1] - (s * pb.p[0] + c * pb.p[1]),
+                                ];
+                                // The line's ρ must agree.
+                                let e = li.r - sign * lk.r - (ca * t[0] + sa * t[1]);
+                                let sd =
+                                    crate::geom::sqrt(li.cov.c + lk.cov.c + pa.cov.a + pb.cov.a);
+                                if e.abs() > 3.0 * sd + cfg.slack[1] + cfg.slack[2] * lk.reach {
+                                    continue;
+                                }
+                                self.pair_hyps += 1;
+                                consider(Pose::new(t[0], t[1], th), votes, &mut self.count);
+                            }
+                        }
+                    }
+                    *left -= 1;
+                }
+                Part::Corridor => {
+                    // Single lines, nothing along them.
+                    let Some(&i) = hp.get(self.i) else {
+                        self.part = Part::Done;
+                        continue;
+                    };
+                    self.i += 1;
+                    let Some(li) = line(pl, i) else { continue };
+                    for &k in hc {
+                        let Some(lk) = line(cl, k) else { continue };
+                        for th in [li.a - lk.a, li.a - lk.a + PI] {
+                            let th = wrap(th);
+                            let sign = if crate::geom::sin_cos(lk.a + th - li.a).1 >= 0.0 {
+                                1.0
+                            } else {
+                                -1.0
+                            };
+                            let (sa, ca) = sin_cos(li.a);
+                            let mut along = 0.0;
+                            if let Some(p) = prior {
+                                along = -sa * p.pose.x + ca * p.pose.y;
+                            }
+                            let d = li.r - sign * lk.r;
+                            let t = [d * ca - along * sa, d * sa + along * ca];
+                            consider(Pose::new(t[0], t[1], th), votes, &mut self.count);
+                        }
+                    }
+                    *left -= 1;
+                }
+                Part::Done => return true,
+            }
+        }
+    }
 }
 
 /// Clusters of hypotheses within this of each other (mm, rad) are one.
@@ -400,7 +559,8 @@ const VOTES: usize = 96;
 /// The hypotheses formed, clustered: how many pairs of features agree on each pose. Each
 /// cluster's mean (x, y, θ) and count in arrays of their own, so that the search for a
 /// vote's cluster runs down the x values alone.
-struct Votes {
+#[derive(Clone, Debug)]
+pub(super) struct Votes {
     x: [f32; VOTES],
     y: [f32; VOTES],
     theta: [f32; VOTES],
@@ -412,7 +572,7 @@ struct Votes {
 }
 
 impl Votes {
-    fn new() -> Self {
+    pub(super) const fn new() -> Self {
         Self {
             x: [0.0; VOTES],
             y: [0.0; VOTES],

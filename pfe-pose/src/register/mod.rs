@@ -45,6 +45,10 @@
 mod config;
 mod hypotheses;
 mod refine;
+/// Compiled into the firmware too (not yet called there): its call of [`Scratch::new`] once
+/// left `register_sets_verified` building the scratch in temporaries and copying it in
+/// (9 336 B frame; fixed in [`Scratch::new`]).
+mod search;
 mod visibility;
 
 use crate::geom::{finite3, inverse_spd3, wrap, Cov3, Pose};
@@ -53,6 +57,7 @@ use crate::set::{Set, MAX_OBS};
 pub use config::Config;
 use hypotheses::{hypothesise, Top};
 use refine::{converge, finish, refine, Refined, Scratch, Work};
+pub use search::{Progress, Resumable};
 use visibility::visibility_penalty;
 
 /// Variance given to a direction the scene cannot tell when there is no prior: 10⁸ mm² (a
@@ -209,7 +214,7 @@ impl Assoc {
 }
 
 /// A validated prior: pose, information matrix, covariance.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Prior {
     pose: Pose,
     info: Cov3,

@@ -68,14 +68,19 @@ fn bucket(x: f32) -> usize {
 }
 
 impl Scratch {
+    /// All zero, evaluated at compile time: each caller's frame gets one `memset` into its
+    /// `Scratch`, not the arrays built in temporaries and copied in (3.3 KiB more of
+    /// `register_sets_verified`'s frame on the firmware while `Search::step` also called this).
+    const EMPTY: Self = Self {
+        contrib: [[0.0; 6]; 2 * MAX_OBS],
+        trusted: [false; 2 * MAX_OBS],
+        curr_sc: [[0.0; 2]; MAX_OBS],
+        prev_sc: [[0.0; 2]; MAX_OBS],
+        buckets: [0; BUCKETS],
+    };
+
     pub(super) const fn new() -> Self {
-        Self {
-            contrib: [[0.0; 6]; 2 * MAX_OBS],
-            trusted: [false; 2 * MAX_OBS],
-            curr_sc: [[0.0; 2]; MAX_OBS],
-            prev_sc: [[0.0; 2]; MAX_OBS],
-            buckets: [0; BUCKETS],
-        }
+        Self::EMPTY
     }
 }
 
@@ -519,19 +524,54 @@ const CONVERGED_RAD: f32 = 0.01;
 /// The Gauss–Newton of [`refine`] from `start`: the pose it converges to, or `None` as soon
 /// as a step lands within [`CONVERGED_MM`] and [`CONVERGED_RAD`] of one of `done` (the
 /// poses other hypotheses were refined to: the same solution again).
+/// Not inlined (twice) into the registration's frame.
+#[inline(never)]
 pub(super) fn converge(
     w: &mut Work,
     start: Pose,
     prior: Option<&Prior>,
     done: &[Hyp],
 ) -> Option<Pose> {
-    let cfg = w.cfg;
-    let mut pose = start;
-    let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
-    let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
-    let mut stage = 0usize;
-    for _ in 0..ITERATIONS {
-        let slack = slacks.get(stage).copied().unwrap_or(0.0);
+    let mut gn = Converging::new(start);
+    loop {
+        if let Some(end) = gn.step(w, prior, done) {
+            return end;
+        }
+    }
+}
+
+/// A [`converge`] under way: the pose reached and the steps taken.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Converging {
+    pose: Pose,
+    stage: usize,
+}
+
+impl Converging {
+    pub(super) const fn new(start: Pose) -> Self {
+        Self {
+            pose: start,
+            stage: 0,
+        }
+    }
+
+    /// One Gauss–Newton step (one association): `None` while it goes on, else what
+    /// [`converge`] returns. Inlined: [`converge`]'s frame is all the stack it takes.
+    #[inline(always)]
+    pub(super) fn step(
+        &mut self,
+        w: &mut Work,
+        prior: Option<&Prior>,
+        done: &[Hyp],
+    ) -> Option<Option<Pose>> {
+        if self.stage >= ITERATIONS {
+            return Some(Some(self.pose));
+        }
+        let cfg = w.cfg;
+        let slacks = [1.0, 0.5, 0.25, 0.1, 0.0];
+        let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
+        let pose = self.pose;
+        let slack = slacks.get(self.stage).copied().unwrap_or(0.0);
         let mut n = w.associate(&pose, slack, None);
         if let Some(p) = prior {
             add_prior(&mut n, &pose, p);
@@ -556,24 +596,25 @@ pub(super) fn converge(
         }
         let step_theta = step[2] / ROTATION_SCALE;
         if !(step[0].is_finite() && step[1].is_finite() && step_theta.is_finite()) {
-            break;
+            return Some(Some(pose));
         }
-        pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
+        let pose = Pose::new(pose.x + step[0], pose.y + step[1], pose.theta + step_theta);
+        self.pose = pose;
         let near = |d: &Hyp| {
             (d.pose.x - pose.x).abs() < CONVERGED_MM
                 && (d.pose.y - pose.y).abs() < CONVERGED_MM
                 && wrap(d.pose.theta - pose.theta).abs() < CONVERGED_RAD
         };
         if done.iter().any(near) {
-            return None;
+            return Some(None);
         }
         let small = crate::geom::hypot(step[0], step[1]) < 0.05 && step_theta.abs() < 5e-5;
         if small && slack == 0.0 {
-            break;
+            return Some(Some(pose));
         }
-        stage += 1;
+        self.stage += 1;
+        (self.stage >= ITERATIONS).then_some(Some(pose))
     }
-    Some(pose)
 }
 
 /// The final association at `pose` (its matches into `out`) and, when `full`, the
