@@ -89,7 +89,10 @@ impl Rows<'_> {
         }
     }
 
-    /// [`Self::table`] one candidate beam at a time ([`row`]).
+    /// [`Self::table`] one candidate beam at a time ([`row`]): candidate j's beams are the
+    /// first, the `sweep`-th, the `sweeps`-th and the last of the 2·`sweeps` + 1 points from
+    /// `sweeps`·j (every one within the scan: [`Rows::plan`]), read from that window without a
+    /// test of the scan's end each.
     #[cfg_attr(feature = "std", allow(dead_code))]
     fn table_each(&self) -> Table {
         let mut t = Table::empty();
@@ -99,11 +102,24 @@ impl Rows<'_> {
             curve,
             reach,
         } = self.plan();
-        for j in (0..triples).step_by(stride) {
-            let [a, q, b, c] = self.beams(j);
+        let (sweeps, s) = (self.sweeps, self.sweep);
+        let candidates = self
+            .points
+            .windows(2 * sweeps + 1)
+            .step_by((sweeps * stride).max(1))
+            .take(triples.div_ceil(stride));
+        for w in candidates {
+            let (Some(&a), Some(&q), Some(&b), Some(&c)) =
+                (w.first(), w.get(s), w.get(sweeps), w.last())
+            else {
+                continue;
+            };
             if let Some((row, range)) = row(a, q, b, c, curve, reach) {
-                if t.rows.push(row).is_ok() {
-                    t.far = t.far.max(range);
+                // `range` is positive (a row's chord is shorter than a positive multiple of
+                // it), `far` never NaN: the larger without `f32::max`'s NaN tests (a libm call
+                // on thumbv7em).
+                if t.rows.push(row).is_ok() && range > t.far {
+                    t.far = range;
                 }
             }
         }
@@ -182,19 +198,6 @@ impl Rows<'_> {
             // A chord longer than this many times its length at normal incidence is a jump.
             reach: 16.0 * math::abs(self.step) * sweeps as f32,
         }
-    }
-
-    /// The points `a`, `q`, `b`, `c` of triple `j` ([`row`]), invalid beyond the scan.
-    #[inline(always)]
-    fn beams(&self, j: usize) -> [Point; 4] {
-        let (sweeps, s) = (self.sweeps, self.sweep);
-        let at = |k: usize| self.points.get(k).copied().unwrap_or(Point::INVALID);
-        [
-            at(sweeps * j),
-            at(sweeps * j + s),
-            at(sweeps * (j + 1)),
-            at(sweeps * (j + 2)),
-        ]
     }
 }
 
