@@ -284,7 +284,7 @@ fn step<const FAST: bool>(
     }
     if let (None, Some((b, old))) = (boundary, walk.pending) {
         if k == b + REFINE_AFTER {
-            let best = refine_boundary(points, old, b, k + 1);
+            let best = refine_boundary(points, old, b, k + 1, rule.sigma_r);
             if best != b {
                 pass.clear(b, START);
                 pass.set(best, START);

@@ -3,7 +3,7 @@
 //! [`refine_boundary`] settles it between two fixed lines.
 
 use crate::config::NP;
-use crate::fit::line::fit_axis;
+use crate::fit::line::{fit_axis, LineAxis};
 use crate::geometry::Point;
 use crate::math;
 use crate::pass::Pass;
@@ -92,22 +92,45 @@ pub(crate) fn locate(
 /// the nearer of two fixed lines, the left one fitted to up to `REFINE_SPAN` points before the
 /// candidates (the old segment's), the right one to up to `REFINE_SPAN` from the last candidate
 /// on (the new segment's): least sum of squared distances, one fit each side, not two fits per
-/// candidate.
+/// candidate. Where both lines are full ([`REFINE_SPAN`] points each), straight (every point
+/// within [`STRAIGHT_SIGMAS`] σ_r of its line) and meet at a corner between the candidates,
+/// the corner's bearing splits them instead ([`corner_split`]). `sigma_r`: the walk's σ_r.
 #[inline(never)]
-pub(crate) fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize) -> usize {
+pub(crate) fn refine_boundary(
+    points: &[Point],
+    old: usize,
+    b: usize,
+    end: usize,
+    sigma_r: f32,
+) -> usize {
     let lo = b.saturating_sub(3).max(old + NP);
     let hi = (b + 1).min(end.saturating_sub(NP));
     if lo >= hi {
         return b;
     }
-    let left = points.get(lo.saturating_sub(REFINE_SPAN).max(old)..lo);
-    let right = points.get(hi..end.min(hi + REFINE_SPAN));
-    let (Some(Ok(left)), Some(Ok(right))) = (left.map(fit_axis), right.map(fit_axis)) else {
+    let (Some(left_pts), Some(right_pts)) = (
+        points.get(lo.saturating_sub(REFINE_SPAN).max(old)..lo),
+        points.get(hi..end.min(hi + REFINE_SPAN)),
+    ) else {
+        return b;
+    };
+    let (Ok(left), Ok(right)) = (fit_axis(left_pts), fit_axis(right_pts)) else {
         return b;
     };
     let Some(contested) = points.get(lo..hi) else {
         return b;
     };
+    let tol = STRAIGHT_SIGMAS * sigma_r;
+    let straight =
+        |l: &LineAxis, pts: &[Point]| pts.iter().all(|p| math::abs(l.signed_distance(p)) <= tol);
+    let full = left_pts.len() == REFINE_SPAN && right_pts.len() == REFINE_SPAN;
+    if full && straight(&left, left_pts) && straight(&right, right_pts) {
+        if let Some(split) =
+            corner_split(&left, &right, points, (lo, hi), CONTESTED_SIGMAS * sigma_r)
+        {
+            return split;
+        }
+    }
     // Split j: points lo..j on the left line, j..hi on the right one.
     let mut sse: f32 = contested.iter().map(|p| sq(right.signed_distance(p))).sum();
     let (mut best, mut best_sse) = (lo, sse);
@@ -121,6 +144,87 @@ pub(crate) fn refine_boundary(points: &[Point], old: usize, b: usize, end: usize
     }
     best
 }
+
+/// Where the corner of `left` and `right` splits the contested points `lo..hi` by bearing: the
+/// points whose beam passes before the corner lie on the left line, the others on the right
+/// one, whatever their ranges say (a beam's bearing is exact, its range is not). `None` (the
+/// squared distances decide) when the lines meet at less than [`CORNER_SIN`], not between the
+/// beams of points `lo − 1` and `hi`, within [`CORNER_MARGIN`] of a contested beam, or when a
+/// contested point lies more than `tol` from the line of its side.
+fn corner_split(
+    left: &LineAxis,
+    right: &LineAxis,
+    points: &[Point],
+    (lo, hi): (usize, usize),
+    tol: f32,
+) -> Option<usize> {
+    let (before, after) = (points.get(lo.checked_sub(1)?)?, points.get(hi)?);
+    // The normals from the signed distances (the lines are linear in the point), about the
+    // point before the contested ones to keep the rounding small.
+    let q = *before;
+    let normal = |l: &LineAxis| {
+        let d = l.signed_distance(&q);
+        let nx = (l.signed_distance(&Point::new(q.x + 1000.0, q.y)) - d) / 1000.0;
+        let ny = (l.signed_distance(&Point::new(q.x, q.y + 1000.0)) - d) / 1000.0;
+        (nx, ny, d)
+    };
+    let ((ax, ay, da), (bx, by, db)) = (normal(left), normal(right));
+    let det = ax * by - ay * bx;
+    if !(math::abs(det) >= CORNER_SIN) {
+        return None;
+    }
+    let corner = Point::new(
+        q.x + (by * -da - ay * -db) / det,
+        q.y + (ax * -db - bx * -da) / det,
+    );
+    let cross = |p: &Point, c: &Point| p.x * c.y - p.y * c.x;
+    // The scan's turning sense, from the beams either side.
+    let sense = cross(before, after);
+    let (from, to) = (
+        cross(before, &corner) * sense,
+        cross(&corner, after) * sense,
+    );
+    let ahead = corner.x * q.x + corner.y * q.y > 0.0;
+    if !(from > 0.0 && to > 0.0 && ahead) {
+        return None;
+    }
+    let contested = points.get(lo..hi)?;
+    // Too close to a beam to tell which side it passes: the distances decide.
+    let norm = |p: &Point| math::sqrt(p.x * p.x + p.y * p.y);
+    let step = sense.abs() / (norm(before) * norm(after) * (hi - lo + 1) as f32);
+    let near = contested
+        .iter()
+        .any(|p| math::abs(cross(p, &corner)) < CORNER_MARGIN * step * norm(p) * norm(&corner));
+    if near {
+        return None;
+    }
+    let on_left = contested
+        .iter()
+        .take_while(|p| cross(p, &corner) * sense > 0.0)
+        .count();
+    // Each contested point lies on the line of its side (an arc's chord, extrapolated,
+    // leaves the arc's points).
+    let (l, r) = contested.split_at(on_left.min(contested.len()));
+    let on = |line: &LineAxis, pts: &[Point]| {
+        pts.iter()
+            .all(|p| math::abs(line.signed_distance(p)) <= tol)
+    };
+    (on(left, l) && on(right, r)).then_some(lo + on_left)
+}
+
+/// How far (in σ_r) each contested point may lie from the line of its side for
+/// [`corner_split`].
+const CONTESTED_SIGMAS: f32 = 2.5;
+
+/// How close (in beam steps) the corner may lie to a contested beam for [`corner_split`].
+const CORNER_MARGIN: f32 = 0.3;
+
+/// The sine of the least angle between two lines for [`corner_split`] to place their corner.
+const CORNER_SIN: f32 = 0.5;
+
+/// How far (in σ_r) every point of both lines lies from its line at most for [`corner_split`]
+/// to place their corner.
+const STRAIGHT_SIGMAS: f32 = 3.0;
 
 /// `x²`.
 fn sq(x: f32) -> f32 {
@@ -236,16 +340,47 @@ mod tests {
     fn a_boundary_settles_between_two_fixed_lines() {
         let pts = corner(1950.0);
         for b in [19, 20, 21, 22] {
-            assert_eq!(refine_boundary(&pts, 0, b, 40), 20, "detected at {b}");
+            assert_eq!(refine_boundary(&pts, 0, b, 40, 5.0), 20, "detected at {b}");
         }
         let apex = corner(1900.0);
-        assert_eq!(refine_boundary(&apex, 0, 20, 40), 20);
-        assert_eq!(refine_boundary(&apex, 0, 19, 40), 19);
-        assert_eq!(refine_boundary(&apex, 0, 22, 40), 19);
+        assert_eq!(refine_boundary(&apex, 0, 20, 40, 5.0), 20);
+        assert_eq!(refine_boundary(&apex, 0, 19, 40, 5.0), 19);
+        assert_eq!(refine_boundary(&apex, 0, 22, 40, 5.0), 19);
         // A segment that began too close before it (fewer than NP points to the left of the
         // candidates): the detection stands. NP points after the segment's start, the
         // boundary can settle right there (a corner at 5 of a segment from 2, detected at 8).
-        assert_eq!(refine_boundary(&pts, 19, 21, 40), 21);
-        assert_eq!(refine_boundary(&corner_at(550.0, 5), 2, 8, 40), 5);
+        assert_eq!(refine_boundary(&pts, 19, 21, 40, 5.0), 21);
+        assert_eq!(refine_boundary(&corner_at(550.0, 5), 2, 8, 40, 5.0), 5);
+    }
+
+    /// A room's corner 4 m ahead (walls x − y = 4000 and x + y = 4000), beams 0.5° apart, the
+    /// corner 0.35 beam after beam 20 or before beam 21: that beam lies on the wall its
+    /// bearing meets even when its range is 15 mm long (3 σ_r of 5 mm: nearer the other
+    /// wall's line than its own), and the boundary falls where the walls change.
+    #[test]
+    fn a_beam_goes_with_the_wall_its_bearing_meets() {
+        let step = 0.5f32.to_radians();
+        let scan = |corner: f32, long: usize| -> [Point; 40] {
+            core::array::from_fn(|i| {
+                let t = (i as f32 - corner) * step;
+                let (s, c) = math::sin_cos(t);
+                let r = 4000.0 / if t < 0.0 { c - s } else { c + s };
+                let r = r + if i == long { 15.0 } else { 0.0 };
+                Point::new(r * c, r * s)
+            })
+        };
+        for b in [20, 21, 22] {
+            for corner in [20.35, 20.65] {
+                assert_eq!(refine_boundary(&scan(corner, 99), 0, b, 40, 5.0), 21);
+                for long in [20, 21] {
+                    let pts = scan(corner, long);
+                    assert_eq!(
+                        refine_boundary(&pts, 0, b, 40, 5.0),
+                        21,
+                        "{corner} {long} {b}"
+                    );
+                }
+            }
+        }
     }
 }

@@ -754,3 +754,56 @@ fn corners_are_marked_at_their_beam() {
         "{off:?}"
     );
 }
+
+/// Corners of two long walls (interior angles 60°–150°, 2–6 m away, facing the scanner at
+/// any turn that leaves both faces in sight) with range noise of σ 5 mm, in `scenes` draws:
+/// of the `corners` where the walls change (truth by ray casting) 0.3 beam or more from both
+/// beams either side, the `at` the walk marks at their beam.
+fn corners_of_two_walls(seed: &mut u32, scenes: usize) -> (usize, usize) {
+    let config = crate::config::Config::default();
+    let (mut corners, mut at) = (0, 0);
+    for _ in 0..scenes {
+        let d = 2000.0 + 4000.0 * lcg(seed);
+        let bearing = (lcg(seed) - 0.5) * 1.0;
+        let (s, c) = crate::math::sin_cos(bearing);
+        let corner = Point::new(d * c, d * s);
+        let phi = (60.0 + 90.0 * lcg(seed)).to_radians();
+        // The bisector from the corner towards the scanner, turned by at most φ/2 − 15°.
+        let turn = (lcg(seed) - 0.5) * 2.0 * (phi / 2.0 - 15f32.to_radians());
+        let ray = |a: f32| {
+            let (s, c) = crate::math::sin_cos(bearing + core::f32::consts::PI + turn + a);
+            Point::new(corner.x + 3000.0 * c, corner.y + 3000.0 * s)
+        };
+        let mut walls = heapless::Vec::new();
+        let _ = walls.push((ray(phi / 2.0), corner));
+        let _ = walls.push((corner, ray(-phi / 2.0)));
+        let scene: Room = (walls, heapless::Vec::new());
+        let (points, ranges, ids) = scanned(&scene, |_| (Point::new(0.0, 0.0), 0.0), seed);
+        let flags = walked((&points, &ranges), (None, false), &config, How::Mark);
+        let g = crate::scan::ScanGeometry::LMS200_180_050;
+        let off = |i: usize| {
+            let f = (bearing - g.bearing(i - 1)) / (g.bearing(i) - g.bearing(i - 1));
+            f.min(1.0 - f)
+        };
+        for i in 12..349 {
+            let change = ids[i] != ids[i - 1] && ids[i] < 2 && ids[i - 1] < 2;
+            if change && off(i) >= 0.3 {
+                corners += 1;
+                at += usize::from(flags[i] & START != 0);
+            }
+        }
+    }
+    (at, corners)
+}
+
+/// [`corners_of_two_walls`] where the corner lies 0.3 beam or more from the beams either
+/// side (1 241 corners of 3 000 scenes): 9 in 10 at their beam (1 121 here; 1 083 with the
+/// boundary settled by the points' distances alone).
+#[test]
+fn corners_of_two_walls_are_marked_at_their_beam() {
+    let (at, corners) = corners_of_two_walls(&mut 5, 3000);
+    assert!(
+        corners > 1000 && at * 100 >= corners * 89,
+        "{at} of {corners}"
+    );
+}
