@@ -45,6 +45,10 @@ const SEARCH_STEP: f32 = 50.0;
 /// An answer found along the least determined direction replaces `reg` when its points agree
 /// this much better (or when `reg` is degenerate and the points determine every direction).
 const SEARCH_MARGIN: f32 = 0.03;
+/// A local maximum along the features' unobservable direction that agrees at least
+/// [`SEARCH_CLEAR_FLOOR`] stays (its variance along it [`SEARCH_STEP`]²) when the ICP's answer
+/// from it agrees this much less (see [`search_along`]).
+const SEARCH_SLIDE: f32 = 0.03;
 /// Local maxima of the agreement along the direction refined by the ICP, best first.
 const SEARCH_STARTS: usize = 2;
 /// The best local maximum must agree this much better than any other at least 0.3 m from it
@@ -120,8 +124,25 @@ pub(super) fn search_along<const N: usize>(
         clear = margin(&scores, k0 + n, best, &peak) >= SEARCH_CLEAR;
     }
     let mut best: Option<(IcpResult, f32, bool)> = None;
-    for (i, (k, _)) in starts.iter().flatten().enumerate() {
-        if let Some(r) = icp(prev_pts, curr_pts, &at(*k)) {
+    for (i, (k, sk)) in starts.iter().flatten().enumerate() {
+        if let Some(mut r) = icp(prev_pts, curr_pts, &at(*k)) {
+            // The ICP fits the surfaces, not the agreement: along a corridor (the features'
+            // unobservable direction) it can slide off a start its points agree with well and
+            // clearly better. Then the start stands, with the ICP's covariance widened along
+            // the corridor by the profile's step (a standard deviation of one step).
+            if hint.is_some()
+                && *sk >= SEARCH_CLEAR_FLOOR
+                && r.agreement.score() < sk - SEARCH_SLIDE
+            {
+                r.pose = at(*k);
+                r.agreement = agreement(prev_pts, curr_pts, &r.pose);
+                let (sn, cs) = sin_cos(axis);
+                let v = SEARCH_STEP * SEARCH_STEP;
+                r.cov[0][0] += v * cs * cs;
+                r.cov[1][1] += v * sn * sn;
+                r.cov[0][1] += v * cs * sn;
+                r.cov[1][0] += v * cs * sn;
+            }
             let s = r.agreement.score();
             if r.unobservable.is_none() && best.as_ref().is_none_or(|(_, b, _)| s > *b) {
                 best = Some((r, s, i == 0));
