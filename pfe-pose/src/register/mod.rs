@@ -261,6 +261,36 @@ pub(crate) fn register_sets(
     register_sets_verified::<0>(prev, curr, prior, cfg, assoc, search, None).0
 }
 
+/// No registration: the prior's pose and covariance (no motion and
+/// [`UNOBSERVABLE_VARIANCE`] without one).
+fn fallback(failure: Failure, prior: Option<&Prior>, hypotheses: u32) -> Registration {
+    let (rel, cov) = match prior {
+        Some(p) => (p.pose, p.cov),
+        None => (
+            Pose::IDENTITY,
+            [
+                [UNOBSERVABLE_VARIANCE, 0.0, 0.0],
+                [0.0, UNOBSERVABLE_VARIANCE, 0.0],
+                [
+                    0.0,
+                    0.0,
+                    UNOBSERVABLE_VARIANCE / (ROTATION_SCALE * ROTATION_SCALE),
+                ],
+            ],
+        ),
+    };
+    Registration {
+        rel,
+        cov,
+        status: Status::None(failure),
+        matches: (0, 0),
+        hypotheses,
+        dropped: 0,
+        invalid: 0,
+        chi2: 0.0,
+    }
+}
+
 /// [`register_sets`] with `verify`: a score of a pose by the scans' own points (higher is
 /// better, see [`crate::points::agreement`]). Among the refined hypotheses, one whose points
 /// agree better than the features' winner's by [`Config::verify_margin`] wins instead (the
@@ -280,33 +310,6 @@ pub(crate) fn register_sets_verified<const K: usize>(
     verify: Option<&dyn Fn(&Pose) -> f32>,
 ) -> (Registration, Option<Pose>) {
     let prior = check_prior(prior, cfg);
-    let fallback = |failure: Failure, prior: Option<&Prior>, hypotheses: u32| {
-        let (rel, cov) = match prior {
-            Some(p) => (p.pose, p.cov),
-            None => (
-                Pose::IDENTITY,
-                [
-                    [UNOBSERVABLE_VARIANCE, 0.0, 0.0],
-                    [0.0, UNOBSERVABLE_VARIANCE, 0.0],
-                    [
-                        0.0,
-                        0.0,
-                        UNOBSERVABLE_VARIANCE / (ROTATION_SCALE * ROTATION_SCALE),
-                    ],
-                ],
-            ),
-        };
-        Registration {
-            rel,
-            cov,
-            status: Status::None(failure),
-            matches: (0, 0),
-            hypotheses,
-            dropped: 0,
-            invalid: 0,
-            chi2: 0.0,
-        }
-    };
     let prior = match prior {
         Ok(p) => p,
         Err(f) => return (fallback(f, None, 0), None),

@@ -10,42 +10,12 @@ use super::hypotheses::{score_next, Top, Votes, Voting};
 use super::refine::{finish, Converging, Refined, Scratch, Work};
 use super::visibility::visibility_penalty;
 use super::{
-    better, check_prior, close, is_corridor, Assoc, Config, Failure, Prior, Registration, Status,
-    REFINE_RATIO, ROTATION_SCALE, UNOBSERVABLE_VARIANCE,
+    better, check_prior, close, fallback, is_corridor, Assoc, Config, Failure, Prior, Registration,
+    Status, REFINE_RATIO,
 };
 use crate::geom::{Cov3, Pose};
 use crate::obs::Observation;
 use crate::set::Set;
-
-/// No registration: the prior's pose and covariance (no motion and
-/// [`UNOBSERVABLE_VARIANCE`] without one).
-fn fallback(failure: Failure, prior: Option<&Prior>, hypotheses: u32) -> Registration {
-    let (rel, cov) = match prior {
-        Some(p) => (p.pose, p.cov),
-        None => (
-            Pose::IDENTITY,
-            [
-                [UNOBSERVABLE_VARIANCE, 0.0, 0.0],
-                [0.0, UNOBSERVABLE_VARIANCE, 0.0],
-                [
-                    0.0,
-                    0.0,
-                    UNOBSERVABLE_VARIANCE / (ROTATION_SCALE * ROTATION_SCALE),
-                ],
-            ],
-        ),
-    };
-    Registration {
-        rel,
-        cov,
-        status: Status::None(failure),
-        matches: (0, 0),
-        hypotheses,
-        dropped: 0,
-        invalid: 0,
-        chi2: 0.0,
-    }
-}
 
 /// The refined hypotheses judged so far: the best and the best distinct runner-up's score.
 #[derive(Clone, Copy, Debug)]
