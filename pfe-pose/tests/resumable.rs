@@ -7,13 +7,7 @@ use pfe_pose::register::{Progress, Resumable};
 use pfe_pose::{register_with, Config, Cov3, LineObs, Observation, PointObs, Pose, Registration};
 
 mod common;
-use common::Rng;
-
-/// A scene: wall segments (ends, mm) and pillars (centres, mm).
-struct World {
-    walls: Vec<([f32; 2], [f32; 2])>,
-    pillars: Vec<[f32; 2]>,
-}
+use common::{corridor, Rng, World};
 
 /// Random walls and pillars within 8 m of the origin; `periodic`: pillars on a 1 m grid.
 fn world(rng: &mut Rng, periodic: bool) -> World {
@@ -42,20 +36,6 @@ fn world(rng: &mut Rng, periodic: bool) -> World {
             .collect()
     };
     World { walls, pillars }
-}
-
-/// A corridor 2.4 m wide along x, its walls in pieces.
-fn corridor() -> World {
-    let mut walls = Vec::new();
-    for k in -6..6 {
-        let x0 = k as f32 * 1500.0;
-        walls.push(([x0 + 1200.0, 1200.0], [x0, 1200.0]));
-        walls.push(([x0 + 300.0, -1200.0], [x0 + 1400.0, -1200.0]));
-    }
-    World {
-        walls,
-        pillars: Vec::new(),
-    }
 }
 
 /// The features of `world` seen from `pose`, with noise, a few dropped and a few spurious.

@@ -9,19 +9,13 @@ use pfe_pose::{
 };
 
 mod common;
-use common::Rng;
+use common::{corridor, Rng, World};
 
 /// Stated covariances of the synthetic features.
 const SIGMA_ALPHA: f64 = 0.004;
 const SIGMA_RHO: f64 = 10.0;
 const CORR: f64 = 0.3;
 const SIGMA_POINT: f64 = 15.0;
-
-/// A world: wall segments (ends, mm) and pillars (centres, mm).
-struct World {
-    walls: Vec<([f32; 2], [f32; 2])>,
-    pillars: Vec<[f32; 2]>,
-}
 
 /// An irregular convex room about 9 m × 7 m (no wall hides another from inside) with pillars.
 fn room() -> World {
@@ -40,20 +34,6 @@ fn room() -> World {
     World {
         walls,
         pillars: vec![[2000.0, 1000.0], [-1500.0, -1200.0], [3500.0, -800.0]],
-    }
-}
-
-/// A straight corridor 2.4 m wide along x, its walls in pieces (doors between), no pillar.
-fn corridor() -> World {
-    let mut walls = Vec::new();
-    for k in -6..6 {
-        let x0 = k as f32 * 1500.0;
-        walls.push(([x0 + 1200.0, 1200.0], [x0, 1200.0]));
-        walls.push(([x0 + 300.0, -1200.0], [x0 + 1400.0, -1200.0]));
-    }
-    World {
-        walls,
-        pillars: Vec::new(),
     }
 }
 

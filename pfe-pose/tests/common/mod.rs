@@ -23,3 +23,23 @@ impl Rng {
         (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
     }
 }
+
+/// A scene: wall segments (ends, mm) and pillars (centres, mm).
+pub struct World {
+    pub walls: Vec<([f32; 2], [f32; 2])>,
+    pub pillars: Vec<[f32; 2]>,
+}
+
+/// A straight corridor 2.4 m wide along x, its walls in pieces (doors between), no pillar.
+pub fn corridor() -> World {
+    let mut walls = Vec::new();
+    for k in -6..6 {
+        let x0 = k as f32 * 1500.0;
+        walls.push(([x0 + 1200.0, 1200.0], [x0, 1200.0]));
+        walls.push(([x0 + 300.0, -1200.0], [x0 + 1400.0, -1200.0]));
+    }
+    World {
+        walls,
+        pillars: Vec::new(),
+    }
+}
