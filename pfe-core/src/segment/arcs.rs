@@ -5,8 +5,8 @@
 //! those are left out when the circle passes them by and they lie on the wall beyond (the
 //! neighbouring line, or the next one past a nearer object that hides the wall, such as another
 //! pillar), not on a straight leg of a convex corner that ends there. When beams are left
-//! out on a wall seen past a nearer object, a union the typing leaves a line is a circle when it is curved beyond the noise
-//! ([`classify::curved_circle`]).
+//! out on a wall seen past a nearer object, a union the typing leaves a line is a circle
+//! when it is curved beyond the noise ([`classify::curved_circle`]).
 
 use crate::arc::arc_fit;
 use crate::classify;
@@ -42,8 +42,8 @@ const PILLAR_MAX_RADIUS: f32 = 1000.0;
 /// whose union, less at most two beams at one end that lie off its circle and on the wall
 /// beyond ([`wall`], [`occluded_wall`]), the typing makes a circle ([`classify::feature`]), or
 /// that is curved ([`classify::curved_circle`]) when beams are left out on a wall seen past a
-/// nearer object, that circle; the beams left out become a
-/// segment of their own, too short for a feature.
+/// nearer object, that circle; the beams left out become a segment of their own, too short
+/// for a feature.
 #[inline(never)]
 pub(super) fn join_arcs(
     pass: &mut Pass<'_>,
@@ -136,7 +136,10 @@ fn occluded_wall(
     sigma_r: f32,
 ) -> Option<(f32, f32)> {
     let mut line = |k: Option<usize>| match out.features_mut().get(k?) {
-        Some(Feature::Line(l)) => Some((usize::from(l.first), usize::from(l.last), l.alpha, l.rho)),
+        Some(Feature::Line(l)) => {
+            let (first, last) = (usize::from(l.first), usize::from(l.last));
+            Some((first, last, l.alpha, l.rho))
+        }
         _ => None,
     };
     let (first, last, alpha, rho) = line(k[0]).or_else(|| line(k[1]))?;
@@ -214,8 +217,8 @@ fn arc_of(
         if !((s..cs).all(|k| on(walls[0], k)) && (ce + 1..=e).all(|k| on(walls[1], k))) {
             return None;
         }
-        // Beams left out on a wall seen past a nearer object (a pillar between two others): the
-        // curved run is enough, its radius known more loosely.
+        // Beams left out on a wall seen past a nearer object (another pillar, say): the curved
+        // run is enough, its radius known more loosely.
         let kink = (lead > 0 && past[0]) || (trail > 0 && past[1]);
         // The walk's one-pass arc test screens the candidates before the typing.
         arc_fit(pass.points.get(cs..=ce)?, rule)?;
