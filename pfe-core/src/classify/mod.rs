@@ -114,25 +114,7 @@ fn feature_of<const SCRUTINY: bool>(
         .filter(|&(c, _, allowed)| !allowed || !seen_through(pass, s, e, &c, config.sigma_r));
     match circle {
         Some((c, _, _)) if !honest => circle_feature(pts, s, e, &c, origin, config.sigma_r),
-        Some((c, sse, _)) => {
-            let mut f = circle_feature(pts, s, e, &c, origin, config.sigma_r)?;
-            if let Feature::Circle(cf) = &mut f {
-                let c2 = mean_cos2(pass, s, pts, |p| {
-                    Point::new(p.x - c.center.x, p.y - c.center.y)
-                });
-                let dof = pts.len() as f32 - 3.0;
-                let mut k = scatter_scale(sse, var * c2, dof);
-                // Only a significant scatter can show its correlation (see `correlated_scale`).
-                if k > 1.0 {
-                    let (o, r) = (c.center, c.radius);
-                    let residuals = pts.iter().map(|p| math::hypot(p.x - o.x, p.y - o.y) - r);
-                    k = correlated_scale(residuals, var * c2, dof).unwrap_or(k);
-                }
-                cf.cov = cf.cov.map(|row| row.map(|v| v * k));
-                systematic_circle(cf, origin, config.sigma_sys);
-            }
-            Some(f)
-        }
+        Some((c, sse, _)) => honest_circle(pass, s, e, pts, (&c, sse), config),
         None => {
             let line = line?;
             let ends = [pts.first()?, pts.last()?];
@@ -166,6 +148,56 @@ fn feature_of<const SCRUTINY: bool>(
             Some(f)
         }
     }
+}
+
+/// The circle feature of the points `pts` of the segment `s..=e` on the circle `c` with residual
+/// sum `sse`, its covariance scaled by the scatter the noise does not explain (and its
+/// correlation) and the systematic error's share.
+fn honest_circle(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    pts: &[Point],
+    (c, sse): (&Circle, f32),
+    config: &Config,
+) -> Option<Feature> {
+    let origin = pass.origin((s + e) / 2);
+    let var = config.sigma_r * config.sigma_r;
+    let mut f = circle_feature(pts, s, e, c, origin, config.sigma_r)?;
+    if let Feature::Circle(cf) = &mut f {
+        let c2 = mean_cos2(pass, s, pts, |p| {
+            Point::new(p.x - c.center.x, p.y - c.center.y)
+        });
+        let dof = pts.len() as f32 - 3.0;
+        let mut k = scatter_scale(sse, var * c2, dof);
+        // Only a significant scatter can show its correlation (see `correlated_scale`).
+        if k > 1.0 {
+            let (o, r) = (c.center, c.radius);
+            let residuals = pts.iter().map(|p| math::hypot(p.x - o.x, p.y - o.y) - r);
+            k = correlated_scale(residuals, var * c2, dof).unwrap_or(k);
+        }
+        cf.cov = cf.cov.map(|row| row.map(|v| v * k));
+        systematic_circle(cf, origin, config.sigma_sys);
+    }
+    Some(f)
+}
+
+/// The circle feature of the segment `s..=e` (default mode, with the checks for real scans)
+/// when its points are curved ([`curved`]) though the typing made them no circle: for a caller
+/// that knows more of the scene (a pillar's two pieces between the walls it stands in).
+pub(crate) fn curved_circle(
+    pass: &Pass<'_>,
+    s: usize,
+    e: usize,
+    config: &Config,
+) -> Option<Feature> {
+    let pts = pass.points.get(s..=e)?;
+    if !curved(pass, s, pts, config) {
+        return None;
+    }
+    let c = fit_circle(pts, config.circle_method).ok()?;
+    let (c, sse) = refine_from(pts, c, NormalEquations::at(pts, &c), config.circle_refine).ok()?;
+    (c.radius <= CURVED_MAX_RADIUS).then(|| honest_circle(pass, s, e, pts, (&c, sse), config))?
 }
 
 /// The circle of `pts` when the configured typing says they are one (`line`: their line fit,

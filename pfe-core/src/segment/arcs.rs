@@ -3,7 +3,10 @@
 //! their union a clear one. The pillar's far side meets the wall in a kink, and the walk may
 //! keep a beam or two of the wall in the arc's last piece (or first, seen the other way):
 //! those are left out when the circle passes them by and they lie on the wall beyond (the
-//! neighbouring line), not on a straight leg of a convex corner that ends there.
+//! neighbouring line, or the next one past a nearer object that hides the wall, such as another
+//! pillar), not on a straight leg of a convex corner that ends there. When beams are left
+//! out on a wall seen past a nearer object, a union the typing leaves a line is a circle
+//! when it is curved beyond the noise ([`classify::curved_circle`]).
 
 use crate::arc::arc_fit;
 use crate::classify;
@@ -27,6 +30,9 @@ const OFF_SIGMAS: f32 = 3.0;
 /// Largest standard deviation of the circle's radius, as a fraction of it: the beams must
 /// determine the radius.
 const RADIUS_SPREAD: f32 = 0.1;
+/// [`RADIUS_SPREAD`] where the join leaves beams out on a wall seen past a nearer object (the
+/// kink a pillar makes with it shows the union ends there).
+const KINK_RADIUS_SPREAD: f32 = 0.2;
 /// Fewest points of the join's circle.
 const JOIN_MIN_POINTS: usize = 10;
 /// Largest radius of a pillar the join makes, mm.
@@ -34,8 +40,10 @@ const PILLAR_MAX_RADIUS: f32 = 1000.0;
 
 /// Makes each pair of neighbouring stored lines (no beam and no range jump between them)
 /// whose union, less at most two beams at one end that lie off its circle and on the wall
-/// beyond ([`wall`]), the typing makes a circle ([`classify::feature`]) that circle; the beams
-/// left out become a segment of their own, too short for a feature.
+/// beyond ([`wall`], [`occluded_wall`]), the typing makes a circle ([`classify::feature`]), or
+/// that is curved ([`classify::curved_circle`]) when beams are left out on a wall seen past a
+/// nearer object, that circle; the beams left out become a segment of their own, too short
+/// for a feature.
 #[inline(never)]
 pub(super) fn join_arcs(
     pass: &mut Pass<'_>,
@@ -65,11 +73,25 @@ pub(super) fn join_arcs(
             && bulges(bulge, pass.origin(b.0))
             && spans_pillar(bulge)
         {
-            let walls = [
+            // Each end's wall, and whether it was seen past a nearer object.
+            let near = [
                 wall(pass, out, i.checked_sub(1), s),
                 wall(pass, out, Some(i + 2), e + 1),
             ];
-            if let Some((f, lead, trail)) = arc_of(pass, s, e, walls, rule, config) {
+            let hidden = [
+                near[0].is_none().then(|| {
+                    let k = [i.checked_sub(2), i.checked_sub(1)];
+                    occluded_wall(pass, out, k, s, config.sigma_r)
+                }),
+                near[1].is_none().then(|| {
+                    let k = [Some(i + 3), Some(i + 2)];
+                    occluded_wall(pass, out, k, e + 1, config.sigma_r)
+                }),
+            ]
+            .map(Option::flatten);
+            let walls = [near[0].or(hidden[0]), near[1].or(hidden[1])];
+            let past = [hidden[0].is_some(), hidden[1].is_some()];
+            if let Some((f, lead, trail)) = arc_of(pass, s, e, (walls, past), rule, config) {
                 joins -= 1;
                 replace_pair(pass, out, i, f, (s, e), (a.1, b.0), (lead, trail));
             }
@@ -101,6 +123,50 @@ fn wall(
     (pass.flag(next) & JUMP == 0).then_some((l.alpha, l.rho))
 }
 
+/// The line (normal angle, distance) of the stored line `k[0]` (or else `k[1]`) beyond a
+/// nearer object that hides the wall from `edge` (the join's first or last beam's neighbour)
+/// on: a range jump at `edge`'s side of the join, and every beam between the join and the
+/// line on the scanner's side of it. The wall a pillar stands in, its next stretch seen past
+/// another pillar in front of it, on which any beam the join leaves out at that end must lie.
+fn occluded_wall(
+    pass: &Pass<'_>,
+    out: &mut dyn FeatureSink,
+    k: [Option<usize>; 2],
+    edge: usize,
+    sigma_r: f32,
+) -> Option<(f32, f32)> {
+    let mut line = |k: Option<usize>| match out.features_mut().get(k?) {
+        Some(Feature::Line(l)) => {
+            let (first, last) = (usize::from(l.first), usize::from(l.last));
+            Some((first, last, l.alpha, l.rho))
+        }
+        _ => None,
+    };
+    let (first, last, alpha, rho) = line(k[0]).or_else(|| line(k[1]))?;
+    // The beams between the join and the line (the nearer object).
+    let (lo, hi) = if first >= edge {
+        (edge, first.checked_sub(1)?)
+    } else if last < edge {
+        (last + 1, edge.checked_sub(1)?)
+    } else {
+        return None;
+    };
+    if lo > hi || pass.flag(edge) & JUMP == 0 {
+        return None;
+    }
+    let (sn, cn) = math::sin_cos(alpha);
+    let off = |p: Point| p.x * cn + p.y * sn - rho;
+    // Towards the scanner, each within the noise of the wall or nearer.
+    let side = if off(pass.origin(edge)) > 0.0 {
+        1.0
+    } else {
+        -1.0
+    };
+    (lo..=hi)
+        .all(|b| !pass.valid(b) || side * off(pass.point(b)) >= -OFF_SIGMAS * sigma_r)
+        .then_some((alpha, rho))
+}
+
 /// Whether the two lines from `p[0]` to `p[1]` and from `p[2]` to `p[3]` bulge towards the
 /// scanner at `origin`: their meeting point lies on its side of the chord between their far
 /// ends, as on a pillar's face (a cheap screen before any fit: a circle that faces the scanner,
@@ -124,13 +190,13 @@ fn spans_pillar(p: [Point; 4]) -> bool {
 }
 
 /// The circle of the segment `s..=e` less `lead` beams at its start and `trail` at its end
-/// (the first of [`DROPS`] the typing makes a circle whose left-out beams are off it and that
-/// can be a pillar, [`pillar`]).
+/// (the first of [`DROPS`] the typing makes a circle, or that is curved, whose left-out beams
+/// are off it and that can be a pillar, [`pillar`]).
 fn arc_of(
     pass: &Pass<'_>,
     s: usize,
     e: usize,
-    walls: [Option<(f32, f32)>; 2],
+    (walls, past): ([Option<(f32, f32)>; 2], [bool; 2]),
     rule: &NoiseRule,
     config: &Config,
 ) -> Option<(Feature, usize, usize)> {
@@ -151,13 +217,24 @@ fn arc_of(
         if !((s..cs).all(|k| on(walls[0], k)) && (ce + 1..=e).all(|k| on(walls[1], k))) {
             return None;
         }
+        // Beams left out on a wall seen past a nearer object (another pillar, say): the curved
+        // run is enough, its radius known more loosely.
+        let kink = (lead > 0 && past[0]) || (trail > 0 && past[1]);
         // The walk's one-pass arc test screens the candidates before the typing.
         arc_fit(pass.points.get(cs..=ce)?, rule)?;
-        let Some(Feature::Circle(c)) = classify::feature::<true>(pass, cs, ce, config) else {
+        let Some(Feature::Circle(c)) = classify::feature::<true>(pass, cs, ce, config)
+            .filter(|f| matches!(f, Feature::Circle(_)))
+            .or_else(|| kink.then(|| classify::curved_circle(pass, cs, ce, config))?)
+        else {
             return None;
         };
         let pts = pass.points.get(cs..=ce)?;
-        if !pillar(pts, pass.origin((cs + ce) / 2), &c) {
+        let spread = if kink {
+            KINK_RADIUS_SPREAD
+        } else {
+            RADIUS_SPREAD
+        };
+        if !pillar(pts, pass.origin((cs + ce) / 2), &c, spread) {
             return None;
         }
         let off = |k: usize| {
@@ -171,10 +248,10 @@ fn arc_of(
 
 /// Whether the circle `c` of the points `pts` can be a pillar standing in a wall, seen from
 /// `origin`: its points face the scanner ([`faces`]), its arc spans at most 120° ([`narrow`]),
-/// the beams determine its radius (a standard deviation of at most [`RADIUS_SPREAD`] of it),
+/// the beams determine its radius (a standard deviation of at most `spread` of it),
 /// which is at most [`PILLAR_MAX_RADIUS`].
-fn pillar(pts: &[Point], origin: Point, c: &CircleFeature) -> bool {
-    let spread = RADIUS_SPREAD * c.radius;
+fn pillar(pts: &[Point], origin: Point, c: &CircleFeature, spread: f32) -> bool {
+    let spread = spread * c.radius;
     faces(pts, origin, c)
         && narrow(pts, c)
         && c.cov[2][2] <= spread * spread
