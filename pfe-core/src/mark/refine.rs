@@ -383,4 +383,34 @@ mod tests {
             }
         }
     }
+
+    /// The room's corner of [`a_beam_goes_with_the_wall_its_bearing_meets`], 0.35 beam after
+    /// beam 20, turned about the scanner (0, 0.8 rad, ±π/2, π: the corner's x, then y, across
+    /// the beams), beam 21 15 mm long and the point before the contested ones (its left line's
+    /// last, about which the corner is solved) 15 mm short, both 3 σ_r: detected at 20, 21 or
+    /// 22, the boundary falls where the walls change.
+    #[test]
+    fn the_corner_is_solved_about_a_point_off_its_line() {
+        let step = 0.5f32.to_radians();
+        let (half, pi) = (core::f32::consts::FRAC_PI_2, core::f32::consts::PI);
+        for turn in [0.0f32, 0.8, half, -half, pi] {
+            for b in [20usize, 21, 22] {
+                // The point before the contested ones `b − 3..=b`.
+                let q = b - 4;
+                let pts: [Point; 40] = core::array::from_fn(|i| {
+                    let t = (i as f32 - 20.35) * step;
+                    let (s, c) = math::sin_cos(t);
+                    let r = 4000.0 / if t < 0.0 { c - s } else { c + s };
+                    let r = r + match i {
+                        21 => 15.0,
+                        _ if i == q => -15.0,
+                        _ => 0.0,
+                    };
+                    let (s, c) = math::sin_cos(t + turn);
+                    Point::new(r * c, r * s)
+                });
+                assert_eq!(refine_boundary(&pts, 0, b, 40, 5.0), 21, "{turn} {b}");
+            }
+        }
+    }
 }

@@ -367,4 +367,46 @@ mod tests {
             assert_eq!(lines.as_slice(), [(80, 97)], "{past}");
         }
     }
+
+    /// A face of four beams (90..=93, LMS200 180° at 1°) meeting a wall at a corner 3 m away,
+    /// 0.6 of a beam step past beam 90 (exact points, σ_r 5 mm): beam 90 is the wall's, so the
+    /// face has three beams of its own. The beam after it (94) lies on the face's line: counted
+    /// as the face's, it makes four, and the face keeps beam 90 ([`super::shared_ends`] is
+    /// `None`). Across a range jump (flagged at 94, as the walk flags a grazing wall's far
+    /// points) it is not the face's beam: three, and beam 90 goes to the wall.
+    #[test]
+    fn a_beam_across_a_jump_is_not_the_face_s() {
+        use crate::geometry::Point;
+        let g = ScanGeometry::lms200(180.0, 1.0);
+        let config = Config::default();
+        let beta = g.bearing(90) + 0.6 * g.angle_step;
+        let corner = Point::new(3000.0 * libm::cosf(beta), 3000.0 * libm::sinf(beta));
+        // Each surface's line through the corner: normal angle and distance.
+        let line = |alpha: f32| {
+            (
+                alpha,
+                corner.x * libm::cosf(alpha) + corner.y * libm::sinf(alpha),
+            )
+        };
+        let (wall, face) = (line(beta - 0.7), line(beta + 0.7));
+        let ranges: [f32; 181] = core::array::from_fn(|i| {
+            let (alpha, rho) = match i {
+                60..=90 => wall,
+                91..=120 => face,
+                _ => return f32::NAN,
+            };
+            rho / libm::cosf(g.bearing(i) - alpha)
+        });
+        for jump in [false, true] {
+            let mut ex = Extractor::<181, 8>::new();
+            let shared = ex.with_pass(&Scan::from_mm(g, &ranges), &config, |pass, _| {
+                if jump {
+                    pass.set(94, crate::flags::JUMP);
+                }
+                super::shared_ends(pass, 90, 93, &config)
+            });
+            let expected = jump.then_some((true, false));
+            assert_eq!(shared, expected, "jump {jump}");
+        }
+    }
 }

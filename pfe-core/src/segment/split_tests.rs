@@ -178,3 +178,37 @@ fn a_pillar_at_the_segment_s_start_that_the_peak_misses_is_found() {
     };
     assert_eq!(bump_at(&rev, &line, 5.0), Some((19 - j, 19)));
 }
+
+/// A shallow V of 12 points (legs ±1 mm a point, 100 mm apart, apex at 6) seen with a small
+/// σ_r (0.5 mm, under 1 mm where σ_r² and 1/σ_r² swap order): its line's residual sum (about
+/// 36 mm²) is far beyond the noise's (`σ_r² (n − 2)` = 2.5 mm²) and beyond `chi2 σ_r²`
+/// (6.25 mm², not `chi2 / σ_r²`), and two lines leave nothing: split at its apex.
+#[test]
+fn a_shallow_corner_at_a_small_sigma_is_split_at_its_apex() {
+    let pts: [Point; 12] = core::array::from_fn(|i| {
+        let t = i as f32 - 6.0;
+        Point::new(100.0 * t, t.abs())
+    });
+    let Ok(line) = fit_line(&pts) else {
+        panic!("a line fits 12 points");
+    };
+    // The line's residual sum from f64 sums: the band the test is about (above chi2 σ_r² =
+    // 6.25, below chi2 / σ_r² = 100).
+    let n = pts.len() as f64;
+    let (mx, my) = pts.iter().fold((0.0, 0.0), |(x, y), p| {
+        (x + f64::from(p.x) / n, y + f64::from(p.y) / n)
+    });
+    let (sxx, syy, sxy) = pts.iter().fold((0.0, 0.0, 0.0), |(a, b, c), p| {
+        let (dx, dy) = (f64::from(p.x) - mx, f64::from(p.y) - my);
+        (a + dx * dx, b + dy * dy, c + dx * dy)
+    });
+    let sse = 0.5 * (sxx + syy - ((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy).sqrt());
+    assert!(sse > 6.25 && sse < 100.0, "{sse}");
+    assert!(
+        (f64::from(line.sse()) - sse).abs() < 1e-3 * sse,
+        "{} {sse}",
+        line.sse()
+    );
+    let config = Config::default().with_sigma_r(0.5);
+    assert_eq!(corner(&pts, &line, &config), Some(6));
+}
