@@ -375,9 +375,9 @@ fn a_pillar_of_ten_beams_is_an_arc() {
         let Some(noise) = rule.noise() else {
             panic!("the default rule")
         };
-        let nine = super::arc_of(pass, 86, 94, [None, None], noise, &config);
+        let nine = super::arc_of(pass, 86, 94, ([None, None], [false, false]), noise, &config);
         assert!(nine.is_none(), "{nine:?}");
-        super::arc_of(pass, 86, 95, [None, None], noise, &config)
+        super::arc_of(pass, 86, 95, ([None, None], [false, false]), noise, &config)
     });
     let Some((Feature::Circle(c), 0, 0)) = found else {
         panic!("{found:?}");
