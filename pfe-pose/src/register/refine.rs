@@ -199,19 +199,26 @@ impl<'a> Work<'a> {
     /// Matches every current feature to its nearest previous one under `pose` (Mahalanobis,
     /// with `slack` times the configured slack), and the normal equations of those matches.
     pub(super) fn associate(&mut self, pose: &Pose, slack: f32, out: Option<&mut Assoc>) -> Normal {
-        self.associate_with::<true>(pose, slack, out)
+        self.associate_with::<true, true>(pose, slack, out)
+    }
+
+    /// [`Work::associate`] without recording each match's information (what a Gauss–Newton
+    /// step needs: only [`finish`]'s association is searched for a critical match).
+    fn associate_step(&mut self, pose: &Pose, slack: f32) -> Normal {
+        self.associate_with::<true, false>(pose, slack, None)
     }
 
     /// The consensus score of [`Work::associate`] alone (bit for bit the same: the same
     /// matches, summed in the same order), without the normal equations.
     pub(super) fn score(&mut self, pose: &Pose, slack: f32) -> f32 {
-        self.associate_with::<false>(pose, slack, None).score
+        self.associate_with::<false, false>(pose, slack, None).score
     }
 
     /// [`Work::associate`]; with `FULL` false only the score (and the match counts) are
-    /// computed.
+    /// computed; with `RECORD` (and `FULL`) each match's information is kept for
+    /// [`Work::without_critical`].
     #[inline(always)]
-    pub(super) fn associate_with<const FULL: bool>(
+    pub(super) fn associate_with<const FULL: bool, const RECORD: bool>(
         &mut self,
         pose: &Pose,
         slack: f32,
@@ -329,18 +336,6 @@ impl<'a> Work<'a> {
                     (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
                 continue;
             }
-            let length = |ext: Option<([f32; 2], [f32; 2])>| {
-                ext.map_or(0.0, |(s, e)| {
-                    let d = [e[0] - s[0], e[1] - s[1]];
-                    crate::geom::sqrt(d[0] * d[0] + d[1] * d[1])
-                })
-            };
-            let prev_len = self
-                .prev
-                .lines()
-                .get(usize::from(i))
-                .map_or(0.0, |l| length(l.ext));
-            let trusted = length(lk.ext).min(prev_len) >= cfg.trusted_length;
             n.lines += 1;
             n.score += (1.0 - d2 / gate) * (1.0 - cfg.overlap_weight + cfg.overlap_weight * frac);
             n.chi2 += d2;
@@ -348,7 +343,21 @@ impl<'a> Work<'a> {
             let ja = [0.0, 0.0, 1.0];
             let jr = [sign * ca, sign * sa, sign * h];
             let hi = accumulate(&mut n, &ja, &jr, &w, &e);
-            self.record(hi, trusted);
+            if RECORD {
+                let length = |ext: Option<([f32; 2], [f32; 2])>| {
+                    ext.map_or(0.0, |(s, e)| {
+                        let d = [e[0] - s[0], e[1] - s[1]];
+                        crate::geom::sqrt(d[0] * d[0] + d[1] * d[1])
+                    })
+                };
+                let prev_len = self
+                    .prev
+                    .lines()
+                    .get(usize::from(i))
+                    .map_or(0.0, |l| length(l.ext));
+                let trusted = length(lk.ext).min(prev_len) >= cfg.trusted_length;
+                self.record(hi, trusted);
+            }
         }
         for (k, pk) in self.curr.pts().iter().enumerate() {
             let q = transform(pk.p);
@@ -388,7 +397,9 @@ impl<'a> Work<'a> {
             let jx = [1.0, 0.0, -st * pk.p[0] - ct * pk.p[1]];
             let jy = [0.0, 1.0, ct * pk.p[0] - st * pk.p[1]];
             let hi = accumulate(&mut n, &jx, &jy, &w, &e);
-            self.record(hi, false);
+            if RECORD {
+                self.record(hi, false);
+            }
         }
         n
     }
@@ -572,7 +583,7 @@ impl Converging {
         let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
         let pose = self.pose;
         let slack = slacks.get(self.stage).copied().unwrap_or(0.0);
-        let mut n = w.associate(&pose, slack, None);
+        let mut n = w.associate_step(&pose, slack);
         if let Some(p) = prior {
             add_prior(&mut n, &pose, p);
         }
@@ -630,7 +641,7 @@ pub(super) fn finish(
     let cfg = w.cfg;
     let limit = 1.0 / (cfg.degenerate_sigma * cfg.degenerate_sigma);
     if !full {
-        let n = w.associate_with::<false>(&pose, 0.0, out);
+        let n = w.associate_with::<false, false>(&pose, 0.0, out);
         return Refined {
             pose,
             cov: ZERO3,

@@ -1,5 +1,6 @@
-//! The association's angle index against every previous line tried: the same
-//! matches, scores and normal equations, bit for bit.
+//! The association's angle index against every previous line tried, and a Gauss–Newton
+//! step's association against the full one: the same matches, scores and normal equations,
+//! bit for bit.
 use super::*;
 use crate::geom::normalise_line;
 
@@ -168,6 +169,9 @@ fn indices_change_nothing() {
             for (x, y) in fast.s.contrib.iter().zip(&brute.s.contrib).take(fast.nc) {
                 assert!(x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits()));
             }
+            // A Gauss–Newton step's association (no match recorded): the same equations.
+            let ns = brute.associate_step(&pose, slack);
+            assert!(same_normal(&ns, &nb), "round {round}: {pose:?}");
             let (sa, sb) = (fast.score(&pose, slack), brute.score(&pose, slack));
             assert_eq!(sa.to_bits(), sb.to_bits(), "round {round}");
             matched += usize::from(na.lines);
