@@ -109,6 +109,14 @@ pub struct Odometry<const MAP: usize, const PTS: usize = 0> {
     /// against them ([`crate::points::refine_on_key`]).
     key: RangeScan<PTS>,
     key_pose: Pose,
+    /// The key scan before the last one (empty: none to go back to), its pose, the pose the
+    /// motion before the key moved predicts for the current scan, that motion, and the scans
+    /// since the key moved ([`crate::points::back_to_key`]).
+    back: RangeScan<PTS>,
+    back_pose: Pose,
+    back_guess: Pose,
+    back_motion: Pose,
+    back_age: u8,
 }
 
 /// The settings of an [`Odometry`]: the default ones as a tag only, so that a new odometry
@@ -184,6 +192,11 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
             pts: RangeScan::new(),
             key: RangeScan::new(),
             key_pose: Pose::IDENTITY,
+            back: RangeScan::new(),
+            back_pose: Pose::IDENTITY,
+            back_guess: Pose::IDENTITY,
+            back_motion: Pose::IDENTITY,
+            back_age: 0,
         }
     }
 
@@ -196,6 +209,7 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
         self.scans = 0;
         self.pts.clear();
         self.key.clear();
+        self.back.clear();
     }
 
     /// The latest pose in the first scan's frame and its covariance.

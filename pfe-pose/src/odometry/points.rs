@@ -2,10 +2,17 @@
 //! the pose against the key scan.
 
 use super::{Odometry, Step};
-use crate::geom::{compose_covariance, Cov3, Pose};
-use crate::points::{bridge, recheck, refine_on_key, RangeScan};
-use crate::register::{Assoc, Config, Status};
+use crate::geom::{compose_covariance, wrap, Cov3, Pose};
+use crate::points::{back_to_key, bridge, recheck, refine_on_key, RangeScan};
+use crate::register::{Assoc, Config, Status, ROTATION_SCALE};
 use crate::set::Set;
+
+/// Scans after the key moved during which the former key may take a scan back
+/// ([`back_to_key`]).
+const BACK_SCANS: u8 = 3;
+/// A step this far from the last motion (mm, θ in units of [`ROTATION_SCALE`]) is a jump: the
+/// key scan before it is the one to go back to.
+const JUMP: f32 = 500.0;
 
 impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
     /// Registers `curr` (with the scan's ranges `curr_pts`, when given) and updates the map,
@@ -60,6 +67,8 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                     self.pose = step.pose;
                     self.cov = step.cov;
                 }
+                self.back_guess = self.back_guess.compose(&self.back_motion);
+                self.back_age = self.back_age.saturating_add(1);
                 // The pose refined against the key scan's points; the key moves on to this
                 // scan when they no longer refine it.
                 let keep = !self.key.is_empty()
@@ -74,14 +83,64 @@ impl<const MAP: usize, const PTS: usize> Odometry<MAP, PTS> {
                         None => false,
                     };
                 if !keep {
-                    self.key.clone_from(c);
-                    self.key_pose = step.pose;
+                    let back = (self.back_age <= BACK_SCANS)
+                        .then(|| {
+                            back_to_key(
+                                &self.back,
+                                &self.back_pose,
+                                c,
+                                &self.back_guess,
+                                &step.pose,
+                            )
+                        })
+                        .flatten();
+                    if let Some((pose, cov)) = back {
+                        // The scans since the key moved came from elsewhere (registered as a
+                        // jump and back): this scan is placed against the former key, which
+                        // becomes the key again, and the map restarts from it.
+                        step.pose = pose;
+                        step.rel = old.inverse().compose(&pose);
+                        step.rel_cov = cov;
+                        step.cov = compose_covariance(&old, &old_cov, &step.rel, &cov);
+                        step.status = Status::Ok;
+                        self.pose = pose;
+                        self.cov = step.cov;
+                        self.last_rel = self.back_motion;
+                        core::mem::swap(&mut self.key, &mut self.back);
+                        self.key_pose = self.back_pose;
+                        self.back.clear();
+                        let curr = self.last.clone();
+                        self.n = 0;
+                        self.insert_all(&curr, &Assoc::new(), &pose, scan);
+                    } else {
+                        // The key scan becomes the one to go back to when the one before
+                        // has been so for a few scans, or when this step jumped from the
+                        // motion before that one (otherwise the scans since it may be the
+                        // ones from elsewhere).
+                        let m = self.back_motion;
+                        let d = [
+                            step.rel.x - m.x,
+                            step.rel.y - m.y,
+                            wrap(step.rel.theta - m.theta) * ROTATION_SCALE,
+                        ];
+                        let jump = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > JUMP * JUMP;
+                        if jump || self.back_age > BACK_SCANS || self.back.is_empty() {
+                            core::mem::swap(&mut self.key, &mut self.back);
+                            self.back_pose = self.key_pose;
+                            self.back_guess = old.compose(&old_last);
+                            self.back_motion = old_last;
+                            self.back_age = 0;
+                        }
+                        self.key.clone_from(c);
+                        self.key_pose = step.pose;
+                    }
                 }
                 self.pts.clone_from(c);
             }
             _ => {
                 self.pts.clear();
                 self.key.clear();
+                self.back.clear();
             }
         }
         step

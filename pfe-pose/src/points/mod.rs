@@ -13,7 +13,7 @@ mod search;
 
 pub use icp::{icp, IcpResult, ICP_CORRELATION};
 pub use recover::{bridge, recheck, RECHECK_BELOW};
-pub use search::refine_on_key;
+pub use search::{back_to_key, refine_on_key};
 
 use crate::geom::{hypot, sin_cos, Pose};
 use crate::register::ROTATION_SCALE;

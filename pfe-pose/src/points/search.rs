@@ -340,6 +340,39 @@ pub fn refine_on_key<const N: usize>(
     .then_some(out)
 }
 
+/// A former key scan takes a scan back ([`back_to_key`]) when their points agree at least this
+/// well after the ICP...
+const BACK_AGREE: f32 = 0.8;
+/// ...and this much better than under the chain's pose.
+const BACK_MARGIN: f32 = 0.25;
+
+/// `curr`'s pose against a former key scan `key` at `key_pose`, when the steps since it went
+/// astray (scans from elsewhere, registered as a jump): [`icp()`] from `guess` (the pose the
+/// motion before the jump predicts) determines every direction, agrees at least 0.8 and
+/// [`BACK_MARGIN`] better than `curr` at `pose` (the chain's answer). The pose (odometry
+/// frame) and the ICP's covariance in `key`'s frame; `None` keeps the chain's answer.
+pub fn back_to_key<const N: usize>(
+    key: &RangeScan<N>,
+    key_pose: &Pose,
+    curr: &RangeScan<N>,
+    guess: &Pose,
+    pose: &Pose,
+) -> Option<(Pose, crate::geom::Cov3)> {
+    if key.is_empty() || curr.is_empty() {
+        return None;
+    }
+    let from = key_pose.inverse();
+    let r = icp(key, curr, &from.compose(guess))?;
+    let own = agreement(key, curr, &from.compose(pose)).score();
+    let score = r.agreement.score();
+    let out = key_pose.compose(&r.pose);
+    (r.unobservable.is_none()
+        && score >= BACK_AGREE
+        && score >= own + BACK_MARGIN
+        && out.is_finite())
+    .then_some((out, r.cov))
+}
+
 #[cfg(test)]
 #[path = "search_tests.rs"]
 mod tests;
