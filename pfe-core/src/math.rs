@@ -25,7 +25,7 @@ mod imp {
     pub fn sin_cos(x: f32) -> (f32, f32) {
         match super::sin_cos_f32(x) {
             Some(sc) => sc,
-            None => (libm::sinf(x), libm::cosf(x)),
+            None => super::sin_cos_large(x),
         }
     }
 }
@@ -81,6 +81,100 @@ pub fn sin_cos_f32(x: f32) -> Option<(f32, f32)> {
         2 => (-s, -c),
         _ => (-c, s),
     })
+}
+
+/// 2/π: one word of zeros, then its first 256 bits after the binary point.
+#[cfg_attr(feature = "micromath", allow(dead_code))]
+const FRAC_2_PI_BITS: [u32; 9] = [
+    0,
+    0xA2F9_836E,
+    0x4E44_1529,
+    0xFC27_57D1,
+    0xF534_DDC0,
+    0xDB62_9599,
+    0x3C43_9041,
+    0xFE51_63AB,
+    0xDEBB_C561,
+];
+
+/// `(sin x, cos x)` for |x| > 10⁴ (where [`sin_cos_f32`] stops): libm's `sinf` and `cosf`
+/// bit for bit on every such f32 (NaN for ±inf and NaN, as libm), in integer arithmetic only.
+/// libm reduces by π/2 and evaluates its kernels in f64, which links soft double arithmetic
+/// and a 2.5 KB Payne–Hanek routine into the firmware; this reduces exactly (x · 2/π mod 4
+/// from a 128-bit window of 2/π's bits: at least 90 bits of the remainder for every f32) and
+/// evaluates the same kernel polynomials (musl's `__sindf`/`__cosdf` coefficients) in Q62
+/// fixed point, 60 bits where the f64 kernels keep 53: the results round to the same f32 but
+/// for three arguments (±), whose libm bits are in a table. The exhaustive test (`sin_cos_large_is_libm_on_every_f32`, ignored: minutes) checks every
+/// argument; a test run checks every 1021st.
+#[allow(clippy::excessive_precision)] // the coefficients as published
+#[cfg_attr(feature = "micromath", allow(dead_code))]
+#[allow(clippy::eq_op)] // x − x: libm's NaN for ±inf and NaN.
+pub(crate) fn sin_cos_large(x: f32) -> (f32, f32) {
+    const PIO2_Q62: u64 = 0x6487_ED51_10B4_611A; // π/2 · 2⁶²
+    const Q: f64 = (1u64 << 62) as f64;
+    const ONE: i128 = 1 << 62;
+    const S1: i128 = (-0.166_666_666_416_265_235_595 * Q) as i128;
+    const S2: i128 = (0.008_333_329_385_889_463_175_6 * Q) as i128;
+    const S3: i128 = (-0.000_198_393_348_360_966_317_347 * Q) as i128;
+    const S4: i128 = (0.000_002_718_311_493_989_821_906_4 * Q) as i128;
+    const C0: i128 = (-0.499_999_997_251_031_003_120 * Q) as i128;
+    const C1: i128 = (0.041_666_623_323_739_063_189_4 * Q) as i128;
+    const C2: i128 = (-0.001_388_676_377_460_992_946_92 * Q) as i128;
+    const C3: i128 = (0.000_024_390_448_796_277_409_065_4 * Q) as i128;
+    let bits = x.to_bits() & 0x7fff_ffff;
+    let biased = bits >> 23;
+    if !finite(x) || biased < 140 {
+        // sin and cos of ±inf and NaN are NaN (libm's x − x); |x| < 2¹³ is not taken here.
+        return (x - x, x - x);
+    }
+    // The three f32 (of 1.9·10⁹) where libm's f64 kernels round the other way: its bits.
+    const LIBM_ROUNDING: [(u32, u32, u32); 3] = [
+        (0x5023_64CE, 0x3F4B_09D6, 0xBF1B_EBD0),
+        (0x552F_6DFD, 0x3EC9_9426, 0xBF6B_5303),
+        (0x7B51_A603, 0xBF74_1C8F, 0x3E9A_36FA),
+    ];
+    if let Some(&(_, s, c)) = LIBM_ROUNDING.iter().find(|e| e.0 == bits) {
+        let s = f32::from_bits(s);
+        return (if x < 0.0 { -s } else { s }, f32::from_bits(c));
+    }
+    // |x| = m · 2^e with e = biased − 150 ≥ −10; the bits of 2/π from 2^−(e−1) on give
+    // x · 2/π mod 4 as m · window mod 2¹²⁸, in units of 2⁻¹²⁶.
+    let m = u128::from((bits & 0x7f_ffff) | 0x80_0000);
+    let from = (biased - 120) as usize;
+    let (word, shift) = (from / 32, from % 32);
+    let window = match FRAC_2_PI_BITS.get(word..word + 5) {
+        Some(&[a, b, c, d, e]) => {
+            let top = u128::from(a) << 96 | u128::from(b) << 64 | u128::from(c) << 32;
+            (top | u128::from(d)) << shift | u128::from((u64::from(e) << shift) >> 32)
+        }
+        _ => 0,
+    };
+    // The nearest quadrant n and the remainder r ∈ [−½, ½) of a quadrant.
+    let t = m.wrapping_mul(window).wrapping_add(1 << 125);
+    let n = (t >> 126) as u32 & 3;
+    let r = (t & ((1 << 126) - 1)) as i128 - (1 << 125);
+    let ra = r.unsigned_abs();
+    // |r| ≤ 2¹²⁵, so lz ≥ 2; every f32 keeps lz ≤ 36 (its remainder is not that small).
+    let lz = ra.leading_zeros().min(64);
+    let r64 = ((ra << lz) >> 64) as u64;
+    // y = |r| · π/2 = ym · 2^(−60−lz); yq = y · 2⁶², z = y² · 2⁶².
+    let ym = ((u128::from(r64) * u128::from(PIO2_Q62)) >> 64) as u64;
+    let yq = ym.checked_shr(lz.saturating_sub(2)).unwrap_or(0);
+    let z = ((u128::from(yq) * u128::from(yq)) >> 62) as i128;
+    let mul = |a: i128, b: i128| (a * b) >> 62;
+    let sin_y = ONE + mul(z, S1 + mul(z, S2 + mul(z, S3 + mul(z, S4)))); // sin y / y
+    let cos_y = ONE + mul(z, C0 + mul(z, C1 + mul(z, C2 + mul(z, C3))));
+    let ps = ((u128::from(ym) * sin_y as u128) >> 64) as u64; // sin y · 2^(58+lz)
+    let sa = ps as f32 * f32::from_bits((127 - 58 - lz) << 23);
+    let c = cos_y as u64 as f32 * f32::from_bits((127 - 62) << 23);
+    let s = if r < 0 { -sa } else { sa };
+    let (s, c) = match n {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    };
+    (if x < 0.0 { -s } else { s }, c)
 }
 
 /// Square root, correctly rounded (IEEE 754): the FPU's `vsqrt.f32` on hard-float Arm (14
@@ -301,6 +395,93 @@ mod tests {
         assert!(super::sin_cos_f32(f32::INFINITY).is_none());
         assert!(super::sin_cos_f32(2.0e4).is_none());
         Ok(())
+    }
+
+    /// [`super::sin_cos_large`] against libm's `sinf` and `cosf`, bit for bit, on the f32
+    /// from 10⁴ (where [`super::sin_cos_f32`] hands over) to the largest, both signs, every
+    /// `step`th.
+    fn sin_cos_large_is_libm(step: u32) {
+        let sign_runs: std::vec::Vec<_> = [0u32, 0x8000_0000]
+            .into_iter()
+            .map(|sign| {
+                std::thread::spawn(move || {
+                    let mut b = 1.0e4f32.to_bits() + 1;
+                    let mut differ = std::vec::Vec::new();
+                    while b <= f32::MAX.to_bits() {
+                        let x = f32::from_bits(b | sign);
+                        let (s, c) = super::sin_cos_large(x);
+                        if (s.to_bits(), c.to_bits())
+                            != (libm::sinf(x).to_bits(), libm::cosf(x).to_bits())
+                        {
+                            differ.push(x);
+                        }
+                        b = match b.checked_add(step) {
+                            Some(next) => next,
+                            None => break,
+                        };
+                    }
+                    differ
+                })
+            })
+            .collect();
+        for run in sign_runs {
+            let differ = run.join().unwrap_or_default();
+            assert!(
+                differ.is_empty(),
+                "{} differ: {:?}",
+                differ.len(),
+                &differ[..differ.len().min(8)]
+            );
+        }
+    }
+
+    #[test]
+    fn sin_cos_large_is_libm_on_every_1021st_f32() {
+        sin_cos_large_is_libm(1021);
+        for x in [
+            1.096_517e10,
+            -1.205_543_3e13,
+            1.088_557_2e36,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            1.0e4,
+            10_000.001,
+            f32::MAX,
+            f32::MIN,
+        ] {
+            let (s, c) = super::sin_cos_large(x);
+            if x.is_finite() {
+                assert_eq!(
+                    (s.to_bits(), c.to_bits()),
+                    (libm::sinf(x).to_bits(), libm::cosf(x).to_bits()),
+                    "{x}"
+                );
+            } else {
+                assert!(s.is_nan() && c.is_nan(), "{x}");
+            }
+        }
+        // Through `sin_cos`: the f32 kernel up to 10⁴, libm's bits beyond.
+        for x in [1.0e4f32, 10_000.001, 3.0e5, -7.7e8, 1.0e30] {
+            let (s, c) = super::sin_cos(x);
+            if x.abs() > 1.0e4 {
+                assert_eq!(
+                    (s.to_bits(), c.to_bits()),
+                    (libm::sinf(x).to_bits(), libm::cosf(x).to_bits()),
+                    "{x}"
+                );
+            } else {
+                assert!((f64::from(s) - f64::from(x).sin()).abs() < 2e-7, "{x}");
+            }
+        }
+    }
+
+    /// Every f32 beyond 10⁴: about 1.9·10⁹ arguments, 15 minutes on two threads in release
+    /// (`cargo test --release -p pfe-core --lib sin_cos_large_is_libm_on_every_f32 -- --ignored`).
+    #[test]
+    #[ignore]
+    fn sin_cos_large_is_libm_on_every_f32() {
+        sin_cos_large_is_libm(1);
     }
 
     #[test]

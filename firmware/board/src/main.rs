@@ -2,7 +2,7 @@
 //! LMS200 on USART1 (PA9 TX, PA10 RX, through an RS-232/RS-422 transceiver) at the baud the
 //! driver asks for, received by interrupt into a ring (`scanner_uart.rs`); one feature frame
 //! per scan on USART2 (PA2 TX, PA3 RX) at 460800 baud, defmt logs over RTT, panics reported
-//! by panic-probe. The independent watchdog (250 ms) is fed once per main-loop iteration and
+//! over defmt (`panic.rs`). The independent watchdog (250 ms) is fed once per main-loop iteration and
 //! by the driver's polling delay; the cause of the last reset is logged at start-up
 //! (`watchdog.rs`).
 //!
@@ -16,6 +16,8 @@ fn main() {
 }
 
 #[cfg(target_os = "none")]
+mod panic;
+#[cfg(target_os = "none")]
 mod scanner_uart;
 #[cfg(target_os = "none")]
 mod watchdog;
@@ -27,7 +29,6 @@ mod fw {
     use cortex_m::peripheral::syst::SystClkSource;
     use cortex_m_rt::{entry, exception};
     use defmt_rtt as _;
-    use panic_probe as _;
     use stm32f4xx_hal::{
         pac,
         prelude::*,
@@ -60,13 +61,20 @@ mod fw {
         }
     }
 
+    /// Core cycles in `ns` nanoseconds: ⌊ns · 96 / 1000⌋ = ⌊ns · 12 / 125⌋, split at multiples of
+    /// 125 ns so it stays in u32 (at most 4.1·10⁸, no overflow) with divisions by a constant (a
+    /// multiply each), where the u64 product and division linked a 0.9 KB u64 division routine.
+    const fn ns_to_cycles(ns: u32) -> u32 {
+        const _: () = assert!(SYSCLK_HZ == 96_000_000);
+        ns / 125 * 12 + ns % 125 * 12 / 125
+    }
+
     /// Busy-wait delay counting core cycles; feeds the watchdog (the driver waits through it).
     struct Delay;
     impl embedded_hal::delay::DelayNs for Delay {
         fn delay_ns(&mut self, ns: u32) {
             watchdog::feed();
-            let cycles = u64::from(ns) * u64::from(SYSCLK_HZ / 1_000_000) / 1000;
-            cortex_m::asm::delay(u32::try_from(cycles).unwrap_or(u32::MAX).max(1));
+            cortex_m::asm::delay(ns_to_cycles(ns).max(1));
         }
     }
 
