@@ -349,7 +349,7 @@ const BACK_MARGIN: f32 = 0.25;
 /// `curr`'s pose against a former key scan `key` at `key_pose`, when the steps since it went
 /// astray (scans from elsewhere, registered as a jump): [`icp()`] from `guess` (the pose the
 /// motion before the jump predicts) determines every direction, agrees at least 0.8 and
-/// [`BACK_MARGIN`] better than `curr` at `pose` (the chain's answer). The pose (odometry
+/// `BACK_MARGIN` (0.25) better than `curr` at `pose` (the chain's answer). The pose (odometry
 /// frame) and the ICP's covariance in `key`'s frame; `None` keeps the chain's answer.
 pub fn back_to_key<const N: usize>(
     key: &RangeScan<N>,
