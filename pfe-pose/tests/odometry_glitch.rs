@@ -6,17 +6,9 @@ use pfe_pose::points::{RangeScan, SCAN_BEAMS};
 use pfe_pose::{wrap, PointOdometry, Pose};
 
 mod common;
-use common::{Rng, World};
+use common::{polygon, Rng, World, ROOM};
 
 const GEOMETRY: ScanGeometry = ScanGeometry::LMS200_180_050;
-
-/// A closed polygon of walls (corners, mm).
-fn polygon(c: &[[f32; 2]]) -> World {
-    World {
-        walls: (0..c.len()).map(|i| (c[i], c[(i + 1) % c.len()])).collect(),
-        pillars: Vec::new(),
-    }
-}
 
 /// The ranges (mm, NaN: no return) of a scanner at `pose` among `world`'s walls, with noise
 /// of σ 10 mm.
@@ -55,15 +47,7 @@ fn ray_cast(world: &World, pose: &Pose, rng: &mut Rng) -> Box<RangeScan<SCAN_BEA
 /// before it predicting the scans nothing registers) missed the turn.
 #[test]
 fn odometry_returns_to_the_key_scan_after_scans_from_elsewhere() {
-    let room = polygon(&[
-        [-4000.0, -3000.0],
-        [1000.0, -3600.0],
-        [5200.0, -2000.0],
-        [5600.0, 1500.0],
-        [2500.0, 3800.0],
-        [-2500.0, 3400.0],
-        [-4600.0, 800.0],
-    ]);
+    let room = polygon(&ROOM);
     let elsewhere = polygon(&[
         [-1500.0, -1000.0],
         [1800.0, -1200.0],

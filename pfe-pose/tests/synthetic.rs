@@ -19,15 +19,7 @@ const SIGMA_POINT: f64 = 15.0;
 
 /// An irregular convex room about 9 m × 7 m (no wall hides another from inside) with pillars.
 fn room() -> World {
-    let corners = [
-        [-4000.0, -3000.0],
-        [1000.0, -3600.0],
-        [5200.0, -2000.0],
-        [5600.0, 1500.0],
-        [2500.0, 3800.0],
-        [-2500.0, 3400.0],
-        [-4600.0, 800.0],
-    ];
+    let corners = common::ROOM;
     let walls = (0..corners.len())
         .map(|i| (corners[i], corners[(i + 1) % corners.len()]))
         .collect();

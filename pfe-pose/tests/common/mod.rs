@@ -30,6 +30,26 @@ pub struct World {
     pub pillars: Vec<[f32; 2]>,
 }
 
+/// The corners (mm) of an irregular convex room about 9 m × 7 m: no wall hides another from
+/// inside.
+pub const ROOM: [[f32; 2]; 7] = [
+    [-4000.0, -3000.0],
+    [1000.0, -3600.0],
+    [5200.0, -2000.0],
+    [5600.0, 1500.0],
+    [2500.0, 3800.0],
+    [-2500.0, 3400.0],
+    [-4600.0, 800.0],
+];
+
+/// A closed polygon of walls (corners, mm), no pillar.
+pub fn polygon(c: &[[f32; 2]]) -> World {
+    World {
+        walls: (0..c.len()).map(|i| (c[i], c[(i + 1) % c.len()])).collect(),
+        pillars: Vec::new(),
+    }
+}
+
 /// A straight corridor 2.4 m wide along x, its walls in pieces (doors between), no pillar.
 pub fn corridor() -> World {
     let mut walls = Vec::new();
