@@ -6,23 +6,14 @@ use pfe_pose::points::{RangeScan, SCAN_BEAMS};
 use pfe_pose::{wrap, LineObs, Observation, PointOdometry, Pose, Status};
 
 mod common;
-use common::Rng;
+use common::{Rng, ROOM};
 
 const GEOMETRY: ScanGeometry = ScanGeometry::LMS200_180_050;
 
-/// An irregular convex room about 9 m × 7 m: its corners, mm.
-const ROOM: [[f64; 2]; 7] = [
-    [-4000.0, -3000.0],
-    [1000.0, -3600.0],
-    [5200.0, -2000.0],
-    [5600.0, 1500.0],
-    [2500.0, 3800.0],
-    [-2500.0, 3400.0],
-    [-4600.0, 800.0],
-];
-
+/// Wall `k` of the room ([`common::ROOM`]), its ends in mm.
 fn wall(k: usize) -> ([f64; 2], [f64; 2]) {
-    (ROOM[k % ROOM.len()], ROOM[(k + 1) % ROOM.len()])
+    let corner = |i: usize| ROOM[i % ROOM.len()].map(f64::from);
+    (corner(k), corner(k + 1))
 }
 
 /// The ranges (mm, 10 mm noise) of a scanner at `pose` in the room.

@@ -27,15 +27,7 @@ struct World {
 
 /// An irregular convex room about 9 m × 7 m with three pillars.
 fn room() -> World {
-    let c = [
-        [-4000.0, -3000.0],
-        [1000.0, -3600.0],
-        [5200.0, -2000.0],
-        [5600.0, 1500.0],
-        [2500.0, 3800.0],
-        [-2500.0, 3400.0],
-        [-4600.0, 800.0],
-    ];
+    let c = common::ROOM.map(|p| p.map(f64::from));
     World {
         walls: (0..c.len()).map(|i| (c[i], c[(i + 1) % c.len()])).collect(),
         pillars: vec![[2000.0, 1000.0], [-1500.0, -1200.0], [3500.0, -800.0]],
