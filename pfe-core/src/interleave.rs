@@ -592,6 +592,94 @@ mod leverage;
 mod tests {
     use super::*;
 
+    /// A chunk's variance factors and degrees of freedom against their definitions, in f64 with
+    /// every matrix written out: the second differences' covariance is banded (1.5, −1, 1/4 σ²
+    /// at lags 0, 1, 2), so with G = (XᵀX)⁻¹Xᵀ the estimates' variances are the diagonal of
+    /// G Σ Gᵀ and the residuals' expected sum of squares is tr((I − XG) Σ) = 1.5 m − tr(XGΣ).
+    /// Ranges all equal (no outliers: every row kept), chunks of 18, 25 and 32 rows.
+    #[test]
+    #[allow(clippy::indexing_slicing)]
+    fn a_chunk_s_variances_and_dof_follow_the_banded_covariance() {
+        for (first, m) in [(5usize, 18usize), (8, 32), (3, 25)] {
+            let row = |k: usize| -> [f64; 6] {
+                let g = first + 1 + k;
+                let t = (g as f64 - (first as f64 + 1.0 + 0.5 * m as f64)) / 32.0;
+                let alt = if g % 2 == 0 { 1.0 } else { -1.0 };
+                let (c, s) = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][g % 4];
+                [1.0, t, alt, alt * t, c, s]
+            };
+            let cov = |j: usize, k: usize| match j.abs_diff(k) {
+                0 => 1.5,
+                1 => -1.0,
+                2 => 0.25,
+                _ => 0.0,
+            };
+            // [XᵀX | I] reduced to [I | (XᵀX)⁻¹].
+            let mut a = [[0.0f64; 12]; 6];
+            for k in 0..m {
+                let x = row(k);
+                for p in 0..6 {
+                    for q in 0..6 {
+                        a[p][q] += x[p] * x[q];
+                    }
+                }
+            }
+            for p in 0..6 {
+                a[p][6 + p] = 1.0;
+            }
+            for c in 0..6 {
+                let piv = (c..6)
+                    .max_by(|&u, &v| a[u][c].abs().total_cmp(&a[v][c].abs()))
+                    .unwrap_or(c);
+                a.swap(c, piv);
+                let d = a[c][c];
+                a[c] = a[c].map(|v| v / d);
+                for r in (0..6).filter(|&r| r != c) {
+                    let f = a[r][c];
+                    let rc = a[c];
+                    for (v, p) in a[r].iter_mut().zip(rc) {
+                        *v -= f * p;
+                    }
+                }
+            }
+            // G's column k: (XᵀX)⁻¹ x_k.
+            let g: [[f64; 6]; CHUNK] = core::array::from_fn(|k| {
+                let x = row(k);
+                core::array::from_fn(|p| (0..6).map(|q| a[p][6 + q] * x[q]).sum())
+            });
+            let mut var = [0.0f64; 3];
+            let mut trace = 0.0f64;
+            for j in 0..m {
+                for k in 0..m {
+                    let s = cov(j, k);
+                    for (v, p) in var.iter_mut().zip([2usize, 4, 5]) {
+                        *v += g[j][p] * s * g[k][p];
+                    }
+                    // (XG)_{jk} Σ_{kj}.
+                    let h: f64 = (0..6).map(|p| row(j)[p] * g[k][p]).sum();
+                    trace += h * s;
+                }
+            }
+            let dof = 1.5 * m as f64 - trace;
+            let r = [3000.0f32; CHUNK + 2];
+            let f = fit_chunk(first, &r[..m + 2], 1.0).expect("a fit");
+            let close = |got: f32, want: f64| (f64::from(got) - want).abs() <= 1e-3 * want.abs();
+            for (got, want) in f.var.iter().zip(var) {
+                assert!(
+                    close(*got, want),
+                    "first {first}, m {m}: {:?} against {var:?}",
+                    f.var
+                );
+            }
+            assert!(
+                close(f.dof, dof),
+                "first {first}, m {m}: dof {} against {dof}",
+                f.dof
+            );
+            assert_eq!((f.est, f.ss), ([0.0; 3], 0.0));
+        }
+    }
+
     /// A chunk's evidence is each estimate squared over its variance (σ² times the fit's
     /// factor), capped: the half offset's 2² / (0.25 · 2²) = 4 for 2 sweeps; the quarter
     /// offsets' 3² / (0.5 · 2²) + 1² / (0.125 · 2²) = 4.5 + 2 = 6.5 for 4 (a remainder in place

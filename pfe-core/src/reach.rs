@@ -305,6 +305,23 @@ mod tests {
         );
     }
 
+    /// A beam with no return beyond the reached beams gets no mark: the reach backwards stops
+    /// at beam 144 (no return) and leaves 140–143 of the short segment before the line with
+    /// its START only, not an END on 144; forwards, up to the jump at 205, the rest 205–212
+    /// gets its START as before.
+    #[test]
+    fn no_mark_goes_to_a_beam_without_a_return() {
+        let mut r = wall_ranges(0.0, |_| 0.0);
+        r[144] = f32::NAN;
+        let marks = [(140, 149), (150, 200), (201, 212)];
+        let (f, starts, ends) = remarked(&r, &[205], &marks, [line(150, 200, 0.0, 3000.0, EXACT)]);
+        assert_eq!(span(&f[0]), (145, 204));
+        assert_eq!(
+            (&starts[..], &ends[..]),
+            (&[140, 145, 205][..], &[204, 212][..])
+        );
+    }
+
     fn span(f: &Feature) -> (usize, usize) {
         (f.first(), f.last())
     }

@@ -684,6 +684,30 @@ mod tests {
         assert_eq!(raw(&codes(5)), 50.0);
     }
 
+    /// Codes of a unit within 1 to 100 mm that is not whole mm: their readings `code · unit`
+    /// (here exact in f32) are on the grid that divides them all, or on none when some is not
+    /// whole mm. 2.5 mm × even codes 400 + 2k are 1 000 + 5k mm: 5 mm; 2.5 mm × codes 400 + k
+    /// include 1 002.5 mm: 0; 1.5 mm × even codes are 600 + 3k mm: 1 mm (3 mm is no grid). The
+    /// same as the readings in mm say.
+    #[test]
+    fn grid_of_codes_of_a_fractional_unit_is_that_of_their_mm() {
+        let even: std::vec::Vec<u16> = (0..40).map(|k| 400 + 2 * k).collect();
+        let all: std::vec::Vec<u16> = (0..40).map(|k| 400 + k).collect();
+        for (codes, unit, want) in [(&even, 2.5f32, 5.0f32), (&all, 2.5, 0.0), (&even, 1.5, 1.0)] {
+            let raw = Ranges::Raw {
+                values: codes,
+                mm_per_unit: unit,
+                max_valid: LMS_MAX_VALID_8M,
+            };
+            let mm: std::vec::Vec<f32> = codes
+                .iter()
+                .map(|&c| (f64::from(c) * f64::from(unit)) as f32)
+                .collect();
+            assert_eq!(Ranges::Mm(&mm).grid(20_000.0), want, "{unit} mm, in mm");
+            assert_eq!(raw.grid(20_000.0), want, "{unit} mm, as codes");
+        }
+    }
+
     /// The sweeps declared, at least one; with odometry, its timing's.
     #[test]
     fn the_sweep_count_is_the_declared_or_the_timings() {
