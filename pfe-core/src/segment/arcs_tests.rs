@@ -385,3 +385,44 @@ fn a_pillar_of_ten_beams_is_an_arc() {
     assert!(c.center.distance(&centre) < 1.0, "{c:?}");
     assert!((c.radius - radius).abs() < 1.0, "{c:?}");
 }
+
+/// [`super::narrow`] holds when the arc of the points about the circle's centre spans at most
+/// 120° between its ends: points on a circle of radius 300 mm about (2000, −700) at a start
+/// bearing of 10°, 37° and −80°, their arc's span 30°..=170° against the same span in f64
+/// (the ends' angle from the dot product, the first and last points only).
+#[test]
+fn an_arc_is_narrow_up_to_120_degrees() {
+    let (cx, cy, r) = (2000.0f64, -700.0f64, 300.0f64);
+    let at = |deg: f64| {
+        let t = deg.to_radians();
+        Point::new((cx + r * t.cos()) as f32, (cy + r * t.sin()) as f32)
+    };
+    let c = crate::feature::CircleFeature::new(
+        0,
+        4,
+        5,
+        Point::new(cx as f32, cy as f32),
+        r as f32,
+        [[0.0; 3]; 3],
+        0.0,
+        0.0,
+    );
+    for start in [10.0f64, 37.0, -80.0] {
+        for span in [30.0f64, 90.0, 115.0, 125.0, 150.0, 170.0] {
+            // The ends and three points between them.
+            let pts: [Point; 5] = core::array::from_fn(|k| at(start + span * k as f64 / 4.0));
+            let (a, b) = (at(start), at(start + span));
+            let (ax, ay) = (f64::from(a.x) - cx, f64::from(a.y) - cy);
+            let (bx, by) = (f64::from(b.x) - cx, f64::from(b.y) - cy);
+            let angle = ((ax * bx + ay * by) / (ax.hypot(ay) * bx.hypot(by)))
+                .acos()
+                .to_degrees();
+            assert_eq!(
+                super::narrow(&pts, &c),
+                angle <= 120.0,
+                "start {start}°, span {span}° ({angle}°)"
+            );
+        }
+    }
+    assert!(!super::narrow(&[], &c));
+}
