@@ -426,3 +426,56 @@ fn an_arc_is_narrow_up_to_120_degrees() {
     }
     assert!(!super::narrow(&[], &c));
 }
+
+/// [`super::wall`] gives the stored line's (α, ρ) when its last beam is just before `edge` or
+/// its first beam is `edge`, with no range jump at the beam that joins it to the join (`edge`
+/// itself), and nothing when the line does not touch `edge`, when the jump is there, or when
+/// the feature is no line: a line over beams 50..=60 of a scan of 181 beams (a circle
+/// over 70..=80 beside it) asked about edges 61, 50, 49, 60, 45, 70 and 75.
+#[test]
+fn a_wall_is_the_line_that_touches_the_join_s_edge() {
+    use crate::feature::{CircleFeature, LineFeature};
+    use crate::flags::JUMP;
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let ranges = [2000.0f32; 181];
+    let p = Point::new(0.0, 2000.0);
+    let (alpha, rho) = (1.2f32, 1834.0f32);
+    let line = Feature::Line(LineFeature::new(
+        50, 60, 11, alpha, rho, 0.0, 0.0, 0.0, p, p,
+    ));
+    let circle = Feature::Circle(CircleFeature::new(
+        70,
+        80,
+        11,
+        p,
+        300.0,
+        [[0.0; 3]; 3],
+        0.0,
+        1.0,
+    ));
+    let mut ex = Extractor::<181, 8>::new();
+    let found = ex.with_pass(&Scan::from_mm(g, &ranges), &Config::default(), |pass, _| {
+        let mut out: heapless::Vec<Feature, 8> = heapless::Vec::new();
+        assert!(out.push(line).is_ok() && out.push(circle).is_ok());
+        let mut ask = |pass: &crate::pass::Pass<'_>, k: usize, edge: usize| {
+            super::wall(pass, &mut out, Some(k), edge)
+        };
+        let free = [61, 50, 49, 60, 45, 70, 75].map(|edge| ask(pass, 0, edge));
+        let on_circle = ask(pass, 1, 81);
+        let none_stored = ask(pass, 2, 61);
+        pass.set(61, JUMP);
+        pass.set(50, JUMP);
+        let jumped = [ask(pass, 0, 61), ask(pass, 0, 50)];
+        (free, on_circle, none_stored, jumped)
+    });
+    let w = Some((alpha, rho));
+    assert_eq!(
+        found,
+        (
+            [w, w, None, None, None, None, None],
+            None,
+            None,
+            [None, None]
+        )
+    );
+}
