@@ -384,6 +384,43 @@ mod tests {
         }
     }
 
+    /// [`corner_split`] leaves the split to the squared distances (`None`) when the corner lies
+    /// within [`CORNER_MARGIN`] (0.3) of a contested beam's bearing, and splits by bearing
+    /// otherwise: the room's corner of [`a_beam_goes_with_the_wall_its_bearing_meets`] (no
+    /// noise) `at` beams 19.5..=20.9 (its bearing known from the construction), contested
+    /// beams 17..=20, the lines fitted to 11..=16 and 21..=26, turned about the scanner (0,
+    /// 0.8 rad, ±π/2, π). Off the margin the split is the first beam past the corner.
+    #[test]
+    fn a_corner_within_the_margin_of_a_beam_is_not_split_by_bearing() {
+        let step = 0.5f32.to_radians();
+        let (half, pi) = (core::f32::consts::FRAC_PI_2, core::f32::consts::PI);
+        for turn in [0.0f32, 0.8, half, -half, pi] {
+            for at in [19.5f32, 19.65, 19.9, 20.1, 20.2, 20.4, 20.5, 20.8, 20.9] {
+                let pts: [Point; 40] = core::array::from_fn(|i| {
+                    let t = (i as f32 - at) * step;
+                    let (s, c) = math::sin_cos(t);
+                    let r = 4000.0 / if t < 0.0 { c - s } else { c + s };
+                    let (s, c) = math::sin_cos(t + turn);
+                    Point::new(r * c, r * s)
+                });
+                let (Ok(left), Ok(right)) = (fit_axis(&pts[11..17]), fit_axis(&pts[21..27])) else {
+                    panic!("two walls")
+                };
+                // The contested beam nearest the corner, in beams.
+                let off = (17..=20)
+                    .map(|k| (k as f32 - at).abs())
+                    .fold(f32::INFINITY, f32::min);
+                let expected =
+                    (off >= 0.3).then(|| 17 + (17..=20).filter(|&k| (k as f32) < at).count());
+                assert_eq!(
+                    corner_split(&left, &right, &pts, (17, 21), 12.5),
+                    expected,
+                    "turn {turn}, corner at {at}"
+                );
+            }
+        }
+    }
+
     /// The room's corner of [`a_beam_goes_with_the_wall_its_bearing_meets`], 0.35 beam after
     /// beam 20, turned about the scanner (0, 0.8 rad, ±π/2, π: the corner's x, then y, across
     /// the beams), beam 21 15 mm long and the point before the contested ones (its left line's

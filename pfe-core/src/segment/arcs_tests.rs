@@ -385,3 +385,97 @@ fn a_pillar_of_ten_beams_is_an_arc() {
     assert!(c.center.distance(&centre) < 1.0, "{c:?}");
     assert!((c.radius - radius).abs() < 1.0, "{c:?}");
 }
+
+/// [`super::narrow`] holds when the arc of the points about the circle's centre spans at most
+/// 120° between its ends: points on a circle of radius 300 mm about (2000, −700) at a start
+/// bearing of 10°, 37° and −80°, their arc's span 30°..=170° against the same span in f64
+/// (the ends' angle from the dot product, the first and last points only).
+#[test]
+fn an_arc_is_narrow_up_to_120_degrees() {
+    let (cx, cy, r) = (2000.0f64, -700.0f64, 300.0f64);
+    let at = |deg: f64| {
+        let t = deg.to_radians();
+        Point::new((cx + r * t.cos()) as f32, (cy + r * t.sin()) as f32)
+    };
+    let c = crate::feature::CircleFeature::new(
+        0,
+        4,
+        5,
+        Point::new(cx as f32, cy as f32),
+        r as f32,
+        [[0.0; 3]; 3],
+        0.0,
+        0.0,
+    );
+    for start in [10.0f64, 37.0, -80.0] {
+        for span in [30.0f64, 90.0, 115.0, 125.0, 150.0, 170.0] {
+            // The ends and three points between them.
+            let pts: [Point; 5] = core::array::from_fn(|k| at(start + span * k as f64 / 4.0));
+            let (a, b) = (at(start), at(start + span));
+            let (ax, ay) = (f64::from(a.x) - cx, f64::from(a.y) - cy);
+            let (bx, by) = (f64::from(b.x) - cx, f64::from(b.y) - cy);
+            let angle = ((ax * bx + ay * by) / (ax.hypot(ay) * bx.hypot(by)))
+                .acos()
+                .to_degrees();
+            assert_eq!(
+                super::narrow(&pts, &c),
+                angle <= 120.0,
+                "start {start}°, span {span}° ({angle}°)"
+            );
+        }
+    }
+    assert!(!super::narrow(&[], &c));
+}
+
+/// [`super::wall`] gives the stored line's (α, ρ) when its last beam is just before `edge` or
+/// its first beam is `edge`, with no range jump at the beam that joins it to the join (`edge`
+/// itself), and nothing when the line does not touch `edge`, when the jump is there, or when
+/// the feature is no line: a line over beams 50..=60 of a scan of 181 beams (a circle
+/// over 70..=80 beside it) asked about edges 61, 50, 49, 60, 45, 70 and 75.
+#[test]
+fn a_wall_is_the_line_that_touches_the_join_s_edge() {
+    use crate::feature::{CircleFeature, LineFeature};
+    use crate::flags::JUMP;
+    let g = ScanGeometry::lms200(180.0, 1.0);
+    let ranges = [2000.0f32; 181];
+    let p = Point::new(0.0, 2000.0);
+    let (alpha, rho) = (1.2f32, 1834.0f32);
+    let line = Feature::Line(LineFeature::new(
+        50, 60, 11, alpha, rho, 0.0, 0.0, 0.0, p, p,
+    ));
+    let circle = Feature::Circle(CircleFeature::new(
+        70,
+        80,
+        11,
+        p,
+        300.0,
+        [[0.0; 3]; 3],
+        0.0,
+        1.0,
+    ));
+    let mut ex = Extractor::<181, 8>::new();
+    let found = ex.with_pass(&Scan::from_mm(g, &ranges), &Config::default(), |pass, _| {
+        let mut out: heapless::Vec<Feature, 8> = heapless::Vec::new();
+        assert!(out.push(line).is_ok() && out.push(circle).is_ok());
+        let mut ask = |pass: &crate::pass::Pass<'_>, k: usize, edge: usize| {
+            super::wall(pass, &mut out, Some(k), edge)
+        };
+        let free = [61, 50, 49, 60, 45, 70, 75].map(|edge| ask(pass, 0, edge));
+        let on_circle = ask(pass, 1, 81);
+        let none_stored = ask(pass, 2, 61);
+        pass.set(61, JUMP);
+        pass.set(50, JUMP);
+        let jumped = [ask(pass, 0, 61), ask(pass, 0, 50)];
+        (free, on_circle, none_stored, jumped)
+    });
+    let w = Some((alpha, rho));
+    assert_eq!(
+        found,
+        (
+            [w, w, None, None, None, None, None],
+            None,
+            None,
+            [None, None]
+        )
+    );
+}

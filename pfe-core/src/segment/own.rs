@@ -220,6 +220,35 @@ mod tests {
         }
     }
 
+    /// [`super::residual`] is the sum of the squared distances of the fit's points from its
+    /// line: four points 100 mm apart along a line at 0.3 rad through (2000, 500), set off it
+    /// by +d, −d, −d, +d (their mean and their moment along the line zero, so the fitted line
+    /// is the construction's), the sum 4 d² computed in f64 (d = 10 and 25 mm).
+    #[test]
+    fn residual_is_the_sum_of_the_squared_distances() {
+        let (theta, h) = (0.3f64, 100.0f64);
+        let (t, nrm) = ((theta.cos(), theta.sin()), (-theta.sin(), theta.cos()));
+        for d in [10.0f64, 25.0] {
+            let off = [d, -d, -d, d];
+            let pts: [crate::geometry::Point; 4] = core::array::from_fn(|k| {
+                let s = h * k as f64;
+                crate::geometry::Point::new(
+                    (2000.0 + s * t.0 + off[k] * nrm.0) as f32,
+                    (500.0 + s * t.1 + off[k] * nrm.1) as f32,
+                )
+            });
+            let Ok(f) = crate::fit::line::fit_line(&pts) else {
+                panic!("a line of 4 points")
+            };
+            let expected: f64 = off.iter().map(|o| o * o).sum();
+            let got = f64::from(super::residual(&f));
+            assert!(
+                (got - expected).abs() <= 1e-3 * expected,
+                "d {d}: {got} against {expected}"
+            );
+        }
+    }
+
     /// The features (kind, first beam, last beam) of an LMS200 scan (180°, 0.5°) whose beams
     /// from `first` have the ranges `run` and the others no return.
     fn lines(first: usize, run: &[f32]) -> heapless::Vec<(usize, usize), 16> {
