@@ -205,3 +205,41 @@ fn off_line_weighs_the_distance_by_the_lines_spread_along_it() {
     let got = f64::from(got.expect("the points fit a line"));
     assert!((got - want).abs() <= 1e-3 * want, "{got} vs {want}");
 }
+
+/// `segment_bounds` of a run inside one segment (beams 10..=20, marked START at 10 and END at
+/// 20) that starts two beams after the segment's first point: the bounds are the segment's own
+/// first and last points, (10, 20), the segment keeping 2 < `min_points` points outside the run.
+#[test]
+fn segment_bounds_walk_back_to_the_segments_start() {
+    use crate::flags::{END, START, VALID};
+    use crate::output::Stats;
+    use crate::pass::Pass;
+    let g = ScanGeometry::LMS200_180_050;
+    let mut points = [Point::INVALID; 361];
+    let mut ranges = [f32::NAN; 361];
+    let mut flags = [0u8; 361];
+    for i in 10..=20 {
+        points[i] = Point::new(3000.0, 100.0 * (i as f32 - 15.0));
+        ranges[i] = libm::hypotf(points[i].x, points[i].y);
+        flags[i] = VALID;
+    }
+    flags[10] |= START;
+    flags[20] |= END;
+    let mut ex = Extractor::<361, 8>::new();
+    let loading = [1000.0f32; 361];
+    let got = ex.with_pass(
+        &Scan::from_mm(g, &loading),
+        &Config::default(),
+        |loaded, _| {
+            let mut stats = Stats::default();
+            let pass = Pass::over(
+                loaded.beams,
+                (&points, &ranges, &mut flags),
+                None,
+                &mut stats,
+            );
+            super::segment_bounds(&pass, 12, 20, 5)
+        },
+    );
+    assert_eq!(got, Some((10, 20)));
+}
