@@ -126,3 +126,120 @@ fn the_segment_s_points_before_the_run_stay_a_short_segment() {
         );
     });
 }
+
+/// `off_line` of a beam beyond the end of a tilted wall's points is its squared distance from
+/// their line over the variance of its residual, σ_r² (1 + 1/n + u²/Σu²), u its position along
+/// the line from the points' centroid and Σu² the points' spread along it: all computed here
+/// in f64 from the points (total-least-squares line through them).
+#[test]
+fn off_line_weighs_the_distance_by_the_lines_spread_along_it() {
+    use crate::output::Stats;
+    use crate::pass::Pass;
+    let g = ScanGeometry::LMS200_180_050;
+    // A wall y = 0.5 x + 2000 (mm), beams 100..=109 with ±4 mm alternating offsets across
+    // it, and beam 115 30 mm off it, 150 mm beyond its last point along it.
+    let (tx, ty) = (2.0 / libm::sqrt(5.0), 1.0 / libm::sqrt(5.0));
+    let (nx, ny) = (-ty, tx);
+    let at = |t: f64, off: f64| (1000.0 * tx + t * tx + off * nx, 2500.0 + t * ty + off * ny);
+    let mut points = [Point::INVALID; 361];
+    let mut ranges = [f32::NAN; 361];
+    for k in 0u32..10 {
+        let (x, y) = at(50.0 * f64::from(k), if k % 2 == 0 { 4.0 } else { -4.0 });
+        points[100 + k as usize] = Point::new(x as f32, y as f32);
+    }
+    let (x, y) = at(600.0, 30.0);
+    points[115] = Point::new(x as f32, y as f32);
+    for (p, r) in points.iter().zip(ranges.iter_mut()) {
+        if p.x.is_finite() {
+            *r = libm::hypotf(p.x, p.y);
+        }
+    }
+    let mut flags: [u8; 361] = core::array::from_fn(|i| match ranges[i].is_finite() {
+        true => crate::flags::VALID,
+        false => 0,
+    });
+    // The reference, in f64.
+    let pts: [(f64, f64); 10] =
+        core::array::from_fn(|i| (f64::from(points[100 + i].x), f64::from(points[100 + i].y)));
+    let n = pts.len() as f64;
+    let (cx, cy) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let (mut sxx, mut syy, mut sxy) = (0.0f64, 0.0f64, 0.0f64);
+    for p in &pts {
+        sxx += (p.0 - cx) * (p.0 - cx);
+        syy += (p.1 - cy) * (p.1 - cy);
+        sxy += (p.0 - cx) * (p.1 - cy);
+    }
+    // Direction of the line: the principal axis of the scatter.
+    let theta = 0.5 * libm::atan2(2.0 * sxy, sxx - syy);
+    let (dx, dy) = (libm::cos(theta), libm::sin(theta));
+    let suu: f64 = pts
+        .iter()
+        .map(|p| ((p.0 - cx) * dx + (p.1 - cy) * dy).powi(2))
+        .sum();
+    let (px, py) = (f64::from(points[115].x), f64::from(points[115].y));
+    let u = (px - cx) * dx + (py - cy) * dy;
+    let d = -(px - cx) * dy + (py - cy) * dx;
+    let var_r = 25.0f64;
+    let want = d * d / (var_r * (1.0 + 1.0 / n + u * u / suu));
+    // The line's own variance there is a sizeable part of the residual's.
+    assert!(u * u / suu > 0.5, "{}", u * u / suu);
+    let mut ex = Extractor::<361, 8>::new();
+    let loading = [1000.0f32; 361];
+    let got = ex.with_pass(
+        &Scan::from_mm(g, &loading),
+        &Config::default(),
+        |loaded, _| {
+            let mut stats = Stats::default();
+            let pass = Pass::over(
+                loaded.beams,
+                (&points, &ranges, &mut flags),
+                None,
+                &mut stats,
+            );
+            super::off_line(&pass, 100, 109, 115, var_r as f32)
+        },
+    );
+    let got = f64::from(got.expect("the points fit a line"));
+    assert!((got - want).abs() <= 1e-3 * want, "{got} vs {want}");
+}
+
+/// `segment_bounds` of a run inside one segment (beams 10..=20, marked START at 10 and END at
+/// 20) that starts two beams after the segment's first point: the bounds are the segment's own
+/// first and last points, (10, 20), the segment keeping 2 < `min_points` points outside the run.
+#[test]
+fn segment_bounds_walk_back_to_the_segments_start() {
+    use crate::flags::{END, START, VALID};
+    use crate::output::Stats;
+    use crate::pass::Pass;
+    let g = ScanGeometry::LMS200_180_050;
+    let mut points = [Point::INVALID; 361];
+    let mut ranges = [f32::NAN; 361];
+    let mut flags = [0u8; 361];
+    for i in 10..=20 {
+        points[i] = Point::new(3000.0, 100.0 * (i as f32 - 15.0));
+        ranges[i] = libm::hypotf(points[i].x, points[i].y);
+        flags[i] = VALID;
+    }
+    flags[10] |= START;
+    flags[20] |= END;
+    let mut ex = Extractor::<361, 8>::new();
+    let loading = [1000.0f32; 361];
+    let got = ex.with_pass(
+        &Scan::from_mm(g, &loading),
+        &Config::default(),
+        |loaded, _| {
+            let mut stats = Stats::default();
+            let pass = Pass::over(
+                loaded.beams,
+                (&points, &ranges, &mut flags),
+                None,
+                &mut stats,
+            );
+            super::segment_bounds(&pass, 12, 20, 5)
+        },
+    );
+    assert_eq!(got, Some((10, 20)));
+}

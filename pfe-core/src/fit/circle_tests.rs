@@ -180,3 +180,39 @@ fn the_normal_equations_are_the_sums_in_their_slot() {
         );
     }
 }
+
+/// A full circle of points mirrored about the x axis, refined from a centre 2 mm off along x
+/// and the radius that is the mean distance to it (computed in f64): the first step is about
+/// (2, 0, 0) (its radius part of the order of 2²/R, the y part zero by symmetry), its length
+/// 2 mm, far above the convergence tolerance (0.01 mm), and the refinement
+/// reaches the true centre (0, 0) and radius 1000 mm (the points lie on it exactly, up to f32
+/// rounding).
+#[test]
+fn refinement_moves_a_centre_off_along_one_axis_only() -> Result<(), FitError> {
+    let r = 1000.0f64;
+    let mut pts: Vec<Point> = Vec::new();
+    for k in 0..=18 {
+        let t = core::f64::consts::PI * f64::from(k) / 18.0;
+        let (x, y) = ((r * t.cos()) as f32, (r * t.sin()) as f32);
+        pts.push(Point::new(x, y));
+        if k != 0 && k != 18 {
+            pts.push(Point::new(x, -y));
+        }
+    }
+    let c0 = (2.0f64, 0.0f64);
+    let mean = pts
+        .iter()
+        .map(|p| (f64::from(p.x) - c0.0).hypot(f64::from(p.y) - c0.1))
+        .sum::<f64>()
+        / pts.len() as f64;
+    let initial = Circle {
+        center: Point::new(c0.0 as f32, c0.1 as f32),
+        radius: mean as f32,
+    };
+    let c = refine_circle(&pts, initial, 10)?;
+    assert!(
+        c.center.x.abs() < 0.01 && c.center.y.abs() < 0.01 && (c.radius - 1000.0).abs() < 0.01,
+        "{c:?}"
+    );
+    Ok(())
+}
