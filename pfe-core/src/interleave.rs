@@ -601,13 +601,7 @@ mod tests {
     #[allow(clippy::indexing_slicing)]
     fn a_chunk_s_variances_and_dof_follow_the_banded_covariance() {
         for (first, m) in [(5usize, 18usize), (8, 32), (3, 25)] {
-            let row = |k: usize| -> [f64; 6] {
-                let g = first + 1 + k;
-                let t = (g as f64 - (first as f64 + 1.0 + 0.5 * m as f64)) / 32.0;
-                let alt = if g % 2 == 0 { 1.0 } else { -1.0 };
-                let (c, s) = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][g % 4];
-                [1.0, t, alt, alt * t, c, s]
-            };
+            let row = |k: usize| super::leverage::model_row(first, m, k);
             let cov = |j: usize, k: usize| match j.abs_diff(k) {
                 0 => 1.5,
                 1 => -1.0,
@@ -627,21 +621,7 @@ mod tests {
             for p in 0..6 {
                 a[p][6 + p] = 1.0;
             }
-            for c in 0..6 {
-                let piv = (c..6)
-                    .max_by(|&u, &v| a[u][c].abs().total_cmp(&a[v][c].abs()))
-                    .unwrap_or(c);
-                a.swap(c, piv);
-                let d = a[c][c];
-                a[c] = a[c].map(|v| v / d);
-                for r in (0..6).filter(|&r| r != c) {
-                    let f = a[r][c];
-                    let rc = a[c];
-                    for (v, p) in a[r].iter_mut().zip(rc) {
-                        *v -= f * p;
-                    }
-                }
-            }
+            super::leverage::gauss_jordan(&mut a);
             // G's column k: (XᵀX)⁻¹ x_k.
             let g: [[f64; 6]; CHUNK] = core::array::from_fn(|k| {
                 let x = row(k);

@@ -4,31 +4,18 @@
 
 use super::*;
 
-/// The leverage `h` of row `j` among the `m` rows of a chunk starting at `first`, in f64 by
-/// normal equations solved with Gauss–Jordan: `x_jᵀ (XᵀX)⁻¹ x_j` with the rows of the model
-/// (a line, the alternating offset and its change, the period-4 pair) written out here.
-fn leverage(first: usize, m: usize, j: usize) -> f64 {
-    let row = |k: usize| -> [f64; 6] {
-        let g = first + 1 + k;
-        let t = (g as f64 - (first as f64 + 1.0 + 0.5 * m as f64)) / 32.0;
-        let alt = if g % 2 == 0 { 1.0 } else { -1.0 };
-        let (c, s) = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][g % 4];
-        [1.0, t, alt, alt * t, c, s]
-    };
-    // [XᵀX | x_j], reduced to [I | (XᵀX)⁻¹ x_j].
-    let mut a = [[0.0f64; 7]; 6];
-    for k in 0..m {
-        let x = row(k);
-        for p in 0..6 {
-            for q in 0..6 {
-                a[p][q] += x[p] * x[q];
-            }
-        }
-    }
-    let xj = row(j);
-    for p in 0..6 {
-        a[p][6] = xj[p];
-    }
+/// Row `k` of the model of a chunk of `m` rows starting at `first`: a line, the alternating
+/// offset and its change, the period-4 pair.
+pub(super) fn model_row(first: usize, m: usize, k: usize) -> [f64; 6] {
+    let g = first + 1 + k;
+    let t = (g as f64 - (first as f64 + 1.0 + 0.5 * m as f64)) / 32.0;
+    let alt = if g % 2 == 0 { 1.0 } else { -1.0 };
+    let (c, s) = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][g % 4];
+    [1.0, t, alt, alt * t, c, s]
+}
+
+/// Gauss–Jordan with partial pivoting on `[A | B]` (A 6 × 6): reduced to `[I | A⁻¹ B]`.
+pub(super) fn gauss_jordan<const C: usize>(a: &mut [[f64; C]; 6]) {
     for c in 0..6 {
         let piv = (c..6)
             .max_by(|&u, &v| a[u][c].abs().total_cmp(&a[v][c].abs()))
@@ -44,6 +31,28 @@ fn leverage(first: usize, m: usize, j: usize) -> f64 {
             }
         }
     }
+}
+
+/// The leverage `h` of row `j` among the `m` rows of a chunk starting at `first`, in f64 by
+/// normal equations solved with Gauss–Jordan: `x_jᵀ (XᵀX)⁻¹ x_j` with the rows of the model
+/// (a line, the alternating offset and its change, the period-4 pair) written out here.
+fn leverage(first: usize, m: usize, j: usize) -> f64 {
+    let row = |k: usize| model_row(first, m, k);
+    // [XᵀX | x_j], reduced to [I | (XᵀX)⁻¹ x_j].
+    let mut a = [[0.0f64; 7]; 6];
+    for k in 0..m {
+        let x = row(k);
+        for p in 0..6 {
+            for q in 0..6 {
+                a[p][q] += x[p] * x[q];
+            }
+        }
+    }
+    let xj = row(j);
+    for p in 0..6 {
+        a[p][6] = xj[p];
+    }
+    gauss_jordan(&mut a);
     (0..6).map(|p| xj[p] * a[p][6]).sum()
 }
 
