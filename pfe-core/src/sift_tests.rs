@@ -20,6 +20,28 @@ fn ray_segment(c: f32, s: f32, p: Point, q: Point) -> Option<f32> {
     (t > 0.0 && (0.0..=1.0).contains(&u)).then_some(t)
 }
 
+/// `f` on a pass over hand-made `points`, `ranges` and `flags` (LMS200 180° at 0.5°, no
+/// motion): the beams of a loaded scan, the points the test placed.
+fn on_hand_made<R>(
+    points: &[Point; 361],
+    ranges: &[f32; 361],
+    flags: &mut [u8; 361],
+    f: impl FnOnce(&crate::pass::Pass<'_>) -> R,
+) -> R {
+    let mut ex = Extractor::<361, 8>::new();
+    let loading = [1000.0f32; 361];
+    ex.with_pass(
+        &Scan::from_mm(ScanGeometry::LMS200_180_050, &loading),
+        &Config::default(),
+        |loaded, _| {
+            let mut stats = crate::output::Stats::default();
+            let pass =
+                crate::pass::Pass::over(loaded.beams, (points, ranges, flags), None, &mut stats);
+            f(&pass)
+        },
+    )
+}
+
 /// A door jamb 5.3 m ahead (corridor seed 1, scan 21 of `pfe eval`'s simulator): its face,
 /// 275 mm wide, seen head-on over beams 200–204, the wall it turns into running away from the
 /// scanner at grazing incidence (beam 199, no return before it), a pillar 1.4 m behind the
@@ -133,9 +155,6 @@ fn the_segment_s_points_before_the_run_stay_a_short_segment() {
 /// in f64 from the points (total-least-squares line through them).
 #[test]
 fn off_line_weighs_the_distance_by_the_lines_spread_along_it() {
-    use crate::output::Stats;
-    use crate::pass::Pass;
-    let g = ScanGeometry::LMS200_180_050;
     // A wall y = 0.5 x + 2000 (mm), beams 100..=109 with ±4 mm alternating offsets across
     // it, and beam 115 30 mm off it, 150 mm beyond its last point along it.
     let (tx, ty) = (2.0 / libm::sqrt(5.0), 1.0 / libm::sqrt(5.0));
@@ -186,22 +205,9 @@ fn off_line_weighs_the_distance_by_the_lines_spread_along_it() {
     let want = d * d / (var_r * (1.0 + 1.0 / n + u * u / suu));
     // The line's own variance there is a sizeable part of the residual's.
     assert!(u * u / suu > 0.5, "{}", u * u / suu);
-    let mut ex = Extractor::<361, 8>::new();
-    let loading = [1000.0f32; 361];
-    let got = ex.with_pass(
-        &Scan::from_mm(g, &loading),
-        &Config::default(),
-        |loaded, _| {
-            let mut stats = Stats::default();
-            let pass = Pass::over(
-                loaded.beams,
-                (&points, &ranges, &mut flags),
-                None,
-                &mut stats,
-            );
-            super::off_line(&pass, 100, 109, 115, var_r as f32)
-        },
-    );
+    let got = on_hand_made(&points, &ranges, &mut flags, |pass| {
+        super::off_line(pass, 100, 109, 115, var_r as f32)
+    });
     let got = f64::from(got.expect("the points fit a line"));
     assert!((got - want).abs() <= 1e-3 * want, "{got} vs {want}");
 }
@@ -212,9 +218,6 @@ fn off_line_weighs_the_distance_by_the_lines_spread_along_it() {
 #[test]
 fn segment_bounds_walk_back_to_the_segments_start() {
     use crate::flags::{END, START, VALID};
-    use crate::output::Stats;
-    use crate::pass::Pass;
-    let g = ScanGeometry::LMS200_180_050;
     let mut points = [Point::INVALID; 361];
     let mut ranges = [f32::NAN; 361];
     let mut flags = [0u8; 361];
@@ -225,21 +228,8 @@ fn segment_bounds_walk_back_to_the_segments_start() {
     }
     flags[10] |= START;
     flags[20] |= END;
-    let mut ex = Extractor::<361, 8>::new();
-    let loading = [1000.0f32; 361];
-    let got = ex.with_pass(
-        &Scan::from_mm(g, &loading),
-        &Config::default(),
-        |loaded, _| {
-            let mut stats = Stats::default();
-            let pass = Pass::over(
-                loaded.beams,
-                (&points, &ranges, &mut flags),
-                None,
-                &mut stats,
-            );
-            super::segment_bounds(&pass, 12, 20, 5)
-        },
-    );
+    let got = on_hand_made(&points, &ranges, &mut flags, |pass| {
+        super::segment_bounds(pass, 12, 20, 5)
+    });
     assert_eq!(got, Some((10, 20)));
 }
